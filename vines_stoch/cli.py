@@ -1,0 +1,83 @@
+"""Command line: ``vines-stoch run | validate | bench``."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+from typing import Optional
+
+import typer
+
+from .scenario import ScenarioError, load_scenario
+
+app = typer.Typer(add_completion=False, no_args_is_help=True, pretty_exceptions_enable=False,
+                  help="Stochastic Monte Carlo response analysis of vibration absorbers.")
+
+
+def _fail(message: str) -> None:
+    typer.echo(f"error: {message}", err=True)
+    raise typer.Exit(2)
+
+
+@app.command()
+def run(
+    scenario: Path = typer.Argument(..., help="Scenario TOML file."),
+    out: Optional[Path] = typer.Option(None, "--out", help="Output directory (overrides [output] directory)."),
+    workers: Optional[int] = typer.Option(None, "--workers", min=1, help="Threads of the embedded scheduler (default: all cores)."),
+    chunk: Optional[int] = typer.Option(None, "--chunk", min=0, help="Realisations per task (overrides [ensemble] chunk; 0 = automatic)."),
+    resume: bool = typer.Option(False, "--resume", help="Keep the chunks an interrupted run of the same scenario finished."),
+    scheduler: Optional[str] = typer.Option(None, "--scheduler", help="Address of a running dask.distributed scheduler."),
+    quiet: bool = typer.Option(False, "--quiet", help="No progress or summary output."),
+) -> None:
+    """Run a scenario and write realizations.parquet and summary.parquet."""
+    from .ensemble import run as run_study
+    from .metrics import METRICS
+
+    try:
+        study = load_scenario(scenario)
+    except ScenarioError as exc:
+        _fail(str(exc))
+    try:
+        realizations, summary = run_study(study, out, workers=workers, chunk=chunk, resume=resume,
+                                          scheduler=scheduler, progress=not quiet)
+    except (OSError, ValueError) as exc:
+        _fail(str(exc))
+    if quiet:
+        return
+    directory = out or study.base.output.directory or f"results/{study.name}"
+    typer.echo(f"results: {directory}/realizations.parquet ({len(realizations)} rows), "
+               f"{directory}/summary.parquet ({len(summary)} rows)")
+    import pandas as pd
+
+    columns = study.sweep_keys + ["n_ok", "n_failed"] + [f"{m}_mean" for m in ("edm", "e1_max", "impacts", "energy_residual")]
+    with pd.option_context("display.width", 200, "display.max_columns", 20, "display.precision", 4):
+        typer.echo(summary[columns].to_string(index=False))
+
+
+@app.command()
+def validate(scenario: Path = typer.Argument(..., help="Scenario TOML file.")) -> None:
+    """Check a scenario file without running it."""
+    try:
+        study = load_scenario(scenario)
+    except ScenarioError as exc:
+        _fail(str(exc))
+    typer.echo(f"{scenario}: ok ({len(study.points)} sweep point(s))")
+
+
+@app.command()
+def bench(
+    out: Path = typer.Option(Path("reports/benchmarks.md"), "--out", help="Markdown report to write."),
+) -> None:
+    """Measure throughput and error side by side; write the figures to reports/."""
+    from .bench import main as bench_main
+
+    bench_main(out)
+
+
+def main() -> None:
+    """Console entry point."""
+    app()
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,74 @@
+"""Per-realisation metrics (MODEL.md section 4) and the ensemble statistics of summary.parquet."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+
+from .kernels.common import SLOTS, STATUS_DIVERGED
+from .scene import Scene
+
+#: Metric columns of realizations.parquet, in order; each gets summary statistics.
+METRICS = (
+    "input_energy", "edm", "energy_integral", "e1_max", "x1_max", "x1_rms", "impacts",
+    "energy_residual", "primary_dissipation", "absorber_dissipation", "impact_loss",
+)
+
+#: Statistics of each metric in summary.parquet, as ``<metric>_<stat>``.
+STATISTICS = ("mean", "std", "sem", "q05", "q50", "q95")
+
+_S = {name: i for i, name in enumerate(SLOTS)}
+
+
+def finish(raw: np.ndarray, scene: Scene) -> dict[str, float | str]:
+    """Metric columns of one realisation from a kernel's raw vector ``raw`` (shape (n_slots,))."""
+    g = raw.__getitem__
+    input_energy = g(_S["input_energy"])
+    absorbed = g(_S["absorber_dissipation"]) + g(_S["impact_loss"])
+    dissipated = absorbed + g(_S["primary_dissipation"])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        edm = absorbed / input_energy if input_energy > 0 else np.nan
+        residual = ((input_energy - g(_S["final_energy"]) - dissipated) / input_energy
+                    if input_energy > 0 else np.nan)
+    row: dict[str, float | str] = {
+        "input_energy": input_energy,
+        "edm": edm,
+        "energy_integral": g(_S["energy_integral"]),
+        "e1_max": g(_S["e1_max"]),
+        "x1_max": g(_S["x1_max"]),
+        "x1_rms": float(np.sqrt(max(g(_S["x1_square_integral"]), 0.0) / scene.window)),
+        "impacts": int(g(_S["impacts"])),
+        "energy_residual": residual,
+        "primary_dissipation": g(_S["primary_dissipation"]),
+        "absorber_dissipation": g(_S["absorber_dissipation"]),
+        "impact_loss": g(_S["impact_loss"]),
+    }
+    finite = all(np.isfinite(v) for k, v in row.items() if k not in ("edm", "energy_residual"))
+    row["status"] = "diverged" if g(_S["status"]) == STATUS_DIVERGED or not finite else "ok"
+    return row
+
+
+def summarise(realizations: pd.DataFrame, parameters: list[str]) -> pd.DataFrame:
+    """One row per sweep point: parameters, ``n_ok``, ``n_failed`` and ``M_<stat>`` per metric.
+
+    Failed realisations are counted, never averaged in.
+    """
+    rows = []
+    for point, group in realizations.groupby("point", sort=True):
+        ok = group[group["status"] == "ok"]
+        row: dict[str, float | int] = {"point": int(point)}
+        for p in parameters:
+            row[p] = group[p].iloc[0]
+        row["n_ok"] = len(ok)
+        row["n_failed"] = len(group) - len(ok)
+        for m in METRICS:
+            values = ok[m].to_numpy(dtype=float)
+            n = values.size
+            std = float(np.std(values, ddof=1)) if n > 1 else np.nan
+            q = np.quantile(values, [0.05, 0.5, 0.95]) if n else [np.nan] * 3
+            row[f"{m}_mean"] = float(values.mean()) if n else np.nan
+            row[f"{m}_std"] = std
+            row[f"{m}_sem"] = std / np.sqrt(n) if n > 1 else np.nan
+            row[f"{m}_q05"], row[f"{m}_q50"], row[f"{m}_q95"] = (float(v) for v in q)
+        rows.append(row)
+    return pd.DataFrame(rows)

@@ -1,0 +1,88 @@
+"""Physics formulae of MODEL.md, written as small numba functions that the kernels inline.
+
+Bodies are numbered 0 (primary) and 1..n (absorbers).  Relative motion of absorber ``a`` is
+``u = x_a - x_1``, ``w = v_a - v_1``; ``f`` is the force the primary exerts on the absorber.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+#: Options of every compiled loop: cached on disk, GIL released, IEEE division (no Python
+#: ZeroDivisionError checks in hot loops).
+KERNEL = dict(cache=True, nogil=True, error_model="numpy")
+#: Options of the small formula functions the loops inline.
+INLINE = dict(KERNEL, inline="always")
+
+
+@njit(**INLINE)
+def spring_damper_force(u: float, w: float, k_lin: float, k_cubic: float, c: float) -> float:
+    """Force on an absorber from its attachment (MODEL.md section 2).
+
+    ``linear``: ``f = -k u - c w``; ``cubic`` (Wei et al. eq. 1): ``f = -k u^3 - k_lin u - c w``.
+    """
+    return -(k_lin + k_cubic * u * u) * u - c * w
+
+
+@njit(**INLINE)
+def spring_damper_energy(u: float, k_lin: float, k_cubic: float) -> float:
+    """Potential energy of an absorber attachment: ``k_lin u^2 / 2 + k_cubic u^4 / 4``."""
+    u2 = u * u
+    return 0.5 * k_lin * u2 + 0.25 * k_cubic * u2 * u2
+
+
+@njit(**INLINE)
+def restitution_impact(m1: float, ma: float, v1: float, va: float, r: float):
+    """Newton impact between primary and absorber (MODEL.md section 2, Wei et al. eqs. 2-3).
+
+    Momentum is conserved and the relative velocity reversed and scaled by ``r``.  Returns the
+    post-impact velocities and the energy lost,
+    ``dE = (1 - r^2) m1 ma / (2 (m1 + ma)) (va - v1)^2``.
+    """
+    w = va - v1
+    total = m1 + ma
+    v1_new = v1 + ma * (1.0 + r) * w / total
+    va_new = va - m1 * (1.0 + r) * w / total
+    loss = 0.5 * (1.0 - r * r) * m1 * ma / total * w * w
+    return v1_new, va_new, loss
+
+
+@njit(**INLINE)
+def primary_energy(m1: float, k1: float, x1: float, v1: float) -> float:
+    """``E1 = m1 v1^2 / 2 + k1 x1^2 / 2`` (MODEL.md section 4)."""
+    return 0.5 * m1 * v1 * v1 + 0.5 * k1 * x1 * x1
+
+
+@njit(**INLINE)
+def total_energy(x, v, mass, k1, k_lin, k_cubic) -> float:
+    """Mechanical energy stored in all bodies and springs."""
+    e = 0.5 * k1 * x[0] * x[0]
+    for i in range(mass.shape[0]):
+        e += 0.5 * mass[i] * v[i] * v[i]
+    for a in range(k_lin.shape[0]):
+        e += spring_damper_energy(x[a + 1] - x[0], k_lin[a], k_cubic[a])
+    return e
+
+
+@njit(**INLINE)
+def harmonic_force(t: float, harmonic) -> float:
+    """Sum of ``P cos(omega t + phi)`` over the rows ``(P, omega, phi)`` of ``harmonic``."""
+    f = 0.0
+    for j in range(harmonic.shape[0]):
+        f += harmonic[j, 0] * np.cos(harmonic[j, 1] * t + harmonic[j, 2])
+    return f
+
+
+@njit(**INLINE)
+def wall_hit_time(u: float, w: float, clearance: float):
+    """Time for a relative coordinate moving at constant speed ``w`` to reach ``|u| = clearance``.
+
+    Returns ``(tau, side)`` with side ``+1``/``-1`` for the wall hit, or ``(inf, 0)`` when at
+    rest relative to the primary.
+    """
+    if w > 0.0:
+        return max((clearance - u) / w, 0.0), 1
+    if w < 0.0:
+        return max((-clearance - u) / w, 0.0), -1
+    return np.inf, 0

@@ -1,0 +1,449 @@
+"""Scenario files: parsing, validation and sweep expansion (SCENARIOS.md).
+
+A scenario is validated completely before anything is computed.  Every mistake is reported
+as one line naming the file, the dotted key, the value and what is allowed, e.g.
+``scenarios/x.toml: absorbers.1.restitution = 1.4: must be in [0, 1]``.
+"""
+
+from __future__ import annotations
+
+import copy
+import math
+import tomllib
+from pathlib import Path
+from typing import Annotated, Any, Literal, Union
+
+import numpy as np
+from annotated_types import Ge, Gt, Le, Lt
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+
+
+class ScenarioError(ValueError):
+    """A scenario file that cannot be run; the message names file, key, value and rule."""
+
+
+class _Model(BaseModel):
+    model_config = ConfigDict(extra="forbid", strict=False, frozen=False)
+
+
+Positive = Annotated[float, Field(gt=0, allow_inf_nan=False)]
+NonNegative = Annotated[float, Field(ge=0, allow_inf_nan=False)]
+Real = Annotated[float, Field(allow_inf_nan=False)]
+
+
+class Primary(_Model):
+    """The linear primary oscillator (MODEL.md section 1)."""
+
+    mass: Positive
+    stiffness: NonNegative = 0.0
+    damping: NonNegative = 0.0
+
+
+class LinearAbsorber(_Model):
+    """Tuned mass damper: ``f = -k u - c w`` (MODEL.md section 2)."""
+
+    type: Literal["linear"]
+    mass: Positive
+    stiffness: NonNegative = 0.0
+    damping: NonNegative = 0.0
+
+
+class CubicAbsorber(_Model):
+    """Cubic NES: ``f = -k u^3 - k_lin u - c w`` (MODEL.md section 2, Wei et al. eq. 1)."""
+
+    type: Literal["cubic"]
+    mass: Positive
+    stiffness: NonNegative = 0.0
+    damping: NonNegative = 0.0
+    linear_stiffness: NonNegative = 0.0
+
+
+class ImpactAbsorber(_Model):
+    """Vibro-impact NES in a symmetric cavity with Newton restitution (MODEL.md section 2)."""
+
+    type: Literal["impact"]
+    mass: Positive
+    clearance: Positive
+    restitution: Annotated[float, Field(ge=0, le=1)]
+    stiffness: NonNegative = 0.0
+    damping: NonNegative = 0.0
+
+
+Absorber = Annotated[
+    Union[LinearAbsorber, CubicAbsorber, ImpactAbsorber], Field(discriminator="type")
+]
+
+
+class ImpulseLoad(_Model):
+    """Initial velocity ``v1(0) = velocity`` of the primary (Wei's impulse strength X)."""
+
+    type: Literal["impulse"]
+    velocity: Real
+
+
+class InitialLoad(_Model):
+    """Initial displacements and velocities of all bodies (primary first)."""
+
+    type: Literal["initial"]
+    displacement: list[Real] | None = None
+    velocity: list[Real] | None = None
+
+
+class HarmonicLoad(_Model):
+    """``F = amplitude * cos(frequency * t + phase)``, frequency in rad/s."""
+
+    type: Literal["harmonic"]
+    amplitude: Real
+    frequency: NonNegative
+    phase: Real = 0.0
+
+
+class WhiteNoiseLoad(_Model):
+    """Additive white-noise force, ``F dt = intensity dW`` (Ito)."""
+
+    type: Literal["white-noise"]
+    intensity: NonNegative
+
+
+Load = Annotated[
+    Union[ImpulseLoad, InitialLoad, HarmonicLoad, WhiteNoiseLoad], Field(discriminator="type")
+]
+
+SCHEMES = ("auto", "euler-maruyama", "rk4")
+
+
+class Simulation(_Model):
+    """Time grid and scheme; ``metrics_from`` opens the metrics window ``[t0, T]``."""
+
+    duration: Positive
+    dt: Positive
+    scheme: Literal["auto", "euler-maruyama", "rk4"] = "auto"
+    history: Literal[False] = False
+    metrics_from: NonNegative = 0.0
+
+
+class Ensemble(_Model):
+    """Monte Carlo ensemble size, master seed and chunk size (0 = automatic)."""
+
+    realizations: Annotated[int, Field(ge=1)] = 1
+    seed: Annotated[int, Field(ge=0)] = 0
+    chunk: Annotated[int, Field(ge=0)] = 0
+
+
+class Output(_Model):
+    """Where results go (default ``results/<name>``)."""
+
+    directory: str | None = None
+
+
+class Scenario(_Model):
+    """A complete scenario file (SCENARIOS.md)."""
+
+    name: Annotated[str, Field(min_length=1)]
+    description: str = ""
+    primary: Primary
+    absorbers: list[Absorber] = []
+    loads: list[Load] = []
+    simulation: Simulation
+    ensemble: Ensemble = Ensemble()
+    sweep: dict[str, Any] = {}
+    uncertain: dict[str, Any] = {}
+    output: Output = Output()
+
+    @model_validator(mode="after")
+    def _consistency(self) -> "Scenario":
+        sim = self.simulation
+        if sim.dt > sim.duration:
+            raise _KeyError("simulation.dt", sim.dt, f"must be <= simulation.duration ({sim.duration:g})")
+        if sim.metrics_from >= sim.duration:
+            raise _KeyError(
+                "simulation.metrics_from", sim.metrics_from, f"must be in [0, {sim.duration:g})"
+            )
+        nbodies = 1 + len(self.absorbers)
+        for i, load in enumerate(self.loads):
+            if isinstance(load, InitialLoad):
+                for field in ("displacement", "velocity"):
+                    values = getattr(load, field)
+                    if values is not None and len(values) != nbodies:
+                        raise _KeyError(
+                            f"loads.{i}.{field}", values,
+                            f"must list {nbodies} values (primary, then each absorber)",
+                        )
+        if self.uncertain:
+            raise _KeyError("uncertain", self.uncertain, "random parameters are not supported yet; remove the section")
+        if self.simulation.scheme == "rk4" and self.has_noise:
+            raise _KeyError("simulation.scheme", "rk4", "is deterministic; a scene with white noise needs 'euler-maruyama' or 'auto'")
+        return self
+
+    @property
+    def has_noise(self) -> bool:
+        """True when any random force acts."""
+        return any(isinstance(l, WhiteNoiseLoad) and l.intensity > 0 for l in self.loads)
+
+
+class _KeyError(ValueError):
+    """Raised inside validators to report a dotted key with its value and rule."""
+
+    def __init__(self, key: str, value: Any, rule: str):
+        super().__init__(rule)
+        self.key, self.value, self.rule = key, value, rule
+
+
+# ----------------------------------------------------------------------------- errors
+
+
+def _interval(metadata: list[Any]) -> str | None:
+    lo = hi = None
+    lo_open = hi_open = True
+    for m in metadata:
+        if isinstance(m, Ge):
+            lo, lo_open = m.ge, False
+        elif isinstance(m, Gt):
+            lo, lo_open = m.gt, True
+        elif isinstance(m, Le):
+            hi, hi_open = m.le, False
+        elif isinstance(m, Lt):
+            hi, hi_open = m.lt, True
+    if lo is None and hi is None:
+        return None
+    if hi is None:
+        return f"must be {'>' if lo_open else '>='} {lo:g}"
+    if lo is None:
+        return f"must be {'<' if hi_open else '<='} {hi:g}"
+    return f"must be in {'(' if lo_open else '['}{lo:g}, {hi:g}{')' if hi_open else ']'}"
+
+
+def _field_info(loc: tuple[Any, ...]):
+    """Walk a pydantic error location through the models to the FieldInfo it names."""
+    model: Any = Scenario
+    info = None
+    for part in loc:
+        if isinstance(part, int) or model is None:
+            continue
+        if isinstance(model, type) and issubclass(model, BaseModel):
+            if part not in model.model_fields:
+                return None
+            info = model.model_fields[part]
+            model = _inner_model(info.annotation)
+        elif isinstance(model, dict):  # tagged union: part is the tag
+            model = model.get(part)
+    return info
+
+
+def _inner_model(annotation: Any) -> Any:
+    """The model (or tag -> model map for a tagged union) inside an annotation, if any."""
+    args = getattr(annotation, "__args__", ())
+    if isinstance(annotation, type) and issubclass(annotation, BaseModel):
+        return annotation
+    for arg in args:
+        inner = _inner_model(getattr(arg, "__origin__", None) and arg or arg)
+        if inner is not None:
+            return inner
+    members = [a for a in args if isinstance(a, type) and issubclass(a, BaseModel)]
+    if members:
+        return {m.model_fields["type"].annotation.__args__[0]: m for m in members}
+    return None
+
+
+def _tags(union: Any) -> list[str]:
+    for arg in getattr(union, "__args__", ()):
+        members = getattr(arg, "__args__", ())
+        tags = [m.model_fields["type"].annotation.__args__[0] for m in members
+                if isinstance(m, type) and issubclass(m, BaseModel)]
+        if tags:
+            return tags
+    return []
+
+
+def _dotted(loc: tuple[Any, ...], data: Any) -> tuple[str, Any, tuple[Any, ...]]:
+    """Dotted key, the user's value at it, and the location without union tags."""
+    parts: list[str] = []
+    clean: list[Any] = []
+    node = data
+    for part in loc:
+        if isinstance(node, dict) and part in node:
+            node = node[part]
+        elif isinstance(node, list) and isinstance(part, int) and part < len(node):
+            node = node[part]
+        elif isinstance(part, str) and isinstance(node, dict) and node.get("type") == part:
+            continue  # the tag of a tagged union, not a key of the file
+        else:
+            node = _MISSING
+        parts.append(str(part))
+        clean.append(part)
+    return ".".join(parts), node, tuple(clean)
+
+
+_MISSING = object()
+
+
+def _describe(err: dict[str, Any], data: Any) -> tuple[str, Any, str]:
+    key, value, loc = _dotted(tuple(err["loc"]), data)
+    kind = err["type"]
+    info = _field_info(loc)
+    if kind == "missing":
+        what = "section" if info is not None and _inner_model(info.annotation) is not None else "key"
+        return key, _MISSING, f"missing required {what}"
+    if kind == "extra_forbidden":
+        parent = _field_info(loc[:-1])
+        allowed = _allowed_keys(loc[:-1], data)
+        return key, value, f"unknown key; allowed keys: {', '.join(allowed)}" if allowed else "unknown key"
+    if kind in ("union_tag_invalid", "union_tag_not_found"):
+        key = f"{key}.type" if key else "type"
+        value = value.get("type", _MISSING) if isinstance(value, dict) else value
+        tags = _tags(Scenario.model_fields[loc[0]].annotation)
+        return key, value, f"must be one of {', '.join(repr(t) for t in tags)}"
+    if kind in ("greater_than", "greater_than_equal", "less_than", "less_than_equal") and info:
+        return key, value, _interval(info.metadata) or err["msg"]
+    if kind in ("float_parsing", "float_type", "int_parsing", "int_type", "int_from_float"):
+        return key, value, "must be " + ("an integer" if kind.startswith("int") else "a number")
+    if kind == "finite_number":
+        return key, value, "must be a finite number"
+    if kind == "literal_error":
+        return key, value, "must be " + err["msg"].removeprefix("Input should be ")
+    if kind in ("model_type", "model_attributes_type", "dict_type"):
+        return key, value, "must be a table"
+    if kind == "list_type":
+        return key, value, "must be a list"
+    if kind == "value_error" and isinstance(err.get("ctx", {}).get("error"), _KeyError):
+        e = err["ctx"]["error"]
+        return e.key, e.value, e.rule
+    return key, value, err["msg"]
+
+
+def _allowed_keys(loc: tuple[Any, ...], data: Any) -> list[str]:
+    model: Any = Scenario
+    node = data
+    for part in loc:
+        node = node[part] if isinstance(node, (dict, list)) else None
+        if isinstance(part, int):
+            continue
+        info = model.model_fields.get(part) if isinstance(model, type) else None
+        model = _inner_model(info.annotation) if info else None
+    if isinstance(model, dict):
+        model = model.get(node.get("type")) if isinstance(node, dict) else None
+    return list(model.model_fields) if isinstance(model, type) else []
+
+
+def _format(source: str, key: str, value: Any, rule: str) -> str:
+    where = f"{source}: {key}" if key else source
+    if value is _MISSING:
+        return f"{where}: {rule}"
+    return f"{where} = {value!r}: {rule}"
+
+
+def _validate(data: dict[str, Any], source: str) -> Scenario:
+    try:
+        return Scenario.model_validate(data)
+    except ValidationError as exc:
+        errors = exc.errors(include_url=False)
+        lines = [_format(source, *_describe(e, data)) for e in errors]
+        raise ScenarioError("\n".join(dict.fromkeys(lines))) from None
+
+
+# ----------------------------------------------------------------------------- sweeps
+
+
+def _grid(key: str, spec: Any, source: str) -> list[float]:
+    """Values of one ``[sweep]`` entry: a list, ``{linspace = [a, b, n]}`` or ``{logspace = [a, b, n]}``."""
+    where = f"sweep.{key}"
+    if isinstance(spec, list):
+        values = spec
+    elif isinstance(spec, dict) and len(spec) == 1 and next(iter(spec)) in ("linspace", "logspace"):
+        kind, args = next(iter(spec.items()))
+        if not (isinstance(args, list) and len(args) == 3 and all(isinstance(a, (int, float)) for a in args)
+                and isinstance(args[2], int) and args[2] >= 1):
+            raise ScenarioError(_format(source, f"{where}.{kind}", args, "must be [first, last, count] with count an integer >= 1"))
+        first, last, count = args
+        if kind == "logspace":
+            if first <= 0 or last <= 0:
+                raise ScenarioError(_format(source, f"{where}.logspace", args, "first and last must be > 0 (values, not exponents)"))
+            values = list(np.geomspace(first, last, count))
+        else:
+            values = list(np.linspace(first, last, count))
+    else:
+        raise ScenarioError(_format(source, where, spec, "must be a list of values, {linspace = [first, last, count]} or {logspace = [first, last, count]}"))
+    if not values:
+        raise ScenarioError(_format(source, where, spec, "must hold at least one value"))
+    for v in values:
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+            raise ScenarioError(_format(source, where, spec, "values must be finite numbers"))
+    return [float(v) for v in values]
+
+
+def set_path(data: dict[str, Any], key: str, value: Any) -> None:
+    """Set the field addressed by a dotted path (``loads.0.velocity``) in raw scenario data."""
+    parts = key.split(".")
+    node: Any = data
+    for part in parts[:-1]:
+        node = node[int(part)] if isinstance(node, list) else node[part]
+    last = parts[-1]
+    if isinstance(node, list):
+        node[int(last)] = value
+    else:
+        node[last] = value
+
+
+def get_path(data: dict[str, Any], key: str) -> Any:
+    """The value addressed by a dotted path, or raise KeyError/IndexError/ValueError."""
+    node: Any = data
+    for part in key.split("."):
+        node = node[int(part)] if isinstance(node, list) else node[part]
+    return node
+
+
+class Study:
+    """A validated scenario file: the base scenario and its sweep points."""
+
+    def __init__(self, source: str, text: str, data: dict[str, Any]):
+        self.source = source
+        self.text = text
+        self.base = _validate(data, source)
+        self.sweep_keys = list(self.base.sweep)
+        grids = [_grid(k, self.base.sweep[k], source) for k in self.sweep_keys]
+        for key in self.sweep_keys:
+            try:
+                current = get_path(data, key)
+            except (KeyError, IndexError, ValueError, TypeError):
+                current = None
+            if isinstance(current, bool) or not isinstance(current, (int, float)):
+                raise ScenarioError(_format(source, f"sweep.{key}", self.base.sweep[key],
+                                            "must name an existing numeric field of the file (e.g. loads.0.velocity)"))
+        self.grid = [dict(zip(self.sweep_keys, combo)) for combo in _product(grids)]
+        self.points: list[Scenario] = []
+        for values in self.grid:
+            variant = copy.deepcopy(data)
+            for key, value in values.items():
+                set_path(variant, key, value)
+            self.points.append(_validate(variant, f"{source} (sweep point {values})"))
+
+    @property
+    def name(self) -> str:
+        return self.base.name
+
+
+def _product(grids: list[list[float]]) -> list[tuple[float, ...]]:
+    combos: list[tuple[float, ...]] = [()]
+    for grid in grids:
+        combos = [c + (v,) for c in combos for v in grid]
+    return combos
+
+
+def load_scenario(path: str | Path) -> Study:
+    """Read and validate a scenario file; raise ScenarioError with a one-line reason per mistake."""
+    path = Path(path)
+    source = str(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except OSError as exc:
+        raise ScenarioError(f"{source}: cannot read file ({exc.strerror})") from None
+    return parse_scenario(text, source)
+
+
+def parse_scenario(text: str, source: str = "<scenario>") -> Study:
+    """Validate scenario TOML text (``source`` names it in messages)."""
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ScenarioError(f"{source}: TOML syntax error: {exc}") from None
+    return Study(source, text, data)

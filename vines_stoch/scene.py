@@ -1,0 +1,96 @@
+"""A validated scenario turned into the arrays a kernel reads (MODEL.md sections 1-3)."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .scenario import (CubicAbsorber, HarmonicLoad, ImpactAbsorber, ImpulseLoad, InitialLoad,
+                       LinearAbsorber, Scenario, WhiteNoiseLoad)
+
+
+@dataclass(frozen=True)
+class Scene:
+    """Numeric description of one sweep point: bodies, absorber laws, loads, time grid."""
+
+    mass: np.ndarray          # (n_bodies,) primary first
+    k1: float
+    c1: float
+    k_lin: np.ndarray         # (n_absorbers,) linear attachment stiffness
+    k_cubic: np.ndarray       # (n_absorbers,) cubic attachment stiffness
+    c_abs: np.ndarray         # (n_absorbers,) attachment damping
+    impact_body: np.ndarray   # (n_impact,) absorber index of each impact absorber
+    clearance: np.ndarray     # (n_impact,)
+    restitution: np.ndarray   # (n_impact,)
+    harmonic: np.ndarray      # (n_harmonic, 3): amplitude, frequency, phase
+    sigma: float              # white-noise intensity, F dt = sigma dW
+    x0: np.ndarray
+    v0: np.ndarray
+    dt: float
+    n_steps: int
+    i0: int                   # first step of the metrics window
+    scheme: str               # "rk4" | "euler-maruyama"
+
+    @property
+    def has_noise(self) -> bool:
+        return self.sigma > 0.0
+
+    @property
+    def has_impact(self) -> bool:
+        return self.impact_body.shape[0] > 0
+
+    @property
+    def window(self) -> float:
+        """Length of the metrics window."""
+        return (self.n_steps - self.i0) * self.dt
+
+
+def build_scene(scenario: Scenario) -> Scene:
+    """Arrays of one scenario (one sweep point)."""
+    absorbers = scenario.absorbers
+    n = 1 + len(absorbers)
+    mass = np.array([scenario.primary.mass] + [a.mass for a in absorbers], dtype=float)
+    k_lin = np.zeros(n - 1)
+    k_cubic = np.zeros(n - 1)
+    c_abs = np.zeros(n - 1)
+    impact = []
+    for i, a in enumerate(absorbers):
+        c_abs[i] = a.damping
+        if isinstance(a, CubicAbsorber):
+            k_cubic[i] = a.stiffness
+            k_lin[i] = a.linear_stiffness
+        elif isinstance(a, (LinearAbsorber, ImpactAbsorber)):
+            k_lin[i] = a.stiffness
+        if isinstance(a, ImpactAbsorber):
+            impact.append((i, a.clearance, a.restitution))
+    x0 = np.zeros(n)
+    v0 = np.zeros(n)
+    harmonic = []
+    variance = 0.0
+    for load in scenario.loads:
+        if isinstance(load, ImpulseLoad):
+            v0[0] += load.velocity
+        elif isinstance(load, InitialLoad):
+            x0 += np.asarray(load.displacement or np.zeros(n), dtype=float)
+            v0 += np.asarray(load.velocity or np.zeros(n), dtype=float)
+        elif isinstance(load, HarmonicLoad):
+            harmonic.append((load.amplitude, load.frequency, load.phase))
+        elif isinstance(load, WhiteNoiseLoad):
+            variance += load.intensity**2
+    sim = scenario.simulation
+    n_steps = max(1, math.ceil(sim.duration / sim.dt - 1e-9))
+    scheme = sim.scheme
+    if scheme == "auto":
+        scheme = "euler-maruyama" if variance > 0 else "rk4"
+    return Scene(
+        mass=mass, k1=float(scenario.primary.stiffness), c1=float(scenario.primary.damping),
+        k_lin=k_lin, k_cubic=k_cubic, c_abs=c_abs,
+        impact_body=np.array([i for i, _, _ in impact], dtype=np.int64),
+        clearance=np.array([c for _, c, _ in impact], dtype=float),
+        restitution=np.array([r for _, _, r in impact], dtype=float),
+        harmonic=np.array(harmonic, dtype=float).reshape(-1, 3),
+        sigma=math.sqrt(variance), x0=x0, v0=v0, dt=float(sim.dt), n_steps=n_steps,
+        i0=min(n_steps - 1, int(round(sim.metrics_from / sim.dt))), scheme=scheme,
+    )
