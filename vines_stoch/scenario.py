@@ -230,29 +230,27 @@ def _field_info(loc: tuple[Any, ...]):
     return info
 
 
+def _members(annotation: Any) -> list[type[BaseModel]]:
+    """Model classes inside an annotation (through lists, unions and Annotated)."""
+    found: list[type[BaseModel]] = []
+    for arg in getattr(annotation, "__args__", ()):
+        if isinstance(arg, type) and issubclass(arg, BaseModel):
+            found.append(arg)
+        else:
+            found += _members(arg)
+    return found
+
+
 def _inner_model(annotation: Any) -> Any:
     """The model (or tag -> model map for a tagged union) inside an annotation, if any."""
-    args = getattr(annotation, "__args__", ())
     if isinstance(annotation, type) and issubclass(annotation, BaseModel):
         return annotation
-    for arg in args:
-        inner = _inner_model(getattr(arg, "__origin__", None) and arg or arg)
-        if inner is not None:
-            return inner
-    members = [a for a in args if isinstance(a, type) and issubclass(a, BaseModel)]
+    members = _members(annotation)
+    if len(members) == 1:
+        return members[0]
     if members:
         return {m.model_fields["type"].annotation.__args__[0]: m for m in members}
     return None
-
-
-def _tags(union: Any) -> list[str]:
-    for arg in getattr(union, "__args__", ()):
-        members = getattr(arg, "__args__", ())
-        tags = [m.model_fields["type"].annotation.__args__[0] for m in members
-                if isinstance(m, type) and issubclass(m, BaseModel)]
-        if tags:
-            return tags
-    return []
 
 
 def _dotted(loc: tuple[Any, ...], data: Any) -> tuple[str, Any, tuple[Any, ...]]:
@@ -280,19 +278,18 @@ _MISSING = object()
 def _describe(err: dict[str, Any], data: Any) -> tuple[str, Any, str]:
     key, value, loc = _dotted(tuple(err["loc"]), data)
     kind = err["type"]
-    info = _field_info(loc)
+    info = _field_info(tuple(err["loc"]))
     if kind == "missing":
         what = "section" if info is not None and _inner_model(info.annotation) is not None else "key"
         return key, _MISSING, f"missing required {what}"
     if kind == "extra_forbidden":
-        parent = _field_info(loc[:-1])
         allowed = _allowed_keys(loc[:-1], data)
         return key, value, f"unknown key; allowed keys: {', '.join(allowed)}" if allowed else "unknown key"
     if kind in ("union_tag_invalid", "union_tag_not_found"):
         key = f"{key}.type" if key else "type"
         value = value.get("type", _MISSING) if isinstance(value, dict) else value
-        tags = _tags(Scenario.model_fields[loc[0]].annotation)
-        return key, value, f"must be one of {', '.join(repr(t) for t in tags)}"
+        tags = err.get("ctx", {}).get("expected_tags", "")
+        return key, value, f"must be one of {tags}"
     if kind in ("greater_than", "greater_than_equal", "less_than", "less_than_equal") and info:
         return key, value, _interval(info.metadata) or err["msg"]
     if kind in ("float_parsing", "float_type", "int_parsing", "int_type", "int_from_float"):

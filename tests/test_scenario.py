@@ -1,0 +1,108 @@
+"""Scenario validation: one clear message per mistake, naming file, key, value and rule."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from vines_stoch import ScenarioError, load_scenario
+
+GOOD = """
+name = "t"
+[primary]
+mass = 1.0
+stiffness = 1.0
+damping = 0.0
+[[absorbers]]
+type = "cubic"
+mass = 0.05
+stiffness = 1.0
+damping = 0.01
+[[absorbers]]
+type = "impact"
+mass = 0.05
+clearance = 0.2
+restitution = 0.6
+[[loads]]
+type = "impulse"
+velocity = 0.5
+[simulation]
+duration = 10.0
+dt = 1e-3
+"""
+
+CASES = [
+    ("unknown key", GOOD.replace("damping = 0.0\n[[", "dampnig = 0.0\n[["),
+     "primary.dampnig = 0.0: unknown key; allowed keys: mass, stiffness, damping"),
+    ("wrong type", GOOD.replace("mass = 1.0", 'mass = "heavy"'),
+     "primary.mass = 'heavy': must be a number"),
+    ("negative mass", GOOD.replace("mass = 1.0", "mass = -1.0"),
+     "primary.mass = -1.0: must be > 0"),
+    ("restitution", GOOD.replace("restitution = 0.6", "restitution = 1.4"),
+     "absorbers.1.restitution = 1.4: must be in [0, 1]"),
+    ("missing section", GOOD.replace("[simulation]\nduration = 10.0\ndt = 1e-3\n", ""),
+     "simulation: missing required section"),
+    ("unknown absorber type", GOOD.replace('type = "cubic"', 'type = "magnetic"'),
+     "absorbers.0.type = 'magnetic': must be one of 'linear', 'cubic', 'impact'"),
+    ("negative damping", GOOD.replace("damping = 0.01", "damping = -0.01"),
+     "absorbers.0.damping = -0.01: must be >= 0"),
+    ("dt beyond duration", GOOD.replace("dt = 1e-3", "dt = 20.0"),
+     "simulation.dt = 20.0: must be <= simulation.duration (10)"),
+    ("bad sweep key", GOOD + '[sweep]\n"loads.3.velocity" = [1.0, 2.0]\n',
+     "sweep.loads.3.velocity = [1.0, 2.0]: must name an existing numeric field"),
+    ("sweep out of range", GOOD + '[sweep]\n"absorbers.1.restitution" = [0.5, 1.5]\n',
+     "absorbers.1.restitution = 1.5: must be in [0, 1]"),
+]
+
+
+@pytest.mark.parametrize("label,text,message", CASES, ids=[c[0] for c in CASES])
+def test_bad_input_names_file_key_value_and_rule(write, label, text, message):
+    path = write(text)
+    with pytest.raises(ScenarioError) as err:
+        load_scenario(path)
+    assert str(err.value).startswith(str(path)), err.value
+    assert message in str(err.value)
+
+
+def test_zero_stiffness_and_damping_are_valid(write):
+    text = GOOD.replace("stiffness = 1.0\ndamping = 0.0", "stiffness = 0.0\ndamping = 0.0")
+    text = text.replace("damping = 0.01", "damping = 0.0")
+    study = load_scenario(write(text))
+    assert study.base.primary.stiffness == 0.0
+
+
+def test_sweep_grid_values(write):
+    study = load_scenario(write(GOOD + '[sweep]\n"loads.0.velocity" = { logspace = [0.01, 10.0, 4] }\n'))
+    values = [p.loads[0].velocity for p in study.points]
+    assert values == pytest.approx([0.01, 0.1, 1.0, 10.0], rel=1e-12)
+
+
+@pytest.mark.parametrize("text", [c[1] for c in CASES[:6]], ids=[c[0] for c in CASES[:6]])
+def test_cli_exits_nonzero_without_traceback(write, text):
+    path = write(text)
+    proc = subprocess.run([sys.executable, "-m", "vines_stoch.cli", "validate", str(path)],
+                          capture_output=True, text=True)
+    assert proc.returncode != 0
+    assert "Traceback" not in proc.stderr + proc.stdout
+    lines = [l for l in proc.stderr.splitlines() if l.strip()]
+    assert len(lines) == 1 and str(path) in lines[0], proc.stderr
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.floats(allow_nan=True, allow_infinity=True))
+def test_restitution_accepted_exactly_in_unit_interval(value):
+    from vines_stoch import parse_scenario
+
+    text = GOOD.replace("restitution = 0.6", f"restitution = {value!r}".replace("inf", "inf").replace("nan", "nan"))
+    if value != value or value in (float("inf"), float("-inf")):
+        text = GOOD.replace("restitution = 0.6", f"restitution = {'nan' if value != value else ('inf' if value > 0 else '-inf')}")
+    ok = value == value and 0.0 <= value <= 1.0
+    if ok:
+        assert parse_scenario(text).base.absorbers[1].restitution == value
+    else:
+        with pytest.raises(ScenarioError, match="absorbers.1.restitution"):
+            parse_scenario(text)
