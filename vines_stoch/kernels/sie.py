@@ -95,11 +95,13 @@ def sie_kernel(has_noise: bool, has_impact: bool):
         m0 = mass[0]
         e1_prev = primary_energy(m0, k1, x[0], v[0])
         x2_prev = x[0] * x[0]
+        # accumulators in registers; written to ``out`` once at the end
+        work = d_primary = d_absorber = e_integral = x2_integral = e1_max = x1_max = 0.0
         for i in range(n_steps):
             if i == i0:
-                out[INPUT] = total_energy(x, v, mass, k1, k_lin, k_cubic)
-                out[E1_MAX] = e1_prev
-                out[X1_MAX] = abs(x[0])
+                work = total_energy(x, v, mass, k1, k_lin, k_cubic)
+                e1_max = e1_prev
+                x1_max = abs(x[0])
             if i % CHECK_EVERY == 0:
                 if diverged(x):
                     out[STATUS] = STATUS_DIVERGED
@@ -128,11 +130,11 @@ def sie_kernel(has_noise: bool, has_impact: bool):
             inside = i >= i0
             if inside:
                 v_mid = 0.5 * (v[0] + vn[0])
-                out[INPUT] += (load * dt + dw) * v_mid
-                out[PRIMARY_DISS] += c1 * v[0] * dt * v_mid
+                work += (load * dt + dw) * v_mid
+                d_primary += c1 * v[0] * dt * v_mid
                 for a in range(nb - 1):
                     w = v[a + 1] - v[0]
-                    out[ABSORBER_DISS] += c_abs[a] * w * dt * 0.5 * (w + vn[a + 1] - vn[0])
+                    d_absorber += c_abs[a] * w * dt * 0.5 * (w + vn[a + 1] - vn[0])
             for b in range(nb):
                 v[b] = vn[b]
             # drift
@@ -152,14 +154,21 @@ def sie_kernel(has_noise: bool, has_impact: bool):
             e1 = primary_energy(m0, k1, x[0], v[0])
             x2 = x[0] * x[0]
             if inside:
-                out[ENERGY_INT] += 0.5 * (e1 + e1_prev) * dt
-                out[X1_SQ_INT] += 0.5 * (x2 + x2_prev) * dt
-                out[E1_MAX] = max(out[E1_MAX], e1)
-                out[X1_MAX] = max(out[X1_MAX], abs(x[0]))
+                e_integral += 0.5 * (e1 + e1_prev) * dt
+                x2_integral += 0.5 * (x2 + x2_prev) * dt
+                e1_max = max(e1_max, e1)
+                x1_max = max(x1_max, abs(x[0]))
             e1_prev = e1
             x2_prev = x2
         if diverged(x):
             out[STATUS] = STATUS_DIVERGED
+        out[INPUT] = work
+        out[PRIMARY_DISS] = d_primary
+        out[ABSORBER_DISS] = d_absorber
+        out[ENERGY_INT] = e_integral
+        out[X1_SQ_INT] = x2_integral
+        out[E1_MAX] = e1_max
+        out[X1_MAX] = x1_max
         out[FINAL_ENERGY] = total_energy(x, v, mass, k1, k_lin, k_cubic)
 
     return kernel
