@@ -4,7 +4,7 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: run test bench env clean
+.PHONY: run test bench env clean clean-cache
 
 $(STAMP): pyproject.toml
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
@@ -23,5 +23,10 @@ test: $(STAMP)
 bench: $(STAMP)
 	$(BIN)/vines-stoch bench
 
-clean:
+# numba's on-disk cache is keyed on each kernel's own file: clear it after editing the
+# formula modules the kernels inline (physics.py, kernels/common.py).
+clean-cache:
+	find vines_stoch -name '*.nbi' -delete -o -name '*.nbc' -delete
+
+clean: clean-cache
 	rm -rf $(VENV) results .pytest_cache
