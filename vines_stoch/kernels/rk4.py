@@ -27,7 +27,7 @@ NEWTON_ITERATIONS = 12
 
 @njit(**INLINE)
 def accelerations(x, v, t, mass, k1, c1, k_lin, k_cubic, c_abs, harmonic, impact_body, stuck,
-                  release, acc):
+                  release, acc, sticking=True):
     """Accelerations of all bodies into ``acc``; returns the rates of the energy integrals
     (load power, primary damping power, absorber damping power, ``E1``, ``x1^2``)."""
     attachment_forces(x, v, k1, c1, k_lin, k_cubic, c_abs, acc)
@@ -35,7 +35,7 @@ def accelerations(x, v, t, mass, k1, c1, k_lin, k_cubic, c_abs, harmonic, impact
     acc[0] += load
     for b in range(mass.shape[0]):
         acc[b] /= mass[b]
-    if impact_body.shape[0] > 0:
+    if sticking:
         stick_together(mass, acc, stuck, impact_body, release)
     absorber_power = 0.0
     for a in range(c_abs.shape[0]):
@@ -47,27 +47,27 @@ def accelerations(x, v, t, mass, k1, c1, k_lin, k_cubic, c_abs, harmonic, impact
 
 @njit(**INLINE)
 def rk4_step(x, v, t, h, xo, vo, a1, a2, a3, a4, xs, v2, v3, v4, mass, k1, c1, k_lin, k_cubic, c_abs, harmonic,
-             impact_body, stuck):
+             impact_body, stuck, sticking):
     """One RK4 step of size ``h`` from ``(x, v)`` into ``(xo, vo)``; returns the increments
     of the five energy integrals."""
     nb = mass.shape[0]
     r1 = accelerations(x, v, t, mass, k1, c1, k_lin, k_cubic, c_abs, harmonic, impact_body,
-                       stuck, False, a1)
+                       stuck, False, a1, sticking)
     for b in range(nb):
         xs[b] = x[b] + 0.5 * h * v[b]
         v2[b] = v[b] + 0.5 * h * a1[b]
     r2 = accelerations(xs, v2, t + 0.5 * h, mass, k1, c1, k_lin, k_cubic, c_abs, harmonic,
-                       impact_body, stuck, False, a2)
+                       impact_body, stuck, False, a2, sticking)
     for b in range(nb):
         xs[b] = x[b] + 0.5 * h * v2[b]
         v3[b] = v[b] + 0.5 * h * a2[b]
     r3 = accelerations(xs, v3, t + 0.5 * h, mass, k1, c1, k_lin, k_cubic, c_abs, harmonic,
-                       impact_body, stuck, False, a3)
+                       impact_body, stuck, False, a3, sticking)
     for b in range(nb):
         xs[b] = x[b] + h * v3[b]
         v4[b] = v[b] + h * a3[b]
     r4 = accelerations(xs, v4, t + h, mass, k1, c1, k_lin, k_cubic, c_abs, harmonic,
-                       impact_body, stuck, False, a4)
+                       impact_body, stuck, False, a4, sticking)
     for b in range(nb):
         xo[b] = x[b] + h / 6.0 * (v[b] + 2.0 * v2[b] + 2.0 * v3[b] + v4[b])
         vo[b] = v[b] + h / 6.0 * (a1[b] + 2.0 * a2[b] + 2.0 * a3[b] + a4[b])
@@ -126,8 +126,12 @@ def rk4_kernel(has_impact: bool):
             t = i * dt
             left = dt
             for event in range(MAX_EVENTS + 1):
-                inc = rk4_step(x, v, t, left, xn, vn, a1, a2, a3, a4, xs, v2, v3, v4, mass, k1, c1, k_lin, k_cubic, c_abs,
-                               harmonic, impact_body, stuck)
+                if has_impact and stuck.any():
+                    inc = rk4_step(x, v, t, left, xn, vn, a1, a2, a3, a4, xs, v2, v3, v4, mass, k1, c1,
+                                   k_lin, k_cubic, c_abs, harmonic, impact_body, stuck, True)
+                else:  # the common case, compiled without the contact constraint
+                    inc = rk4_step(x, v, t, left, xn, vn, a1, a2, a3, a4, xs, v2, v3, v4, mass, k1, c1,
+                                   k_lin, k_cubic, c_abs, harmonic, impact_body, stuck, False)
                 hit, side, tau, j = -1, 0, left, 0
                 if has_impact and event < MAX_EVENTS:
                     hit, side, tau = first_crossing(x, v, xn, clearance, impact_body, stuck, left)
@@ -135,7 +139,7 @@ def rk4_kernel(has_impact: bool):
                     j = impact_body[hit] + 1
                     for _ in range(NEWTON_ITERATIONS):
                         inc = rk4_step(x, v, t, tau, xn, vn, a1, a2, a3, a4, xs, v2, v3, v4, mass, k1, c1, k_lin, k_cubic,
-                                       c_abs, harmonic, impact_body, stuck)
+                                       c_abs, harmonic, impact_body, stuck, True)
                         gap = side * (xn[j] - xn[0]) - clearance[hit]
                         approach = side * (vn[j] - vn[0])
                         if approach <= 0.0:
@@ -145,7 +149,7 @@ def rk4_kernel(has_impact: bool):
                         if abs(correction) <= 1e-15 * dt:
                             break
                     inc = rk4_step(x, v, t, tau, xn, vn, a1, a2, a3, a4, xs, v2, v3, v4, mass, k1, c1, k_lin, k_cubic, c_abs,
-                                   harmonic, impact_body, stuck)
+                                   harmonic, impact_body, stuck, True)
                 for b in range(nb):
                     x[b] = xn[b]
                     v[b] = vn[b]
@@ -182,7 +186,7 @@ def rk4_kernel(has_impact: bool):
                     out[IMPACT_LOSS] += loss
                     out[IMPACTS] += 1
                     out[E1_MAX] = max(out[E1_MAX], primary_energy(m0, k1, x[0], v[0]))
-            if has_impact:
+            if has_impact and stuck.any():
                 pin_to_walls(x, stuck, impact_body, clearance)
                 # release contacts the wall would have to pull (checked at step ends)
                 accelerations(x, v, t + left, mass, k1, c1, k_lin, k_cubic, c_abs, harmonic,
