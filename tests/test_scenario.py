@@ -92,16 +92,21 @@ def test_cli_exits_nonzero_without_traceback(write, text):
     assert len(lines) == 1 and str(path) in lines[0], proc.stderr
 
 
+def _toml_float(value: float) -> str:
+    if value != value:
+        return "nan"
+    if value in (float("inf"), float("-inf")):
+        return "inf" if value > 0 else "-inf"
+    return repr(value)
+
+
 @settings(max_examples=60, deadline=None)
 @given(st.floats(allow_nan=True, allow_infinity=True))
 def test_restitution_accepted_exactly_in_unit_interval(value):
     from vines_stoch import parse_scenario
 
-    text = GOOD.replace("restitution = 0.6", f"restitution = {value!r}".replace("inf", "inf").replace("nan", "nan"))
-    if value != value or value in (float("inf"), float("-inf")):
-        text = GOOD.replace("restitution = 0.6", f"restitution = {'nan' if value != value else ('inf' if value > 0 else '-inf')}")
-    ok = value == value and 0.0 <= value <= 1.0
-    if ok:
+    text = GOOD.replace("restitution = 0.6", f"restitution = {_toml_float(value)}")
+    if value == value and 0.0 <= value <= 1.0:
         assert parse_scenario(text).base.absorbers[1].restitution == value
     else:
         with pytest.raises(ScenarioError, match="absorbers.1.restitution"):
