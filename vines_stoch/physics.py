@@ -55,17 +55,6 @@ def primary_energy(m1: float, k1: float, x1: float, v1: float) -> float:
 
 
 @njit(**INLINE)
-def total_energy(x, v, mass, k1, k_lin, k_cubic) -> float:
-    """Mechanical energy stored in all bodies and springs."""
-    e = 0.5 * k1 * x[0] * x[0]
-    for i in range(mass.shape[0]):
-        e += 0.5 * mass[i] * v[i] * v[i]
-    for a in range(k_lin.shape[0]):
-        e += spring_damper_energy(x[a + 1] - x[0], k_lin[a], k_cubic[a])
-    return e
-
-
-@njit(**INLINE)
 def harmonic_force(t: float, harmonic) -> float:
     """Sum of ``P cos(omega t + phi)`` over the rows ``(P, omega, phi)`` of ``harmonic``."""
     f = 0.0
@@ -86,3 +75,23 @@ def wall_hit_time(u: float, w: float, clearance: float):
     if w < 0.0:
         return max((-clearance - u) / w, 0.0), -1
     return np.inf, 0
+
+
+def hertz_constant(young, poisson, radius: float, q: float = 0.318) -> float:
+    """Hertz constant ``K = (4/3) q / ((delta_1 + delta_2) sqrt(A + B))`` of a sphere of
+    ``radius`` on a flat, ``A = B = 1 / (2 radius)``, ``delta_i = (1 - nu_i^2) / (pi E_i)``
+    (MODEL.md section 2, Lizunov et al. eq. 3)."""
+    deltas = sum((1.0 - nu * nu) / (np.pi * e) for e, nu in zip(young, poisson))
+    return 4.0 / 3.0 * q / (deltas * np.sqrt(1.0 / radius))
+
+
+@njit(**INLINE)
+def hertz_force(z: float, k: float) -> float:
+    """Quasi-static Hertz contact force ``K z^1.5`` for an approach ``z > 0``, else 0."""
+    return k * z * np.sqrt(z) if z > 0.0 else 0.0
+
+
+@njit(**INLINE)
+def hertz_energy(z: float, k: float) -> float:
+    """Energy stored in a Hertz contact: ``0.4 K z^2.5`` for ``z > 0``, else 0."""
+    return 0.4 * k * z * z * np.sqrt(z) if z > 0.0 else 0.0

@@ -17,6 +17,8 @@ import numpy as np
 from annotated_types import Ge, Gt, Le, Lt
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
+from .physics import hertz_constant
+
 
 class ScenarioError(ValueError):
     """A scenario file that cannot be run; the message names file, key, value and rule."""
@@ -69,8 +71,88 @@ class ImpactAbsorber(_Model):
     damping: NonNegative = 0.0
 
 
+class Contact(_Model):
+    """Hertz contact constant ``K`` of one side, given directly (``k``) or from the surfaces:
+    Young's moduli and Poisson ratios ``[barrier, absorber]`` and the sphere ``radius``
+    (MODEL.md section 2)."""
+
+    k: Positive | None = None
+    young: Annotated[list[Positive], Field(min_length=2, max_length=2)] | None = None
+    poisson: Annotated[list[Annotated[float, Field(ge=0, lt=0.5)]], Field(min_length=2, max_length=2)] | None = None
+    radius: Positive | None = None
+    q: Positive = 0.318
+
+    @model_validator(mode="after")
+    def _one_way(self) -> "Contact":
+        surfaces = (self.young, self.poisson, self.radius)
+        if self.k is not None and any(s is not None for s in surfaces):
+            raise _KeyError("k", self.k, "give either k or young/poisson/radius, not both")
+        if self.k is None and any(s is None for s in surfaces):
+            missing = [n for n, s in zip(("young", "poisson", "radius"), surfaces) if s is None]
+            raise _KeyError(missing[0], None, "missing: give k, or all of young = [barrier, absorber], "
+                            "poisson = [barrier, absorber] and radius")
+        return self
+
+    @property
+    def constant(self) -> float:
+        """``K`` of ``F = K z^1.5``."""
+        if self.k is not None:
+            return float(self.k)
+        return hertz_constant(self.young, self.poisson, self.radius, self.q)
+
+
+class HertzAbsorber(_Model):
+    """Vibro-impact NES with finite-duration Hertz contact (MODEL.md section 2, Lizunov et al.).
+
+    ``offset`` is D (single-sided) or V (double-sided), ``gap`` is C.  ``rest`` overrides the
+    spring's rest offset (default D, or V + C for double-sided).
+    """
+
+    type: Literal["hertz"]
+    geometry: Literal["single-sided", "double-sided"]
+    mass: Positive
+    stiffness: NonNegative = 0.0
+    damping: NonNegative = 0.0
+    offset: NonNegative
+    gap: Positive
+    contact_left: Contact
+    contact_right: Contact
+    obstacle: Literal["from-rest", "from-primary"] = "from-rest"
+    rest: Real | None = None
+
+    @model_validator(mode="after")
+    def _geometry(self) -> "HertzAbsorber":
+        if self.obstacle == "from-primary":
+            if self.geometry != "single-sided":
+                raise _KeyError("obstacle", self.obstacle, "'from-primary' (seed 002) is defined for single-sided geometry only")
+            if self.offset >= self.gap:
+                raise _KeyError("offset", self.offset, f"must be < gap ({self.gap:g}) with obstacle = 'from-primary' "
+                                "(the absorber would start inside the obstacle)")
+        return self
+
+    @property
+    def walls(self) -> tuple[float, float]:
+        """Relative positions ``(lo, hi)`` of the left and right contact surfaces:
+        ``z_L = lo - u``, ``z_R = u - hi``."""
+        if self.geometry == "double-sided":
+            return self.offset, self.offset + 2.0 * self.gap
+        if self.obstacle == "from-primary":
+            return 0.0, self.gap
+        return 0.0, self.offset + self.gap
+
+    @property
+    def start(self) -> float:
+        """Initial relative position: D (single-sided) or V + C (double-sided)."""
+        return self.offset + (self.gap if self.geometry == "double-sided" else 0.0)
+
+    @property
+    def spring_rest(self) -> float:
+        """Rest offset of the linear spring."""
+        return self.start if self.rest is None else self.rest
+
+
 Absorber = Annotated[
-    Union[LinearAbsorber, CubicAbsorber, ImpactAbsorber], Field(discriminator="type")
+    Union[LinearAbsorber, CubicAbsorber, ImpactAbsorber, HertzAbsorber], Field(discriminator="type")
 ]
 
 
@@ -304,7 +386,8 @@ def _describe(err: dict[str, Any], data: Any) -> tuple[str, Any, str]:
         return key, value, "must be a list"
     if kind == "value_error" and isinstance(err.get("ctx", {}).get("error"), _KeyError):
         e = err["ctx"]["error"]
-        return e.key, e.value, e.rule
+        value = e.value if e.value is not None else _MISSING
+        return (f"{key}.{e.key}" if key else e.key), value, e.rule
     return key, value, err["msg"]
 
 
@@ -396,17 +479,19 @@ class Study:
         self.source = source
         self.text = text
         self.base = _validate(data, source)
-        self.sweep_keys = list(self.base.sweep)
-        grids = [_grid(k, self.base.sweep[k], source) for k in self.sweep_keys]
+        sweep = dict(self.base.sweep)
+        zipped = _zipped(sweep.pop("zip", []), sweep, source)
+        self.sweep_keys = list(sweep)
+        grids = {k: _grid(k, sweep[k], source) for k in self.sweep_keys}
         for key in self.sweep_keys:
             try:
                 current = get_path(data, key)
             except (KeyError, IndexError, ValueError, TypeError):
                 current = None
             if isinstance(current, bool) or not isinstance(current, (int, float)):
-                raise ScenarioError(_format(source, f"sweep.{key}", self.base.sweep[key],
+                raise ScenarioError(_format(source, f"sweep.{key}", sweep[key],
                                             "must name an existing numeric field of the file (e.g. loads.0.velocity)"))
-        self.grid = [dict(zip(self.sweep_keys, combo)) for combo in _product(grids)]
+        self.grid = _product(grids, zipped, source)
         self.points: list[Scenario] = []
         for values in self.grid:
             variant = copy.deepcopy(data)
@@ -419,11 +504,31 @@ class Study:
         return self.base.name
 
 
-def _product(grids: list[list[float]]) -> list[tuple[float, ...]]:
-    combos: list[tuple[float, ...]] = [()]
-    for grid in grids:
-        combos = [c + (v,) for c in combos for v in grid]
-    return combos
+def _zipped(spec: Any, sweep: dict[str, Any], source: str) -> list[str]:
+    """Keys of ``sweep.zip``: swept together, value by value, as one axis of the grid."""
+    if not (isinstance(spec, list) and all(isinstance(k, str) for k in spec)):
+        raise ScenarioError(_format(source, "sweep.zip", spec, "must be a list of swept keys"))
+    for key in spec:
+        if key not in sweep:
+            raise ScenarioError(_format(source, "sweep.zip", spec, f"names {key!r}, which is not swept in [sweep]"))
+    return list(dict.fromkeys(spec))
+
+
+def _product(grids: dict[str, list[float]], zipped: list[str], source: str) -> list[dict[str, float]]:
+    """Sweep points: the cartesian product of the axes, zipped keys forming one axis."""
+    if zipped:
+        lengths = {len(grids[k]) for k in zipped}
+        if len(lengths) > 1:
+            sizes = ", ".join(f"{k}: {len(grids[k])}" for k in zipped)
+            raise ScenarioError(_format(source, "sweep.zip", zipped, f"zipped keys need equally many values ({sizes})"))
+    axes: list[list[dict[str, float]]] = []
+    if zipped:
+        axes.append([{k: grids[k][i] for k in zipped} for i in range(len(grids[zipped[0]]))])
+    axes += [[{k: v} for v in grid] for k, grid in grids.items() if k not in zipped]
+    points: list[dict[str, float]] = [{}]
+    for axis in axes:
+        points = [{**p, **a} for p in points for a in axis]
+    return [{k: p[k] for k in grids} for p in points]
 
 
 def load_scenario(path: str | Path) -> Study:

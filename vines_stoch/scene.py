@@ -7,8 +7,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .scenario import (CubicAbsorber, HarmonicLoad, ImpactAbsorber, ImpulseLoad, InitialLoad,
-                       LinearAbsorber, Scenario, WhiteNoiseLoad)
+from .kernels.common import POINCARE_SAMPLES
+from .scenario import (CubicAbsorber, HarmonicLoad, HertzAbsorber, ImpactAbsorber, ImpulseLoad,
+                       InitialLoad, LinearAbsorber, Scenario, WhiteNoiseLoad)
 
 
 @dataclass(frozen=True)
@@ -21,9 +22,13 @@ class Scene:
     k_lin: np.ndarray         # (n_absorbers,) linear attachment stiffness
     k_cubic: np.ndarray       # (n_absorbers,) cubic attachment stiffness
     c_abs: np.ndarray         # (n_absorbers,) attachment damping
+    rest: np.ndarray          # (n_absorbers,) rest offset of the attachment spring
     impact_body: np.ndarray   # (n_impact,) absorber index of each impact absorber
     clearance: np.ndarray     # (n_impact,)
     restitution: np.ndarray   # (n_impact,)
+    hertz_body: np.ndarray    # (n_hertz,) absorber index of each Hertz absorber
+    hertz_k: np.ndarray       # (n_hertz, 2) contact constants K, left and right
+    hertz_walls: np.ndarray   # (n_hertz, 2) contact surfaces: z_L = lo - u, z_R = u - hi
     harmonic: np.ndarray      # (n_harmonic, 3): amplitude, frequency, phase
     sigma: float              # white-noise intensity, F dt = sigma dW
     x0: np.ndarray
@@ -32,6 +37,8 @@ class Scene:
     n_steps: int
     i0: int                   # first step of the metrics window
     scheme: str               # "rk4" | "euler-maruyama"
+    period: float = 0.0       # forcing period of Poincare samples (0: no regime)
+    sample_from: float = 0.0  # time of the first Poincare sample
 
     @property
     def has_noise(self) -> bool:
@@ -40,6 +47,10 @@ class Scene:
     @property
     def has_impact(self) -> bool:
         return self.impact_body.shape[0] > 0
+
+    @property
+    def has_hertz(self) -> bool:
+        return self.hertz_body.shape[0] > 0
 
     @property
     def window(self) -> float:
@@ -55,18 +66,25 @@ def build_scene(scenario: Scenario) -> Scene:
     k_lin = np.zeros(n - 1)
     k_cubic = np.zeros(n - 1)
     c_abs = np.zeros(n - 1)
+    rest = np.zeros(n - 1)
     impact = []
+    hertz = []
     for i, a in enumerate(absorbers):
         c_abs[i] = a.damping
         if isinstance(a, CubicAbsorber):
             k_cubic[i] = a.stiffness
             k_lin[i] = a.linear_stiffness
-        elif isinstance(a, (LinearAbsorber, ImpactAbsorber)):
+        else:
             k_lin[i] = a.stiffness
         if isinstance(a, ImpactAbsorber):
             impact.append((i, a.clearance, a.restitution))
+        if isinstance(a, HertzAbsorber):
+            rest[i] = a.spring_rest
+            hertz.append((i, a.contact_left.constant, a.contact_right.constant, *a.walls, a.start))
     x0 = np.zeros(n)
     v0 = np.zeros(n)
+    for i, _, _, _, _, start in hertz:
+        x0[i + 1] = start
     harmonic = []
     variance = 0.0
     for load in scenario.loads:
@@ -84,13 +102,24 @@ def build_scene(scenario: Scenario) -> Scene:
     scheme = sim.scheme
     if scheme == "auto":
         scheme = "euler-maruyama" if variance > 0 else "rk4"
+    period = sample_from = 0.0
+    frequencies = [h[1] for h in harmonic]
+    if variance == 0 and len(frequencies) == 1 and frequencies[0] > 0:
+        # Poincare samples at multiples of the forcing period, in the last periods of the window
+        period = 2.0 * math.pi / frequencies[0]
+        first = max(sim.metrics_from, n_steps * sim.dt - POINCARE_SAMPLES * period)
+        sample_from = math.ceil(first / period - 1e-9) * period
     return Scene(
         mass=mass, k1=float(scenario.primary.stiffness), c1=float(scenario.primary.damping),
-        k_lin=k_lin, k_cubic=k_cubic, c_abs=c_abs,
+        k_lin=k_lin, k_cubic=k_cubic, c_abs=c_abs, rest=rest,
         impact_body=np.array([i for i, _, _ in impact], dtype=np.int64),
         clearance=np.array([c for _, c, _ in impact], dtype=float),
         restitution=np.array([r for _, _, r in impact], dtype=float),
+        hertz_body=np.array([h[0] for h in hertz], dtype=np.int64),
+        hertz_k=np.array([h[1:3] for h in hertz], dtype=float).reshape(-1, 2),
+        hertz_walls=np.array([h[3:5] for h in hertz], dtype=float).reshape(-1, 2),
         harmonic=np.array(harmonic, dtype=float).reshape(-1, 3),
         sigma=math.sqrt(variance), x0=x0, v0=v0, dt=float(sim.dt), n_steps=n_steps,
         i0=min(n_steps - 1, int(round(sim.metrics_from / sim.dt))), scheme=scheme,
+        period=period, sample_from=sample_from,
     )

@@ -1,4 +1,5 @@
-"""Numba step loops, specialised to what a scene contains (noise, impacts) and compiled once.
+"""Numba step loops, specialised to what a scene contains (noise, impacts, contact) and
+compiled once.
 
 ``simulate(scene, generator)`` runs one realisation and returns the raw metric vector
 (``common.SLOTS``).  Kernels are memoised by scene structure; the parameters are arguments,
@@ -9,31 +10,54 @@ from __future__ import annotations
 
 import numpy as np
 
-from .common import SLOTS, new_metrics
+from .common import POINCARE_SAMPLES, SLOTS, new_metrics
 from .rk4 import rk4_kernel
 from .sie import sie_kernel
 
 #: A generator handed to kernels of scenes without noise (never drawn from).
 _NO_NOISE = np.random.default_rng(0)
+_NO_NORMALS = np.zeros(0)
 
 
-def kernel_for(scene):
+def kernel_for(scene, replay: bool = False):
     """The compiled loop for a scene's scheme and structure."""
     if scene.scheme == "rk4":
-        return rk4_kernel(scene.has_impact)
-    return sie_kernel(scene.has_noise, scene.has_impact)
+        return rk4_kernel(scene.has_impact, scene.has_hertz, scene.period > 0)
+    return sie_kernel(scene.has_noise, scene.has_impact, replay)
 
 
-def simulate(scene, generator: np.random.Generator | None = None) -> np.ndarray:
-    """Run one realisation of ``scene``; returns the raw metric vector (see ``SLOTS``)."""
+def sample_buffer(scene) -> np.ndarray:
+    """Empty Poincare sample rows (positions, velocities, impacts left and right)."""
+    rows = POINCARE_SAMPLES if scene.period > 0 and scene.scheme == "rk4" else 0
+    return np.full((rows, 2 * scene.mass.shape[0] + 2), np.nan)
+
+
+def simulate(scene, generator: np.random.Generator | None = None, *, normals: np.ndarray | None = None,
+             final: np.ndarray | None = None, samples: np.ndarray | None = None) -> np.ndarray:
+    """Run one realisation of ``scene``; returns the raw metric vector (see ``SLOTS``).
+
+    ``normals`` replays a given Brownian path (one standard normal per step) instead of
+    drawing from ``generator``; ``final`` (shape ``(2, n_bodies)``) receives the final
+    positions and velocities; ``samples`` (from ``sample_buffer``) receives the Poincare
+    samples of periodic scenes.
+    """
     out = new_metrics()
-    kernel_for(scene)(
-        scene.mass, scene.k1, scene.c1, scene.k_lin, scene.k_cubic, scene.c_abs,
-        scene.impact_body, scene.clearance, scene.restitution, scene.harmonic, scene.sigma,
-        scene.x0, scene.v0, scene.dt, scene.n_steps, scene.i0,
-        generator if generator is not None else _NO_NOISE, out,
+    x, v = scene.x0.copy(), scene.v0.copy()
+    if samples is None:
+        samples = sample_buffer(scene)
+    replay = normals is not None
+    if replay and normals.shape[0] < scene.n_steps:
+        raise ValueError(f"normals: need {scene.n_steps} values, got {normals.shape[0]}")
+    kernel_for(scene, replay)(
+        scene.mass, scene.k1, scene.c1, scene.k_lin, scene.k_cubic, scene.c_abs, scene.rest,
+        scene.impact_body, scene.clearance, scene.restitution, scene.hertz_body, scene.hertz_k,
+        scene.hertz_walls, scene.harmonic, scene.sigma, x, v, scene.dt, scene.n_steps, scene.i0,
+        scene.period, scene.sample_from, generator if generator is not None else _NO_NOISE,
+        normals if replay else _NO_NORMALS, out, samples,
     )
+    if final is not None:
+        final[0], final[1] = x, v
     return out
 
 
-__all__ = ["SLOTS", "kernel_for", "simulate"]
+__all__ = ["SLOTS", "kernel_for", "sample_buffer", "simulate"]

@@ -5,16 +5,18 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ..physics import INLINE, KERNEL, spring_damper_force
+from ..physics import INLINE, KERNEL, hertz_energy, hertz_force, spring_damper_energy, spring_damper_force
 
 #: Slots of the raw metric vector a kernel fills; ``metrics.finish`` turns it into columns.
 SLOTS = (
     "input_energy", "primary_dissipation", "absorber_dissipation", "impact_loss",
     "energy_integral", "e1_max", "x1_max", "x1_square_integral", "impacts",
-    "final_energy", "status", "capped_steps",
+    "final_energy", "status", "capped_steps", "impacts_left", "impacts_right", "peak_force",
+    "contact_time",
 )
 (INPUT, PRIMARY_DISS, ABSORBER_DISS, IMPACT_LOSS, ENERGY_INT, E1_MAX, X1_MAX, X1_SQ_INT,
- IMPACTS, FINAL_ENERGY, STATUS, CAPPED) = range(len(SLOTS))
+ IMPACTS, FINAL_ENERGY, STATUS, CAPPED, IMPACTS_LEFT, IMPACTS_RIGHT, PEAK_FORCE,
+ CONTACT_TIME) = range(len(SLOTS))
 
 #: Status codes written into the ``status`` slot.
 STATUS_OK, STATUS_DIVERGED = 0, 1
@@ -28,16 +30,54 @@ CHECK_EVERY = 1024
 #: A displacement beyond this counts as divergence.
 DIVERGED = 1e100
 
+#: Poincare samples (one per forcing period) kept at the end of the window for the regime.
+POINCARE_SAMPLES = 32
+
 
 @njit(**INLINE)
-def attachment_forces(x, v, k1, c1, k_lin, k_cubic, c_abs, force):
+def attachment_forces(x, v, k1, c1, k_lin, k_cubic, c_abs, rest, force):
     """``force[b]``: force on body ``b`` from the primary's spring and damper and every
     absorber attachment (MODEL.md section 1); external loads are added by the caller."""
     force[0] = -k1 * x[0] - c1 * v[0]
     for a in range(k_lin.shape[0]):
-        f = spring_damper_force(x[a + 1] - x[0], v[a + 1] - v[0], k_lin[a], k_cubic[a], c_abs[a])
+        f = spring_damper_force(x[a + 1] - x[0] - rest[a], v[a + 1] - v[0], k_lin[a], k_cubic[a], c_abs[a])
         force[a + 1] = f
         force[0] -= f
+
+
+@njit(**INLINE)
+def contact_forces(x, hertz_body, hertz_k, hertz_walls, force):
+    """Add the Hertz contact forces (MODEL.md section 2): ``+K_L z_L^1.5 - K_R z_R^1.5`` on
+    each Hertz absorber, the opposite on the primary."""
+    for q in range(hertz_body.shape[0]):
+        j = hertz_body[q] + 1
+        u = x[j] - x[0]
+        f = (hertz_force(hertz_walls[q, 0] - u, hertz_k[q, 0])
+             - hertz_force(u - hertz_walls[q, 1], hertz_k[q, 1]))
+        force[j] += f
+        force[0] -= f
+
+
+@njit(**INLINE)
+def contact_force(x, q, hertz_body, hertz_k, hertz_walls) -> float:
+    """Magnitude of the contact force on Hertz absorber ``q`` (either side)."""
+    u = x[hertz_body[q] + 1] - x[0]
+    return (hertz_force(hertz_walls[q, 0] - u, hertz_k[q, 0])
+            + hertz_force(u - hertz_walls[q, 1], hertz_k[q, 1]))
+
+
+@njit(**INLINE)
+def stored_energy(x, v, mass, k1, k_lin, k_cubic, rest, hertz_body, hertz_k, hertz_walls) -> float:
+    """Mechanical energy stored in all bodies, springs and Hertz contacts."""
+    e = 0.5 * k1 * x[0] * x[0]
+    for i in range(mass.shape[0]):
+        e += 0.5 * mass[i] * v[i] * v[i]
+    for a in range(k_lin.shape[0]):
+        e += spring_damper_energy(x[a + 1] - x[0] - rest[a], k_lin[a], k_cubic[a])
+    for q in range(hertz_body.shape[0]):
+        u = x[hertz_body[q] + 1] - x[0]
+        e += hertz_energy(hertz_walls[q, 0] - u, hertz_k[q, 0]) + hertz_energy(u - hertz_walls[q, 1], hertz_k[q, 1])
+    return e
 
 
 @njit(**INLINE)
@@ -101,3 +141,27 @@ def sticks(side: int, w_in: float, w_gain: float) -> bool:
 def new_metrics() -> np.ndarray:
     """A zeroed raw metric vector."""
     return np.zeros(len(SLOTS))
+
+
+@njit(**INLINE)
+def record_sample(samples, k, sample_from, period, t0, dt, xp, vp, x, v, left, right) -> int:
+    """Write the Poincare samples at times ``sample_from + k period`` that fall in the step
+    ``[t0, t0 + dt]`` from ``(xp, vp)`` to ``(x, v)``: positions by cubic Hermite, velocities
+    by linear interpolation, then the impact counts per side.  Returns the next ``k``."""
+    nb = x.shape[0]
+    while k < samples.shape[0]:
+        ts = sample_from + k * period
+        if ts > t0 + dt * (1.0 + 1e-9):
+            break
+        s = min(max((ts - t0) / dt, 0.0), 1.0)
+        h00 = (1.0 + 2.0 * s) * (1.0 - s) ** 2
+        h10 = s * (1.0 - s) ** 2
+        h01 = s * s * (3.0 - 2.0 * s)
+        h11 = s * s * (s - 1.0)
+        for b in range(nb):
+            samples[k, b] = h00 * xp[b] + h10 * dt * vp[b] + h01 * x[b] + h11 * dt * v[b]
+            samples[k, nb + b] = (1.0 - s) * vp[b] + s * v[b]
+        samples[k, 2 * nb] = left
+        samples[k, 2 * nb + 1] = right
+        k += 1
+    return k

@@ -1,11 +1,18 @@
-"""Classical fourth-order Runge-Kutta for scenes without noise, with located impacts.
+"""Classical fourth-order Runge-Kutta for scenes without noise, with located events.
 
 The energy integrals of MODEL.md section 4 (work of the loads, viscous dissipation, the
 integrals of ``E1`` and ``x1^2``) are integrated as extra states by the same RK4 stages, so
-the energy balance closes to the scheme's fourth-order error.  When an impact absorber
-crosses its wall inside a step, the impact instant is found by Newton iteration on the
-length of an RK4 sub-step from the start of the step (converged to round-off), the Newton
-map is applied at that instant and the step continues from the post-impact state.
+the energy balance closes to the scheme's fourth-order error.
+
+Events are located inside a step by Newton iteration on the length of an RK4 sub-step from
+the start of the step (converged to round-off):
+
+- an impact absorber reaching its wall: the Newton map is applied at that instant;
+- a Hertz absorber touching a contact surface: from there the step is cut into sub-steps
+  sized from the contact's stiffness, masses and approach speed (about ``CONTACT_STEPS`` per
+  contact duration), until the contact ends, which is located the same way.
+
+The outer step ``dt`` never has to be shrunk by the user for contact.
 """
 
 from __future__ import annotations
@@ -15,22 +22,36 @@ from functools import lru_cache
 import numpy as np
 from numba import njit
 
-from ..physics import harmonic_force, primary_energy, restitution_impact, total_energy
-from ..physics import KERNEL
-from .common import (ABSORBER_DISS, CAPPED, CHECK_EVERY, E1_MAX, ENERGY_INT, FINAL_ENERGY,
-                     IMPACT_LOSS, IMPACTS, INLINE, INPUT, MAX_EVENTS, PRIMARY_DISS, STATUS,
-                     STATUS_DIVERGED, X1_MAX, X1_SQ_INT, attachment_forces, diverged,
-                     pin_to_walls, stick_together, sticks)
+from ..physics import KERNEL, harmonic_force, primary_energy, restitution_impact
+from .common import (ABSORBER_DISS, CAPPED, CHECK_EVERY, CONTACT_TIME, E1_MAX, ENERGY_INT,
+                     FINAL_ENERGY, IMPACT_LOSS, IMPACTS, IMPACTS_LEFT, IMPACTS_RIGHT, INLINE,
+                     INPUT, MAX_EVENTS, PEAK_FORCE, PRIMARY_DISS, STATUS, STATUS_DIVERGED, X1_MAX, X1_SQ_INT,
+                     attachment_forces, contact_force, contact_forces, diverged, pin_to_walls,
+                     record_sample, stick_together, sticks, stored_energy)
 
 NEWTON_ITERATIONS = 12
+#: Sub-steps per Hertz contact duration.
+CONTACT_STEPS = 80
+#: Sub-steps (contact phases, impacts) allowed in one outer step; past it the rest of the
+#: step is taken at once and counted in ``capped_steps``.
+MAX_SUBSTEPS = 100_000
+#: Event kinds.
+NONE, IMPACT, ONSET, EXIT = 0, 1, 2, 3
 
 
 @njit(**INLINE)
-def accelerations(x, v, t, mass, k1, c1, k_lin, k_cubic, c_abs, harmonic, impact_body, stuck,
-                  release, acc, sticking=True):
+def accelerations(x, v, t, p, stuck, release, acc, sticking, contact):
     """Accelerations of all bodies into ``acc``; returns the rates of the energy integrals
-    (load power, primary damping power, absorber damping power, ``E1``, ``x1^2``)."""
-    attachment_forces(x, v, k1, c1, k_lin, k_cubic, c_abs, acc)
+    (load power, primary damping power, absorber damping power, ``E1``, ``x1^2``).
+
+    ``p`` is the scene tuple ``(mass, k1, c1, k_lin, k_cubic, c_abs, rest, harmonic,
+    impact_body, hertz_body, hertz_k, hertz_walls)``; ``sticking`` applies the contact
+    constraint of stuck impact absorbers, ``contact`` the Hertz contact forces.
+    """
+    mass, k1, c1, k_lin, k_cubic, c_abs, rest, harmonic, impact_body, hertz_body, hertz_k, hertz_walls = p
+    attachment_forces(x, v, k1, c1, k_lin, k_cubic, c_abs, rest, acc)
+    if contact:
+        contact_forces(x, hertz_body, hertz_k, hertz_walls, acc)
     load = harmonic_force(t, harmonic)
     acc[0] += load
     for b in range(mass.shape[0]):
@@ -45,29 +66,25 @@ def accelerations(x, v, t, mass, k1, c1, k_lin, k_cubic, c_abs, harmonic, impact
             primary_energy(mass[0], k1, x[0], v[0]), x[0] * x[0])
 
 
-@njit(**INLINE)
-def rk4_step(x, v, t, h, xo, vo, a1, a2, a3, a4, xs, v2, v3, v4, mass, k1, c1, k_lin, k_cubic, c_abs, harmonic,
-             impact_body, stuck, sticking):
+@njit(**KERNEL)
+def rk4_step(x, v, t, h, xo, vo, work, p, stuck, sticking, contact):
     """One RK4 step of size ``h`` from ``(x, v)`` into ``(xo, vo)``; returns the increments
-    of the five energy integrals."""
-    nb = mass.shape[0]
-    r1 = accelerations(x, v, t, mass, k1, c1, k_lin, k_cubic, c_abs, harmonic, impact_body,
-                       stuck, False, a1, sticking)
+    of the five energy integrals.  ``work`` holds eight scratch arrays."""
+    a1, a2, a3, a4, xs, v2, v3, v4 = work
+    nb = x.shape[0]
+    r1 = accelerations(x, v, t, p, stuck, False, a1, sticking, contact)
     for b in range(nb):
         xs[b] = x[b] + 0.5 * h * v[b]
         v2[b] = v[b] + 0.5 * h * a1[b]
-    r2 = accelerations(xs, v2, t + 0.5 * h, mass, k1, c1, k_lin, k_cubic, c_abs, harmonic,
-                       impact_body, stuck, False, a2, sticking)
+    r2 = accelerations(xs, v2, t + 0.5 * h, p, stuck, False, a2, sticking, contact)
     for b in range(nb):
         xs[b] = x[b] + 0.5 * h * v2[b]
         v3[b] = v[b] + 0.5 * h * a2[b]
-    r3 = accelerations(xs, v3, t + 0.5 * h, mass, k1, c1, k_lin, k_cubic, c_abs, harmonic,
-                       impact_body, stuck, False, a3, sticking)
+    r3 = accelerations(xs, v3, t + 0.5 * h, p, stuck, False, a3, sticking, contact)
     for b in range(nb):
         xs[b] = x[b] + h * v3[b]
         v4[b] = v[b] + h * a3[b]
-    r4 = accelerations(xs, v4, t + h, mass, k1, c1, k_lin, k_cubic, c_abs, harmonic,
-                       impact_body, stuck, False, a4, sticking)
+    r4 = accelerations(xs, v4, t + h, p, stuck, False, a4, sticking, contact)
     for b in range(nb):
         xo[b] = x[b] + h / 6.0 * (v[b] + 2.0 * v2[b] + 2.0 * v3[b] + v4[b])
         vo[b] = v[b] + h / 6.0 * (a1[b] + 2.0 * a2[b] + 2.0 * a3[b] + a4[b])
@@ -78,78 +95,144 @@ def rk4_step(x, v, t, h, xo, vo, a1, a2, a3, a4, xs, v2, v3, v4, mass, k1, c1, k
             h / 6.0 * (r1[4] + 2.0 * r2[4] + 2.0 * r3[4] + r4[4]))
 
 
-@njit(**INLINE)
-def first_crossing(x, v, xn, clearance, impact_body, stuck, h):
-    """The free impact absorber whose wall crossing during a step ``x -> xn`` comes first
-    (by linear interpolation); returns ``(q, side, tau)`` or ``(-1, 0, h)``."""
-    hit, side, first = -1, 0, h
+@njit(**KERNEL)
+def event_geometry(kind, q, side, impact_body, clearance, hertz_body, hertz_walls):
+    """Body ``j``, sign and wall of an event's gap ``g = sign * (x_j - x_1 - wall)``, which
+    crosses zero upwards when the event happens."""
+    if kind == IMPACT:
+        return impact_body[q] + 1, side, side * clearance[q]
+    wall = hertz_walls[q, 0] if side < 0 else hertz_walls[q, 1]
+    return hertz_body[q] + 1, (side if kind == ONSET else -side), wall
+
+
+@njit(**KERNEL)
+def next_event(x, xn, h, impact_body, clearance, stuck, hertz_body, hertz_walls, touching):
+    """The first event of a step ``x -> xn`` of length ``h``: an impact absorber crossing its
+    wall, a Hertz contact starting or ending (by linear interpolation of the gap).
+    Returns ``(kind, q, side, tau)``; ``kind == NONE`` when nothing happens."""
+    kind, hit, hit_side, first = NONE, -1, 0, h
     for q in range(impact_body.shape[0]):
         if stuck[q] == 0:
             j = impact_body[q] + 1
-            u_end = xn[j] - xn[0]
-            if abs(u_end) > clearance[q]:
-                s = 1 if u_end > 0.0 else -1
+            u1 = xn[j] - xn[0]
+            if abs(u1) > clearance[q]:
+                s = 1 if u1 > 0.0 else -1
                 g0 = s * (x[j] - x[0]) - clearance[q]
-                g1 = s * u_end - clearance[q]
+                g1 = s * u1 - clearance[q]
                 tau = h * max(-g0, 0.0) / (g1 - g0)
-                if tau < first or hit < 0:
-                    hit, side, first = q, s, tau
-    return hit, side, first
+                if tau < first or kind == NONE:
+                    kind, hit, hit_side, first = IMPACT, q, s, tau
+    for q in range(hertz_body.shape[0]):
+        j = hertz_body[q] + 1
+        u0 = x[j] - x[0]
+        u1 = xn[j] - xn[0]
+        for s in (-1, 1):
+            if touching[q] == 0 or touching[q] == s:
+                event = ONSET if touching[q] == 0 else EXIT
+                sign = s if event == ONSET else -s
+                wall = hertz_walls[q, 0] if s < 0 else hertz_walls[q, 1]
+                g1 = sign * (u1 - wall)
+                if g1 > 0.0:
+                    g0 = sign * (u0 - wall)
+                    tau = h * max(-g0, 0.0) / (g1 - g0)
+                    if tau < first or kind == NONE:
+                        kind, hit, hit_side, first = event, q, s, tau
+    return kind, hit, hit_side, first
+
+
+@njit(**KERNEL)
+def contact_step(x, v, mass, hertz_body, hertz_k, hertz_walls, touching) -> float:
+    """Sub-step for the Hertz contacts in progress: about ``CONTACT_STEPS`` per contact.
+
+    A Hertz contact with relative energy ``E`` compresses to ``z_max = (E / (0.4 K))^0.4`` and
+    lasts about ``4 / omega`` with ``omega = sqrt(1.5 K z_max^0.5 / m_eff)``.
+    """
+    h = np.inf
+    for q in range(hertz_body.shape[0]):
+        side = touching[q]
+        if side != 0:
+            j = hertz_body[q] + 1
+            m_eff = mass[0] * mass[j] / (mass[0] + mass[j])
+            u = x[j] - x[0]
+            w = v[j] - v[0]
+            k = hertz_k[q, 0] if side < 0 else hertz_k[q, 1]
+            z = max(hertz_walls[q, 0] - u if side < 0 else u - hertz_walls[q, 1], 0.0)
+            energy = 0.5 * m_eff * w * w + 0.4 * k * z * z * np.sqrt(z)
+            z_ref = max(z, (energy / (0.4 * k)) ** 0.4)
+            if z_ref > 0.0:
+                omega = np.sqrt(1.5 * k * np.sqrt(z_ref) / m_eff)
+                h = min(h, 4.0 / (CONTACT_STEPS * omega))
+    return h
 
 
 @lru_cache(maxsize=None)
-def rk4_kernel(has_impact: bool):
-    """The RK4 loop specialised to a scene's structure."""
+def rk4_kernel(has_impact: bool, has_hertz: bool, sampling: bool):
+    """The RK4 loop specialised to a scene's structure (impact absorbers, Hertz absorbers,
+    Poincare sampling for the regime)."""
 
     @njit(**KERNEL)
-    def kernel(mass, k1, c1, k_lin, k_cubic, c_abs, impact_body, clearance, restitution,
-               harmonic, sigma, x0, v0, dt, n_steps, i0, gen, out):
+    def kernel(mass, k1, c1, k_lin, k_cubic, c_abs, rest, impact_body, clearance, restitution,
+               hertz_body, hertz_k, hertz_walls, harmonic, sigma, x, v, dt, n_steps, i0,
+               period, sample_from, gen, normals, out, samples):
         nb = mass.shape[0]
-        x = x0.copy()
-        v = v0.copy()
+        p = (mass, k1, c1, k_lin, k_cubic, c_abs, rest, harmonic, impact_body, hertz_body,
+             hertz_k, hertz_walls)
         xn = np.zeros(nb)
         vn = np.zeros(nb)
+        xp = x.copy()
+        vp = v.copy()
         acc = np.zeros(nb)
-        a1, a2, a3, a4 = np.zeros(nb), np.zeros(nb), np.zeros(nb), np.zeros(nb)
-        xs, v2, v3, v4 = np.zeros(nb), np.zeros(nb), np.zeros(nb), np.zeros(nb)
+        work = (np.zeros(nb), np.zeros(nb), np.zeros(nb), np.zeros(nb),
+                np.zeros(nb), np.zeros(nb), np.zeros(nb), np.zeros(nb))
         stuck = np.zeros(impact_body.shape[0], np.int64)
+        touching = np.zeros(hertz_body.shape[0], np.int64)
         m0 = mass[0]
+        next_sample = 0
         for i in range(n_steps):
             inside = i >= i0
             if i == i0:
-                out[INPUT] = total_energy(x, v, mass, k1, k_lin, k_cubic)
+                out[INPUT] = stored_energy(x, v, mass, k1, k_lin, k_cubic, rest, hertz_body, hertz_k, hertz_walls)
                 out[E1_MAX] = primary_energy(m0, k1, x[0], v[0])
                 out[X1_MAX] = abs(x[0])
             if i % CHECK_EVERY == 0 and diverged(x):
                 out[STATUS] = STATUS_DIVERGED
                 break
+            if sampling:
+                xp[:] = x
+                vp[:] = v
             t = i * dt
             left = dt
-            for event in range(MAX_EVENTS + 1):
-                if has_impact and stuck.any():
-                    inc = rk4_step(x, v, t, left, xn, vn, a1, a2, a3, a4, xs, v2, v3, v4, mass, k1, c1,
-                                   k_lin, k_cubic, c_abs, harmonic, impact_body, stuck, True)
-                else:  # the common case, compiled without the contact constraint
-                    inc = rk4_step(x, v, t, left, xn, vn, a1, a2, a3, a4, xs, v2, v3, v4, mass, k1, c1,
-                                   k_lin, k_cubic, c_abs, harmonic, impact_body, stuck, False)
-                hit, side, tau, j = -1, 0, left, 0
-                if has_impact and event < MAX_EVENTS:
-                    hit, side, tau = first_crossing(x, v, xn, clearance, impact_body, stuck, left)
-                if hit >= 0:
-                    j = impact_body[hit] + 1
+            n_impacts = 0
+            for sub in range(MAX_SUBSTEPS):
+                sticking = has_impact and stuck.any()
+                contact = has_hertz and touching.any()
+                h = left
+                if contact:
+                    h = min(left, contact_step(x, v, mass, hertz_body, hertz_k, hertz_walls, touching))
+                capped = sub == MAX_SUBSTEPS - 1 or n_impacts >= MAX_EVENTS
+                if capped:  # take the rest of the step at once, keep absorbers in their cavity
+                    h = left
+                    out[CAPPED] += 1
+                inc = rk4_step(x, v, t, h, xn, vn, work, p, stuck, sticking, contact)
+                kind, q, side, j, sign, wall, tau = NONE, -1, 0, 0, 0, 0.0, h
+                if (has_impact or has_hertz) and not capped:
+                    kind, q, side, tau = next_event(x, xn, h, impact_body, clearance, stuck,
+                                                    hertz_body, hertz_walls, touching)
+                if kind != NONE:
+                    j, sign, wall = event_geometry(kind, q, side, impact_body, clearance, hertz_body, hertz_walls)
                     for _ in range(NEWTON_ITERATIONS):
-                        inc = rk4_step(x, v, t, tau, xn, vn, a1, a2, a3, a4, xs, v2, v3, v4, mass, k1, c1, k_lin, k_cubic,
-                                       c_abs, harmonic, impact_body, stuck, True)
-                        gap = side * (xn[j] - xn[0]) - clearance[hit]
-                        approach = side * (vn[j] - vn[0])
+                        rk4_step(x, v, t, tau, xn, vn, work, p, stuck, sticking, contact)
+                        gap = sign * (xn[j] - xn[0] - wall)
+                        approach = sign * (vn[j] - vn[0])
                         if approach <= 0.0:
                             break
                         correction = gap / approach
-                        tau = min(max(tau - correction, 0.0), left)
+                        tau = min(max(tau - correction, 0.0), h)
                         if abs(correction) <= 1e-15 * dt:
                             break
-                    inc = rk4_step(x, v, t, tau, xn, vn, a1, a2, a3, a4, xs, v2, v3, v4, mass, k1, c1, k_lin, k_cubic, c_abs,
-                                   harmonic, impact_body, stuck, True)
+                    inc = rk4_step(x, v, t, tau, xn, vn, work, p, stuck, sticking, contact)
+                    h = tau
+                done = kind == NONE and h == left
                 for b in range(nb):
                     x[b] = xn[b]
                     v[b] = vn[b]
@@ -161,38 +244,50 @@ def rk4_kernel(has_impact: bool):
                     out[X1_SQ_INT] += inc[4]
                     out[E1_MAX] = max(out[E1_MAX], primary_energy(m0, k1, x[0], v[0]))
                     out[X1_MAX] = max(out[X1_MAX], abs(x[0]))
-                if hit < 0:
-                    if has_impact and event == MAX_EVENTS:
-                        out[CAPPED] += 1
-                        for q in range(impact_body.shape[0]):
-                            jq = impact_body[q] + 1
-                            x[jq] = x[0] + min(max(x[jq] - x[0], -clearance[q]), clearance[q])
+                    if contact:
+                        for c in range(touching.shape[0]):
+                            if touching[c] != 0:
+                                out[CONTACT_TIME] += h
+                                out[PEAK_FORCE] = max(out[PEAK_FORCE], contact_force(x, c, hertz_body, hertz_k, hertz_walls))
+                t += h
+                left -= h
+                if done:
+                    if capped:
+                        for s in range(impact_body.shape[0]):
+                            js = impact_body[s] + 1
+                            x[js] = x[0] + min(max(x[js] - x[0], -clearance[s]), clearance[s])
                     break
-                # the impact, at t + tau
-                t += tau
-                left -= tau
-                x[j] = x[0] + side * clearance[hit]
-                accelerations(x, v, t, mass, k1, c1, k_lin, k_cubic, c_abs, harmonic,
-                              impact_body, stuck, False, acc)
-                plastic = sticks(side, v[j] - v[0], (acc[j] - acc[0]) * dt)
-                r = 0.0 if plastic else restitution[hit]
-                v[0], v[j], loss = restitution_impact(m0, mass[j], v[0], v[j], r)
-                for q in range(stuck.shape[0]):
-                    stuck[q] = 0
-                if plastic:
-                    v[j] = v[0]
-                    stuck[hit] = side
-                if inside:
-                    out[IMPACT_LOSS] += loss
+                if kind == IMPACT:
+                    n_impacts += 1
+                    x[j] = x[0] + side * clearance[q]
+                    accelerations(x, v, t, p, stuck, False, acc, True, contact)
+                    plastic = sticks(side, v[j] - v[0], (acc[j] - acc[0]) * dt)
+                    r = 0.0 if plastic else restitution[q]
+                    v[0], v[j], loss = restitution_impact(m0, mass[j], v[0], v[j], r)
+                    for s in range(stuck.shape[0]):
+                        stuck[s] = 0
+                    if plastic:
+                        v[j] = v[0]
+                        stuck[q] = side
+                    if inside:
+                        out[IMPACT_LOSS] += loss
+                        out[E1_MAX] = max(out[E1_MAX], primary_energy(m0, k1, x[0], v[0]))
+                elif kind == ONSET:
+                    touching[q] = side
+                elif kind == EXIT:
+                    touching[q] = 0
+                if inside and kind != EXIT:
                     out[IMPACTS] += 1
-                    out[E1_MAX] = max(out[E1_MAX], primary_energy(m0, k1, x[0], v[0]))
+                    out[IMPACTS_LEFT if side < 0 else IMPACTS_RIGHT] += 1
             if has_impact and stuck.any():
                 pin_to_walls(x, stuck, impact_body, clearance)
                 # release contacts the wall would have to pull (checked at step ends)
-                accelerations(x, v, t + left, mass, k1, c1, k_lin, k_cubic, c_abs, harmonic,
-                              impact_body, stuck, True, acc)
+                accelerations(x, v, t, p, stuck, True, acc, True, False)
+            if sampling:
+                next_sample = record_sample(samples, next_sample, sample_from, period, i * dt, dt,
+                                            xp, vp, x, v, out[IMPACTS_LEFT], out[IMPACTS_RIGHT])
         if diverged(x):
             out[STATUS] = STATUS_DIVERGED
-        out[FINAL_ENERGY] = total_energy(x, v, mass, k1, k_lin, k_cubic)
+        out[FINAL_ENERGY] = stored_energy(x, v, mass, k1, k_lin, k_cubic, rest, hertz_body, hertz_k, hertz_walls)
 
     return kernel

@@ -1,10 +1,19 @@
-"""Semi-implicit (symplectic) Euler-Maruyama with exact impact location.
+"""Euler-Maruyama for additive noise in kick-drift-kick (velocity Verlet) form, with impacts
+located on the Brownian path.
 
-Each step is a *kick* then a *drift*: velocities take the force impulses of the step
-(plus the Wiener increment ``sigma dW`` on the primary, Ito, additive), then positions move
-linearly with the new velocities.  During the drift every relative coordinate is linear in
-time, so the instant an impact absorber reaches its wall is found exactly, the Newton map is
-applied there and the drift continues from the post-impact state.
+Each step is a half *kick* (half the force impulse of the step plus the whole Wiener increment
+``sigma dW`` on the primary, Ito, additive), a *drift* (positions move linearly with the new
+velocities) and a closing half kick with the forces at the new positions.  Without noise this
+is the second-order velocity Verlet map; with additive noise it has strong order 1.
+
+When the drift would carry an impact absorber through its wall, the step is split at the
+impact: the sub-step of length ``s`` that lands exactly on the wall is found by a bracketed
+root search, with its Wiener increment drawn from the Brownian bridge pinned to the step's
+increment (``dW_s = dW s / h + sqrt(s (h - s) / h) Z``), so the sub-stepped path is the same
+Brownian path.  The Newton map acts at the end of that sub-step, and the rest of the step
+continues from the post-impact state with the rest of the increment.  (Applying the impact
+at a grid state of a symmetric map matters: with a kick-drift map the energy balance drifts
+by ``O(dt)`` per impact.)
 
 Energy bookkeeping uses the midpoint velocity of each kick, for which the change of kinetic
 energy equals the work of the impulses exactly; the only residual left in the energy balance
@@ -18,74 +27,86 @@ from functools import lru_cache
 import numpy as np
 from numba import njit
 
-from ..physics import primary_energy, restitution_impact, total_energy, wall_hit_time
-from ..physics import KERNEL
-from .common import (ABSORBER_DISS, CAPPED, CHECK_EVERY, E1_MAX, ENERGY_INT, FINAL_ENERGY, IMPACT_LOSS,
-                     IMPACTS, INLINE, INPUT, MAX_EVENTS, PRIMARY_DISS, STATUS, STATUS_DIVERGED, X1_MAX,
-                     X1_SQ_INT, attachment_forces, diverged, pin_to_walls, stick_together, sticks)
+from ..physics import KERNEL, harmonic_force, primary_energy, restitution_impact
+from .common import (ABSORBER_DISS, CAPPED, CHECK_EVERY, E1_MAX, ENERGY_INT, FINAL_ENERGY,
+                     IMPACT_LOSS, IMPACTS, IMPACTS_LEFT, IMPACTS_RIGHT, INLINE, INPUT, MAX_EVENTS,
+                     PRIMARY_DISS, STATUS, STATUS_DIVERGED, X1_MAX, X1_SQ_INT, attachment_forces,
+                     diverged, pin_to_walls, stick_together, sticks, stored_energy)
+
+#: Iterations of the bracketed search for the impact instant (Illinois method).
+ROOT_ITERATIONS = 100
 
 
 @njit(**INLINE)
-def drift_with_impacts(x, v, dt, mass, impact_body, clearance, restitution, stuck, w_gain, result):
-    """Move all bodies for ``dt`` at constant velocity, resolving wall impacts in time order.
+def kick(v, s, dws, load, force, mass, stuck, impact_body, release, vn):
+    """Velocities after a kick of length ``s`` with Wiener increment ``dws`` into ``vn``."""
+    vn[0] = v[0] + ((force[0] + load) * s + dws) / mass[0]
+    for b in range(1, mass.shape[0]):
+        vn[b] = v[b] + force[b] * s / mass[b]
+    if impact_body.shape[0] > 0:
+        stick_together(mass, vn, stuck, impact_body, release)
 
-    Adds impact losses to ``result[0]`` and counts impacts in ``result[1]``; returns False
-    if more than ``MAX_EVENTS`` impacts had to be resolved in this step.
-    """
-    left = dt
-    for _ in range(MAX_EVENTS):
-        first = left
-        hit = -1
-        side = 0
-        for q in range(impact_body.shape[0]):
-            if stuck[q] == 0:
-                j = impact_body[q] + 1
-                tau, s = wall_hit_time(x[j] - x[0], v[j] - v[0], clearance[q])
-                if tau < first:
-                    first, hit, side = tau, q, s
-        for b in range(x.shape[0]):
-            x[b] += first * v[b]
-        left -= first
-        if hit < 0:
-            return True
-        j = impact_body[hit] + 1
-        x[j] = x[0] + side * clearance[hit]
-        w_in = v[j] - v[0]
-        plastic = sticks(side, w_in, w_gain[hit])
-        r = 0.0 if plastic else restitution[hit]
-        v[0], v[j], loss = restitution_impact(mass[0], mass[j], v[0], v[j], r)
-        for q in range(stuck.shape[0]):  # the primary's velocity jumped: re-examine every contact
-            stuck[q] = 0
-        if plastic:
-            v[j] = v[0]
-            stuck[hit] = side
-        result[0] += loss
-        result[1] += 1.0
-    for b in range(x.shape[0]):
-        x[b] += left * v[b]
-    for q in range(impact_body.shape[0]):
-        j = impact_body[q] + 1
-        x[j] = x[0] + min(max(x[j] - x[0], -clearance[q]), clearance[q])
-    return False
+
+@njit(**INLINE)
+def bridge(total, length, s, z):
+    """Wiener increment over ``[0, s]`` of a Brownian path with increment ``total`` over
+    ``[0, length]`` (Brownian bridge, standard normal ``z``)."""
+    if length <= 0.0:
+        return total
+    return total * (s / length) + np.sqrt(max(s * (length - s) / length, 0.0)) * z
+
+
+@njit(**INLINE)
+def crossing(x, v, length, total, z, load, force, mass, stuck, impact_body, j, side, wall, vt):
+    """Sub-step length in ``(0, length]`` after which absorber body ``j`` is exactly at
+    ``wall`` (side ``side``), by the Illinois method on the bracket ``[0, length]``."""
+    lo, hi = 0.0, length
+    g_lo = min(side * (x[j] - x[0]) - wall, 0.0)  # on the wall counts as inside
+    kick(v, 0.5 * length, total, load, force, mass, stuck, impact_body, False, vt)
+    g_hi = side * (x[j] - x[0] + length * (vt[j] - vt[0])) - wall
+    s = hi
+    last = 0
+    for _ in range(ROOT_ITERATIONS):
+        s = hi - g_hi * (hi - lo) / (g_hi - g_lo)
+        if not (lo < s < hi):
+            s = 0.5 * (lo + hi)
+        kick(v, 0.5 * s, bridge(total, length, s, z), load, force, mass, stuck, impact_body, False, vt)
+        g = side * (x[j] - x[0] + s * (vt[j] - vt[0])) - wall
+        if g > 0.0:
+            hi, g_hi = s, g
+            if last > 0:
+                g_lo *= 0.5
+            last = 1
+        else:
+            lo, g_lo = s, g
+            if last < 0:
+                g_hi *= 0.5
+            last = -1
+        if hi - lo <= 1e-15 * length or g == 0.0:
+            break
+    return hi
 
 
 @lru_cache(maxsize=None)
-def sie_kernel(has_noise: bool, has_impact: bool):
-    """The semi-implicit Euler-Maruyama loop specialised to a scene's structure."""
+def sie_kernel(has_noise: bool, has_impact: bool, replay: bool = False):
+    """The semi-implicit Euler-Maruyama loop specialised to a scene's structure.
+
+    With ``replay``, the step increments are ``sigma sqrt(dt) normals[i]`` (a given Brownian
+    path, for convergence studies) instead of draws from ``gen``.
+    """
 
     @njit(**KERNEL)
-    def kernel(mass, k1, c1, k_lin, k_cubic, c_abs, impact_body, clearance, restitution,
-               harmonic, sigma, x0, v0, dt, n_steps, i0, gen, out):
+    def kernel(mass, k1, c1, k_lin, k_cubic, c_abs, rest, impact_body, clearance, restitution,
+               hertz_body, hertz_k, hertz_walls, harmonic, sigma, x, v, dt, n_steps, i0,
+               period, sample_from, gen, normals, out, samples):
         nb = mass.shape[0]
         ni = impact_body.shape[0]
         nh = harmonic.shape[0]
-        x = x0.copy()
-        v = v0.copy()
         force = np.zeros(nb)
         vn = np.zeros(nb)
+        vt = np.zeros(nb)
+        vs = np.zeros(nb)
         stuck = np.zeros(ni, np.int64)
-        w_gain = np.zeros(ni)
-        impact = np.zeros(2)
         # harmonic loads by rotation, re-evaluated exactly every CHECK_EVERY steps
         hc = np.zeros(nh)
         hs = np.zeros(nh)
@@ -97,9 +118,11 @@ def sie_kernel(has_noise: bool, has_impact: bool):
         x2_prev = x[0] * x[0]
         # accumulators in registers; written to ``out`` once at the end
         work = d_primary = d_absorber = e_integral = x2_integral = e1_max = x1_max = 0.0
+        loss_sum = n_left = n_right = 0.0
         for i in range(n_steps):
+            inside = i >= i0
             if i == i0:
-                work = total_energy(x, v, mass, k1, k_lin, k_cubic)
+                work = stored_energy(x, v, mass, k1, k_lin, k_cubic, rest, hertz_body, hertz_k, hertz_walls)
                 e1_max = e1_prev
                 x1_max = abs(x[0])
             if i % CHECK_EVERY == 0:
@@ -111,46 +134,96 @@ def sie_kernel(has_noise: bool, has_impact: bool):
                     hc[h] = np.cos(phase)
                     hs[h] = np.sin(phase)
             load = 0.0
+            load_next = 0.0
             for h in range(nh):
                 load += harmonic[h, 0] * hc[h]
                 hc[h], hs[h] = hc[h] * rc[h] - hs[h] * rs[h], hs[h] * rc[h] + hc[h] * rs[h]
-            # kick
-            attachment_forces(x, v, k1, c1, k_lin, k_cubic, c_abs, force)
+                load_next += harmonic[h, 0] * hc[h]
             dw = 0.0
             if has_noise:
-                dw = noise_scale * gen.standard_normal()
-            vn[0] = v[0] + ((force[0] + load) * dt + dw) / m0
-            for b in range(1, nb):
-                vn[b] = v[b] + force[b] * dt / mass[b]
+                dw = noise_scale * (normals[i] if replay else gen.standard_normal())
+            left = dt
+            t = i * dt
+            for event in range(MAX_EVENTS + 1):
+                if event > 0 and left <= 0.0:
+                    break
+                attachment_forces(x, v, k1, c1, k_lin, k_cubic, c_abs, rest, force)
+                kick(v, 0.5 * left, dw, load, force, mass, stuck, impact_body, True, vn)
+                s = left
+                hit, side = -1, 0
+                z = 0.0
+                if has_impact and event < MAX_EVENTS:
+                    for q in range(ni):
+                        j = impact_body[q] + 1
+                        u_end = x[j] - x[0] + left * (vn[j] - vn[0])
+                        if stuck[q] == 0 and abs(u_end) > clearance[q]:
+                            if has_noise and hit < 0:  # one bridge draw per split step
+                                z = gen.standard_normal()
+                            sq = 1 if u_end > 0.0 else -1
+                            sc = crossing(x, v, left, dw, z, load, force, mass, stuck, impact_body,
+                                          j, sq, clearance[q], vt)
+                            if hit < 0 or sc < s:
+                                hit, side, s = q, sq, sc
+                    if hit >= 0:
+                        kick(v, 0.5 * s, bridge(dw, left, s, z), load, force, mass, stuck, impact_body, False, vn)
+                dws = bridge(dw, left, s, z)
+                if inside:
+                    v_mid = 0.5 * (v[0] + vn[0])
+                    work += (0.5 * load * s + dws) * v_mid
+                    d_primary += c1 * v[0] * 0.5 * s * v_mid
+                    for a in range(nb - 1):
+                        w = v[a + 1] - v[0]
+                        d_absorber += c_abs[a] * w * 0.5 * s * 0.5 * (w + vn[a + 1] - vn[0])
+                for b in range(nb):
+                    x[b] += s * vn[b]
+                    v[b] = vn[b]
+                # closing half kick with the forces at the new positions
+                load_end = load_next
+                if nh > 0 and hit >= 0:
+                    load_end = harmonic_force(t + s, harmonic)
+                attachment_forces(x, v, k1, c1, k_lin, k_cubic, c_abs, rest, force)
+                kick(v, 0.5 * s, 0.0, load_end, force, mass, stuck, impact_body, False, vn)
+                if inside:
+                    v_mid = 0.5 * (v[0] + vn[0])
+                    work += 0.5 * load_end * s * v_mid
+                    d_primary += c1 * v[0] * 0.5 * s * v_mid
+                    for a in range(nb - 1):
+                        w = v[a + 1] - v[0]
+                        d_absorber += c_abs[a] * w * 0.5 * s * 0.5 * (w + vn[a + 1] - vn[0])
+                for b in range(nb):
+                    v[b] = vn[b]
+                if hit < 0:
+                    break
+                # the impact, at t + s; the rest of the step keeps the rest of the increment
+                j = impact_body[hit] + 1
+                x[j] = x[0] + side * clearance[hit]
+                t += s
+                left -= s
+                dw -= dws
+                if nh > 0:
+                    load = harmonic_force(t, harmonic)
+                gain = (force[j] / mass[j] - (force[0] + load) / m0) * dt
+                plastic = sticks(side, v[j] - v[0], gain)
+                r = 0.0 if plastic else restitution[hit]
+                v[0], v[j], loss = restitution_impact(m0, mass[j], v[0], v[j], r)
+                for q in range(ni):  # the primary's velocity jumped: re-examine every contact
+                    stuck[q] = 0
+                if plastic:
+                    v[j] = v[0]
+                    stuck[hit] = side
+                if inside:
+                    loss_sum += loss
+                    if side < 0:
+                        n_left += 1.0
+                    else:
+                        n_right += 1.0
+                if event == MAX_EVENTS - 1:
+                    out[CAPPED] += 1
             if has_impact:
                 for q in range(ni):
                     j = impact_body[q] + 1
-                    w_gain[q] = (vn[j] - vn[0]) - (v[j] - v[0])
-                stick_together(mass, vn, stuck, impact_body, True)
-            inside = i >= i0
-            if inside:
-                v_mid = 0.5 * (v[0] + vn[0])
-                work += (load * dt + dw) * v_mid
-                d_primary += c1 * v[0] * dt * v_mid
-                for a in range(nb - 1):
-                    w = v[a + 1] - v[0]
-                    d_absorber += c_abs[a] * w * dt * 0.5 * (w + vn[a + 1] - vn[0])
-            for b in range(nb):
-                v[b] = vn[b]
-            # drift
-            if has_impact:
-                impact[0] = 0.0
-                impact[1] = 0.0
-                if not drift_with_impacts(x, v, dt, mass, impact_body, clearance, restitution,
-                                          stuck, w_gain, impact):
-                    out[CAPPED] += 1
+                    x[j] = x[0] + min(max(x[j] - x[0], -clearance[q]), clearance[q])
                 pin_to_walls(x, stuck, impact_body, clearance)
-                if inside:
-                    out[IMPACT_LOSS] += impact[0]
-                    out[IMPACTS] += impact[1]
-            else:
-                for b in range(nb):
-                    x[b] += dt * v[b]
             e1 = primary_energy(m0, k1, x[0], v[0])
             x2 = x[0] * x[0]
             if inside:
@@ -169,6 +242,10 @@ def sie_kernel(has_noise: bool, has_impact: bool):
         out[X1_SQ_INT] = x2_integral
         out[E1_MAX] = e1_max
         out[X1_MAX] = x1_max
-        out[FINAL_ENERGY] = total_energy(x, v, mass, k1, k_lin, k_cubic)
+        out[IMPACT_LOSS] = loss_sum
+        out[IMPACTS] = n_left + n_right
+        out[IMPACTS_LEFT] = n_left
+        out[IMPACTS_RIGHT] = n_right
+        out[FINAL_ENERGY] = stored_energy(x, v, mass, k1, k_lin, k_cubic, rest, hertz_body, hertz_k, hertz_walls)
 
     return kernel
