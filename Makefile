@@ -4,7 +4,7 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: run test bench env clean clean-cache
+.PHONY: run test bench seeds env clean clean-cache
 
 $(STAMP): pyproject.toml
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
@@ -22,6 +22,9 @@ test: $(STAMP)
 
 bench: $(STAMP)
 	$(BIN)/vines-stoch bench
+
+seeds: $(STAMP)
+	$(BIN)/vines-stoch reproduce
 
 # numba's on-disk cache is keyed on each kernel's own file: clear it after editing the
 # formula modules the kernels inline (physics.py, kernels/common.py).

@@ -1,4 +1,4 @@
-"""Command line: ``vines-stoch run | validate | bench``."""
+"""Command line: ``vines-stoch run | validate | bench | reproduce``."""
 
 from __future__ import annotations
 
@@ -72,6 +72,21 @@ def bench(
     from .bench import main as bench_main
 
     bench_main(out)
+
+
+@app.command()
+def reproduce(
+    out: Path = typer.Option(Path("reports/seed-tables.md"), "--out", help="Markdown report to write."),
+    scenarios: Path = typer.Option(Path("scenarios"), "--scenarios", help="Folder holding the seed003_*.toml files."),
+) -> None:
+    """Reproduce seed 003 Tables 2 and 4 (E1max at 6.3 rad/s, both obstacle conventions)."""
+    from .reproduce import reproduce as reproduce_tables
+
+    try:
+        path = reproduce_tables(scenarios, out)
+    except (ScenarioError, OSError) as exc:
+        _fail(str(exc))
+    typer.echo(f"wrote {path}")
 
 
 def main() -> None:

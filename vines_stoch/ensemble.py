@@ -20,7 +20,7 @@ import numpy as np
 import pandas as pd
 from dask.callbacks import Callback
 
-from .kernels import simulate
+from .kernels import sample_buffer, simulate
 from .metrics import METRICS, finish, summarise
 from .scenario import Study
 from .scene import Scene, build_scene
@@ -39,9 +39,12 @@ def run_chunk(scene: Scene, seed: int, point: int, start: int, stop: int) -> pd.
     """Realisations ``start..stop-1`` of one sweep point, one row each."""
     rows = []
     for r in range(start, stop):
-        raw = simulate(scene, generator(seed, point, r) if scene.has_noise else None)
-        rows.append({"point": point, "realization": r, **finish(raw, scene)})
-    return pd.DataFrame(rows)
+        samples = sample_buffer(scene)
+        raw = simulate(scene, generator(seed, point, r) if scene.has_noise else None, samples=samples)
+        rows.append({"point": point, "realization": r, **finish(raw, scene, samples)})
+    frame = pd.DataFrame(rows)
+    frame["regime"] = frame["regime"].astype("string")
+    return frame
 
 
 @dataclass

@@ -12,7 +12,13 @@ from .scene import Scene
 METRICS = (
     "input_energy", "edm", "energy_integral", "e1_max", "x1_max", "x1_rms", "impacts",
     "energy_residual", "primary_dissipation", "absorber_dissipation", "impact_loss",
+    "impacts_left", "impacts_right", "peak_force", "contact_time",
 )
+
+#: Longest period (in forcing periods) the regime detection looks for.
+MAX_PERIOD = 8
+#: Poincare samples repeating to this fraction of the response amplitude count as periodic.
+PERIODIC_TOLERANCE = 1e-3
 
 #: Statistics of each metric in summary.parquet, as ``<metric>_<stat>``.
 STATISTICS = ("mean", "std", "sem", "q05", "q50", "q95")
@@ -20,8 +26,32 @@ STATISTICS = ("mean", "std", "sem", "q05", "q50", "q95")
 _S = {name: i for i, name in enumerate(SLOTS)}
 
 
-def finish(raw: np.ndarray, scene: Scene) -> dict[str, float | str]:
-    """Metric columns of one realisation from a kernel's raw vector ``raw`` (shape (n_slots,))."""
+def regime(samples: np.ndarray, omega: float) -> str | None:
+    """Regime ``nT,k,m`` of a periodically forced response (MODEL.md section 4) from Poincare
+    samples (rows of positions, velocities, cumulative left and right impacts, one per forcing
+    period): the smallest ``n <= MAX_PERIOD`` with which the samples repeat, and the left and
+    right impacts over the last ``n`` periods.  ``"aperiodic"`` when none repeats (amplitude
+    modulated or chaotic motion); None without samples."""
+    rows = samples[~np.isnan(samples[:, 0])]
+    nb = (samples.shape[1] - 2) // 2
+    if rows.shape[0] < 3:
+        return None
+    state = np.hstack([rows[:, :nb], rows[:, nb:2 * nb] / omega])
+    scale = float(np.abs(state).max()) or 1.0
+    for n in range(1, MAX_PERIOD + 1):
+        if rows.shape[0] < 2 * n + 1:
+            break
+        if np.abs(state[n:] - state[:-n]).max() <= PERIODIC_TOLERANCE * scale:
+            # impacts per n periods, averaged over every whole cycle sampled
+            cycles = (rows.shape[0] - 1) // n
+            left, right = (rows[-1, 2 * nb:] - rows[-1 - cycles * n, 2 * nb:]) / cycles
+            return f"{'' if n == 1 else n}T,{left:.0f},{right:.0f}"
+    return "aperiodic"
+
+
+def finish(raw: np.ndarray, scene: Scene, samples: np.ndarray | None = None) -> dict[str, float | str | None]:
+    """Metric columns of one realisation from a kernel's raw vector ``raw`` (shape (n_slots,))
+    and, for periodically forced scenes, its Poincare ``samples``."""
     g = raw.__getitem__
     input_energy = g(_S["input_energy"])
     absorbed = g(_S["absorber_dissipation"]) + g(_S["impact_loss"])
@@ -30,7 +60,7 @@ def finish(raw: np.ndarray, scene: Scene) -> dict[str, float | str]:
         edm = absorbed / input_energy if input_energy > 0 else np.nan
         residual = ((input_energy - g(_S["final_energy"]) - dissipated) / input_energy
                     if input_energy > 0 else np.nan)
-    row: dict[str, float | str] = {
+    row: dict[str, float | str | None] = {
         "input_energy": input_energy,
         "edm": edm,
         "energy_integral": g(_S["energy_integral"]),
@@ -42,9 +72,15 @@ def finish(raw: np.ndarray, scene: Scene) -> dict[str, float | str]:
         "primary_dissipation": g(_S["primary_dissipation"]),
         "absorber_dissipation": g(_S["absorber_dissipation"]),
         "impact_loss": g(_S["impact_loss"]),
+        "impacts_left": int(g(_S["impacts_left"])),
+        "impacts_right": int(g(_S["impacts_right"])),
+        "peak_force": g(_S["peak_force"]),
+        "contact_time": g(_S["contact_time"]),
     }
     finite = all(np.isfinite(v) for k, v in row.items() if k not in ("edm", "energy_residual"))
     row["status"] = "diverged" if g(_S["status"]) == STATUS_DIVERGED or not finite else "ok"
+    row["regime"] = (regime(samples, float(scene.harmonic[0, 1]))
+                     if samples is not None and samples.size and row["status"] == "ok" else None)
     return row
 
 

@@ -253,6 +253,11 @@ class Scenario(_Model):
                         )
         if self.uncertain:
             raise _KeyError("uncertain", self.uncertain, "random parameters are not supported yet; remove the section")
+        for i, a in enumerate(self.absorbers):
+            if isinstance(a, HertzAbsorber) and (self.has_noise or sim.scheme == "euler-maruyama"):
+                raise _KeyError(f"absorbers.{i}.type", "hertz",
+                                "Hertz contact is solved by the rk4 scheme only: remove white-noise loads "
+                                "and use scheme = 'auto' or 'rk4'")
         if self.simulation.scheme == "rk4" and self.has_noise:
             raise _KeyError("simulation.scheme", "rk4", "is deterministic; a scene with white noise needs 'euler-maruyama' or 'auto'")
         return self

@@ -276,7 +276,7 @@ def rk4_kernel(has_impact: bool, has_hertz: bool, sampling: bool):
                     touching[q] = side
                 elif kind == EXIT:
                     touching[q] = 0
-                if inside and kind != EXIT:
+                if inside and (kind == IMPACT or kind == ONSET):
                     out[IMPACTS] += 1
                     out[IMPACTS_LEFT if side < 0 else IMPACTS_RIGHT] += 1
             if has_impact and stuck.any():
