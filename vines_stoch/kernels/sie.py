@@ -49,8 +49,8 @@ def kick(v, s, dws, load, force, mass, stuck, impact_body, release, vn):
 
 @njit(**INLINE)
 def bridge(total, length, s, z):
-    """Wiener increment over ``[0, s]`` of a Brownian path with increment ``total`` over
-    ``[0, length]`` (Brownian bridge, standard normal ``z``)."""
+    """Increment over ``[0, s]`` of ``sigma W`` given its increment ``total`` over ``[0, length]``
+    (Brownian bridge; ``z`` is ``sigma`` times a standard normal)."""
     if length <= 0.0:
         return total
     return total * (s / length) + np.sqrt(max(s * (length - s) / length, 0.0)) * z
@@ -158,7 +158,7 @@ def sie_kernel(has_noise: bool, has_impact: bool, replay: bool = False):
                         u_end = x[j] - x[0] + left * (vn[j] - vn[0])
                         if stuck[q] == 0 and abs(u_end) > clearance[q]:
                             if has_noise and hit < 0:  # one bridge draw per split step
-                                z = gen.standard_normal()
+                                z = sigma * gen.standard_normal()
                             sq = 1 if u_end > 0.0 else -1
                             sc = crossing(x, v, left, dw, z, load, force, mass, stuck, impact_body,
                                           j, sq, clearance[q], vt)
