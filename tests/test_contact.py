@@ -16,7 +16,7 @@ from vines_stoch.reproduce import PRIMARY_E1MAX, TABLES
 from vines_stoch.scene import build_scene
 
 from .conftest import raw_metrics, scene_of
-from .reference import hertz_reference
+from vines_stoch.reference import hertz_reference
 
 SEED_ABSORBER = """
 [[absorbers]]
