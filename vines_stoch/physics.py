@@ -63,20 +63,6 @@ def harmonic_force(t: float, harmonic) -> float:
     return f
 
 
-@njit(**INLINE)
-def wall_hit_time(u: float, w: float, clearance: float):
-    """Time for a relative coordinate moving at constant speed ``w`` to reach ``|u| = clearance``.
-
-    Returns ``(tau, side)`` with side ``+1``/``-1`` for the wall hit, or ``(inf, 0)`` when at
-    rest relative to the primary.
-    """
-    if w > 0.0:
-        return max((clearance - u) / w, 0.0), 1
-    if w < 0.0:
-        return max((-clearance - u) / w, 0.0), -1
-    return np.inf, 0
-
-
 def hertz_constant(young, poisson, radius: float, q: float = 0.318) -> float:
     """Hertz constant ``K = (4/3) q / ((delta_1 + delta_2) sqrt(A + B))`` of a sphere of
     ``radius`` on a flat, ``A = B = 1 / (2 radius)``, ``delta_i = (1 - nu_i^2) / (pi E_i)``

@@ -7,7 +7,7 @@ import time
 from pathlib import Path
 
 from .ensemble import run_chunk
-from .scenario import Scenario, ScenarioError, load_scenario
+from .scenario import Scenario, load_scenario
 from .scene import build_scene
 
 #: Seed 003 tables as printed: scenario file, variant labels, E1max (J) at 6.3 rad/s.

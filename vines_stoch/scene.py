@@ -9,7 +9,7 @@ import numpy as np
 
 from .kernels.common import POINCARE_SAMPLES
 from .scenario import (CubicAbsorber, HarmonicLoad, HertzAbsorber, ImpactAbsorber, ImpulseLoad,
-                       InitialLoad, LinearAbsorber, Scenario, WhiteNoiseLoad)
+                       InitialLoad, Scenario, WhiteNoiseLoad)
 
 
 @dataclass(frozen=True)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ..physics import INLINE, KERNEL, hertz_energy, hertz_force, spring_damper_energy, spring_damper_force
+from ..physics import INLINE, hertz_energy, hertz_force, spring_damper_energy, spring_damper_force
 
 #: Slots of the raw metric vector a kernel fills; ``metrics.finish`` turns it into columns.
 SLOTS = (

@@ -105,7 +105,6 @@ def sie_kernel(has_noise: bool, has_impact: bool, replay: bool = False):
         force = np.zeros(nb)
         vn = np.zeros(nb)
         vt = np.zeros(nb)
-        vs = np.zeros(nb)
         stuck = np.zeros(ni, np.int64)
         # harmonic loads by rotation, re-evaluated exactly every CHECK_EVERY steps
         hc = np.zeros(nh)
