@@ -31,7 +31,6 @@ def run(
 ) -> None:
     """Run a scenario and write realizations.parquet and summary.parquet."""
     from .ensemble import run as run_study
-    from .metrics import METRICS
 
     try:
         study = load_scenario(scenario)

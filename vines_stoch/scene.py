@@ -104,7 +104,7 @@ def build_scene(scenario: Scenario) -> Scene:
         scheme = "euler-maruyama" if variance > 0 else "rk4"
     period = sample_from = 0.0
     frequencies = [h[1] for h in harmonic]
-    if variance == 0 and len(frequencies) == 1 and frequencies[0] > 0:
+    if scheme == "rk4" and len(frequencies) == 1 and frequencies[0] > 0:
         # Poincare samples at multiples of the forcing period, in the last periods of the window
         period = 2.0 * math.pi / frequencies[0]
         first = max(sim.metrics_from, n_steps * sim.dt - POINCARE_SAMPLES * period)

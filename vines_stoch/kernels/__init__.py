@@ -28,7 +28,7 @@ def kernel_for(scene, replay: bool = False):
 
 def sample_buffer(scene) -> np.ndarray:
     """Empty Poincare sample rows (positions, velocities, impacts left and right)."""
-    rows = POINCARE_SAMPLES if scene.period > 0 and scene.scheme == "rk4" else 0
+    rows = POINCARE_SAMPLES if scene.period > 0 else 0
     return np.full((rows, 2 * scene.mass.shape[0] + 2), np.nan)
 
 
