@@ -79,7 +79,7 @@ def finish(raw: np.ndarray, scene: Scene, samples: np.ndarray | None = None) -> 
     }
     finite = all(np.isfinite(v) for k, v in row.items() if k not in ("edm", "energy_residual"))
     row["status"] = "diverged" if g(_S["status"]) == STATUS_DIVERGED or not finite else "ok"
-    row["regime"] = (regime(samples, float(scene.harmonic[0, 1]))
+    row["regime"] = (regime(samples, 2.0 * np.pi / scene.period)
                      if samples is not None and samples.size and row["status"] == "ok" else None)
     return row
 

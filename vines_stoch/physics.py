@@ -54,15 +54,6 @@ def primary_energy(m1: float, k1: float, x1: float, v1: float) -> float:
     return 0.5 * m1 * v1 * v1 + 0.5 * k1 * x1 * x1
 
 
-@njit(**INLINE)
-def harmonic_force(t: float, harmonic) -> float:
-    """Sum of ``P cos(omega t + phi)`` over the rows ``(P, omega, phi)`` of ``harmonic``."""
-    f = 0.0
-    for j in range(harmonic.shape[0]):
-        f += harmonic[j, 0] * np.cos(harmonic[j, 1] * t + harmonic[j, 2])
-    return f
-
-
 def hertz_constant(young, poisson, radius: float, q: float = 0.318) -> float:
     """Hertz constant ``K = (4/3) q / ((delta_1 + delta_2) sqrt(A + B))`` of a sphere of
     ``radius`` on a flat, ``A = B = 1 / (2 radius)``, ``delta_i = (1 - nu_i^2) / (pi E_i)``

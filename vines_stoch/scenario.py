@@ -15,9 +15,11 @@ from typing import Annotated, Any, Literal, Union
 
 import numpy as np
 from annotated_types import Ge, Gt, Le, Lt
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+from pydantic import BaseModel, ConfigDict, Field, PrivateAttr, ValidationError, model_validator
 
+from .filters import SOILS
 from .physics import hertz_constant
+from .records import G, RecordError, read_record
 
 
 class ScenarioError(ValueError):
@@ -187,8 +189,157 @@ class WhiteNoiseLoad(_Model):
     intensity: NonNegative
 
 
+class JenningsEnvelope(_Model):
+    """Jennings et al. (1968): ``(t/rise)^2`` up to ``rise``, 1 up to ``hold``, then
+    ``exp(-decay (t - hold))``."""
+
+    type: Literal["jennings"]
+    rise: NonNegative
+    hold: NonNegative
+    decay: NonNegative
+
+    @model_validator(mode="after")
+    def _order(self) -> "JenningsEnvelope":
+        if self.hold < self.rise:
+            raise _KeyError("hold", self.hold, f"must be >= rise ({self.rise:g})")
+        return self
+
+
+class SaragoniHartEnvelope(_Model):
+    """Saragoni and Hart (1974), normalised to peak 1 at ``t = peak``:
+    ``(t/peak)^shape exp(shape (1 - t/peak))``."""
+
+    type: Literal["saragoni-hart"]
+    peak: Positive
+    shape: Positive
+
+
+Envelope = Annotated[Union[JenningsEnvelope, SaragoniHartEnvelope], Field(discriminator="type")]
+
+
+class _FilteredLoad(_Model):
+    """Shared fields of loads made by filtering white noise (``filters.py``)."""
+
+    intensity: NonNegative
+    envelope: Envelope | None = None
+    start: Literal["rest", "stationary"] = "rest"
+
+    @model_validator(mode="after")
+    def _stationary(self) -> "_FilteredLoad":
+        if self.start == "stationary" and self.envelope is not None:
+            raise _KeyError("start", self.start, "a stationary start needs a load without envelope")
+        return self
+
+
+class FilteredNoiseLoad(_FilteredLoad):
+    """Wei et al. eq. 23: ``f'' + 2 damping frequency f' + frequency^2 f = intensity xi``,
+    force ``F = f``."""
+
+    type: Literal["filtered-noise"]
+    frequency: Positive
+    damping: Positive
+
+
+class GroundMotionLoad(_FilteredLoad):
+    """Stochastic ground acceleration: Kanai-Tajimi or Clough-Penzien filtered white noise
+    ``w dt = intensity dW`` (two-sided PSD ``S0 = intensity^2 / (2 pi)``) with an optional
+    envelope; filter parameters from a ``soil`` preset or given."""
+
+    type: Literal["ground-motion"]
+    model: Literal["kanai-tajimi", "clough-penzien"] = "clough-penzien"
+    soil: Literal["firm", "medium", "soft"] | None = None
+    ground_frequency: Positive | None = None
+    ground_damping: Positive | None = None
+    filter_frequency: Positive | None = None
+    filter_damping: Positive | None = None
+
+    @model_validator(mode="after")
+    def _parameters(self) -> "GroundMotionLoad":
+        preset = SOILS.get(self.soil, (None,) * 4)
+        names = ["ground_frequency", "ground_damping"]
+        if self.model == "clough-penzien":
+            names += ["filter_frequency", "filter_damping"]
+        for name, value in zip(["ground_frequency", "ground_damping", "filter_frequency", "filter_damping"], preset):
+            if getattr(self, name) is None:
+                setattr(self, name, value)
+        for name in names:
+            if getattr(self, name) is None:
+                raise _KeyError(name, None, "missing: give it or a soil preset (firm, medium, soft)")
+        return self
+
+
+class HalfSineLoad(_Model):
+    """``F = amplitude sin(pi (t - start) / duration)`` for ``start <= t <= start + duration``."""
+
+    type: Literal["half-sine"]
+    amplitude: Real
+    duration: Positive
+    start: NonNegative = 0.0
+
+
+class PulseTrainLoad(_Model):
+    """``F = amplitude`` while ``(t - start) mod period < width`` (``t >= start``), for ``count``
+    pulses (0: no end)."""
+
+    type: Literal["pulse-train"]
+    amplitude: Real
+    width: Positive
+    period: Positive
+    start: NonNegative = 0.0
+    count: Annotated[int, Field(ge=0)] = 0
+
+    @model_validator(mode="after")
+    def _width(self) -> "PulseTrainLoad":
+        if self.width > self.period:
+            raise _KeyError("width", self.width, f"must be <= period ({self.period:g})")
+        return self
+
+
+class ChirpLoad(_Model):
+    """``F = amplitude sin(2 pi (f0 t + (f1 - f0) t^2 / (2 duration)))``, ``f0``, ``f1`` in Hz."""
+
+    type: Literal["chirp"]
+    amplitude: Real
+    f0: NonNegative
+    f1: NonNegative
+    duration: Positive
+
+
+class _RecordLoad(_Model):
+    """A sampled record: linear interpolation, zero outside its time span."""
+
+    file: Annotated[str, Field(min_length=1)]
+    dt: Positive | None = None
+    scale: Real = 1.0
+    format: Literal["auto", "at2", "two-column", "one-column"] = "auto"
+    _times: np.ndarray | None = PrivateAttr(default=None)
+    _values: np.ndarray | None = PrivateAttr(default=None)
+
+    def samples(self) -> tuple[np.ndarray, np.ndarray]:
+        """Times and values in scenario units (scale and units applied)."""
+        if self._times is None:
+            raise RuntimeError(f"record {self.file!r} was not read (use load_scenario)")
+        factor = G if getattr(self, "units", "m/s2") == "g" else 1.0
+        return self._times, self._values * (self.scale * factor)
+
+
+class RecordLoad(_RecordLoad):
+    """Ground acceleration record (base excitation: every mass gets ``-m a_g``)."""
+
+    type: Literal["record"]
+    units: Literal["g", "m/s2"]
+
+
+class ForceRecordLoad(_RecordLoad):
+    """Force record acting on the primary (scenario force units)."""
+
+    type: Literal["force-record"]
+
+
 Load = Annotated[
-    Union[ImpulseLoad, InitialLoad, HarmonicLoad, WhiteNoiseLoad], Field(discriminator="type")
+    Union[ImpulseLoad, InitialLoad, HarmonicLoad, WhiteNoiseLoad, FilteredNoiseLoad, GroundMotionLoad,
+          HalfSineLoad, PulseTrainLoad, ChirpLoad, RecordLoad, ForceRecordLoad],
+    Field(discriminator="type"),
 ]
 
 SCHEMES = ("auto", "euler-maruyama", "rk4")
@@ -256,16 +407,16 @@ class Scenario(_Model):
         for i, a in enumerate(self.absorbers):
             if isinstance(a, HertzAbsorber) and (self.has_noise or sim.scheme == "euler-maruyama"):
                 raise _KeyError(f"absorbers.{i}.type", "hertz",
-                                "Hertz contact is solved by the rk4 scheme only: remove white-noise loads "
+                                "Hertz contact is solved by the rk4 scheme only: remove noise loads "
                                 "and use scheme = 'auto' or 'rk4'")
         if self.simulation.scheme == "rk4" and self.has_noise:
-            raise _KeyError("simulation.scheme", "rk4", "is deterministic; a scene with white noise needs 'euler-maruyama' or 'auto'")
+            raise _KeyError("simulation.scheme", "rk4", "is deterministic; a scene with noise loads needs 'euler-maruyama' or 'auto'")
         return self
 
     @property
     def has_noise(self) -> bool:
-        """True when any random force acts."""
-        return any(isinstance(l, WhiteNoiseLoad) and l.intensity > 0 for l in self.loads)
+        """True when any random load acts (white, filtered noise, stochastic ground motion)."""
+        return any(isinstance(l, (WhiteNoiseLoad, _FilteredLoad)) and l.intensity > 0 for l in self.loads)
 
 
 class _KeyError(ValueError):
@@ -480,10 +631,12 @@ def get_path(data: dict[str, Any], key: str) -> Any:
 class Study:
     """A validated scenario file: the base scenario and its sweep points."""
 
-    def __init__(self, source: str, text: str, data: dict[str, Any]):
+    def __init__(self, source: str, text: str, data: dict[str, Any], directory: Path = Path(".")):
         self.source = source
         self.text = text
-        self.base = _validate(data, source)
+        self.directory = directory
+        self._records: dict[tuple[Any, ...], tuple[np.ndarray, np.ndarray]] = {}
+        self.base = self._read_records(_validate(data, source), source)
         sweep = dict(self.base.sweep)
         zipped = _zipped(sweep.pop("zip", []), sweep, source)
         self.sweep_keys = list(sweep)
@@ -502,7 +655,21 @@ class Study:
             variant = copy.deepcopy(data)
             for key, value in values.items():
                 set_path(variant, key, value)
-            self.points.append(_validate(variant, f"{source} (sweep point {values})"))
+            self.points.append(self._read_records(_validate(variant, f"{source} (sweep point {values})"), source))
+
+    def _read_records(self, scenario: Scenario, source: str) -> Scenario:
+        """Read the files of record loads (paths relative to the scenario file), once each."""
+        for i, load in enumerate(scenario.loads):
+            if isinstance(load, _RecordLoad):
+                path = (self.directory / load.file).resolve()
+                key = (path, load.format, load.dt)
+                if key not in self._records:
+                    try:
+                        self._records[key] = read_record(path, load.format, load.dt)
+                    except RecordError as exc:
+                        raise ScenarioError(_format(source, f"loads.{i}.file", load.file, str(exc))) from None
+                load._times, load._values = self._records[key]
+        return scenario
 
     @property
     def name(self) -> str:
@@ -544,13 +711,14 @@ def load_scenario(path: str | Path) -> Study:
         text = path.read_text(encoding="utf-8")
     except OSError as exc:
         raise ScenarioError(f"{source}: cannot read file ({exc.strerror})") from None
-    return parse_scenario(text, source)
+    return parse_scenario(text, source, path.parent)
 
 
-def parse_scenario(text: str, source: str = "<scenario>") -> Study:
-    """Validate scenario TOML text (``source`` names it in messages)."""
+def parse_scenario(text: str, source: str = "<scenario>", directory: str | Path = ".") -> Study:
+    """Validate scenario TOML text (``source`` names it in messages; record files are found
+    relative to ``directory``)."""
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise ScenarioError(f"{source}: TOML syntax error: {exc}") from None
-    return Study(source, text, data)
+    return Study(source, text, data, Path(directory))

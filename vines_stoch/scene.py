@@ -7,9 +7,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from . import filters
 from .kernels.common import POINCARE_SAMPLES
-from .scenario import (CubicAbsorber, HarmonicLoad, HertzAbsorber, ImpactAbsorber, ImpulseLoad,
-                       InitialLoad, Scenario, WhiteNoiseLoad)
+from .kernels.loads import CHIRP, HALF_SINE, HARMONIC, JENNINGS, PULSE_TRAIN, SARAGONI_HART, STATIONARY
+from .scenario import (ChirpLoad, CubicAbsorber, FilteredNoiseLoad, ForceRecordLoad, GroundMotionLoad,
+                       HalfSineLoad, HarmonicLoad, HertzAbsorber, ImpactAbsorber, ImpulseLoad, InitialLoad,
+                       JenningsEnvelope, PulseTrainLoad, RecordLoad, Scenario, WhiteNoiseLoad)
 
 
 @dataclass(frozen=True)
@@ -29,7 +32,12 @@ class Scene:
     hertz_body: np.ndarray    # (n_hertz,) absorber index of each Hertz absorber
     hertz_k: np.ndarray       # (n_hertz, 2) contact constants K, left and right
     hertz_walls: np.ndarray   # (n_hertz, 2) contact surfaces: z_L = lo - u, z_R = u - hi
-    harmonic: np.ndarray      # (n_harmonic, 3): amplitude, frequency, phase
+    forces: np.ndarray        # (n_forces, 6) closed-form force rows (kernels/loads.py)
+    series_t: np.ndarray      # records, concatenated: times
+    series_v: np.ndarray      # values (force or ground acceleration, scaled)
+    series_ptr: np.ndarray    # (n_series + 1,) offsets
+    series_ground: np.ndarray  # (n_series,) 1: ground acceleration, 0: force on the primary
+    filters: dict             # filter arrays (filters.block_diagonal): phi, chol, envelope, c_force, c_ground, p0
     sigma: float              # white-noise intensity, F dt = sigma dW
     x0: np.ndarray
     v0: np.ndarray
@@ -42,7 +50,13 @@ class Scene:
 
     @property
     def has_noise(self) -> bool:
-        return self.sigma > 0.0
+        """True when realisations differ (white noise or filtered noise)."""
+        return self.sigma > 0.0 or self.filters["phi"].shape[0] > 0
+
+    @property
+    def excitation(self) -> tuple:
+        """The kernels' tuple of closed-form loads and records (kernels/loads.py)."""
+        return self.forces, self.series_t, self.series_v, self.series_ptr, self.series_ground
 
     @property
     def has_impact(self) -> bool:
@@ -85,8 +99,11 @@ def build_scene(scenario: Scenario) -> Scene:
     v0 = np.zeros(n)
     for i, _, _, _, _, start in hertz:
         x0[i + 1] = start
-    harmonic = []
+    forces = []
+    series = []
+    filter_list = []
     variance = 0.0
+    dt = float(scenario.simulation.dt)
     for load in scenario.loads:
         if isinstance(load, ImpulseLoad):
             v0[0] += load.velocity
@@ -94,16 +111,26 @@ def build_scene(scenario: Scenario) -> Scene:
             x0 += np.asarray(load.displacement or np.zeros(n), dtype=float)
             v0 += np.asarray(load.velocity or np.zeros(n), dtype=float)
         elif isinstance(load, HarmonicLoad):
-            harmonic.append((load.amplitude, load.frequency, load.phase))
+            forces.append((HARMONIC, load.amplitude, load.frequency, load.phase, 0.0, 0.0))
+        elif isinstance(load, HalfSineLoad):
+            forces.append((HALF_SINE, load.amplitude, load.duration, load.start, 0.0, 0.0))
+        elif isinstance(load, PulseTrainLoad):
+            forces.append((PULSE_TRAIN, load.amplitude, load.width, load.period, load.start, load.count))
+        elif isinstance(load, ChirpLoad):
+            forces.append((CHIRP, load.amplitude, load.f0, load.f1, load.duration, 0.0))
+        elif isinstance(load, (RecordLoad, ForceRecordLoad)):
+            series.append((*load.samples(), isinstance(load, RecordLoad)))
         elif isinstance(load, WhiteNoiseLoad):
             variance += load.intensity**2
+        elif isinstance(load, (FilteredNoiseLoad, GroundMotionLoad)) and load.intensity > 0:
+            filter_list.append(_filter(load))
     sim = scenario.simulation
     n_steps = max(1, math.ceil(sim.duration / sim.dt - 1e-9))
     scheme = sim.scheme
     if scheme == "auto":
-        scheme = "euler-maruyama" if variance > 0 else "rk4"
+        scheme = "euler-maruyama" if variance > 0 or filter_list else "rk4"
     period = sample_from = 0.0
-    frequencies = [h[1] for h in harmonic]
+    frequencies = [f[2] for f in forces if f[0] == HARMONIC]
     if scheme == "rk4" and len(frequencies) == 1 and frequencies[0] > 0:
         # Poincare samples at multiples of the forcing period, in the last periods of the window
         period = 2.0 * math.pi / frequencies[0]
@@ -118,8 +145,33 @@ def build_scene(scenario: Scenario) -> Scene:
         hertz_body=np.array([h[0] for h in hertz], dtype=np.int64),
         hertz_k=np.array([h[1:3] for h in hertz], dtype=float).reshape(-1, 2),
         hertz_walls=np.array([h[3:5] for h in hertz], dtype=float).reshape(-1, 2),
-        harmonic=np.array(harmonic, dtype=float).reshape(-1, 3),
+        forces=np.array(forces, dtype=float).reshape(-1, 6),
+        series_t=np.concatenate([t for t, _, _ in series] or [np.zeros(0)]),
+        series_v=np.concatenate([v for _, v, _ in series] or [np.zeros(0)]),
+        series_ptr=np.cumsum([0] + [len(t) for t, _, _ in series]).astype(np.int64),
+        series_ground=np.array([int(g) for _, _, g in series], dtype=np.int64),
+        filters=filters.block_diagonal(filter_list, dt),
         sigma=math.sqrt(variance), x0=x0, v0=v0, dt=float(sim.dt), n_steps=n_steps,
         i0=min(n_steps - 1, int(round(sim.metrics_from / sim.dt))), scheme=scheme,
         period=period, sample_from=sample_from,
     )
+
+
+def _filter(load: FilteredNoiseLoad | GroundMotionLoad) -> filters.Filter:
+    """The linear filter of a filtered-noise or ground-motion load."""
+    if isinstance(load, FilteredNoiseLoad):
+        a, b, c = filters.filtered_noise(load.intensity, load.frequency, load.damping)
+    elif load.model == "kanai-tajimi":
+        a, b, c = filters.kanai_tajimi(load.intensity, load.ground_frequency, load.ground_damping)
+    else:
+        a, b, c = filters.clough_penzien(load.intensity, load.ground_frequency, load.ground_damping,
+                                         load.filter_frequency, load.filter_damping)
+    env = load.envelope
+    if env is None:
+        row = (STATIONARY, 0.0, 0.0, 0.0)
+    elif isinstance(env, JenningsEnvelope):
+        row = (JENNINGS, env.rise, env.hold, env.decay)
+    else:
+        row = (SARAGONI_HART, env.peak, env.shape, 0.0)
+    return filters.Filter(a=a, b=b, c=c, ground=isinstance(load, GroundMotionLoad), envelope=row,
+                          stationary=load.start == "stationary")

@@ -23,13 +23,23 @@ def kernel_for(scene, replay: bool = False):
     """The compiled loop for a scene's scheme and structure."""
     if scene.scheme == "rk4":
         return rk4_kernel(scene.has_impact, scene.has_hertz, scene.period > 0)
-    return sie_kernel(scene.has_noise, scene.has_impact, replay)
+    return sie_kernel(scene.sigma > 0.0, scene.has_impact, replay)
 
 
 def sample_buffer(scene) -> np.ndarray:
     """Empty Poincare sample rows (positions, velocities, impacts left and right)."""
     rows = POINCARE_SAMPLES if scene.period > 0 else 0
     return np.full((rows, 2 * scene.mass.shape[0] + 2), np.nan)
+
+
+def filter_tuple(scene, generator: np.random.Generator | None) -> tuple:
+    """The kernels' filter arrays with the initial filter state: zero (from rest) or a draw
+    from the stationary law (``p0`` is the root of its covariance)."""
+    f = scene.filters
+    z = np.zeros(f["phi"].shape[0])
+    if z.shape[0] and f["p0"].any():
+        z = f["p0"] @ generator.standard_normal(z.shape[0])
+    return f["phi"], f["chol"], f["envelope"], f["c_force"], f["c_ground"], z
 
 
 def simulate(scene, generator: np.random.Generator | None = None, *, normals: np.ndarray | None = None,
@@ -48,10 +58,13 @@ def simulate(scene, generator: np.random.Generator | None = None, *, normals: np
     replay = normals is not None
     if replay and normals.shape[0] < scene.n_steps:
         raise ValueError(f"normals: need {scene.n_steps} values, got {normals.shape[0]}")
+    if replay and scene.filters["phi"].shape[0]:
+        raise ValueError("normals: a replayed Brownian path drives white noise only, not filtered loads")
     kernel_for(scene, replay)(
         scene.mass, scene.k1, scene.c1, scene.k_lin, scene.k_cubic, scene.c_abs, scene.rest,
         scene.impact_body, scene.clearance, scene.restitution, scene.hertz_body, scene.hertz_k,
-        scene.hertz_walls, scene.harmonic, scene.sigma, x, v, scene.dt, scene.n_steps, scene.i0,
+        scene.hertz_walls, scene.excitation, filter_tuple(scene, generator), scene.sigma, x, v,
+        scene.dt, scene.n_steps, scene.i0,
         scene.period, scene.sample_from, generator if generator is not None else _NO_NOISE,
         normals if replay else _NO_NORMALS, out, samples,
     )

@@ -22,12 +22,13 @@ from functools import lru_cache
 import numpy as np
 from numba import njit
 
-from ..physics import KERNEL, harmonic_force, primary_energy, restitution_impact
+from ..physics import KERNEL, primary_energy, restitution_impact
 from .common import (ABSORBER_DISS, CAPPED, CHECK_EVERY, CONTACT_TIME, E1_MAX, ENERGY_INT,
                      FINAL_ENERGY, IMPACT_LOSS, IMPACTS, IMPACTS_LEFT, IMPACTS_RIGHT, INLINE,
                      INPUT, MAX_EVENTS, PEAK_FORCE, PRIMARY_DISS, STATUS, STATUS_DIVERGED, X1_MAX, X1_SQ_INT,
                      attachment_forces, contact_force, contact_forces, diverged, pin_to_walls,
                      record_sample, stick_together, sticks, stored_energy)
+from .loads import applied, has_breaks, next_break
 
 NEWTON_ITERATIONS = 12
 #: Sub-steps per Hertz contact duration.
@@ -40,29 +41,34 @@ NONE, IMPACT, ONSET, EXIT = 0, 1, 2, 3
 
 
 @njit(**INLINE)
-def accelerations(x, v, t, p, stuck, release, acc, sticking, contact):
+def accelerations(x, v, t, tm, p, stuck, release, acc, sticking, contact):
     """Accelerations of all bodies into ``acc``; returns the rates of the energy integrals
     (load power, primary damping power, absorber damping power, ``E1``, ``x1^2``).
 
-    ``p`` is the scene tuple ``(mass, k1, c1, k_lin, k_cubic, c_abs, rest, harmonic,
-    impact_body, hertz_body, hertz_k, hertz_walls)``; ``sticking`` applies the contact
-    constraint of stuck impact absorbers, ``contact`` the Hertz contact forces.
+    ``p`` is the scene tuple ``(mass, k1, c1, k_lin, k_cubic, c_abs, rest, ex,
+    impact_body, hertz_body, hertz_k, hertz_walls)`` (``ex``: kernels/loads.py, piecewise
+    loads on the piece of ``tm``); ``sticking`` applies the contact constraint of stuck impact
+    absorbers, ``contact`` the Hertz contact forces.
     """
-    mass, k1, c1, k_lin, k_cubic, c_abs, rest, harmonic, impact_body, hertz_body, hertz_k, hertz_walls = p
+    mass, k1, c1, k_lin, k_cubic, c_abs, rest, ex, impact_body, hertz_body, hertz_k, hertz_walls = p
     attachment_forces(x, v, k1, c1, k_lin, k_cubic, c_abs, rest, acc)
     if contact:
         contact_forces(x, hertz_body, hertz_k, hertz_walls, acc)
-    load = harmonic_force(t, harmonic)
+    load, ag = applied(t, tm, ex)
     acc[0] += load
+    power = load * v[0]
     for b in range(mass.shape[0]):
-        acc[b] /= mass[b]
+        acc[b] = acc[b] / mass[b] - ag
+    if ag != 0.0:
+        for b in range(mass.shape[0]):
+            power -= ag * mass[b] * v[b]
     if sticking:
         stick_together(mass, acc, stuck, impact_body, release)
     absorber_power = 0.0
     for a in range(c_abs.shape[0]):
         w = v[a + 1] - v[0]
         absorber_power += c_abs[a] * w * w
-    return (load * v[0], c1 * v[0] * v[0], absorber_power,
+    return (power, c1 * v[0] * v[0], absorber_power,
             primary_energy(mass[0], k1, x[0], v[0]), x[0] * x[0])
 
 
@@ -72,19 +78,20 @@ def rk4_step(x, v, t, h, xo, vo, work, p, stuck, sticking, contact):
     of the five energy integrals.  ``work`` holds eight scratch arrays."""
     a1, a2, a3, a4, xs, v2, v3, v4 = work
     nb = x.shape[0]
-    r1 = accelerations(x, v, t, p, stuck, False, a1, sticking, contact)
+    tm = t + 0.5 * h
+    r1 = accelerations(x, v, t, tm, p, stuck, False, a1, sticking, contact)
     for b in range(nb):
         xs[b] = x[b] + 0.5 * h * v[b]
         v2[b] = v[b] + 0.5 * h * a1[b]
-    r2 = accelerations(xs, v2, t + 0.5 * h, p, stuck, False, a2, sticking, contact)
+    r2 = accelerations(xs, v2, tm, tm, p, stuck, False, a2, sticking, contact)
     for b in range(nb):
         xs[b] = x[b] + 0.5 * h * v2[b]
         v3[b] = v[b] + 0.5 * h * a2[b]
-    r3 = accelerations(xs, v3, t + 0.5 * h, p, stuck, False, a3, sticking, contact)
+    r3 = accelerations(xs, v3, tm, tm, p, stuck, False, a3, sticking, contact)
     for b in range(nb):
         xs[b] = x[b] + h * v3[b]
         v4[b] = v[b] + h * a3[b]
-    r4 = accelerations(xs, v4, t + h, p, stuck, False, a4, sticking, contact)
+    r4 = accelerations(xs, v4, t + h, tm, p, stuck, False, a4, sticking, contact)
     for b in range(nb):
         xo[b] = x[b] + h / 6.0 * (v[b] + 2.0 * v2[b] + 2.0 * v3[b] + v4[b])
         vo[b] = v[b] + h / 6.0 * (a1[b] + 2.0 * a2[b] + 2.0 * a3[b] + a4[b])
@@ -172,11 +179,12 @@ def rk4_kernel(has_impact: bool, has_hertz: bool, sampling: bool):
 
     @njit(**KERNEL)
     def kernel(mass, k1, c1, k_lin, k_cubic, c_abs, rest, impact_body, clearance, restitution,
-               hertz_body, hertz_k, hertz_walls, harmonic, sigma, x, v, dt, n_steps, i0,
+               hertz_body, hertz_k, hertz_walls, ex, fl, sigma, x, v, dt, n_steps, i0,
                period, sample_from, gen, normals, out, samples):
         nb = mass.shape[0]
-        p = (mass, k1, c1, k_lin, k_cubic, c_abs, rest, harmonic, impact_body, hertz_body,
+        p = (mass, k1, c1, k_lin, k_cubic, c_abs, rest, ex, impact_body, hertz_body,
              hertz_k, hertz_walls)
+        breaks = has_breaks(ex)  # sub-steps end at the loads' kinks and jumps
         xn = np.zeros(nb)
         vn = np.zeros(nb)
         xp = x.copy()
@@ -209,6 +217,10 @@ def rk4_kernel(has_impact: bool, has_hertz: bool, sampling: bool):
                 h = left
                 if contact:
                     h = min(left, contact_step(x, v, mass, hertz_body, hertz_k, hertz_walls, touching))
+                if breaks:
+                    tb = next_break(t + 1e-9 * dt, ex)
+                    if tb < t + h - 1e-9 * dt:
+                        h = tb - t
                 capped = sub == MAX_SUBSTEPS - 1 or n_impacts >= MAX_EVENTS
                 if capped:  # take the rest of the step at once, keep absorbers in their cavity
                     h = left
@@ -260,7 +272,7 @@ def rk4_kernel(has_impact: bool, has_hertz: bool, sampling: bool):
                 if kind == IMPACT:
                     n_impacts += 1
                     x[j] = x[0] + side * clearance[q]
-                    accelerations(x, v, t, p, stuck, False, acc, True, contact)
+                    accelerations(x, v, t, t, p, stuck, False, acc, True, contact)
                     plastic = sticks(side, v[j] - v[0], (acc[j] - acc[0]) * dt)
                     r = 0.0 if plastic else restitution[q]
                     v[0], v[j], loss = restitution_impact(m0, mass[j], v[0], v[j], r)
@@ -282,7 +294,7 @@ def rk4_kernel(has_impact: bool, has_hertz: bool, sampling: bool):
             if has_impact and stuck.any():
                 pin_to_walls(x, stuck, impact_body, clearance)
                 # release contacts the wall would have to pull (checked at step ends)
-                accelerations(x, v, t, p, stuck, True, acc, True, False)
+                accelerations(x, v, t, t, p, stuck, True, acc, True, False)
             if sampling:
                 next_sample = record_sample(samples, next_sample, sample_from, period, i * dt, dt,
                                             xp, vp, x, v, out[IMPACTS_LEFT], out[IMPACTS_RIGHT])

@@ -27,24 +27,35 @@ from functools import lru_cache
 import numpy as np
 from numba import njit
 
-from ..physics import KERNEL, harmonic_force, primary_energy, restitution_impact
+from ..physics import KERNEL, primary_energy, restitution_impact
 from .common import (ABSORBER_DISS, CAPPED, CHECK_EVERY, E1_MAX, ENERGY_INT, FINAL_ENERGY,
                      IMPACT_LOSS, IMPACTS, IMPACTS_LEFT, IMPACTS_RIGHT, INLINE, INPUT, MAX_EVENTS,
                      PRIMARY_DISS, STATUS, STATUS_DIVERGED, X1_MAX, X1_SQ_INT, attachment_forces,
                      diverged, pin_to_walls, stick_together, sticks, stored_energy)
+from .loads import advance_filters, excitation, has_breaks
 
 #: Iterations of the bracketed search for the impact instant (Illinois method).
 ROOT_ITERATIONS = 100
 
 
 @njit(**INLINE)
-def kick(v, s, dws, load, force, mass, stuck, impact_body, release, vn):
-    """Velocities after a kick of length ``s`` with Wiener increment ``dws`` into ``vn``."""
-    vn[0] = v[0] + ((force[0] + load) * s + dws) / mass[0]
+def kick(v, s, dws, load, ag, force, mass, stuck, impact_body, release, vn):
+    """Velocities after a kick of length ``s`` into ``vn``: forces, the load ``load`` and
+    Wiener increment ``dws`` on the primary, ground acceleration ``ag`` on every body."""
+    vn[0] = v[0] + ((force[0] + load) * s + dws) / mass[0] - ag * s
     for b in range(1, mass.shape[0]):
-        vn[b] = v[b] + force[b] * s / mass[b]
+        vn[b] = v[b] + force[b] * s / mass[b] - ag * s
     if impact_body.shape[0] > 0:
         stick_together(mass, vn, stuck, impact_body, release)
+
+
+@njit(**INLINE)
+def momentum(mass, v, vn) -> float:
+    """Total momentum at the mean of two velocity vectors (work of the ground acceleration)."""
+    p = 0.0
+    for b in range(mass.shape[0]):
+        p += mass[b] * 0.5 * (v[b] + vn[b])
+    return p
 
 
 @njit(**INLINE)
@@ -57,12 +68,12 @@ def bridge(total, length, s, z):
 
 
 @njit(**INLINE)
-def crossing(x, v, length, total, z, load, force, mass, stuck, impact_body, j, side, wall, vt):
+def crossing(x, v, length, total, z, load, ag, force, mass, stuck, impact_body, j, side, wall, vt):
     """Sub-step length in ``(0, length]`` after which absorber body ``j`` is exactly at
     ``wall`` (side ``side``), by the Illinois method on the bracket ``[0, length]``."""
     lo, hi = 0.0, length
     g_lo = min(side * (x[j] - x[0]) - wall, 0.0)  # on the wall counts as inside
-    kick(v, 0.5 * length, total, load, force, mass, stuck, impact_body, False, vt)
+    kick(v, 0.5 * length, total, load, ag, force, mass, stuck, impact_body, False, vt)
     g_hi = side * (x[j] - x[0] + length * (vt[j] - vt[0])) - wall
     s = hi
     last = 0
@@ -70,7 +81,7 @@ def crossing(x, v, length, total, z, load, force, mass, stuck, impact_body, j, s
         s = hi - g_hi * (hi - lo) / (g_hi - g_lo)
         if not (lo < s < hi):
             s = 0.5 * (lo + hi)
-        kick(v, 0.5 * s, bridge(total, length, s, z), load, force, mass, stuck, impact_body, False, vt)
+        kick(v, 0.5 * s, bridge(total, length, s, z), load, ag, force, mass, stuck, impact_body, False, vt)
         g = side * (x[j] - x[0] + s * (vt[j] - vt[0])) - wall
         if g > 0.0:
             hi, g_hi = s, g
@@ -97,24 +108,24 @@ def sie_kernel(has_noise: bool, has_impact: bool, replay: bool = False):
 
     @njit(**KERNEL)
     def kernel(mass, k1, c1, k_lin, k_cubic, c_abs, rest, impact_body, clearance, restitution,
-               hertz_body, hertz_k, hertz_walls, harmonic, sigma, x, v, dt, n_steps, i0,
+               hertz_body, hertz_k, hertz_walls, ex, fl, sigma, x, v, dt, n_steps, i0,
                period, sample_from, gen, normals, out, samples):
         nb = mass.shape[0]
         ni = impact_body.shape[0]
-        nh = harmonic.shape[0]
+        phi, chol, envelopes, c_force, c_ground, z = fl
+        nz = z.shape[0]
         force = np.zeros(nb)
         vn = np.zeros(nb)
         vt = np.zeros(nb)
+        zn = z.copy()
+        draws = np.zeros(nz)
         stuck = np.zeros(ni, np.int64)
-        # harmonic loads by rotation, re-evaluated exactly every CHECK_EVERY steps
-        hc = np.zeros(nh)
-        hs = np.zeros(nh)
-        rc = np.cos(harmonic[:, 1] * dt)
-        rs = np.sin(harmonic[:, 1] * dt)
+        jumps = has_breaks(ex)  # piecewise loads: re-evaluate each step's start on its own piece
         noise_scale = sigma * np.sqrt(dt)
         m0 = mass[0]
         e1_prev = primary_energy(m0, k1, x[0], v[0])
         x2_prev = x[0] * x[0]
+        load_next, ag_next = excitation(0.0, 0.5 * dt, 0.0, ex, c_force, c_ground, z, zn)
         # accumulators in registers; written to ``out`` once at the end
         work = d_primary = d_absorber = e_integral = x2_integral = e1_max = x1_max = 0.0
         loss_sum = n_left = n_right = 0.0
@@ -124,51 +135,50 @@ def sie_kernel(has_noise: bool, has_impact: bool, replay: bool = False):
                 work = stored_energy(x, v, mass, k1, k_lin, k_cubic, rest, hertz_body, hertz_k, hertz_walls)
                 e1_max = e1_prev
                 x1_max = abs(x[0])
-            if i % CHECK_EVERY == 0:
-                if diverged(x):
-                    out[STATUS] = STATUS_DIVERGED
-                    break
-                for h in range(nh):
-                    phase = harmonic[h, 1] * (i * dt) + harmonic[h, 2]
-                    hc[h] = np.cos(phase)
-                    hs[h] = np.sin(phase)
-            load = 0.0
-            load_next = 0.0
-            for h in range(nh):
-                load += harmonic[h, 0] * hc[h]
-                hc[h], hs[h] = hc[h] * rc[h] - hs[h] * rs[h], hs[h] * rc[h] + hc[h] * rs[h]
-                load_next += harmonic[h, 0] * hc[h]
+            if i % CHECK_EVERY == 0 and diverged(x):
+                out[STATUS] = STATUS_DIVERGED
+                break
+            t_step = i * dt
+            tm = t_step + 0.5 * dt
+            if nz > 0:
+                for r in range(nz):
+                    z[r] = zn[r]
+                advance_filters(z, zn, t_step, dt, phi, chol, envelopes, gen, draws)
+            load, ag = load_next, ag_next
+            if jumps:
+                load, ag = excitation(t_step, tm, 0.0, ex, c_force, c_ground, z, zn)
+            load_next, ag_next = excitation(t_step + dt, tm, 1.0, ex, c_force, c_ground, z, zn)
             dw = 0.0
             if has_noise:
                 dw = noise_scale * (normals[i] if replay else gen.standard_normal())
             left = dt
-            t = i * dt
+            t = t_step
             for event in range(MAX_EVENTS + 1):
                 if event > 0 and left <= 0.0:
                     break
                 attachment_forces(x, v, k1, c1, k_lin, k_cubic, c_abs, rest, force)
-                kick(v, 0.5 * left, dw, load, force, mass, stuck, impact_body, True, vn)
+                kick(v, 0.5 * left, dw, load, ag, force, mass, stuck, impact_body, True, vn)
                 s = left
                 hit, side = -1, 0
-                z = 0.0
+                zb = 0.0
                 if has_impact and event < MAX_EVENTS:
                     for q in range(ni):
                         j = impact_body[q] + 1
                         u_end = x[j] - x[0] + left * (vn[j] - vn[0])
                         if stuck[q] == 0 and abs(u_end) > clearance[q]:
                             if has_noise and hit < 0:  # one bridge draw per split step
-                                z = sigma * gen.standard_normal()
+                                zb = sigma * gen.standard_normal()
                             sq = 1 if u_end > 0.0 else -1
-                            sc = crossing(x, v, left, dw, z, load, force, mass, stuck, impact_body,
+                            sc = crossing(x, v, left, dw, zb, load, ag, force, mass, stuck, impact_body,
                                           j, sq, clearance[q], vt)
                             if hit < 0 or sc < s:
                                 hit, side, s = q, sq, sc
                     if hit >= 0:
-                        kick(v, 0.5 * s, bridge(dw, left, s, z), load, force, mass, stuck, impact_body, False, vn)
-                dws = bridge(dw, left, s, z)
+                        kick(v, 0.5 * s, bridge(dw, left, s, zb), load, ag, force, mass, stuck, impact_body, False, vn)
+                dws = bridge(dw, left, s, zb)
                 if inside:
                     v_mid = 0.5 * (v[0] + vn[0])
-                    work += (0.5 * load * s + dws) * v_mid
+                    work += (0.5 * load * s + dws) * v_mid - (0.5 * ag * s * momentum(mass, v, vn) if ag != 0.0 else 0.0)
                     d_primary += c1 * v[0] * 0.5 * s * v_mid
                     for a in range(nb - 1):
                         w = v[a + 1] - v[0]
@@ -177,14 +187,14 @@ def sie_kernel(has_noise: bool, has_impact: bool, replay: bool = False):
                     x[b] += s * vn[b]
                     v[b] = vn[b]
                 # closing half kick with the forces at the new positions
-                load_end = load_next
-                if nh > 0 and hit >= 0:
-                    load_end = harmonic_force(t + s, harmonic)
+                load_end, ag_end = load_next, ag_next
+                if hit >= 0:
+                    load_end, ag_end = excitation(t + s, tm, (t + s - t_step) / dt, ex, c_force, c_ground, z, zn)
                 attachment_forces(x, v, k1, c1, k_lin, k_cubic, c_abs, rest, force)
-                kick(v, 0.5 * s, 0.0, load_end, force, mass, stuck, impact_body, False, vn)
+                kick(v, 0.5 * s, 0.0, load_end, ag_end, force, mass, stuck, impact_body, False, vn)
                 if inside:
                     v_mid = 0.5 * (v[0] + vn[0])
-                    work += 0.5 * load_end * s * v_mid
+                    work += 0.5 * load_end * s * v_mid - (0.5 * ag_end * s * momentum(mass, v, vn) if ag_end != 0.0 else 0.0)
                     d_primary += c1 * v[0] * 0.5 * s * v_mid
                     for a in range(nb - 1):
                         w = v[a + 1] - v[0]
@@ -199,8 +209,7 @@ def sie_kernel(has_noise: bool, has_impact: bool, replay: bool = False):
                 t += s
                 left -= s
                 dw -= dws
-                if nh > 0:
-                    load = harmonic_force(t, harmonic)
+                load, ag = load_end, ag_end
                 gain = (force[j] / mass[j] - (force[0] + load) / m0) * dt
                 plastic = sticks(side, v[j] - v[0], gain)
                 r = 0.0 if plastic else restitution[hit]

@@ -1,0 +1,191 @@
+"""Loads evaluated inside the step loops (MODEL.md section 3): no per-step Python.
+
+A scene's time-dependent loads reach a kernel as the tuple
+``ex = (forces, series_t, series_v, series_ptr, series_ground)``:
+
+- ``forces`` rows ``(kind, amplitude, p1, p2, p3, p4)`` of closed-form forces on the primary
+  (``HARMONIC``, ``HALF_SINE``, ``PULSE_TRAIN``, ``CHIRP``);
+- sampled series (records), concatenated: series ``s`` holds ``series_t/v[ptr[s]:ptr[s+1]]``,
+  linearly interpolated and zero outside its time span; ``series_ground[s]`` is 1 for a
+  ground acceleration (base excitation) and 0 for a force on the primary.
+
+Piecewise loads are evaluated with a *piece time* ``tm``: the piece (pulse on or off, record
+segment) is the one containing ``tm`` and its formula is evaluated at ``t``.  A step that
+never straddles a break point (see ``next_break``) and passes its midpoint as ``tm`` sees a
+smooth load, one-sided limits included.
+
+Filtered loads (``filters.py``) are advanced by ``advance_filters`` and read out linearly.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from ..physics import INLINE
+
+#: Kinds of closed-form force rows.
+HARMONIC, HALF_SINE, PULSE_TRAIN, CHIRP = 0, 1, 2, 3
+#: Envelope kinds of filter rows (``filters.STATIONARY`` etc.).
+STATIONARY, JENNINGS, SARAGONI_HART = 0, 1, 2
+
+
+@njit(**INLINE)
+def closed_form_force(t: float, tm: float, row) -> float:
+    """One closed-form force row at ``t`` (piece chosen at ``tm``)."""
+    kind, amplitude = row[0], row[1]
+    if kind == HARMONIC:  # P cos(omega t + phi)
+        return amplitude * np.cos(row[2] * t + row[3])
+    if kind == HALF_SINE:  # F0 sin(pi (t - t0) / Td) on [t0, t0 + Td]
+        duration, t0 = row[2], row[3]
+        if t0 <= tm <= t0 + duration:
+            return amplitude * np.sin(np.pi * (t - t0) / duration)
+        return 0.0
+    if kind == PULSE_TRAIN:  # F0 while (t - t0) mod Tp < tw, t >= t0, at most `count` pulses
+        width, period, t0, count = row[2], row[3], row[4], row[5]
+        if tm < t0:
+            return 0.0
+        k = np.floor((tm - t0) / period)
+        if count > 0 and k >= count:
+            return 0.0
+        return amplitude if tm - t0 - k * period < width else 0.0
+    # CHIRP: A sin(2 pi (f0 t + (f1 - f0) t^2 / (2 T)))
+    f0, f1, sweep = row[2], row[3], row[4]
+    return amplitude * np.sin(2.0 * np.pi * (f0 * t + (f1 - f0) * t * t / (2.0 * sweep)))
+
+
+@njit(**INLINE)
+def segment(times, lo: int, hi: int, tm: float) -> int:
+    """Index ``k`` in ``[lo, hi - 1)`` with ``times[k] <= tm < times[k + 1]`` (-1 outside the
+    span): a guess from the mean spacing, then a walk (one step on uniform grids)."""
+    if hi - lo < 2 or tm < times[lo] or tm > times[hi - 1]:
+        return -1
+    k = lo + int((tm - times[lo]) / (times[hi - 1] - times[lo]) * (hi - 1 - lo))
+    k = min(max(k, lo), hi - 2)
+    while k > lo and times[k] > tm:
+        k -= 1
+    while k < hi - 2 and times[k + 1] <= tm:
+        k += 1
+    return k
+
+
+@njit(**INLINE)
+def series_value(t: float, tm: float, times, values, lo: int, hi: int) -> float:
+    """Linear interpolation of one series at ``t`` on the segment containing ``tm``."""
+    k = segment(times, lo, hi, tm)
+    if k < 0:
+        return 0.0
+    s = (t - times[k]) / (times[k + 1] - times[k])
+    return values[k] + s * (values[k + 1] - values[k])
+
+
+@njit(**INLINE)
+def applied(t: float, tm: float, ex):
+    """``(force on the primary, ground acceleration)`` of the closed-form loads and records."""
+    forces, series_t, series_v, series_ptr, series_ground = ex
+    force = 0.0
+    ground = 0.0
+    for r in range(forces.shape[0]):
+        force += closed_form_force(t, tm, forces[r])
+    for s in range(series_ground.shape[0]):
+        value = series_value(t, tm, series_t, series_v, series_ptr[s], series_ptr[s + 1])
+        if series_ground[s] != 0:
+            ground += value
+        else:
+            force += value
+    return force, ground
+
+
+@njit(**INLINE)
+def has_breaks(ex) -> bool:
+    """True when some load has kinks or jumps inside the run (pulses, half-sines, records)."""
+    forces, series_t, series_v, series_ptr, series_ground = ex
+    for r in range(forces.shape[0]):
+        if forces[r, 0] == HALF_SINE or forces[r, 0] == PULSE_TRAIN:
+            return True
+    return series_ground.shape[0] > 0
+
+
+@njit(**INLINE)
+def next_break(t: float, ex) -> float:
+    """The first break point of the loads after ``t`` (``inf`` if none)."""
+    forces, series_t, series_v, series_ptr, series_ground = ex
+    first = np.inf
+    for r in range(forces.shape[0]):
+        row = forces[r]
+        if row[0] == HALF_SINE:
+            for tb in (row[3], row[3] + row[2]):
+                if tb > t:
+                    first = min(first, tb)
+        elif row[0] == PULSE_TRAIN:
+            width, period, t0, count = row[2], row[3], row[4], row[5]
+            k = max(np.floor((t - t0) / period), 0.0)
+            tb = t0 + k * period
+            if tb <= t:
+                tb += width
+            if tb <= t:
+                tb = t0 + (k + 1.0) * period
+                k += 1.0
+            if count <= 0 or k < count:
+                first = min(first, tb)
+    for s in range(series_ground.shape[0]):
+        lo, hi = series_ptr[s], series_ptr[s + 1]
+        if t < series_t[lo]:
+            first = min(first, series_t[lo])
+        elif t < series_t[hi - 1]:
+            first = min(first, series_t[segment(series_t, lo, hi, t) + 1])
+    return first
+
+
+@njit(**INLINE)
+def envelope(t: float, row) -> float:
+    """Amplitude envelope ``e(t)`` of a filter row ``(kind, p1, p2, p3)``: 1 (stationary),
+    Jennings ``(t1, t2, c)``: ``(t/t1)^2``, 1, ``exp(-c (t - t2))``; Saragoni-Hart
+    ``(peak, shape)``: ``(t/peak)^shape exp(shape (1 - t/peak))`` (peak 1 at ``t = peak``)."""
+    kind = row[0]
+    if kind == JENNINGS:
+        if t < row[1]:
+            return (t / row[1]) ** 2
+        if t <= row[2]:
+            return 1.0
+        return np.exp(-row[3] * (t - row[2]))
+    if kind == SARAGONI_HART:
+        r = t / row[1]
+        return r ** row[2] * np.exp(row[2] * (1.0 - r)) if r > 0.0 else 0.0
+    return 1.0
+
+
+@njit(**INLINE)
+def advance_filters(z, zn, t: float, dt: float, phi, chol, envelopes, gen, draws):
+    """``zn = Phi z + e(t + dt/2) L n``: the exact Gaussian step of the filter states
+    (``draws`` is scratch for the standard normals ``n``)."""
+    nz = z.shape[0]
+    for c in range(nz):
+        draws[c] = gen.standard_normal()
+    for r in range(nz):
+        acc = 0.0
+        noise = 0.0
+        for c in range(nz):
+            acc += phi[r, c] * z[c]
+            noise += chol[r, c] * draws[c]
+        zn[r] = acc + envelope(t + 0.5 * dt, envelopes[r]) * noise
+
+
+@njit(**INLINE)
+def readout(c, z, zn, theta: float) -> float:
+    """``c . ((1 - theta) z + theta zn)``: a filtered load between two grid states."""
+    f = 0.0
+    for r in range(c.shape[0]):
+        f += c[r] * (z[r] + theta * (zn[r] - z[r]))
+    return f
+
+
+@njit(**INLINE)
+def excitation(t: float, tm: float, theta: float, ex, c_force, c_ground, z, zn):
+    """``(force on the primary, ground acceleration)`` of all loads at ``t``, the filtered
+    ones at ``theta`` of the way from the grid states ``z`` to ``zn``."""
+    force, ground = applied(t, tm, ex)
+    if z.shape[0] > 0:
+        force += readout(c_force, z, zn, theta)
+        ground += readout(c_ground, z, zn, theta)
+    return force, ground
