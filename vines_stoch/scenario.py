@@ -451,6 +451,15 @@ def _interval(metadata: list[Any]) -> str | None:
     return f"must be in {'(' if lo_open else '['}{lo:g}, {hi:g}{')' if hi_open else ']'}"
 
 
+def _constraints(info: Any) -> list[Any]:
+    """Bound constraints of a field, also inside ``Optional[Annotated[...]]``."""
+    found = list(info.metadata)
+    for arg in getattr(info.annotation, "__args__", ()):
+        for meta in getattr(arg, "__metadata__", ()):
+            found += getattr(meta, "metadata", [meta])
+    return found
+
+
 def _field_info(loc: tuple[Any, ...]):
     """Walk a pydantic error location through the models to the FieldInfo it names."""
     model: Any = Scenario
@@ -529,7 +538,7 @@ def _describe(err: dict[str, Any], data: Any) -> tuple[str, Any, str]:
         tags = err.get("ctx", {}).get("expected_tags", "")
         return key, value, f"must be one of {tags}"
     if kind in ("greater_than", "greater_than_equal", "less_than", "less_than_equal") and info:
-        return key, value, _interval(info.metadata) or err["msg"]
+        return key, value, _interval(_constraints(info)) or err["msg"]
     if kind in ("float_parsing", "float_type", "int_parsing", "int_type", "int_from_float"):
         return key, value, "must be " + ("an integer" if kind.startswith("int") else "a number")
     if kind == "finite_number":

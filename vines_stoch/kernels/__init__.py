@@ -11,6 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from .common import POINCARE_SAMPLES, SLOTS, new_metrics
+from .loads import load_path
 from .rk4 import rk4_kernel
 from .sie import sie_kernel
 
@@ -73,4 +74,15 @@ def simulate(scene, generator: np.random.Generator | None = None, *, normals: np
     return out
 
 
-__all__ = ["SLOTS", "kernel_for", "sample_buffer", "simulate"]
+def load_history(scene, generator: np.random.Generator | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """One sample path of a scene's loads on its time grid: ``(t, force on the primary,
+    ground acceleration)``, drawn as a realisation would draw it (filters from the same
+    initial law, the same exact filter steps)."""
+    n = scene.n_steps
+    force, ground = np.zeros(n + 1), np.zeros(n + 1)
+    gen = generator if generator is not None else _NO_NOISE
+    load_path(scene.excitation, filter_tuple(scene, gen), scene.dt, n, gen, force, ground)
+    return scene.dt * np.arange(n + 1), force, ground
+
+
+__all__ = ["SLOTS", "kernel_for", "load_history", "sample_buffer", "simulate"]

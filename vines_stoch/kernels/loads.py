@@ -22,7 +22,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ..physics import INLINE
+from ..physics import INLINE, KERNEL
 
 #: Kinds of closed-form force rows.
 HARMONIC, HALF_SINE, PULSE_TRAIN, CHIRP = 0, 1, 2, 3
@@ -189,3 +189,18 @@ def excitation(t: float, tm: float, theta: float, ex, c_force, c_ground, z, zn):
         force += readout(c_force, z, zn, theta)
         ground += readout(c_ground, z, zn, theta)
     return force, ground
+
+
+@njit(**KERNEL)
+def load_path(ex, fl, dt: float, n_steps: int, gen, force, ground):
+    """Force on the primary and ground acceleration at ``t = i dt``, ``i = 0..n_steps``, with
+    the filters advanced exactly as in the step loops (``fl`` as the kernels take it)."""
+    phi, chol, envelopes, c_force, c_ground, z = fl
+    zn = z.copy()
+    draws = np.zeros(z.shape[0])
+    for i in range(n_steps + 1):
+        t = i * dt
+        force[i], ground[i] = excitation(t, t, 0.0, ex, c_force, c_ground, zn, zn)
+        if z.shape[0] > 0 and i < n_steps:
+            z[:] = zn
+            advance_filters(z, zn, t, dt, phi, chol, envelopes, gen, draws)
