@@ -4,7 +4,7 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: run test bench seeds env clean clean-cache
+.PHONY: run test bench seeds elcentro env clean clean-cache
 
 $(STAMP): pyproject.toml
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
@@ -25,6 +25,13 @@ bench: $(STAMP)
 
 seeds: $(STAMP)
 	$(BIN)/vines-stoch reproduce
+
+# The 1940 El Centro N-S record is not shipped (no licence text at its source); this fetches the
+# quakeio 0.1.21 wheel from the package index and extracts the samples, checking both checksums.
+elcentro: $(STAMP)
+	rm -rf $(VENV)/quakeio && $(BIN)/python -m pip download --quiet --no-deps --dest $(VENV)/quakeio quakeio==0.1.21
+	$(BIN)/python -c "import sys; from vines_stoch.records import extract_elcentro; print('wrote', extract_elcentro(*sys.argv[1:]))" \
+		$(VENV)/quakeio/quakeio-0.1.21-py3-none-any.whl scenarios/records/elcentro_1940_ns.txt
 
 # numba's on-disk cache is keyed on each kernel's own file: clear it after editing the
 # formula modules the kernels inline (physics.py, kernels/common.py).

@@ -56,6 +56,24 @@ CASES = [
      "sweep.loads.3.velocity = [1.0, 2.0]: must name an existing numeric field"),
     ("sweep out of range", GOOD + '[sweep]\n"absorbers.1.restitution" = [0.5, 1.5]\n',
      "absorbers.1.restitution = 1.5: must be in [0, 1]"),
+    ("pulse wider than period", GOOD.replace('type = "impulse"\nvelocity = 0.5',
+                                             'type = "pulse-train"\namplitude = 1.0\nwidth = 2.0\nperiod = 1.0'),
+     "loads.0.width = 2.0: must be <= period (1)"),
+    ("ground motion without filter", GOOD.replace('type = "impulse"\nvelocity = 0.5',
+                                                  'type = "ground-motion"\nintensity = 1.0'),
+     "loads.0.ground_frequency: missing: give it or a soil preset (firm, medium, soft)"),
+    ("stationary start with envelope", GOOD.replace(
+        'type = "impulse"\nvelocity = 0.5',
+        'type = "filtered-noise"\nintensity = 1.0\nfrequency = 2.0\ndamping = 0.1\nstart = "stationary"\n'
+        'envelope = { type = "saragoni-hart", peak = 3.0, shape = 2.0 }'),
+     "loads.0.start = 'stationary': a stationary start needs a load without envelope"),
+    ("jennings order", GOOD.replace('type = "impulse"\nvelocity = 0.5',
+                                    'type = "ground-motion"\nsoil = "soft"\nintensity = 1.0\n'
+                                    'envelope = { type = "jennings", rise = 5.0, hold = 2.0, decay = 0.2 }'),
+     "loads.0.envelope.hold = 2.0: must be >= rise (5)"),
+    ("rk4 with filtered noise", GOOD.replace('type = "impulse"\nvelocity = 0.5',
+                                             'type = "filtered-noise"\nintensity = 1.0\nfrequency = 2.0\ndamping = 0.1')
+     + 'scheme = "rk4"\n', "simulation.scheme = 'rk4': is deterministic"),
 ]
 
 

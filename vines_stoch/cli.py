@@ -1,4 +1,4 @@
-"""Command line: ``vines-stoch run | validate | bench | reproduce``."""
+"""Command line: ``vines-stoch run | validate | loads | bench | reproduce``."""
 
 from __future__ import annotations
 
@@ -61,6 +61,41 @@ def validate(scenario: Path = typer.Argument(..., help="Scenario TOML file.")) -
     except ScenarioError as exc:
         _fail(str(exc))
     typer.echo(f"{scenario}: ok ({len(study.points)} sweep point(s))")
+
+
+@app.command()
+def loads(
+    scenario: Path = typer.Argument(..., help="Scenario TOML file."),
+    out: Path = typer.Argument(..., help="File to write: .AT2 (ground acceleration in g) or .csv (t, force, ground)."),
+    seed: int = typer.Option(0, "--seed", help="Seed of the random loads."),
+    point: int = typer.Option(0, "--point", min=0, help="Sweep point."),
+    pga: Optional[float] = typer.Option(None, "--pga", min=0.0, help="Scale the ground acceleration to this peak (in g)."),
+    every: int = typer.Option(1, "--every", min=1, help="Keep every N-th sample of the time grid."),
+) -> None:
+    """Write one sample path of a scenario's loads (e.g. a synthetic accelerogram)."""
+    import numpy as np
+
+    from .kernels import load_history
+    from .records import G, write_at2
+    from .scene import build_scene
+
+    try:
+        study = load_scenario(scenario)
+    except ScenarioError as exc:
+        _fail(str(exc))
+    if point >= len(study.points):
+        _fail(f"--point {point}: the scenario has {len(study.points)} sweep point(s)")
+    t, force, ground = (a[::every] for a in load_history(build_scene(study.points[point]), np.random.default_rng(seed)))
+    if pga is not None:
+        peak = np.max(np.abs(ground))
+        if peak == 0.0:
+            _fail(f"--pga: {scenario} has no ground acceleration to scale")
+        ground *= pga * G / peak
+    if out.suffix.lower() == ".at2":
+        write_at2(out, t[1] - t[0], ground / G, f"{study.name}, sweep point {point}, seed {seed}")
+    else:
+        np.savetxt(out, np.c_[t, force, ground], header="t force ground_acceleration", comments="# ")
+    typer.echo(f"wrote {out} ({len(t)} samples)")
 
 
 @app.command()

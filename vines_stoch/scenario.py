@@ -670,8 +670,8 @@ class Study:
         """Read the files of record loads (paths relative to the scenario file), once each."""
         for i, load in enumerate(scenario.loads):
             if isinstance(load, _RecordLoad):
-                path = (self.directory / load.file).resolve()
-                key = (path, load.format, load.dt)
+                path = self.directory / load.file
+                key = (path.resolve(), load.format, load.dt)
                 if key not in self._records:
                     try:
                         self._records[key] = read_record(path, load.format, load.dt)
