@@ -24,7 +24,7 @@ def kernel_for(scene, replay: bool = False):
     """The compiled loop for a scene's scheme and structure."""
     if scene.scheme == "rk4":
         return rk4_kernel(scene.has_impact, scene.has_hertz, scene.period > 0)
-    return sie_kernel(scene.sigma > 0.0, scene.has_impact, replay)
+    return sie_kernel(scene.sigma > 0.0, scene.has_impact, scene.filters["phi"].shape[0] > 0, replay)
 
 
 def sample_buffer(scene) -> np.ndarray:

@@ -31,18 +31,18 @@ STATIONARY, JENNINGS, SARAGONI_HART = 0, 1, 2
 
 
 @njit(**INLINE)
-def closed_form_force(t: float, tm: float, row) -> float:
-    """One closed-form force row at ``t`` (piece chosen at ``tm``)."""
-    kind, amplitude = row[0], row[1]
+def closed_form_force(t: float, tm: float, forces, r: int) -> float:
+    """Closed-form force row ``r`` at ``t`` (piece chosen at ``tm``)."""
+    kind, amplitude = forces[r, 0], forces[r, 1]
     if kind == HARMONIC:  # P cos(omega t + phi)
-        return amplitude * np.cos(row[2] * t + row[3])
+        return amplitude * np.cos(forces[r, 2] * t + forces[r, 3])
     if kind == HALF_SINE:  # F0 sin(pi (t - t0) / Td) on [t0, t0 + Td]
-        duration, t0 = row[2], row[3]
+        duration, t0 = forces[r, 2], forces[r, 3]
         if t0 <= tm <= t0 + duration:
             return amplitude * np.sin(np.pi * (t - t0) / duration)
         return 0.0
     if kind == PULSE_TRAIN:  # F0 while (t - t0) mod Tp < tw, t >= t0, at most `count` pulses
-        width, period, t0, count = row[2], row[3], row[4], row[5]
+        width, period, t0, count = forces[r, 2], forces[r, 3], forces[r, 4], forces[r, 5]
         if tm < t0:
             return 0.0
         k = np.floor((tm - t0) / period)
@@ -50,7 +50,7 @@ def closed_form_force(t: float, tm: float, row) -> float:
             return 0.0
         return amplitude if tm - t0 - k * period < width else 0.0
     # CHIRP: A sin(2 pi (f0 t + (f1 - f0) t^2 / (2 T)))
-    f0, f1, sweep = row[2], row[3], row[4]
+    f0, f1, sweep = forces[r, 2], forces[r, 3], forces[r, 4]
     return amplitude * np.sin(2.0 * np.pi * (f0 * t + (f1 - f0) * t * t / (2.0 * sweep)))
 
 
@@ -80,13 +80,14 @@ def series_value(t: float, tm: float, times, values, lo: int, hi: int) -> float:
 
 
 @njit(**INLINE)
-def applied(t: float, tm: float, ex):
-    """``(force on the primary, ground acceleration)`` of the closed-form loads and records."""
-    forces, series_t, series_v, series_ptr, series_ground = ex
+def applied(t: float, tm: float, forces, series_t, series_v, series_ptr, series_ground):
+    """``(force on the primary, ground acceleration)`` of the closed-form loads and records
+    (the arrays of ``ex``, passed one by one: unpacking a tuple in a hot loop costs reference
+    counting)."""
     force = 0.0
     ground = 0.0
     for r in range(forces.shape[0]):
-        force += closed_form_force(t, tm, forces[r])
+        force += closed_form_force(t, tm, forces, r)
     for s in range(series_ground.shape[0]):
         value = series_value(t, tm, series_t, series_v, series_ptr[s], series_ptr[s + 1])
         if series_ground[s] != 0:
@@ -181,11 +182,13 @@ def readout(c, z, zn, theta: float) -> float:
 
 
 @njit(**INLINE)
-def excitation(t: float, tm: float, theta: float, ex, c_force, c_ground, z, zn):
+def excitation(t: float, tm: float, theta: float, forces, series_t, series_v, series_ptr, series_ground,
+               filtered: bool, c_force, c_ground, z, zn):
     """``(force on the primary, ground acceleration)`` of all loads at ``t``, the filtered
-    ones at ``theta`` of the way from the grid states ``z`` to ``zn``."""
-    force, ground = applied(t, tm, ex)
-    if z.shape[0] > 0:
+    ones (if ``filtered``, a compile-time constant of the kernels) at ``theta`` of the way
+    from the grid states ``z`` to ``zn``."""
+    force, ground = applied(t, tm, forces, series_t, series_v, series_ptr, series_ground)
+    if filtered:
         force += readout(c_force, z, zn, theta)
         ground += readout(c_ground, z, zn, theta)
     return force, ground
@@ -196,11 +199,13 @@ def load_path(ex, fl, dt: float, n_steps: int, gen, force, ground):
     """Force on the primary and ground acceleration at ``t = i dt``, ``i = 0..n_steps``, with
     the filters advanced exactly as in the step loops (``fl`` as the kernels take it)."""
     phi, chol, envelopes, c_force, c_ground, z = fl
+    forces, series_t, series_v, series_ptr, series_ground = ex
     zn = z.copy()
     draws = np.zeros(z.shape[0])
     for i in range(n_steps + 1):
         t = i * dt
-        force[i], ground[i] = excitation(t, t, 0.0, ex, c_force, c_ground, zn, zn)
+        force[i], ground[i] = excitation(t, t, 0.0, forces, series_t, series_v, series_ptr, series_ground, True,
+                                         c_force, c_ground, zn, zn)
         if z.shape[0] > 0 and i < n_steps:
             z[:] = zn
             advance_filters(z, zn, t, dt, phi, chol, envelopes, gen, draws)

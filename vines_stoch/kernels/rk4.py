@@ -54,7 +54,8 @@ def accelerations(x, v, t, tm, p, stuck, release, acc, sticking, contact):
     attachment_forces(x, v, k1, c1, k_lin, k_cubic, c_abs, rest, acc)
     if contact:
         contact_forces(x, hertz_body, hertz_k, hertz_walls, acc)
-    load, ag = applied(t, tm, ex)
+    forces, series_t, series_v, series_ptr, series_ground = ex
+    load, ag = applied(t, tm, forces, series_t, series_v, series_ptr, series_ground)
     acc[0] += load
     power = load * v[0]
     for b in range(mass.shape[0]):

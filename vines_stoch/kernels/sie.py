@@ -99,8 +99,9 @@ def crossing(x, v, length, total, z, load, ag, force, mass, stuck, impact_body, 
 
 
 @lru_cache(maxsize=None)
-def sie_kernel(has_noise: bool, has_impact: bool, replay: bool = False):
-    """The semi-implicit Euler-Maruyama loop specialised to a scene's structure.
+def sie_kernel(has_noise: bool, has_impact: bool, filtered: bool, replay: bool = False):
+    """The semi-implicit Euler-Maruyama loop specialised to a scene's structure (white noise,
+    impact absorbers, filtered loads).
 
     With ``replay``, the step increments are ``sigma sqrt(dt) normals[i]`` (a given Brownian
     path, for convergence studies) instead of draws from ``gen``.
@@ -113,6 +114,7 @@ def sie_kernel(has_noise: bool, has_impact: bool, replay: bool = False):
         nb = mass.shape[0]
         ni = impact_body.shape[0]
         phi, chol, envelopes, c_force, c_ground, z = fl
+        forces, series_t, series_v, series_ptr, series_ground = ex
         nz = z.shape[0]
         force = np.zeros(nb)
         vn = np.zeros(nb)
@@ -125,7 +127,7 @@ def sie_kernel(has_noise: bool, has_impact: bool, replay: bool = False):
         m0 = mass[0]
         e1_prev = primary_energy(m0, k1, x[0], v[0])
         x2_prev = x[0] * x[0]
-        load_next, ag_next = excitation(0.0, 0.5 * dt, 0.0, ex, c_force, c_ground, z, zn)
+        load_next, ag_next = excitation(0.0, 0.5 * dt, 0.0, forces, series_t, series_v, series_ptr, series_ground, filtered, c_force, c_ground, z, zn)
         # accumulators in registers; written to ``out`` once at the end
         work = d_primary = d_absorber = e_integral = x2_integral = e1_max = x1_max = 0.0
         loss_sum = n_left = n_right = 0.0
@@ -140,14 +142,14 @@ def sie_kernel(has_noise: bool, has_impact: bool, replay: bool = False):
                 break
             t_step = i * dt
             tm = t_step + 0.5 * dt
-            if nz > 0:
+            if filtered:
                 for r in range(nz):
                     z[r] = zn[r]
                 advance_filters(z, zn, t_step, dt, phi, chol, envelopes, gen, draws)
             load, ag = load_next, ag_next
             if jumps:
-                load, ag = excitation(t_step, tm, 0.0, ex, c_force, c_ground, z, zn)
-            load_next, ag_next = excitation(t_step + dt, tm, 1.0, ex, c_force, c_ground, z, zn)
+                load, ag = excitation(t_step, tm, 0.0, forces, series_t, series_v, series_ptr, series_ground, filtered, c_force, c_ground, z, zn)
+            load_next, ag_next = excitation(t_step + dt, tm, 1.0, forces, series_t, series_v, series_ptr, series_ground, filtered, c_force, c_ground, z, zn)
             dw = 0.0
             if has_noise:
                 dw = noise_scale * (normals[i] if replay else gen.standard_normal())
@@ -189,7 +191,8 @@ def sie_kernel(has_noise: bool, has_impact: bool, replay: bool = False):
                 # closing half kick with the forces at the new positions
                 load_end, ag_end = load_next, ag_next
                 if hit >= 0:
-                    load_end, ag_end = excitation(t + s, tm, (t + s - t_step) / dt, ex, c_force, c_ground, z, zn)
+                    load_end, ag_end = excitation(t + s, tm, (t + s - t_step) / dt, forces, series_t, series_v, series_ptr, series_ground,
+                                                  filtered, c_force, c_ground, z, zn)
                 attachment_forces(x, v, k1, c1, k_lin, k_cubic, c_abs, rest, force)
                 kick(v, 0.5 * s, 0.0, load_end, ag_end, force, mass, stuck, impact_body, False, vn)
                 if inside:
