@@ -76,8 +76,8 @@ def simulate(scene, generator: np.random.Generator | None = None, *, normals: np
 
 def load_history(scene, generator: np.random.Generator | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """One sample path of a scene's loads on its time grid: ``(t, force on the primary,
-    ground acceleration)``, drawn as a realisation would draw it (filters from the same
-    initial law, the same exact filter steps)."""
+    ground acceleration)``; filtered loads start from the same law and take the same exact
+    steps as in the step loops (white noise, having no path value, is left out)."""
     n = scene.n_steps
     force, ground = np.zeros(n + 1), np.zeros(n + 1)
     gen = generator if generator is not None else _NO_NOISE
