@@ -190,4 +190,4 @@ def test_steady_primary_is_period_one_without_impacts():
     scene = build_scene(load_scenario("scenarios/seed003_primary.toml").points[0])
     from vines_stoch.ensemble import run_chunk
 
-    assert run_chunk(scene, 0, 0, 0, 1)["regime"].iloc[0] == "T,0,0"
+    assert run_chunk(scene, 0, 0, 0, 1)[0]["regime"].iloc[0] == "T,0,0"

@@ -1,33 +1,45 @@
-"""Monte Carlo ensembles: chunk plan, per-realisation random streams, dask execution.
+"""Monte Carlo ensembles: chunk plan, per-realisation random streams, dask execution,
+streamed Parquet parts, resume and convergence stopping.
 
 Realisation ``r`` of sweep point ``p`` draws its noise from
 ``PCG64(SeedSequence(seed, spawn_key=(p, r)))``: its numbers depend on nothing else, so results
-are bitwise identical for any chunk size, worker count or scheduler.
+are bitwise identical for any chunk size, worker count or scheduler.  Chunks run on a
+``dask.distributed`` client (an embedded in-process cluster by default); each finished chunk is
+written at once as an atomic part file, and the driver folds chunks into the history
+statistics and the ``target_sem`` test in realisation order, so neither depends on which chunk
+finished first.
 """
 
 from __future__ import annotations
 
 import json
+import logging
 import math
 import os
-import sys
+import pickle
 import time
-from dataclasses import dataclass
+from contextlib import contextmanager
+from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Iterator
 
-import dask
 import numpy as np
 import pandas as pd
-from dask.callbacks import Callback
 
+from . import history as hist
 from .kernels import sample_buffer, simulate
 from .metrics import METRICS, finish, summarise
+from .progress import Progress
 from .scenario import Study
 from .scene import Scene, build_scene
 from .store import part_path, provenance, read_results, run_key, write_table
 
 #: Target work of one chunk, in path-steps (about 0.1-0.3 s of compute).
 CHUNK_STEPS = 5_000_000
+#: Automatic chunks split a sweep point's ensemble into at least this many tasks.
+CHUNKS_PER_POINT = 32
+#: ``target_sem`` is tested at every multiple of this many realisations (and never before).
+TARGET_STEP = 100
 
 
 def generator(seed: int, point: int, realization: int) -> np.random.Generator:
@@ -35,16 +47,26 @@ def generator(seed: int, point: int, realization: int) -> np.random.Generator:
     return np.random.Generator(np.random.PCG64(np.random.SeedSequence(seed, spawn_key=(point, realization))))
 
 
-def run_chunk(scene: Scene, seed: int, point: int, start: int, stop: int) -> pd.DataFrame:
-    """Realisations ``start..stop-1`` of one sweep point, one row each."""
+def run_chunk(scene: Scene, seed: int, point: int, start: int, stop: int,
+              grid: tuple[int, int] | None = None) -> tuple[pd.DataFrame, np.ndarray | None]:
+    """Realisations ``start..stop-1`` of one sweep point: one metric row each and, when a
+    history ``grid = (stride, size)`` is asked for, their ``x1`` and ``E1`` paths
+    ``(2, size, stop - start)``."""
     rows = []
+    paths = None if grid is None else np.full((len(hist.SIGNALS), grid[1], stop - start), np.nan)
+    path = None if grid is None else np.full((grid[1], len(hist.SIGNALS)), np.nan)
     for r in range(start, stop):
         samples = sample_buffer(scene)
-        raw = simulate(scene, generator(seed, point, r) if scene.has_noise else None, samples=samples)
+        if path is not None:
+            path.fill(np.nan)
+        raw = simulate(scene, generator(seed, point, r) if scene.has_noise else None, samples=samples,
+                       history=path, stride=grid[0] if grid else 1)
+        if paths is not None:
+            paths[:, :, r - start] = path.T
         rows.append({"point": point, "realization": r, **finish(raw, scene, samples)})
     frame = pd.DataFrame(rows)
     frame["regime"] = frame["regime"].astype("string")
-    return frame
+    return frame, paths
 
 
 @dataclass
@@ -56,112 +78,246 @@ class Plan:
     chunks: list[tuple[int, int, int]]
 
 
-def plan(study: Study, workers: int, chunk: int | None = None, realizations: int | None = None) -> Plan:
-    """Split every sweep point's realisations into chunks (``chunk`` 0 or None: automatic)."""
+def plan(study: Study, chunk: int | None = None, realizations: int | None = None) -> Plan:
+    """Split every sweep point's realisations into chunks (``chunk`` 0 or None: automatic,
+    from the scene's cost alone, so the plan is the same on any cluster)."""
     scenes = [build_scene(s) for s in study.points]
     wanted = realizations or study.base.ensemble.realizations
     chunk = study.base.ensemble.chunk if chunk is None else chunk
     counts = [wanted if scene.has_noise else 1 for scene in scenes]
     chunks = []
     for p, (scene, n) in enumerate(zip(scenes, counts)):
-        size = chunk or _auto_chunk(scene, n, workers)
+        size = chunk or _auto_chunk(scene, n)
         chunks += [(p, s, min(s + size, n)) for s in range(0, n, size)]
     return Plan(scenes, counts, chunks)
 
 
-def _auto_chunk(scene: Scene, n: int, workers: int) -> int:
+def _auto_chunk(scene: Scene, n: int) -> int:
     by_cost = max(1, CHUNK_STEPS // max(scene.n_steps, 1))
-    by_balance = max(1, math.ceil(n / (4 * max(workers, 1))))
-    return min(by_cost, by_balance)
+    return max(1, min(by_cost, math.ceil(n / CHUNKS_PER_POINT)))
 
 
-class _Progress(Callback):
-    """Chunks finished out of the total, with rate and ETA, on standard error."""
+@dataclass
+class PointState:
+    """What the driver has folded of one sweep point, in realisation order."""
 
-    def __init__(self, total: int, done: int, enabled: bool):
-        super().__init__()
-        self.total, self.done, self.enabled = total, done, enabled
-        self.start = time.perf_counter()
-        self.first = done
-        self.tty = sys.stderr.isatty()
-        self.last_line = 0.0
+    chunks: list[tuple[int, int, int]]
+    folded: int = 0                        # chunks folded
+    stop: int | None = None                # realisations kept, once target_sem is met
+    tree: hist.Tree | None = None
+    edm: list[np.ndarray] = field(default_factory=list)  # per folded chunk: EDM, NaN when failed
 
-    def _posttask(self, key, result, dsk, state, worker_id):
-        if not str(key).startswith("chunk"):
+    @property
+    def done(self) -> bool:
+        return self.stop is not None or self.folded == len(self.chunks)
+
+    def fold(self, frame: pd.DataFrame, paths: np.ndarray | None, target: float | None) -> None:
+        """Take the next chunk; with ``target``, stop at the first multiple of ``TARGET_STEP``
+        realisations whose EDM standard error is at most ``target``."""
+        _, start, stop = self.chunks[self.folded]
+        keep = stop - start
+        if target is not None:
+            edm = np.where(frame["status"].to_numpy() == "ok", frame["edm"].to_numpy(dtype=float), np.nan)
+            self.edm.append(edm)
+            n_stop = _stopping_count(np.concatenate(self.edm), start, target)
+            if n_stop is not None:
+                self.stop, keep = n_stop, n_stop - start
+        if self.tree is not None:
+            ok = (frame["status"] == "ok").to_numpy()
+            self.tree.add(paths[:, :, :keep], ok[:keep])
+        self.folded += 1
+
+
+def _stopping_count(edm: np.ndarray, start: int, target: float) -> int | None:
+    """Smallest multiple ``n > start`` of ``TARGET_STEP`` within ``edm`` whose first ``n``
+    realisations have an EDM standard error ``<= target`` (failed ones, NaN, left out)."""
+    for n in range(TARGET_STEP * (start // TARGET_STEP + 1), edm.shape[0] + 1, TARGET_STEP):
+        values = edm[:n][np.isfinite(edm[:n])]
+        if values.size > 1 and np.std(values, ddof=1) / math.sqrt(values.size) <= target:
+            return n
+    return None
+
+
+@contextmanager
+def _client(scheduler: str | None, workers: int) -> Iterator[tuple[object, str, int]]:
+    """A dask.distributed client: to ``scheduler``, or to an embedded in-process cluster of
+    ``workers`` threads.  Yields ``(client, description, threads)``."""
+    from dask.distributed import Client, LocalCluster
+
+    if scheduler:
+        with Client(scheduler, timeout="30s") as client:
+            threads = sum(client.nthreads().values()) or 1
+            yield client, f"dask.distributed at {scheduler}", threads
+        return
+    with LocalCluster(processes=False, n_workers=1, threads_per_worker=workers, dashboard_address=None,
+                      silence_logs=logging.ERROR) as cluster, Client(cluster) as client:
+        yield client, "embedded", workers
+
+
+class _Checkpoint:
+    """History statistics folded so far, saved atomically now and then (a resumed run takes
+    them up; chunks finished after the last save are run again for their paths)."""
+
+    def __init__(self, path: Path, key: str, every: float):
+        self.path, self.key, self.every = path, key, every
+        self.saved = time.monotonic()
+
+    def load(self) -> list[PointState] | None:
+        if not self.path.exists():
+            return None
+        with self.path.open("rb") as fh:
+            key, states = pickle.load(fh)
+        return states if key == self.key else None
+
+    def save(self, states: list[PointState], force: bool = False) -> None:
+        if not force and time.monotonic() - self.saved < self.every:
             return
-        self.done += 1
-        if not self.enabled:
-            return
-        now = time.perf_counter()
-        if not self.tty and now - self.last_line < 5.0 and self.done < self.total:
-            return
-        self.last_line = now
-        rate = (self.done - self.first) / max(now - self.start, 1e-9)
-        eta = (self.total - self.done) / rate if rate > 0 else float("inf")
-        line = f"chunks {self.done}/{self.total}  {rate:.2f}/s  eta {eta:.0f}s"
-        print(("\r" + line) if self.tty else line, end="" if self.tty else "\n", file=sys.stderr, flush=True)
-
-    def _finish(self, dsk, state, errored):
-        if self.enabled and self.tty:
-            print(file=sys.stderr)
+        tmp = self.path.with_name(self.path.name + ".tmp")
+        with tmp.open("wb") as fh:
+            pickle.dump((self.key, states), fh, protocol=pickle.HIGHEST_PROTOCOL)
+        os.replace(tmp, self.path)
+        self.saved = time.monotonic()
 
 
 def run(study: Study, directory: str | Path | None = None, *, workers: int | None = None,
         chunk: int | None = None, realizations: int | None = None, resume: bool = False,
-        scheduler: str | None = None, progress: bool = False) -> tuple[pd.DataFrame, pd.DataFrame]:
-    """Run a validated study; write ``realizations.parquet`` and ``summary.parquet`` into
-    ``directory`` (default: the scenario's output directory) and return them as DataFrames.
+        scheduler: str | None = None, progress: bool = False,
+        checkpoint_seconds: float = 30.0) -> tuple[pd.DataFrame, pd.DataFrame]:
+    """Run a validated study; write ``realizations.parquet``, ``summary.parquet`` (and
+    ``history.parquet`` when ``simulation.history`` asks for it) into ``directory`` (default:
+    the scenario's output directory) and return realisations and summary as DataFrames.
 
-    ``workers``: threads of the embedded scheduler (default: all cores).  ``scheduler``: the
-    address of a running ``dask.distributed`` scheduler to use instead.  ``resume``: keep the
-    chunks a previous, interrupted run of the same scenario finished.
+    ``workers``: threads of the embedded cluster (default: all cores).  ``scheduler``: the
+    address of a running ``dask.distributed`` scheduler to use instead.  ``resume``: keep what
+    a previous, interrupted run of the same scenario finished.  ``checkpoint_seconds``: how
+    often the history statistics are saved for a resume.
     """
     base = study.base
     directory = Path(directory or base.output.directory or f"results/{base.name}")
-    workers = workers or os.cpu_count() or 1
-    the_plan = plan(study, workers, chunk, realizations)
-    seed = base.ensemble.seed
+    the_plan = plan(study, chunk, realizations)
+    seed, target, spec = base.ensemble.seed, base.ensemble.target_sem, base.simulation.history_spec
+    grids = [hist.grid(scene.n_steps, spec.points) if spec else None for scene in the_plan.scenes]
     key = run_key(study.text, the_plan.chunks)
-    (directory / "parts").mkdir(parents=True, exist_ok=True)
-    manifest = directory / "parts" / "manifest.json"
+    parts = directory / "parts"
+    parts.mkdir(parents=True, exist_ok=True)
+    manifest = parts / "manifest.json"
     if resume and manifest.exists() and json.loads(manifest.read_text()).get("key") != key:
         raise ValueError(f"{directory}: --resume found parts of a different scenario or chunk plan; "
                          "use another --out directory or run without --resume")
     if not resume:
-        for old in (directory / "parts").glob("*.parquet"):
+        for old in parts.glob("*"):
             old.unlink()
     manifest.write_text(json.dumps({"key": key, "chunks": len(the_plan.chunks)}))
+    checkpoint = _Checkpoint(parts / "history.pickle", key, checkpoint_seconds)
 
-    todo = [c for c in the_plan.chunks if not part_path(directory, *c).exists()]
+    states = checkpoint.load() if (resume and spec) else None
+    if states is None:
+        states = [PointState([c for c in the_plan.chunks if c[0] == p]) for p in range(len(the_plan.scenes))]
+        for state in states:
+            state.tree = hist.Tree() if spec else None
+    folded_chunks = {c for s in states for c in s.chunks[:s.folded]}
+    # a part on disk is reused unless its history paths are still needed
+    on_disk = {c for c in the_plan.chunks if part_path(directory, *c).exists()}
+    reusable = folded_chunks if spec else on_disk
+    ready: dict[tuple[int, int, int], tuple[pd.DataFrame, np.ndarray | None]] = {}
 
-    def task(p: int, start: int, stop: int) -> str:
-        frame = run_chunk(the_plan.scenes[p], seed, p, start, stop)
-        for k in study.sweep_keys:
-            frame.insert(2, k, study.grid[p][k])
-        path = part_path(directory, p, start, stop)
-        write_table(frame, path)
-        return str(path)
+    def fold_ready() -> None:
+        for state in states:
+            while not state.done:
+                c = state.chunks[state.folded]
+                if c in ready:
+                    frame, paths = ready.pop(c)
+                elif c in reusable and not spec:
+                    frame, paths = (pd.read_parquet(part_path(directory, *c)) if target else None), None
+                else:
+                    break
+                if target is not None or state.tree is not None:
+                    state.fold(frame, paths, target)
+                else:
+                    state.folded += 1
 
-    tasks = [dask.delayed(task, pure=False)(*c, dask_key_name=f"chunk-{c[0]}-{c[1]}") for c in todo]
-    done = len(the_plan.chunks) - len(todo)
-    where = "embedded threads"
-    with _Progress(len(the_plan.chunks), done, progress):
-        if scheduler:
-            from dask.distributed import Client
+    fold_ready()
+    todo = [c for c in the_plan.chunks if c not in reusable]
+    total = sum(c[2] - c[1] for c in the_plan.chunks)
+    done = total - sum(c[2] - c[1] for c in todo)
+    with _client(scheduler, workers or os.cpu_count() or 1) as (client, where, threads), \
+            Progress(total, done, enabled=progress) as bar:
+        from dask.distributed import as_completed
 
-            with Client(scheduler) as client:
-                where = f"dask.distributed at {scheduler}"
-                dask.compute(*tasks, scheduler=client)
-        else:
-            dask.compute(*tasks, scheduler="threads", num_workers=workers)
+        window = 2 * threads + 2
+        queue = iter(todo)
+        running: dict[object, tuple[int, int, int]] = {}
+        completed = as_completed()
 
-    frames = [pd.read_parquet(part_path(directory, *c)) for c in the_plan.chunks]
-    realizations_df = pd.concat(frames, ignore_index=True).sort_values(["point", "realization"],
-                                                                        kind="stable", ignore_index=True)
-    summary_df = summarise(realizations_df, study.sweep_keys)
+        def submit_more() -> None:
+            while len(running) < window:
+                c = next(queue, None)
+                if c is None:
+                    return
+                if states[c[0]].done:
+                    continue
+                future = client.submit(run_chunk, the_plan.scenes[c[0]], seed, *c, grids[c[0]], pure=False)
+                running[future] = c
+                completed.add(future)
+
+        folding = False
+        try:
+            submit_more()
+            for future in completed:
+                c = running.pop(future)
+                frame, paths = future.result()
+                for k in study.sweep_keys:
+                    frame.insert(2, k, study.grid[c[0]][k])
+                write_table(frame, part_path(directory, *c))
+                ready[c] = (frame, paths)
+                folding = True
+                fold_ready()
+                folding = False
+                for rc in [rc for rc in ready if states[rc[0]].done]:
+                    ready.pop(rc)
+                for other, oc in list(running.items()):
+                    if states[oc[0]].done:
+                        other.cancel()
+                        running.pop(other)
+                if spec:
+                    checkpoint.save(states)
+                bar.advance(c[2] - c[1])
+                submit_more()
+        except BaseException:
+            if spec and not folding:  # keep what was folded, unless interrupted mid-fold
+                checkpoint.save(states, force=True)
+            raise
     meta = provenance(study.text, study.source, seed, where)
+    return _consolidate(study, the_plan, states, directory, meta, grids, spec)
+
+
+def _consolidate(study: Study, the_plan: Plan, states: list[PointState], directory: Path,
+                 meta: dict[str, str], grids: list, spec) -> tuple[pd.DataFrame, pd.DataFrame]:
+    """Gather the parts kept (up to each point's stopping count) into the result files."""
+    frames = []
+    for p, state in enumerate(states):
+        for c in state.chunks:
+            if state.stop is not None and c[1] >= state.stop:
+                break
+            frame = pd.read_parquet(part_path(directory, *c))
+            frames.append(frame if state.stop is None else frame[frame["realization"] < state.stop])
+    realizations_df = pd.concat(frames, ignore_index=True)
+    summary_df = summarise(realizations_df, study.sweep_keys)
     write_table(realizations_df, directory / "realizations.parquet", meta)
     write_table(summary_df, directory / "summary.parquet", meta)
+    if spec:
+        rows = []
+        for p, (state, scene, grid) in enumerate(zip(states, the_plan.scenes, grids)):
+            t = scene.dt * grid[0] * np.arange(grid[1])
+            rows_p = hist.frame(state.tree.result(), spec, t)
+            rows_p.insert(0, "point", p)
+            for i, k in enumerate(study.sweep_keys):
+                rows_p.insert(1 + i, k, study.grid[p][k])
+            rows.append(rows_p)
+        write_table(pd.concat(rows, ignore_index=True), directory / "history.parquet",
+                    {**meta, "vines_stoch.history_block": str(hist.BLOCK)})
+    elif (directory / "history.parquet").exists():
+        (directory / "history.parquet").unlink()
     return read_results(directory)
 
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pandas as pd
+from scipy.stats import t as student_t
 
 from .kernels.common import SLOTS, STATUS_DIVERGED
 from .scene import Scene
@@ -21,7 +22,7 @@ MAX_PERIOD = 8
 PERIODIC_TOLERANCE = 1e-3
 
 #: Statistics of each metric in summary.parquet, as ``<metric>_<stat>``.
-STATISTICS = ("mean", "std", "sem", "q05", "q50", "q95")
+STATISTICS = ("mean", "std", "sem", "ci95_lo", "ci95_hi", "q05", "q50", "q95")
 
 _S = {name: i for i, name in enumerate(SLOTS)}
 
@@ -85,7 +86,9 @@ def finish(raw: np.ndarray, scene: Scene, samples: np.ndarray | None = None) -> 
 
 
 def summarise(realizations: pd.DataFrame, parameters: list[str]) -> pd.DataFrame:
-    """One row per sweep point: parameters, ``n_ok``, ``n_failed`` and ``M_<stat>`` per metric.
+    """One row per sweep point: parameters, ``n_ok``, ``n_failed`` and ``M_<stat>`` per metric
+    (``STATISTICS``; ``sem`` is the standard error of the mean and ``ci95_lo``, ``ci95_hi`` its
+    95 % Student-t confidence interval).
 
     Failed realisations are counted, never averaged in.
     """
@@ -104,7 +107,10 @@ def summarise(realizations: pd.DataFrame, parameters: list[str]) -> pd.DataFrame
             q = np.quantile(values, [0.05, 0.5, 0.95]) if n else [np.nan] * 3
             row[f"{m}_mean"] = float(values.mean()) if n else np.nan
             row[f"{m}_std"] = std
-            row[f"{m}_sem"] = std / np.sqrt(n) if n > 1 else np.nan
+            sem = std / np.sqrt(n) if n > 1 else np.nan
+            half = float(student_t.ppf(0.975, n - 1)) * sem if n > 1 else np.nan
+            row[f"{m}_sem"] = sem
+            row[f"{m}_ci95_lo"], row[f"{m}_ci95_hi"] = row[f"{m}_mean"] - half, row[f"{m}_mean"] + half
             row[f"{m}_q05"], row[f"{m}_q50"], row[f"{m}_q95"] = (float(v) for v in q)
         rows.append(row)
     return pd.DataFrame(rows)

@@ -25,7 +25,7 @@ MATCH = 0.10
 
 def _steady(scenario: Scenario) -> tuple[float, str]:
     """``e1_max`` and regime of one deterministic scenario."""
-    row = run_chunk(build_scene(scenario), 0, 0, 0, 1).iloc[0]
+    row = run_chunk(build_scene(scenario), 0, 0, 0, 1)[0].iloc[0]
     return float(row["e1_max"]), str(row["regime"])
 
 

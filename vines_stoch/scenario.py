@@ -345,14 +345,43 @@ Load = Annotated[
 SCHEMES = ("auto", "euler-maruyama", "rk4")
 
 
+class History(_Model):
+    """Ensemble statistics of ``x1(t)`` and ``E1(t)`` on a decimated grid (history.parquet)."""
+
+    points: Annotated[int, Field(ge=2, le=100_000)] = 1000
+    quantiles: list[Annotated[float, Field(gt=0, lt=1, allow_inf_nan=False)]] = [0.05, 0.5, 0.95]
+
+    @model_validator(mode="after")
+    def _distinct(self) -> "History":
+        if len(set(self.quantiles)) != len(self.quantiles):
+            raise _KeyError("quantiles", self.quantiles, "must not repeat a value")
+        if len({quantile_name(q) for q in self.quantiles}) != len(self.quantiles):
+            raise _KeyError("quantiles", self.quantiles, "must differ in their first 4 decimals")
+        return self
+
+
+def quantile_name(q: float) -> str:
+    """Column suffix of a quantile: ``q05`` for 0.05, ``q50`` for 0.5, ``q025`` for 0.025."""
+    digits = f"{q:.4f}"[2:].rstrip("0")
+    return "q" + digits.ljust(2, "0")
+
+
 class Simulation(_Model):
-    """Time grid and scheme; ``metrics_from`` opens the metrics window ``[t0, T]``."""
+    """Time grid and scheme; ``metrics_from`` opens the metrics window ``[t0, T]``; ``history``
+    asks for ensemble statistics of time histories (``true``: the default grid and quantiles)."""
 
     duration: Positive
     dt: Positive
     scheme: Literal["auto", "euler-maruyama", "rk4"] = "auto"
-    history: Literal[False] = False
+    history: Union[bool, History] = False
     metrics_from: NonNegative = 0.0
+
+    @property
+    def history_spec(self) -> History | None:
+        """The history statistics asked for, or None."""
+        if self.history is True:
+            return History()
+        return self.history or None
 
 
 class Ensemble(_Model):
@@ -361,6 +390,7 @@ class Ensemble(_Model):
     realizations: Annotated[int, Field(ge=1)] = 1
     seed: Annotated[int, Field(ge=0)] = 0
     chunk: Annotated[int, Field(ge=0)] = 0
+    target_sem: Positive | None = None
 
 
 class Output(_Model):

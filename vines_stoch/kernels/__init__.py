@@ -18,6 +18,7 @@ from .sie import sie_kernel
 #: A generator handed to kernels of scenes without noise (never drawn from).
 _NO_NOISE = np.random.default_rng(0)
 _NO_NORMALS = np.zeros(0)
+_NO_HISTORY = np.zeros((0, 2))
 
 
 def kernel_for(scene, replay: bool = False):
@@ -44,13 +45,15 @@ def filter_tuple(scene, generator: np.random.Generator | None) -> tuple:
 
 
 def simulate(scene, generator: np.random.Generator | None = None, *, normals: np.ndarray | None = None,
-             final: np.ndarray | None = None, samples: np.ndarray | None = None) -> np.ndarray:
+             final: np.ndarray | None = None, samples: np.ndarray | None = None,
+             history: np.ndarray | None = None, stride: int = 1) -> np.ndarray:
     """Run one realisation of ``scene``; returns the raw metric vector (see ``SLOTS``).
 
     ``normals`` replays a given Brownian path (one standard normal per step) instead of
     drawing from ``generator``; ``final`` (shape ``(2, n_bodies)``) receives the final
     positions and velocities; ``samples`` (from ``sample_buffer``) receives the Poincare
-    samples of periodic scenes.
+    samples of periodic scenes; ``history`` (shape ``(G, 2)``) receives ``x1`` and ``E1`` at
+    ``t = j stride dt``, ``j < G`` (rows after a divergence keep their previous content).
     """
     out = new_metrics()
     x, v = scene.x0.copy(), scene.v0.copy()
@@ -68,6 +71,7 @@ def simulate(scene, generator: np.random.Generator | None = None, *, normals: np
         scene.dt, scene.n_steps, scene.i0,
         scene.period, scene.sample_from, generator if generator is not None else _NO_NOISE,
         normals if replay else _NO_NORMALS, out, samples,
+        _NO_HISTORY if history is None else history, stride,
     )
     if final is not None:
         final[0], final[1] = x, v

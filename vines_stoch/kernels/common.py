@@ -165,3 +165,23 @@ def record_sample(samples, k, sample_from, period, t0, dt, xp, vp, x, v, left, r
         samples[k, 2 * nb + 1] = right
         k += 1
     return k
+
+
+@njit(**INLINE)
+def start_history(history, stride, x1, e1) -> int:
+    """Write the first history row (``t = 0``) when a history is kept; returns the step after
+    which the next row is due (``-1``: never)."""
+    if history.shape[0] == 0:
+        return -1
+    history[0, 0] = x1
+    history[0, 1] = e1
+    return stride if history.shape[0] > 1 else -1
+
+
+@njit(**INLINE)
+def record_history(history, stride, step, x1, e1) -> int:
+    """Write the history row of ``t = step dt`` (``x1``, ``E1``); returns the next due step."""
+    j = step // stride
+    history[j, 0] = x1
+    history[j, 1] = e1
+    return step + stride if j + 1 < history.shape[0] else -1

@@ -27,7 +27,8 @@ from .common import (ABSORBER_DISS, CAPPED, CHECK_EVERY, CONTACT_TIME, E1_MAX, E
                      FINAL_ENERGY, IMPACT_LOSS, IMPACTS, IMPACTS_LEFT, IMPACTS_RIGHT, INLINE,
                      INPUT, MAX_EVENTS, PEAK_FORCE, PRIMARY_DISS, STATUS, STATUS_DIVERGED, X1_MAX, X1_SQ_INT,
                      attachment_forces, contact_force, contact_forces, diverged, pin_to_walls,
-                     record_sample, stick_together, sticks, stored_energy)
+                     record_history, record_sample, start_history, stick_together, sticks,
+                     stored_energy)
 from .loads import applied, has_breaks, next_break
 
 NEWTON_ITERATIONS = 12
@@ -181,7 +182,7 @@ def rk4_kernel(has_impact: bool, has_hertz: bool, sampling: bool):
     @njit(**KERNEL)
     def kernel(mass, k1, c1, k_lin, k_cubic, c_abs, rest, impact_body, clearance, restitution,
                hertz_body, hertz_k, hertz_walls, ex, fl, sigma, x, v, dt, n_steps, i0,
-               period, sample_from, gen, normals, out, samples):
+               period, sample_from, gen, normals, out, samples, history, stride):
         nb = mass.shape[0]
         p = (mass, k1, c1, k_lin, k_cubic, c_abs, rest, ex, impact_body, hertz_body,
              hertz_k, hertz_walls)
@@ -197,6 +198,7 @@ def rk4_kernel(has_impact: bool, has_hertz: bool, sampling: bool):
         touching = np.zeros(hertz_body.shape[0], np.int64)
         m0 = mass[0]
         next_sample = 0
+        h_next = start_history(history, stride, x[0], primary_energy(m0, k1, x[0], v[0]))
         for i in range(n_steps):
             inside = i >= i0
             if i == i0:
@@ -299,6 +301,8 @@ def rk4_kernel(has_impact: bool, has_hertz: bool, sampling: bool):
             if sampling:
                 next_sample = record_sample(samples, next_sample, sample_from, period, i * dt, dt,
                                             xp, vp, x, v, out[IMPACTS_LEFT], out[IMPACTS_RIGHT])
+            if i + 1 == h_next:
+                h_next = record_history(history, stride, h_next, x[0], primary_energy(m0, k1, x[0], v[0]))
         if diverged(x):
             out[STATUS] = STATUS_DIVERGED
         out[FINAL_ENERGY] = stored_energy(x, v, mass, k1, k_lin, k_cubic, rest, hertz_body, hertz_k, hertz_walls)

@@ -31,7 +31,8 @@ from ..physics import KERNEL, primary_energy, restitution_impact
 from .common import (ABSORBER_DISS, CAPPED, CHECK_EVERY, E1_MAX, ENERGY_INT, FINAL_ENERGY,
                      IMPACT_LOSS, IMPACTS, IMPACTS_LEFT, IMPACTS_RIGHT, INLINE, INPUT, MAX_EVENTS,
                      PRIMARY_DISS, STATUS, STATUS_DIVERGED, X1_MAX, X1_SQ_INT, attachment_forces,
-                     diverged, pin_to_walls, stick_together, sticks, stored_energy)
+                     diverged, pin_to_walls, record_history, start_history, stick_together, sticks,
+                     stored_energy)
 from .loads import advance_filters, excitation, has_breaks
 
 #: Iterations of the bracketed search for the impact instant (Illinois method).
@@ -110,7 +111,7 @@ def sie_kernel(has_noise: bool, has_impact: bool, filtered: bool, replay: bool =
     @njit(**KERNEL)
     def kernel(mass, k1, c1, k_lin, k_cubic, c_abs, rest, impact_body, clearance, restitution,
                hertz_body, hertz_k, hertz_walls, ex, fl, sigma, x, v, dt, n_steps, i0,
-               period, sample_from, gen, normals, out, samples):
+               period, sample_from, gen, normals, out, samples, history, stride):
         nb = mass.shape[0]
         ni = impact_body.shape[0]
         phi, chol, envelopes, c_force, c_ground, z = fl
@@ -127,6 +128,7 @@ def sie_kernel(has_noise: bool, has_impact: bool, filtered: bool, replay: bool =
         m0 = mass[0]
         e1_prev = primary_energy(m0, k1, x[0], v[0])
         x2_prev = x[0] * x[0]
+        h_next = start_history(history, stride, x[0], e1_prev)
         load_next, ag_next = excitation(0.0, 0.5 * dt, 0.0, forces, series_t, series_v, series_ptr, series_ground, filtered, c_force, c_ground, z, zn)
         # accumulators in registers; written to ``out`` once at the end
         work = d_primary = d_absorber = e_integral = x2_integral = e1_max = x1_max = 0.0
@@ -244,6 +246,8 @@ def sie_kernel(has_noise: bool, has_impact: bool, filtered: bool, replay: bool =
                 x1_max = max(x1_max, abs(x[0]))
             e1_prev = e1
             x2_prev = x2
+            if i + 1 == h_next:
+                h_next = record_history(history, stride, h_next, x[0], e1)
         if diverged(x):
             out[STATUS] = STATUS_DIVERGED
         out[INPUT] = work
