@@ -264,7 +264,9 @@ def run(study: Study, directory: str | Path | None = None, *, workers: int | Non
         try:
             submit_more()
             for future in completed:
-                c = running.pop(future)
+                c = running.pop(future, None)
+                if c is None:  # cancelled: its sweep point met target_sem
+                    continue
                 frame, paths = future.result()
                 for k in study.sweep_keys:
                     frame.insert(2, k, study.grid[c[0]][k])

@@ -52,6 +52,7 @@ class Node:
     @classmethod
     def leaf(cls, paths: np.ndarray) -> "Node":
         """Node of raw paths, shape ``(signals, grid, m)``."""
+        paths = np.ascontiguousarray(paths)  # one memory layout, one summation order
         m = paths.shape[2]
         mean = paths.mean(axis=2) if m else np.zeros(paths.shape[:2])
         m2 = ((paths - mean[:, :, None]) ** 2).sum(axis=2)
@@ -59,13 +60,14 @@ class Node:
 
 
 def _coarsen(node: Node, weight: int) -> tuple[np.ndarray, float]:
-    """The node's buffer brought to ``weight`` by keeping every other value, and its error."""
+    """The node's buffer brought to ``weight`` by keeping every other value, and its error
+    (never more than the node's count: no rank moves further than the values it holds)."""
     values, w, err = node.values, node.weight, node.rank_error
     while w < weight:
         values = values[:, :, 1::2] if values.shape[2] % 2 == 0 else values[:, :, 0::2]
         err += w
         w *= 2
-    return values, err
+    return values, min(err, node.count)
 
 
 def merge(a: Node, b: Node) -> Node:
@@ -87,7 +89,7 @@ def merge(a: Node, b: Node) -> Node:
         values = values[:, :, 1::2] if values.shape[2] % 2 == 0 else values[:, :, 0::2]
         err += weight
         weight *= 2
-    return Node(n, mean, m2, values, weight, err)
+    return Node(n, mean, m2, values, weight, min(err, n))
 
 
 @dataclass
@@ -126,9 +128,9 @@ class Tree:
             nodes.append(Node.leaf(np.concatenate(self.pending, axis=2)))
         if not nodes:
             return None
-        total = nodes[0]
-        for node in nodes[1:]:
-            total = merge(total, node)
+        total = nodes[-1]
+        for node in reversed(nodes[:-1]):  # smallest first: the light buffers coarsen least
+            total = merge(node, total)
         return total
 
 
