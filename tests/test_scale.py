@@ -9,7 +9,6 @@ import subprocess
 import sys
 import threading
 import time
-from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -53,7 +52,7 @@ def scenario(n: int = 60, chunk: int = 0, duration: float = 5.0, dt: float = 1e-
 def stored_paths(study, n: int) -> tuple[np.ndarray, np.ndarray]:
     """x1 and E1 paths of realisations 0..n-1 on the history grid, stored: ``(2, grid, n)``."""
     scene = build_scene(study.points[0])
-    stride, size = history.grid(scene.n_steps, study.base.simulation.history_spec.points)
+    stride, size = history.grid(scene.n_steps, study.base.simulation.history.points)
     paths = np.empty((2, size, n))
     for r in range(n):
         path = np.full((size, 2), np.nan)

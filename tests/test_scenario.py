@@ -74,6 +74,13 @@ CASES = [
     ("rk4 with filtered noise", GOOD.replace('type = "impulse"\nvelocity = 0.5',
                                              'type = "filtered-noise"\nintensity = 1.0\nfrequency = 2.0\ndamping = 0.1')
      + 'scheme = "rk4"\n', "simulation.scheme = 'rk4': is deterministic"),
+    ("history quantile", GOOD + "history = { quantiles = [0.05, 1.5] }\n",
+     "simulation.history.quantiles.1 = 1.5: must be in (0, 1)"),
+    ("history points", GOOD + "history = { points = 1 }\n",
+     "simulation.history.points = 1: must be in [2, 100000]"),
+    ("history repeated quantile", GOOD + "history = { quantiles = [0.5, 0.5] }\n",
+     "simulation.history.quantiles = [0.5, 0.5]: must not repeat a value"),
+    ("target sem", GOOD + "[ensemble]\ntarget_sem = 0.0\n", "ensemble.target_sem = 0.0: must be > 0"),
 ]
 
 

@@ -9,11 +9,17 @@
   with event location at the loosest tolerance that reaches the same ``e1_max`` error.
 - A seismic scene (1 Hz primary with a cubic NES) under a synthetic accelerogram against the
   same scene under a harmonic force: the cost of record interpolation and break points.
+- Scale: 10^4 realisations of the smooth scene (T = 20) on the embedded cluster and on a local
+  ``dask.distributed`` cluster of worker processes (the overhead of the distributed
+  scheduler), and the peak memory of 10^4 and 10^5 realisations with history statistics on a
+  1000-point grid (each in a fresh process).
 """
 
 from __future__ import annotations
 
 import os
+import subprocess
+import sys
 import tempfile
 import time
 from pathlib import Path
@@ -200,6 +206,74 @@ def _seismic(directory: Path, repeats: int = 30) -> dict[str, tuple[float, float
     return figures
 
 
+HISTORY = """
+name = "bench-history"
+[primary]
+mass = 1.0
+stiffness = 1.0
+damping = 0.02
+[[absorbers]]
+type = "cubic"
+mass = 0.05
+stiffness = 1.0
+damping = 0.01
+[[loads]]
+type = "white-noise"
+intensity = 0.1
+[simulation]
+duration = 10.0
+dt = 1e-2
+history = {{ points = 1000 }}
+[ensemble]
+realizations = {n}
+seed = 5
+"""
+
+_PEAK_MEMORY = """
+import resource, sys, time
+from pathlib import Path
+from vines_stoch import parse_scenario, run
+start = time.perf_counter()
+realizations, _ = run(parse_scenario(sys.argv[1]), Path(sys.argv[2]))
+print(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024, time.perf_counter() - start, len(realizations))
+"""
+
+
+def _peak_memory(n: int, directory: Path) -> tuple[float, float]:
+    """Peak RSS (MiB) and wall time (s) of a fresh process running ``n`` realisations of the
+    2-DOF history scene (1001-point grid)."""
+    out = subprocess.run([sys.executable, "-c", _PEAK_MEMORY, HISTORY.format(n=n), str(directory)],
+                         check=True, capture_output=True, text=True).stdout.split()
+    assert int(out[2]) == n
+    return float(out[0]), float(out[1])
+
+
+def _load_kernels(text: str) -> None:
+    """Compile or load the kernels of a scenario (in a worker process, before timing)."""
+    simulate(build_scene(parse_scenario(text.replace("duration = 200.0", "duration = 0.1")).points[0]),
+             np.random.default_rng(0))
+
+
+def _distributed_overhead(directory: Path, n: int = 10_000) -> tuple[float, float, int]:
+    """Seconds for ``n`` realisations of the smooth scene (T = 20) on the embedded cluster (all
+    cores as threads) and on a local cluster of one single-threaded worker process per core."""
+    from dask.distributed import Client, LocalCluster
+
+    study = parse_scenario(SMOOTH.format(n=n).replace("duration = 200.0", "duration = 20.0"))
+    cores = os.cpu_count() or 1
+    start = time.perf_counter()
+    embedded, _ = run(study, directory / "embedded", workers=cores)
+    t_embedded = time.perf_counter() - start
+    with LocalCluster(n_workers=cores, threads_per_worker=1, processes=True, dashboard_address=None,
+                      host="127.0.0.1") as cluster, Client(cluster) as client:
+        client.run(_load_kernels, SMOOTH.format(n=2))
+        start = time.perf_counter()
+        distributed, _ = run(study, directory / "distributed", scheduler=cluster.scheduler_address)
+        t_distributed = time.perf_counter() - start
+    same = int(embedded.drop(columns="regime").equals(distributed.drop(columns="regime")))
+    return t_embedded, t_distributed, same
+
+
 def main(out: Path = Path("reports/benchmarks.md"), n_paths: int = 200) -> str:
     """Run the benchmark and write the Markdown report; returns its text."""
     with tempfile.TemporaryDirectory() as tmp:
@@ -210,6 +284,8 @@ def main(out: Path = Path("reports/benchmarks.md"), n_paths: int = 200) -> str:
         api2, res2 = _api_rate(n_paths, 2, Path(tmp) / "two")
         impact1, res_impact = _api_rate(n_paths, 1, Path(tmp) / "impact", impacts=True)
         seismic = _seismic(Path(tmp))
+        memory = {n: _peak_memory(n, Path(tmp) / f"history{n}") for n in (10_000, 100_000)}
+        overhead = _distributed_overhead(Path(tmp))
     ssvi = _ssvi()
     cores = os.cpu_count()
     scipy_row = (f"| scipy DOP853 + events, rtol {ssvi['scipy_rtol']:.0e} | {ssvi['scipy_s'] * 1e3:.1f} | "
@@ -263,6 +339,25 @@ samples) and under a harmonic force of the same peak (`m1 * 0.3 g * cos 6t`).
 | --- | ---: | ---: | ---: | ---: |
 | harmonic force | {seismic['harmonic'][0] / 1e6:.2f} | 1.00 | {seismic['harmonic'][1]:.1e} | {seismic['harmonic'][2]:.1e} |
 | record (base excitation) | {seismic['record'][0] / 1e6:.2f} | {seismic['record'][0] / seismic['harmonic'][0]:.2f} | {seismic['record'][1]:.1e} | {seismic['record'][2]:.1e} |
+
+## Scale
+
+Scheduler overhead: 10^4 realisations of the smooth scene with T = 20 (2 x 10^8 path-steps).
+
+| scheduler | workers | time (s) | ratio |
+| --- | --- | ---: | ---: |
+| embedded (in-process cluster) | {cores} threads | {overhead[0]:.2f} | 1.00 |
+| local `dask.distributed` cluster on loopback | {cores} processes x 1 thread | {overhead[1]:.2f} | {overhead[1] / overhead[0]:.2f} |
+
+Realisations bitwise identical on both: {"yes" if overhead[2] else "NO"}.
+Overhead of the distributed scheduler: {100 * (overhead[1] / overhead[0] - 1):+.1f} %.
+
+Memory: 2-DOF scene (LPO + cubic NES, white noise, T = 10, dt = 0.01) with history statistics
+of x1 and E1 on a 1001-point grid, mean, std and 3 quantiles, in a fresh process each.
+
+| realisations | peak RSS (MiB) | time (s) |
+| ---: | ---: | ---: |
+{chr(10).join(f"| {n:,} | {rss:.0f} | {sec:.1f} |" for n, (rss, sec) in memory.items())}
 """
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text(text)

@@ -23,10 +23,10 @@ def _fail(message: str) -> None:
 def run(
     scenario: Path = typer.Argument(..., help="Scenario TOML file."),
     out: Optional[Path] = typer.Option(None, "--out", help="Output directory (overrides [output] directory)."),
-    workers: Optional[int] = typer.Option(None, "--workers", min=1, help="Threads of the embedded scheduler (default: all cores)."),
+    workers: Optional[int] = typer.Option(None, "--workers", min=1, help="Threads of the embedded cluster (default: all cores)."),
     chunk: Optional[int] = typer.Option(None, "--chunk", min=0, help="Realisations per task (overrides [ensemble] chunk; 0 = automatic)."),
     resume: bool = typer.Option(False, "--resume", help="Keep the chunks an interrupted run of the same scenario finished."),
-    scheduler: Optional[str] = typer.Option(None, "--scheduler", help="Address of a running dask.distributed scheduler."),
+    scheduler: Optional[str] = typer.Option(None, "--scheduler", help="Address of a running dask.distributed scheduler (e.g. tcp://10.0.0.5:8786)."),
     quiet: bool = typer.Option(False, "--quiet", help="No progress or summary output."),
 ) -> None:
     """Run a scenario and write realizations.parquet and summary.parquet."""
@@ -36,16 +36,21 @@ def run(
         study = load_scenario(scenario)
     except ScenarioError as exc:
         _fail(str(exc))
+    directory = out or study.base.output.directory or f"results/{study.name}"
     try:
         realizations, summary = run_study(study, out, workers=workers, chunk=chunk, resume=resume,
                                           scheduler=scheduler, progress=not quiet)
-    except (OSError, ValueError) as exc:
+    except KeyboardInterrupt:
+        typer.echo(f"\ninterrupted: finished chunks are kept in {directory}/parts; "
+                   f"run again with --resume to complete", err=True)
+        raise typer.Exit(130)
+    except (OSError, ValueError, TimeoutError) as exc:
         _fail(str(exc))
     if quiet:
         return
-    directory = out or study.base.output.directory or f"results/{study.name}"
     typer.echo(f"results: {directory}/realizations.parquet ({len(realizations)} rows), "
-               f"{directory}/summary.parquet ({len(summary)} rows)")
+               f"{directory}/summary.parquet ({len(summary)} rows)"
+               + (f", {directory}/history.parquet" if study.base.simulation.history else ""))
     import pandas as pd
 
     columns = study.sweep_keys + ["n_ok", "n_failed"] + [f"{m}_mean" for m in ("edm", "e1_max", "impacts", "energy_residual")]

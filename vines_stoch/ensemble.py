@@ -38,6 +38,9 @@ from .store import part_path, provenance, read_results, run_key, write_table
 CHUNK_STEPS = 5_000_000
 #: Automatic chunks split a sweep point's ensemble into at least this many tasks.
 CHUNKS_PER_POINT = 32
+#: Largest history paths buffer of one chunk, in bytes (caps the chunk size when history
+#: statistics are asked for).
+HISTORY_CHUNK_BYTES = 8_000_000
 #: ``target_sem`` is tested at every multiple of this many realisations (and never before).
 TARGET_STEP = 100
 
@@ -80,14 +83,19 @@ class Plan:
 
 def plan(study: Study, chunk: int | None = None, realizations: int | None = None) -> Plan:
     """Split every sweep point's realisations into chunks (``chunk`` 0 or None: automatic,
-    from the scene's cost alone, so the plan is the same on any cluster)."""
+    from the scene's cost alone, so the plan is the same on any cluster).  With history
+    statistics a chunk holds at most ``HISTORY_CHUNK_BYTES`` of paths."""
     scenes = [build_scene(s) for s in study.points]
     wanted = realizations or study.base.ensemble.realizations
     chunk = study.base.ensemble.chunk if chunk is None else chunk
+    spec = study.base.simulation.history
     counts = [wanted if scene.has_noise else 1 for scene in scenes]
     chunks = []
     for p, (scene, n) in enumerate(zip(scenes, counts)):
         size = chunk or _auto_chunk(scene, n)
+        if spec:
+            row_bytes = 8 * len(hist.SIGNALS) * hist.grid(scene.n_steps, spec.points)[1]
+            size = min(size, max(1, HISTORY_CHUNK_BYTES // row_bytes))
         chunks += [(p, s, min(s + size, n)) for s in range(0, n, size)]
     return Plan(scenes, counts, chunks)
 
@@ -145,7 +153,11 @@ def _client(scheduler: str | None, workers: int) -> Iterator[tuple[object, str, 
     from dask.distributed import Client, LocalCluster
 
     if scheduler:
-        with Client(scheduler, timeout="30s") as client:
+        try:
+            client = Client(scheduler, timeout="30s")
+        except (OSError, TimeoutError) as exc:
+            raise ValueError(f"--scheduler {scheduler}: {exc}") from None
+        with client:
             threads = sum(client.nthreads().values()) or 1
             yield client, f"dask.distributed at {scheduler}", threads
         return
@@ -195,7 +207,7 @@ def run(study: Study, directory: str | Path | None = None, *, workers: int | Non
     base = study.base
     directory = Path(directory or base.output.directory or f"results/{base.name}")
     the_plan = plan(study, chunk, realizations)
-    seed, target, spec = base.ensemble.seed, base.ensemble.target_sem, base.simulation.history_spec
+    seed, target, spec = base.ensemble.seed, base.ensemble.target_sem, base.simulation.history
     grids = [hist.grid(scene.n_steps, spec.points) if spec else None for scene in the_plan.scenes]
     key = run_key(study.text, the_plan.chunks)
     parts = directory / "parts"

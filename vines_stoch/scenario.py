@@ -15,7 +15,8 @@ from typing import Annotated, Any, Literal, Union
 
 import numpy as np
 from annotated_types import Ge, Gt, Le, Lt
-from pydantic import BaseModel, ConfigDict, Field, PrivateAttr, ValidationError, model_validator
+from pydantic import (BaseModel, ConfigDict, Field, PrivateAttr, ValidationError, field_validator,
+                      model_validator)
 
 from .filters import SOILS
 from .physics import hertz_constant
@@ -373,19 +374,21 @@ class Simulation(_Model):
     duration: Positive
     dt: Positive
     scheme: Literal["auto", "euler-maruyama", "rk4"] = "auto"
-    history: Union[bool, History] = False
+    history: History | None = None
     metrics_from: NonNegative = 0.0
 
-    @property
-    def history_spec(self) -> History | None:
-        """The history statistics asked for, or None."""
-        if self.history is True:
-            return History()
-        return self.history or None
+    @field_validator("history", mode="before")
+    @classmethod
+    def _history_switch(cls, value: Any) -> Any:
+        """``true``: the default grid and quantiles; ``false``: none."""
+        if isinstance(value, bool):
+            return History() if value else None
+        return value
 
 
 class Ensemble(_Model):
-    """Monte Carlo ensemble size, master seed and chunk size (0 = automatic)."""
+    """Monte Carlo ensemble size, master seed, chunk size (0 = automatic) and the EDM standard
+    error at which a sweep point stops early."""
 
     realizations: Annotated[int, Field(ge=1)] = 1
     seed: Annotated[int, Field(ge=0)] = 0

@@ -15,7 +15,7 @@ import pyarrow.parquet as pq
 
 from . import __version__
 
-DEPENDENCIES = ("numpy", "scipy", "numba", "pandas", "pyarrow", "dask", "pydantic")
+DEPENDENCIES = ("numpy", "scipy", "numba", "pandas", "pyarrow", "dask", "distributed", "pydantic")
 
 
 def provenance(scenario_text: str, source: str, seed: int, scheduler: str) -> dict[str, str]:
