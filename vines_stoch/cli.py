@@ -23,7 +23,7 @@ def _fail(message: str) -> None:
 def run(
     scenario: Path = typer.Argument(..., help="Scenario TOML file."),
     out: Optional[Path] = typer.Option(None, "--out", help="Output directory (overrides [output] directory)."),
-    workers: Optional[int] = typer.Option(None, "--workers", min=1, help="Threads of the embedded cluster (default: all cores)."),
+    workers: Optional[int] = typer.Option(None, "--workers", min=1, help="Threads of the embedded scheduler (default: all cores)."),
     chunk: Optional[int] = typer.Option(None, "--chunk", min=0, help="Realisations per task (overrides [ensemble] chunk; 0 = automatic)."),
     resume: bool = typer.Option(False, "--resume", help="Keep the chunks an interrupted run of the same scenario finished."),
     scheduler: Optional[str] = typer.Option(None, "--scheduler", help="Address of a running dask.distributed scheduler (e.g. tcp://10.0.0.5:8786)."),

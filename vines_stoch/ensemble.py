@@ -3,8 +3,8 @@ streamed Parquet parts, resume and convergence stopping.
 
 Realisation ``r`` of sweep point ``p`` draws its noise from
 ``PCG64(SeedSequence(seed, spawn_key=(p, r)))``: its numbers depend on nothing else, so results
-are bitwise identical for any chunk size, worker count or scheduler.  Chunks run on a
-``dask.distributed`` client (an embedded in-process cluster by default); each finished chunk is
+are bitwise identical for any chunk size, worker count or scheduler.  Chunks run on
+dask's embedded threaded scheduler or a ``dask.distributed`` cluster; each finished chunk is
 written at once as an atomic part file, and the driver folds chunks into the history
 statistics and the ``target_sem`` test in realisation order, so neither depends on which chunk
 finished first.
@@ -13,12 +13,11 @@ finished first.
 from __future__ import annotations
 
 import json
-import logging
 import math
 import os
 import pickle
 import time
-from contextlib import contextmanager
+from contextlib import ExitStack, contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Iterator
@@ -27,6 +26,7 @@ import numpy as np
 import pandas as pd
 
 from . import history as hist
+from . import schedulers
 from .kernels import sample_buffer, simulate
 from .metrics import METRICS, finish, summarise
 from .progress import Progress
@@ -147,23 +147,16 @@ def _stopping_count(edm: np.ndarray, start: int, target: float) -> int | None:
 
 
 @contextmanager
-def _client(scheduler: str | None, workers: int) -> Iterator[tuple[object, str, int]]:
-    """A dask.distributed client: to ``scheduler``, or to an embedded in-process cluster of
-    ``workers`` threads.  Yields ``(client, description, threads)``."""
-    from dask.distributed import Client, LocalCluster
+def _client(scheduler: str) -> Iterator[object]:
+    """A ``dask.distributed`` client connected to ``scheduler``."""
+    from dask.distributed import Client
 
-    if scheduler:
-        try:
-            client = Client(scheduler, timeout="30s")
-        except (OSError, TimeoutError) as exc:
-            raise ValueError(f"--scheduler {scheduler}: {exc}") from None
-        with client:
-            threads = sum(client.nthreads().values()) or 1
-            yield client, f"dask.distributed at {scheduler}", threads
-        return
-    with LocalCluster(processes=False, n_workers=1, threads_per_worker=workers, dashboard_address=None,
-                      silence_logs=logging.ERROR) as cluster, Client(cluster) as client:
-        yield client, "embedded", workers
+    try:
+        client = Client(scheduler, timeout="30s")
+    except (OSError, TimeoutError) as exc:
+        raise ValueError(f"--scheduler {scheduler}: {exc}") from None
+    with client:
+        yield client
 
 
 class _Checkpoint:
@@ -199,7 +192,7 @@ def run(study: Study, directory: str | Path | None = None, *, workers: int | Non
     ``history.parquet`` when ``simulation.history`` asks for it) into ``directory`` (default:
     the scenario's output directory) and return realisations and summary as DataFrames.
 
-    ``workers``: threads of the embedded cluster (default: all cores).  ``scheduler``: the
+    ``workers``: threads of the embedded scheduler (default: all cores).  ``scheduler``: the
     address of a running ``dask.distributed`` scheduler to use instead.  ``resume``: keep what
     a previous, interrupted run of the same scenario finished.  ``checkpoint_seconds``: how
     often the history statistics are saved for a resume.
@@ -252,34 +245,22 @@ def run(study: Study, directory: str | Path | None = None, *, workers: int | Non
     todo = [c for c in the_plan.chunks if c not in reusable]
     total = sum(c[2] - c[1] for c in the_plan.chunks)
     done = total - sum(c[2] - c[1] for c in todo)
-    with _client(scheduler, workers or os.cpu_count() or 1) as (client, where, threads), \
-            Progress(total, done, enabled=progress) as bar:
-        from dask.distributed import as_completed
+    def call(c: tuple[int, int, int]) -> tuple:
+        return run_chunk, (the_plan.scenes[c[0]], seed, *c, grids[c[0]])
 
-        window = 2 * threads + 2
-        queue = iter(todo)
-        running: dict[object, tuple[int, int, int]] = {}
-        completed = as_completed()
+    def skip(c: tuple[int, int, int]) -> bool:
+        return states[c[0]].done
 
-        def submit_more() -> None:
-            while len(running) < window:
-                c = next(queue, None)
-                if c is None:
-                    return
-                if states[c[0]].done:
-                    continue
-                future = client.submit(run_chunk, the_plan.scenes[c[0]], seed, *c, grids[c[0]], pure=False)
-                running[future] = c
-                completed.add(future)
-
+    with ExitStack() as stack:
+        bar = stack.enter_context(Progress(total, done, enabled=progress))
+        if scheduler:
+            client = stack.enter_context(_client(scheduler))
+            where, results = f"dask.distributed at {scheduler}", schedulers.distributed(client, todo, call, skip)
+        else:
+            where, results = "embedded", schedulers.embedded(todo, call, skip, workers or os.cpu_count() or 1)
         folding = False
         try:
-            submit_more()
-            for future in completed:
-                c = running.pop(future, None)
-                if c is None:  # cancelled: its sweep point met target_sem
-                    continue
-                frame, paths = future.result()
+            for c, (frame, paths) in results:
                 for k in study.sweep_keys:
                     frame.insert(2, k, study.grid[c[0]][k])
                 write_table(frame, part_path(directory, *c))
@@ -289,14 +270,9 @@ def run(study: Study, directory: str | Path | None = None, *, workers: int | Non
                 folding = False
                 for rc in [rc for rc in ready if states[rc[0]].done]:
                     ready.pop(rc)
-                for other, oc in list(running.items()):
-                    if states[oc[0]].done:
-                        other.cancel()
-                        running.pop(other)
                 if spec:
                     checkpoint.save(states)
                 bar.advance(c[2] - c[1])
-                submit_more()
         except BaseException:
             if spec and not folding:  # keep what was folded, unless interrupted mid-fold
                 checkpoint.save(states, force=True)
