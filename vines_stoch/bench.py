@@ -9,7 +9,7 @@
   with event location at the loosest tolerance that reaches the same ``e1_max`` error.
 - A seismic scene (1 Hz primary with a cubic NES) under a synthetic accelerogram against the
   same scene under a harmonic force: the cost of record interpolation and break points.
-- Scale: 10^4 realisations of the smooth scene (T = 20) on the embedded cluster and on a local
+- Scale: 10^4 realisations of the smooth scene (T = 20) on the embedded scheduler and on a local
   ``dask.distributed`` cluster of worker processes (the overhead of the distributed
   scheduler), and the peak memory of 10^4 and 10^5 realisations with history statistics on a
   1000-point grid (each in a fresh process).
@@ -255,7 +255,7 @@ def _load_kernels(text: str) -> None:
 
 
 def _distributed_overhead(directory: Path, n: int = 10_000) -> tuple[float, float, int]:
-    """Seconds for ``n`` realisations of the smooth scene (T = 20) on the embedded cluster (all
+    """Seconds for ``n`` realisations of the smooth scene (T = 20) on the embedded scheduler (all
     cores as threads) and on a local cluster of one single-threaded worker process per core."""
     from dask.distributed import Client, LocalCluster
 
@@ -346,7 +346,7 @@ Scheduler overhead: 10^4 realisations of the smooth scene with T = 20 (2 x 10^8 
 
 | scheduler | workers | time (s) | ratio |
 | --- | --- | ---: | ---: |
-| embedded (in-process cluster) | {cores} threads | {overhead[0]:.2f} | 1.00 |
+| embedded (threaded scheduler) | {cores} threads | {overhead[0]:.2f} | 1.00 |
 | local `dask.distributed` cluster on loopback | {cores} processes x 1 thread | {overhead[1]:.2f} | {overhead[1] / overhead[0]:.2f} |
 
 Realisations bitwise identical on both: {"yes" if overhead[2] else "NO"}.
