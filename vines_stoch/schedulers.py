@@ -17,6 +17,14 @@ Call = Callable[[Any], tuple[Callable[..., Any], tuple]]
 _DONE = object()
 
 
+def _next(pending: Iterator[Any], skip: Callable[[Any], bool]) -> Any:
+    """The next job that ``skip`` does not rule out, or None."""
+    for job in pending:
+        if not skip(job):
+            return job
+    return None
+
+
 def embedded(jobs: Iterable[Any], call: Call, skip: Callable[[Any], bool], workers: int) -> Iterator[tuple[Any, Any]]:
     """Run ``fn(*args)`` for ``(fn, args) = call(job)`` on dask's local threaded scheduler:
     ``workers`` loops take the jobs in order (kernels release the GIL)."""
@@ -36,11 +44,9 @@ def embedded(jobs: Iterable[Any], call: Call, skip: Callable[[Any], bool], worke
     def loop(_: int) -> None:
         while not stop.is_set():
             with lock:
-                job = next(pending, None)
+                job = _next(pending, skip)
             if job is None:
                 return
-            if skip(job):
-                continue
             fn, args = call(job)
             try:
                 put((job, fn(*args), None))
@@ -77,11 +83,9 @@ def distributed(client: Any, jobs: Iterable[Any], call: Call, skip: Callable[[An
 
     def submit_more() -> None:
         while len(running) < window:
-            job = next(pending, None)
+            job = _next(pending, skip)
             if job is None:
                 return
-            if skip(job):
-                continue
             fn, args = call(job)
             future = client.submit(fn, *args, pure=False)
             running[future] = job
