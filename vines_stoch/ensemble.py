@@ -45,28 +45,47 @@ HISTORY_CHUNK_BYTES = 8_000_000
 TARGET_STEP = 100
 
 
-def generator(seed: int, point: int, realization: int) -> np.random.Generator:
-    """The random stream of one realisation."""
-    return np.random.Generator(np.random.PCG64(np.random.SeedSequence(seed, spawn_key=(point, realization))))
+#: Random streams of a realisation: its noise, its uncertain parameters.
+NOISE, PARAMETERS = 0, 1
+
+
+def generator(seed: int, point: int, realization: int, stream: int = NOISE,
+              common: bool = True) -> np.random.Generator:
+    """The random stream ``stream`` of one realisation: with common random numbers the same at
+    every sweep point, otherwise its own per point."""
+    key = (stream, realization) if common else (stream, point, realization)
+    return np.random.Generator(np.random.PCG64(np.random.SeedSequence(seed, spawn_key=key)))
+
+
+def draw_parameters(study: Study, seed: int, point: int, realization: int, common: bool = True) -> dict[str, float]:
+    """Values of the uncertain parameters of one realisation, in file order."""
+    gen = generator(seed, point, realization, PARAMETERS, common)
+    return {key: float(dist.draw(gen)) for key, dist in study.base.uncertain.items()}
 
 
 def run_chunk(scene: Scene, seed: int, point: int, start: int, stop: int,
-              grid: tuple[int, int] | None = None) -> tuple[pd.DataFrame, np.ndarray | None]:
+              grid: tuple[int, int] | None = None, study: Study | None = None,
+              common: bool = True) -> tuple[pd.DataFrame, np.ndarray | None]:
     """Realisations ``start..stop-1`` of one sweep point: one metric row each and, when a
     history ``grid = (stride, size)`` is asked for, their ``x1`` and ``E1`` paths
-    ``(2, size, stop - start)``."""
+    ``(2, size, stop - start)``.  With ``study`` (a study with uncertain parameters) each
+    realisation runs its own scene, its drawn values in columns named by their keys.
+    ``common``: common random numbers across sweep points (see ``generator``)."""
     rows = []
     paths = None if grid is None else np.full((len(hist.SIGNALS), grid[1], stop - start), np.nan)
     path = None if grid is None else np.full((grid[1], len(hist.SIGNALS)), np.nan)
     for r in range(start, stop):
+        drawn = draw_parameters(study, seed, point, r, common) if study is not None else {}
+        if drawn:
+            scene = build_scene(study.realise(point, drawn))
         samples = sample_buffer(scene)
         if path is not None:
             path.fill(np.nan)
-        raw = simulate(scene, generator(seed, point, r) if scene.has_noise else None, samples=samples,
-                       history=path, stride=grid[0] if grid else 1)
+        gen = generator(seed, point, r, NOISE, common) if scene.has_noise else None
+        raw = simulate(scene, gen, samples=samples, history=path, stride=grid[0] if grid else 1)
         if paths is not None:
             paths[:, :, r - start] = path.T
-        rows.append({"point": point, "realization": r, **finish(raw, scene, samples)})
+        rows.append({"point": point, "realization": r, **drawn, **finish(raw, scene, samples)})
     frame = pd.DataFrame(rows)
     frame["regime"] = frame["regime"].astype("string")
     return frame, paths
@@ -89,7 +108,8 @@ def plan(study: Study, chunk: int | None = None, realizations: int | None = None
     wanted = realizations or study.base.ensemble.realizations
     chunk = study.base.ensemble.chunk if chunk is None else chunk
     spec = study.base.simulation.history
-    counts = [wanted if scene.has_noise else 1 for scene in scenes]
+    random = bool(study.base.uncertain)
+    counts = [wanted if scene.has_noise or random else 1 for scene in scenes]
     chunks = []
     for p, (scene, n) in enumerate(zip(scenes, counts)):
         size = chunk or _auto_chunk(scene, n)
@@ -246,7 +266,8 @@ def run(study: Study, directory: str | Path | None = None, *, workers: int | Non
     total = sum(c[2] - c[1] for c in the_plan.chunks)
     done = total - sum(c[2] - c[1] for c in todo)
     def call(c: tuple[int, int, int]) -> tuple:
-        return run_chunk, (the_plan.scenes[c[0]], seed, *c, grids[c[0]])
+        return run_chunk, (the_plan.scenes[c[0]], seed, *c, grids[c[0]], study if base.uncertain else None,
+                           base.ensemble.common_random_numbers)
 
     def skip(c: tuple[int, int, int]) -> bool:
         return states[c[0]].done

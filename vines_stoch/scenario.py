@@ -387,13 +387,86 @@ class Simulation(_Model):
 
 
 class Ensemble(_Model):
-    """Monte Carlo ensemble size, master seed, chunk size (0 = automatic) and the EDM standard
-    error at which a sweep point stops early."""
+    """Monte Carlo ensemble size, master seed, chunk size (0 = automatic), the EDM standard
+    error at which a sweep point stops early, and whether sweep points share their random
+    numbers (realisation ``r`` sees the same noise and parameter draws at every point)."""
 
     realizations: Annotated[int, Field(ge=1)] = 1
     seed: Annotated[int, Field(ge=0)] = 0
     chunk: Annotated[int, Field(ge=0)] = 0
     target_sem: Positive | None = None
+    common_random_numbers: bool = True
+
+
+class NormalDistribution(_Model):
+    """``mean + std Z``."""
+
+    distribution: Literal["normal"]
+    mean: Real
+    std: Positive
+
+    def support(self) -> tuple[float, float]:
+        return -math.inf, math.inf
+
+    def draw(self, gen: np.random.Generator) -> float:
+        return self.mean + self.std * gen.standard_normal()
+
+
+class LognormalDistribution(_Model):
+    """``median exp(s Z)`` with ``s^2 = ln(1 + cov^2)`` (``cov``: coefficient of variation)."""
+
+    distribution: Literal["lognormal"]
+    median: Positive
+    cov: Positive
+
+    def support(self) -> tuple[float, float]:
+        return 0.0, math.inf
+
+    def draw(self, gen: np.random.Generator) -> float:
+        return self.median * math.exp(math.sqrt(math.log1p(self.cov ** 2)) * gen.standard_normal())
+
+
+class _Bounded(_Model):
+    low: Real
+    high: Real
+
+    @model_validator(mode="after")
+    def _order(self) -> "_Bounded":
+        if not self.low < self.high:
+            raise _KeyError("high", self.high, f"must be > low ({self.low:g})")
+        return self
+
+    def support(self) -> tuple[float, float]:
+        return self.low, self.high
+
+
+class UniformDistribution(_Bounded):
+    """Uniform on ``[low, high]``."""
+
+    distribution: Literal["uniform"]
+
+    def draw(self, gen: np.random.Generator) -> float:
+        return self.low + (self.high - self.low) * gen.random()
+
+
+class TruncatedNormalDistribution(_Bounded):
+    """``mean + std Z`` conditioned on ``[low, high]`` (drawn by inverting its CDF)."""
+
+    distribution: Literal["truncated-normal"]
+    mean: Real
+    std: Positive
+
+    def draw(self, gen: np.random.Generator) -> float:
+        from scipy.stats import truncnorm
+
+        a, b = (self.low - self.mean) / self.std, (self.high - self.mean) / self.std
+        return float(truncnorm.ppf(gen.random(), a, b, loc=self.mean, scale=self.std))
+
+
+Distribution = Annotated[
+    Union[NormalDistribution, LognormalDistribution, UniformDistribution, TruncatedNormalDistribution],
+    Field(discriminator="distribution"),
+]
 
 
 class Output(_Model):
@@ -413,7 +486,7 @@ class Scenario(_Model):
     simulation: Simulation
     ensemble: Ensemble = Ensemble()
     sweep: dict[str, Any] = {}
-    uncertain: dict[str, Any] = {}
+    uncertain: dict[str, Distribution] = {}
     output: Output = Output()
 
     @model_validator(mode="after")
@@ -435,8 +508,6 @@ class Scenario(_Model):
                             f"loads.{i}.{field}", values,
                             f"must list {nbodies} values (primary, then each absorber)",
                         )
-        if self.uncertain:
-            raise _KeyError("uncertain", self.uncertain, "random parameters are not supported yet; remove the section")
         for i, a in enumerate(self.absorbers):
             if isinstance(a, HertzAbsorber) and (self.has_noise or sim.scheme == "euler-maruyama"):
                 raise _KeyError(f"absorbers.{i}.type", "hertz",
@@ -445,6 +516,11 @@ class Scenario(_Model):
         if self.simulation.scheme == "rk4" and self.has_noise:
             raise _KeyError("simulation.scheme", "rk4", "is deterministic; a scene with noise loads needs 'euler-maruyama' or 'auto'")
         return self
+
+    @property
+    def is_random(self) -> bool:
+        """True when realisations differ: random loads or uncertain parameters."""
+        return self.has_noise or bool(self.uncertain)
 
     @property
     def has_noise(self) -> bool:
@@ -505,8 +581,8 @@ def _field_info(loc: tuple[Any, ...]):
                 return None
             info = model.model_fields[part]
             model = _inner_model(info.annotation)
-        elif isinstance(model, dict):  # tagged union: part is the tag
-            model = model.get(part)
+        elif isinstance(model, dict):  # tagged union: part is the tag (or a key of a table of them)
+            model = model.get(part, model)
     return info
 
 
@@ -529,8 +605,16 @@ def _inner_model(annotation: Any) -> Any:
     if len(members) == 1:
         return members[0]
     if members:
-        return {m.model_fields["type"].annotation.__args__[0]: m for m in members}
+        return {m.model_fields[_tag(m)].annotation.__args__[0]: m for m in members}
     return None
+
+
+#: Fields that tag the members of a tagged union (absorbers and loads, distributions).
+TAGS = ("type", "distribution")
+
+
+def _tag(model: type[BaseModel]) -> str:
+    return next(t for t in TAGS if t in model.model_fields)
 
 
 def _dotted(loc: tuple[Any, ...], data: Any) -> tuple[str, Any, tuple[Any, ...]]:
@@ -543,7 +627,7 @@ def _dotted(loc: tuple[Any, ...], data: Any) -> tuple[str, Any, tuple[Any, ...]]
             node = node[part]
         elif isinstance(node, list) and isinstance(part, int) and part < len(node):
             node = node[part]
-        elif isinstance(part, str) and isinstance(node, dict) and node.get("type") == part:
+        elif isinstance(part, str) and isinstance(node, dict) and part in (node.get(t) for t in TAGS):
             continue  # the tag of a tagged union, not a key of the file
         else:
             node = _MISSING
@@ -566,9 +650,13 @@ def _describe(err: dict[str, Any], data: Any) -> tuple[str, Any, str]:
         allowed = _allowed_keys(loc[:-1], data)
         return key, value, f"unknown key; allowed keys: {', '.join(allowed)}" if allowed else "unknown key"
     if kind in ("union_tag_invalid", "union_tag_not_found"):
-        key = f"{key}.type" if key else "type"
-        value = value.get("type", _MISSING) if isinstance(value, dict) else value
+        tag = err.get("ctx", {}).get("discriminator", "'type'").strip("'")
+        key = f"{key}.{tag}" if key else tag
+        value = value.get(tag, _MISSING) if isinstance(value, dict) else value
         tags = err.get("ctx", {}).get("expected_tags", "")
+        members = _inner_model(info.annotation) if info is not None else None
+        if not tags and isinstance(members, dict):
+            tags = ", ".join(repr(t) for t in members)
         return key, value, f"must be one of {tags}"
     if kind in ("greater_than", "greater_than_equal", "less_than", "less_than_equal") and info:
         return key, value, _interval(_constraints(info)) or err["msg"]
@@ -593,13 +681,14 @@ def _allowed_keys(loc: tuple[Any, ...], data: Any) -> list[str]:
     model: Any = Scenario
     node = data
     for part in loc:
-        node = node[part] if isinstance(node, (dict, list)) else None
-        if isinstance(part, int):
-            continue
+        node = node[part] if isinstance(node, (dict, list)) and part in (node if isinstance(node, dict) else range(len(node))) else None
+        if isinstance(part, int) or isinstance(model, dict):
+            continue  # a list index, or a key of a table of tagged models
         info = model.model_fields.get(part) if isinstance(model, type) else None
         model = _inner_model(info.annotation) if info else None
     if isinstance(model, dict):
-        model = model.get(node.get("type")) if isinstance(node, dict) else None
+        tag = next((node[t] for t in TAGS if isinstance(node, dict) and t in node), None)
+        model = model.get(tag)
     return list(model.model_fields) if isinstance(model, type) else []
 
 
@@ -670,6 +759,17 @@ def get_path(data: dict[str, Any], key: str) -> Any:
     return node
 
 
+def _require_numeric(data: dict[str, Any], key: str, where: str, spec: Any, source: str) -> None:
+    """``key`` must address an existing numeric field of the file."""
+    try:
+        current = get_path(data, key)
+    except (KeyError, IndexError, ValueError, TypeError):
+        current = None
+    if isinstance(current, bool) or not isinstance(current, (int, float)):
+        raise ScenarioError(_format(source, where, spec,
+                                    "must name an existing numeric field of the file (e.g. loads.0.velocity)"))
+
+
 class Study:
     """A validated scenario file: the base scenario and its sweep points."""
 
@@ -684,20 +784,47 @@ class Study:
         self.sweep_keys = list(sweep)
         grids = {k: _grid(k, sweep[k], source) for k in self.sweep_keys}
         for key in self.sweep_keys:
-            try:
-                current = get_path(data, key)
-            except (KeyError, IndexError, ValueError, TypeError):
-                current = None
-            if isinstance(current, bool) or not isinstance(current, (int, float)):
-                raise ScenarioError(_format(source, f"sweep.{key}", sweep[key],
-                                            "must name an existing numeric field of the file (e.g. loads.0.velocity)"))
+            _require_numeric(data, key, f"sweep.{key}", sweep[key], source)
+        self.uncertain_keys = list(self.base.uncertain)
+        for key, dist in self.base.uncertain.items():
+            _require_numeric(data, key, f"uncertain.{key}", data["uncertain"][key], source)
+            if key in self.sweep_keys:
+                raise ScenarioError(_format(source, f"uncertain.{key}", data["uncertain"][key],
+                                            "is also swept: a parameter is either swept or uncertain"))
+            self._check_support(data, key, dist, source)
         self.grid = _product(grids, zipped, source)
         self.points: list[Scenario] = []
+        self._point_data: list[dict[str, Any]] = []
         for values in self.grid:
             variant = copy.deepcopy(data)
             for key, value in values.items():
                 set_path(variant, key, value)
+            self._point_data.append(variant)
             self.points.append(self._read_records(_validate(variant, f"{source} (sweep point {values})"), source))
+
+    def _check_support(self, data: dict[str, Any], key: str, dist: Any, source: str) -> None:
+        """Every value ``dist`` can draw must be valid for ``key``: check both ends of its support."""
+        lo, hi = dist.support()
+        for end in (lo if math.isfinite(lo) else -1e300, hi if math.isfinite(hi) else 1e300):
+            end = end if end != 0.0 or not isinstance(dist, LognormalDistribution) else 2.2e-308
+            variant = copy.deepcopy(data)
+            set_path(variant, key, end)
+            variant.pop("uncertain")
+            try:
+                _validate(variant, source)
+            except ScenarioError as exc:
+                rule = str(exc).split("\n")[0].rsplit(": ", 1)[-1]
+                raise ScenarioError(_format(
+                    source, f"uncertain.{key}", data["uncertain"][key],
+                    f"{dist.distribution} draws reach {end:g}, but the value {rule}; choose a distribution whose "
+                    "support fits (lognormal for positive values, uniform or truncated-normal within bounds)")) from None
+
+    def realise(self, point: int, values: dict[str, float]) -> Scenario:
+        """Sweep point ``point`` with its uncertain parameters set to ``values``."""
+        variant = copy.deepcopy(self._point_data[point])
+        for key, value in values.items():
+            set_path(variant, key, value)
+        return self._read_records(_validate(variant, self.source), self.source)
 
     def _read_records(self, scenario: Scenario, source: str) -> Scenario:
         """Read the files of record loads (paths relative to the scenario file), once each."""
