@@ -1,4 +1,4 @@
-"""Command line: ``vines-stoch run | validate | loads | bench | reproduce``."""
+"""Command line: ``vines-stoch run | validate | loads | report | compare | bench | reproduce``."""
 
 from __future__ import annotations
 
@@ -101,6 +101,51 @@ def loads(
     else:
         np.savetxt(out, np.c_[t, force, ground], header="t force ground_acceleration", comments="# ")
     typer.echo(f"wrote {out} ({len(t)} samples)")
+
+
+@app.command()
+def report(
+    directories: list[Path] = typer.Argument(..., help="Result directories (several: on the same plots)."),
+    out: Path = typer.Option(Path("reports"), "--out", help="Folder that receives <name>/report.md and the plots."),
+    label: Optional[list[str]] = typer.Option(None, "--label", help="Name of each run in tables and legends (in order)."),
+    point: Optional[int] = typer.Option(None, "--point", min=0, help="Sweep point of the EDM histogram and history plot (default: the middle one)."),
+) -> None:
+    """Write a Markdown report with tables and PNG plots of finished runs."""
+    from .reports import report as write_report
+
+    if label and len(label) != len(directories):
+        _fail(f"--label: give one per directory ({len(directories)}), got {len(label)}")
+    try:
+        path = write_report(directories, out, label, point)
+    except (OSError, ValueError, KeyError) as exc:
+        _fail(str(exc))
+    typer.echo(f"wrote {path}")
+
+
+@app.command()
+def compare(
+    directories: list[Path] = typer.Argument(..., help="Two or more result directories of the same sweep grid."),
+    out: Path = typer.Option(Path("reports/compare.md"), "--out", help="Markdown file to write."),
+    metric: Optional[list[str]] = typer.Option(None, "--metric", help="Metric to compare (repeatable; default edm, e1_max, energy_integral, impacts)."),
+) -> None:
+    """Side-by-side summary metrics of several runs, with differences and their standard errors."""
+    from .metrics import METRICS
+    from .reports import COMPARED, Run, markdown, compare as compare_runs
+
+    if len(directories) < 2:
+        _fail("compare needs at least two result directories")
+    for m in metric or []:
+        if m not in METRICS:
+            _fail(f"--metric {m}: must be one of {', '.join(METRICS)}")
+    try:
+        table = compare_runs([Run.read(d) for d in directories], tuple(metric or COMPARED))
+    except (OSError, ValueError, KeyError) as exc:
+        _fail(str(exc))
+    text = markdown(table)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    out.write_text(f"# Comparison of {', '.join(map(str, directories))}\n\n{text}\n")
+    typer.echo(text)
+    typer.echo(f"wrote {out}")
 
 
 @app.command()

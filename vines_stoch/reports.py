@@ -1,0 +1,266 @@
+"""Reports of finished runs: Markdown tables (pandas) and PNG plots (matplotlib), and the
+side-by-side comparison of several result directories."""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from .store import read_metadata, read_results
+
+#: Metrics compared by default.
+COMPARED = ("edm", "e1_max", "energy_integral", "impacts")
+#: EDM level of the "effective range" table.
+EDM_LEVEL = 0.8
+
+
+@dataclass
+class Run:
+    """One result directory: its tables, scenario and label."""
+
+    directory: Path
+    label: str
+    realizations: pd.DataFrame
+    summary: pd.DataFrame
+    history: pd.DataFrame | None
+    scenario: dict
+    seed: int
+
+    @classmethod
+    def read(cls, directory: str | Path, label: str | None = None) -> "Run":
+        directory = Path(directory)
+        if not (directory / "summary.parquet").is_file():
+            raise FileNotFoundError(f"{directory}: no summary.parquet (not a finished vines-stoch run)")
+        realizations, summary = read_results(directory)
+        meta = read_metadata(directory / "summary.parquet")
+        scenario = tomllib.loads(meta["vines_stoch.scenario"])
+        history = directory / "history.parquet"
+        return cls(directory, label or scenario.get("name", directory.name), realizations, summary,
+                   pd.read_parquet(history) if history.is_file() else None, scenario,
+                   int(meta["vines_stoch.seed"]))
+
+    @property
+    def swept(self) -> list[str]:
+        """Swept keys (columns of the summary)."""
+        return [k for k in self.scenario.get("sweep", {}) if k != "zip" and k in self.summary.columns]
+
+    @property
+    def common(self) -> bool:
+        return bool(self.scenario.get("ensemble", {}).get("common_random_numbers", True))
+
+
+def markdown(frame: pd.DataFrame, digits: int = 4) -> str:
+    """A pipe table of ``frame`` (numbers to ``digits`` significant digits)."""
+    def cell(v: object) -> str:
+        if isinstance(v, (float, np.floating)):
+            return "-" if not np.isfinite(v) else f"{v:.{digits}g}"
+        return str(v)
+
+    lines = ["| " + " | ".join(map(str, frame.columns)) + " |",
+             "| " + " | ".join("---:" if frame[c].dtype.kind in "fiu" else "---" for c in frame.columns) + " |"]
+    lines += ["| " + " | ".join(cell(v) for v in row) + " |" for row in frame.itertuples(index=False)]
+    return "\n".join(lines)
+
+
+def compare(runs: list[Run], metrics: tuple[str, ...] = COMPARED) -> pd.DataFrame:
+    """Per sweep point and metric: each run's mean, and each later run's difference from the
+    first with its standard error.  Runs with the same seed and common random numbers are
+    paired realisation by realisation (standard error of the paired differences); otherwise
+    the errors of independent means are combined."""
+    first = runs[0]
+    for run in runs[1:]:
+        if len(run.summary) != len(first.summary):
+            raise ValueError(f"{run.directory}: {len(run.summary)} sweep points, {first.directory}: "
+                             f"{len(first.summary)}; compare runs of the same grid")
+    rows = []
+    for p in range(len(first.summary)):
+        for m in metrics:
+            row: dict[str, object] = {"point": p}
+            for k in first.swept:
+                row[k] = first.summary[k].iloc[p]
+            row["metric"] = m
+            for run in runs:
+                row[run.label] = run.summary[f"{m}_mean"].iloc[p]
+            for run in runs[1:]:
+                diff, se, paired = _difference(first, run, p, m)
+                row[f"{run.label} - {first.label}"] = diff
+                row[f"se ({run.label})"] = se
+                row[f"paired ({run.label})"] = "yes" if paired else "no"
+            rows.append(row)
+    return pd.DataFrame(rows)
+
+
+def _difference(a: Run, b: Run, point: int, metric: str) -> tuple[float, float, bool]:
+    ra = a.realizations[(a.realizations["point"] == point) & (a.realizations["status"] == "ok")]
+    rb = b.realizations[(b.realizations["point"] == point) & (b.realizations["status"] == "ok")]
+    if a.seed == b.seed and a.common and b.common:
+        joined = ra[["realization", metric]].merge(rb[["realization", metric]], on="realization")
+        if len(joined) > 1:
+            d = (joined[f"{metric}_y"] - joined[f"{metric}_x"]).to_numpy(dtype=float)
+            return float(d.mean()), float(d.std(ddof=1) / math.sqrt(d.size)), True
+    sa, sb = a.summary[f"{metric}_sem"].iloc[point], b.summary[f"{metric}_sem"].iloc[point]
+    diff = b.summary[f"{metric}_mean"].iloc[point] - a.summary[f"{metric}_mean"].iloc[point]
+    return float(diff), float(math.hypot(sa, sb)), False
+
+
+def effective_range(run: Run, level: float = EDM_LEVEL) -> dict[str, object]:
+    """The swept values (and mean input energies) where the mean EDM is at least ``level``,
+    and where even the lower 95 % confidence bound is."""
+    s = run.summary
+    key = run.swept[0] if run.swept else None
+    out: dict[str, object] = {"run": run.label}
+    for name, mask in (("mean EDM", s["edm_mean"] >= level), ("95 % lower bound", s["edm_ci95_lo"] >= level)):
+        hit = s[mask.fillna(False)]
+        if hit.empty:
+            out[f"{key or 'point'} where {name} >= {level}"] = "none"
+            continue
+        values = hit[key] if key else hit["point"]
+        out[f"{key or 'point'} where {name} >= {level}"] = f"{values.min():.4g} to {values.max():.4g} ({len(hit)} of {len(s)} points)"
+        if name == "mean EDM":
+            out["input energy there"] = f"{hit['input_energy_mean'].min():.4g} to {hit['input_energy_mean'].max():.4g}"
+    return out
+
+
+def _percent(column: str) -> str:
+    """``e1_q05`` -> ``5``, ``e1_q975`` -> ``97.5``."""
+    return f"{float('0.' + column.rsplit('_q', 1)[1]) * 100:g}"
+
+
+def _point(run: Run, point: int | None) -> int:
+    """The sweep point of the per-point plots: ``point``, or the middle one."""
+    return point if point is not None else len(run.summary) // 2
+
+
+def _plots(runs: list[Run], out: Path, point: int | None) -> list[str]:
+    """Write the PNG plots; returns their file names."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    files = []
+
+    def save(fig, name: str) -> None:
+        fig.tight_layout()
+        fig.savefig(out / name, dpi=120)
+        plt.close(fig)
+        files.append(name)
+
+    fig, ax = plt.subplots(figsize=(6.4, 4.2))
+    for run in runs:
+        s = run.summary.sort_values("input_energy_mean")
+        ax.plot(s["input_energy_mean"], s["edm_mean"], "o-", ms=3, label=run.label)
+        ax.fill_between(s["input_energy_mean"], s["edm_ci95_lo"], s["edm_ci95_hi"], alpha=0.25)
+    ax.axhline(EDM_LEVEL, color="grey", lw=0.8, ls="--")
+    ax.set(xscale="log", xlabel="input energy (mean)", ylabel="EDM (mean, 95 % band)",
+           title="Energy dissipation measure against input energy")
+    ax.legend()
+    save(fig, "edm_vs_input_energy.png")
+
+    keyed = [run for run in runs if len(run.swept) == 1]
+    if keyed:
+        key = keyed[0].swept[0]
+        fig, ax = plt.subplots(figsize=(6.4, 4.2))
+        for run in keyed:
+            s = run.summary.sort_values(key)
+            ax.plot(s[key], s["energy_integral_mean"], "o-", ms=3, label=run.label)
+            ax.fill_between(s[key], s["energy_integral_ci95_lo"].clip(lower=1e-300), s["energy_integral_ci95_hi"], alpha=0.25)
+        ax.set(xscale="log", yscale="log", xlabel=key, ylabel="energy integral of E1 (mean)",
+               title="Energy integral of the primary")
+        ax.legend()
+        save(fig, "energy_integral_vs_sweep.png")
+
+        regimes = [run for run in keyed if run.realizations["regime"].notna().any()]
+        if regimes:
+            fig, ax = plt.subplots(figsize=(6.4, 4.2))
+            for run in regimes:
+                s = run.summary.sort_values(key)
+                ax.plot(s[key], s["e1_max_mean"], "o-", ms=3, label=run.label)
+            run = regimes[0]
+            r = run.realizations.groupby("point")["regime"].first()
+            values = run.summary.set_index("point")[key].sort_values()
+            x = values.to_numpy(dtype=float)
+            mid = 0.5 * (x[1:] + x[:-1])
+            lows = np.r_[x[0] - (mid[0] - x[0] if x.size > 1 else 0.5), mid]
+            highs = np.r_[mid, x[-1] + (x[-1] - mid[-1] if x.size > 1 else 0.5)]
+            colors = plt.cm.tab10.colors
+            names = list(dict.fromkeys(r.dropna()))
+            for p, lo, hi in zip(values.index, lows, highs):  # each point's regime over its share of the axis
+                if isinstance(r.get(p), str):
+                    ax.axvspan(lo, hi, color=colors[names.index(r[p]) % 10], alpha=0.3, lw=0)
+            for i, name in enumerate(names):
+                ax.plot([], [], "s", color=colors[i % 10], alpha=0.5, label=f"regime {name}")
+            ax.set(xlabel=key, ylabel="e1_max (mean)", title="Maximum primary energy with regimes")
+            ax.legend(fontsize=7)
+            save(fig, "e1_max_regimes.png")
+
+    fig, ax = plt.subplots(figsize=(6.4, 4.2))
+    samples = {}
+    for run in runs:
+        p = _point(run, point)
+        ok = run.realizations[(run.realizations["point"] == p) & (run.realizations["status"] == "ok")]
+        where = ", ".join(f"{k} = {run.summary[k].iloc[p]:.4g}" for k in run.swept) or f"point {p}"
+        samples[f"{run.label} ({where})"] = ok["edm"].to_numpy(dtype=float)
+    pooled = np.concatenate(list(samples.values()))
+    edges = np.histogram_bin_edges(pooled[np.isfinite(pooled)], bins=min(40, max(5, pooled.size // 8)))
+    for name, edm in samples.items():
+        ax.hist(edm, bins=edges, alpha=0.5, label=name)
+    ax.set(xlabel="EDM", ylabel="realisations", title="EDM distribution at one sweep point")
+    ax.legend(fontsize=8)
+    save(fig, "edm_histogram.png")
+
+    histories = [run for run in runs if run.history is not None]
+    if histories:
+        fig, ax = plt.subplots(figsize=(6.4, 4.2))
+        shares = all(h.history.loc[h.history["point"] == _point(h, point), "e1_mean"].iloc[0] > 0 for h in histories)
+        for run in histories:
+            h = run.history[run.history["point"] == _point(run, point)]
+            scale = h["e1_mean"].iloc[0] if shares else 1.0
+            quantiles = sorted(c for c in h.columns if c.startswith("e1_q"))
+            line, = ax.plot(h["t"], h["e1_mean"] / scale, label=f"{run.label}: mean")
+            if len(quantiles) >= 2:
+                ax.fill_between(h["t"], h[quantiles[0]] / scale, h[quantiles[-1]] / scale, color=line.get_color(),
+                                alpha=0.2, label=f"{run.label}: {_percent(quantiles[0])} to {_percent(quantiles[-1])} % quantiles")
+        if shares:  # energy given at t = 0 (impulse, initial state): what is left in the primary
+            ax.set(ylabel="E1(t) / E1(0)", title="Share of the initial energy left in the primary")
+        else:
+            ax.set(ylabel="E1(t)", title="Primary energy over time")
+        ax.set(xlabel="t")
+        ax.legend(fontsize=8)
+        save(fig, "primary_energy_history.png")
+    return files
+
+
+def report(directories: list[str | Path], out: str | Path = "reports", labels: list[str] | None = None,
+           point: int | None = None) -> Path:
+    """Write ``<out>/<name>/report.md`` and its PNG plots for one or several result
+    directories (``name``: the first run's scenario name); returns the Markdown path."""
+    labels = labels or [None] * len(directories)
+    runs = [Run.read(d, label) for d, label in zip(directories, labels)]
+    folder = Path(out) / runs[0].scenario.get("name", runs[0].directory.name)
+    folder.mkdir(parents=True, exist_ok=True)
+    files = _plots(runs, folder, point)
+    parts = [f"# Report: {', '.join(run.label for run in runs)}", ""]
+    for run in runs:
+        s = run.summary
+        table = s[["point", *run.swept, "n_ok", "n_failed", "input_energy_mean", "edm_mean", "edm_ci95_lo",
+                   "edm_ci95_hi", "e1_max_mean", "energy_integral_mean", "impacts_mean"]]
+        parts += [f"## {run.label}", "", f"Directory `{run.directory}`, seed {run.seed}, "
+                  f"{int(s['n_ok'].sum() + s['n_failed'].sum())} realisations.", "", markdown(table), ""]
+    parts += [f"## Where mean EDM >= {EDM_LEVEL}", "", markdown(pd.DataFrame([effective_range(r) for r in runs])), ""]
+    if len(runs) > 1:
+        try:
+            table = markdown(compare(runs))
+        except ValueError as exc:
+            table = f"Not compared: {exc}."
+        parts += ["## Comparison (later runs minus the first)", "", table, ""]
+    parts += ["## Plots", ""] + [f"![{f}]({f})" for f in files] + [""]
+    path = folder / "report.md"
+    path.write_text("\n".join(parts))
+    return path
+
