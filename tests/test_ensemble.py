@@ -87,7 +87,8 @@ def test_resume_keeps_finished_chunks(tmp_path):
 
 
 EXAMPLES = ["parallel_nes_impulse", "cubic_nes_impulse", "parallel_nes_noise", "filtered_noise",
-            "half_sine_shock", "pulse_train", "chirp", "synthetic_record", "ground_motion", "elcentro"]
+            "half_sine_shock", "pulse_train", "chirp", "synthetic_record", "ground_motion", "elcentro",
+            "robustness_parallel", "robustness_cubic"]
 
 
 @pytest.mark.parametrize("name", EXAMPLES)

@@ -1,0 +1,97 @@
+"""report and compare on small result directories made here."""
+
+from __future__ import annotations
+
+import math
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from vines_stoch import parse_scenario, run
+from vines_stoch.reports import Run, compare, effective_range, report
+
+TEXT = """
+name = "{name}"
+[primary]
+mass = 1.0
+stiffness = 1.0
+[[absorbers]]
+type = "cubic"
+mass = 0.05
+stiffness = {k3}
+damping = 0.01
+[[loads]]
+type = "impulse"
+velocity = 0.5
+[simulation]
+duration = 20.0
+dt = 1e-2
+history = {{ points = 50 }}
+[ensemble]
+realizations = 12
+seed = {seed}
+[sweep]
+"loads.0.velocity" = [0.1, 0.5, 2.0]
+[uncertain]
+"absorbers.0.damping" = {{ distribution = "uniform", low = 0.005, high = 0.05 }}
+"""
+
+
+@pytest.fixture(scope="module")
+def runs(tmp_path_factory):
+    root = tmp_path_factory.mktemp("runs")
+    for name, k3, seed in (("soft", 1.0, 3), ("stiff", 4.0, 3), ("other-seed", 4.0, 4)):
+        run(parse_scenario(TEXT.format(name=name, k3=k3, seed=seed)), root / name, workers=2)
+    return root
+
+
+def test_compare_pairs_runs_with_common_random_numbers(runs):
+    soft, stiff, other = (Run.read(runs / n) for n in ("soft", "stiff", "other-seed"))
+    table = compare([soft, stiff, other], ("edm",))
+    for p in range(3):
+        row = table[table["point"] == p].iloc[0]
+        a = soft.realizations[soft.realizations["point"] == p]["edm"].to_numpy()
+        b = stiff.realizations[stiff.realizations["point"] == p]["edm"].to_numpy()
+        assert row["paired (stiff)"] == "yes"
+        assert row["stiff - soft"] == pytest.approx(np.mean(b - a), rel=1e-12)
+        assert row["se (stiff)"] == pytest.approx(np.std(b - a, ddof=1) / math.sqrt(12), rel=1e-12)
+        # a different seed cannot be paired: independent standard errors combine
+        assert row["paired (other-seed)"] == "no"
+        sems = [r.summary["edm_sem"].iloc[p] for r in (soft, other)]
+        assert row["se (other-seed)"] == pytest.approx(math.hypot(*sems), rel=1e-12)
+
+
+def test_effective_range_lists_the_points_above_the_level(runs):
+    soft = Run.read(runs / "soft")
+    s = soft.summary
+    above = s[s["edm_mean"] >= 0.3]["loads.0.velocity"]
+    text = effective_range(soft, 0.3)["loads.0.velocity where mean EDM >= 0.3"]
+    if above.empty:
+        assert text == "none"
+    else:
+        assert text.startswith(f"{above.min():.4g} to {above.max():.4g} ({len(above)} of 3 points)")
+
+
+def test_report_writes_markdown_and_plots(runs, tmp_path):
+    path = report([runs / "soft", runs / "stiff"], tmp_path, ["soft", "stiff"], point=1)
+    text = path.read_text()
+    assert path == tmp_path / "soft" / "report.md"
+    for name in ("edm_vs_input_energy.png", "energy_integral_vs_sweep.png", "edm_histogram.png",
+                 "primary_energy_history.png"):
+        assert (path.parent / name).stat().st_size > 10_000  # a rendered figure, not an empty file
+        assert f"]({name})" in text
+    assert "## Where mean EDM >= 0.8" in text and "## Comparison" in text
+    assert "stiff - soft" in text
+
+
+def test_compare_command_prints_and_writes(runs, tmp_path):
+    out = tmp_path / "cmp.md"
+    done = subprocess.run([sys.executable, "-m", "vines_stoch.cli", "compare", str(runs / "soft"), str(runs / "stiff"),
+                           "--out", str(out), "--metric", "edm"], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    assert "stiff - soft" in done.stdout and out.read_text().count("| edm |") == 3
+    bad = subprocess.run([sys.executable, "-m", "vines_stoch.cli", "compare", str(runs / "soft"), str(tmp_path)],
+                         capture_output=True, text=True)
+    assert bad.returncode == 2 and "no summary.parquet" in bad.stderr
