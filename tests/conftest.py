@@ -9,6 +9,13 @@ from vines_stoch.kernels import SLOTS, simulate
 from vines_stoch.scene import build_scene
 
 
+def two_dof(primary_damping: float = 0.02, stiffness: str = "1.0", damping: str = "0.01") -> str:
+    """Scenario text of the primary (m = k = 1) with one cubic NES (m = 0.05): the bodies of the
+    ensemble tests (values as TOML text, so templates may leave placeholders)."""
+    return (f"[primary]\nmass = 1.0\nstiffness = 1.0\ndamping = {primary_damping}\n"
+            f"[[absorbers]]\ntype = \"cubic\"\nmass = 0.05\nstiffness = {stiffness}\ndamping = {damping}\n")
+
+
 def scene_of(text: str, point: int = 0):
     """The Scene of one sweep point of scenario text."""
     return build_scene(parse_scenario(text).points[point])

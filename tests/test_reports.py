@@ -12,17 +12,11 @@ import pytest
 from vines_stoch import parse_scenario, run
 from vines_stoch.reports import Run, compare, effective_range, report
 
+from .conftest import two_dof
+
 TEXT = """
 name = "{name}"
-[primary]
-mass = 1.0
-stiffness = 1.0
-[[absorbers]]
-type = "cubic"
-mass = 0.05
-stiffness = {k3}
-damping = 0.01
-[[loads]]
+""" + two_dof(0.0, "{k3}") + """[[loads]]
 type = "impulse"
 velocity = 0.5
 [simulation]

@@ -20,18 +20,11 @@ from vines_stoch.kernels import simulate
 from vines_stoch.scene import build_scene
 from vines_stoch.store import read_metadata
 
+from .conftest import two_dof
+
 TEXT = """
 name = "scale"
-[primary]
-mass = 1.0
-stiffness = 1.0
-damping = 0.02
-[[absorbers]]
-type = "cubic"
-mass = 0.05
-stiffness = 1.0
-damping = 0.01
-[[loads]]
+""" + two_dof() + """[[loads]]
 type = "white-noise"
 intensity = 0.1
 [simulation]

@@ -13,18 +13,11 @@ from scipy import stats
 from vines_stoch import ScenarioError, parse_scenario, run
 from vines_stoch.ensemble import draw_parameters
 
+from .conftest import two_dof
+
 BASE = """
 name = "uncertain"
-[primary]
-mass = 1.0
-stiffness = 1.0
-damping = 0.02
-[[absorbers]]
-type = "cubic"
-mass = 0.05
-stiffness = 1.0
-damping = 0.01
-[[loads]]
+""" + two_dof() + """[[loads]]
 type = "white-noise"
 intensity = 0.1
 [simulation]
