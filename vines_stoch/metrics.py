@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pandas as pd
-from scipy.stats import t as student_t
+from scipy.special import stdtrit
 
 from .kernels.common import SLOTS, STATUS_DIVERGED
 from .scene import Scene
@@ -108,7 +108,7 @@ def summarise(realizations: pd.DataFrame, parameters: list[str]) -> pd.DataFrame
             row[f"{m}_mean"] = float(values.mean()) if n else np.nan
             row[f"{m}_std"] = std
             sem = std / np.sqrt(n) if n > 1 else np.nan
-            half = float(student_t.ppf(0.975, n - 1)) * sem if n > 1 else np.nan
+            half = float(stdtrit(n - 1, 0.975)) * sem if n > 1 else np.nan
             row[f"{m}_sem"] = sem
             row[f"{m}_ci95_lo"], row[f"{m}_ci95_hi"] = row[f"{m}_mean"] - half, row[f"{m}_mean"] + half
             row[f"{m}_q05"], row[f"{m}_q50"], row[f"{m}_q95"] = (float(v) for v in q)
