@@ -36,17 +36,21 @@ from .physics import KERNEL, hertz_constant
 from .reference import hertz_reference
 from .scene import build_scene
 
-SMOOTH = """
-name = "bench-smooth"
-[primary]
+#: The bodies of the smooth and history scenes: LPO m = k = 1 (damping c1) with a cubic NES.
+BODIES = """[primary]
 mass = 1.0
 stiffness = 1.0
+damping = {c1}
 [[absorbers]]
 type = "cubic"
 mass = 0.05
 stiffness = 1.0
 damping = 0.01
-[[loads]]
+"""
+
+SMOOTH = """
+name = "bench-smooth"
+""" + BODIES.format(c1=0.0) + """[[loads]]
 type = "harmonic"
 amplitude = 0.1
 frequency = 1.0
@@ -208,16 +212,7 @@ def _seismic(directory: Path, repeats: int = 30) -> dict[str, tuple[float, float
 
 HISTORY = """
 name = "bench-history"
-[primary]
-mass = 1.0
-stiffness = 1.0
-damping = 0.02
-[[absorbers]]
-type = "cubic"
-mass = 0.05
-stiffness = 1.0
-damping = 0.01
-[[loads]]
+""" + BODIES.format(c1=0.02) + """[[loads]]
 type = "white-noise"
 intensity = 0.1
 [simulation]

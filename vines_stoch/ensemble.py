@@ -30,7 +30,7 @@ from . import schedulers
 from .kernels import sample_buffer, simulate
 from .metrics import METRICS, finish, summarise
 from .progress import Progress
-from .scenario import Study
+from .scenario import History, Study
 from .scene import Scene, build_scene
 from .store import part_path, provenance, read_results, run_key, write_table
 
@@ -96,7 +96,6 @@ class Plan:
     """Scenes of the sweep points and the chunks ``(point, start, stop)`` covering them."""
 
     scenes: list[Scene]
-    realizations: list[int]
     chunks: list[tuple[int, int, int]]
 
 
@@ -117,7 +116,7 @@ def plan(study: Study, chunk: int | None = None, realizations: int | None = None
             row_bytes = 8 * len(hist.SIGNALS) * hist.grid(scene.n_steps, spec.points)[1]
             size = min(size, max(1, HISTORY_CHUNK_BYTES // row_bytes))
         chunks += [(p, s, min(s + size, n)) for s in range(0, n, size)]
-    return Plan(scenes, counts, chunks)
+    return Plan(scenes, chunks)
 
 
 def _auto_chunk(scene: Scene, n: int) -> int:
@@ -140,7 +139,8 @@ class PointState:
         return self.stop is not None or self.folded == len(self.chunks)
 
     def fold(self, frame: pd.DataFrame, paths: np.ndarray | None, target: float | None) -> None:
-        """Take the next chunk; with ``target``, stop at the first multiple of ``TARGET_STEP``
+        """Take the next chunk (``frame`` and ``paths`` are read only for ``target`` and the
+        history tree); with ``target``, stop at the first multiple of ``TARGET_STEP``
         realisations whose EDM standard error is at most ``target``."""
         _, start, stop = self.chunks[self.folded]
         keep = stop - start
@@ -256,10 +256,7 @@ def run(study: Study, directory: str | Path | None = None, *, workers: int | Non
                     frame, paths = (pd.read_parquet(part_path(directory, *c)) if target else None), None
                 else:
                     break
-                if target is not None or state.tree is not None:
-                    state.fold(frame, paths, target)
-                else:
-                    state.folded += 1
+                state.fold(frame, paths, target)
 
     fold_ready()
     todo = [c for c in the_plan.chunks if c not in reusable]
@@ -302,8 +299,8 @@ def run(study: Study, directory: str | Path | None = None, *, workers: int | Non
     return _consolidate(study, the_plan, states, directory, meta, grids, spec)
 
 
-def _consolidate(study: Study, the_plan: Plan, states: list[PointState], directory: Path,
-                 meta: dict[str, str], grids: list, spec) -> tuple[pd.DataFrame, pd.DataFrame]:
+def _consolidate(study: Study, the_plan: Plan, states: list[PointState], directory: Path, meta: dict[str, str],
+                 grids: list[tuple[int, int] | None], spec: History | None) -> tuple[pd.DataFrame, pd.DataFrame]:
     """Gather the parts kept (up to each point's stopping count) into the result files."""
     frames = []
     for p, state in enumerate(states):
