@@ -1,4 +1,4 @@
-"""Command line: ``vines-stoch run | validate | loads | report | compare | bench | reproduce``."""
+"""Command line: ``vines-stoch run | validate | loads | report | compare | optimize | bench | reproduce``."""
 
 from __future__ import annotations
 
@@ -146,6 +146,36 @@ def compare(
     out.write_text(f"# Comparison of {', '.join(map(str, directories))}\n\n{text}\n")
     typer.echo(text)
     typer.echo(f"wrote {out}")
+
+
+@app.command()
+def optimize(
+    scenario: Path = typer.Argument(..., help="Scenario TOML file with an [optimize] table."),
+    out: Optional[Path] = typer.Option(None, "--out", help="Output directory (default: <output directory>-optimum)."),
+    workers: Optional[int] = typer.Option(None, "--workers", min=1, help="Threads of the embedded scheduler (default: all cores)."),
+    quiet: bool = typer.Option(False, "--quiet", help="No progress output."),
+) -> None:
+    """Tune absorber parameters for the best mean EDM (or other metric); write the optimum,
+    the objective history, a report and the results at the optimum."""
+    from .optimize import optimize_scenario
+
+    try:
+        study = load_scenario(scenario)
+    except ScenarioError as exc:
+        _fail(str(exc))
+    directory = out or Path(f"{study.base.output.directory or f'results/{study.name}'}-optimum")
+    echo = (lambda line: None) if quiet else typer.echo
+    try:
+        best, path = optimize_scenario(study, directory, workers, progress=not quiet, echo=echo)
+    except KeyboardInterrupt:
+        typer.echo(f"\ninterrupted: the evaluations so far are in {directory}/optimization.parquet", err=True)
+        raise typer.Exit(130)
+    except (OSError, ValueError) as exc:
+        _fail(str(exc))
+    if not quiet:
+        shown = ", ".join(f"{k} = {v:.6g}" for k, v in best.values.items())
+        typer.echo(f"optimum: {shown}; {study.base.optimize.objective} = {best.objective:.6g} +- {best.sem:.2g}")
+        typer.echo(f"wrote {directory}/optimum.toml, {directory}/optimization.parquet, {path}")
 
 
 @app.command()

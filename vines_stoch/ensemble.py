@@ -124,6 +124,28 @@ def _auto_chunk(scene: Scene, n: int) -> int:
     return max(1, min(by_cost, math.ceil(n / CHUNKS_PER_POINT)))
 
 
+def sample(study: Study, workers: int | None = None) -> pd.DataFrame:
+    """Every realisation of every sweep point, in memory (no files, no history, no early
+    stopping): the metric rows in point and realisation order."""
+    the_plan = plan(study)
+    base = study.base
+    uncertain = study if base.uncertain else None
+
+    def call(c: tuple[int, int, int]) -> tuple:
+        return run_chunk, (the_plan.scenes[c[0]], base.ensemble.seed, *c, None, uncertain,
+                           base.ensemble.common_random_numbers)
+
+    done = dict(schedulers.embedded(the_plan.chunks, call, lambda c: False, workers or os.cpu_count() or 1))
+    return pd.concat([_label(done[c][0], study, c[0]) for c in the_plan.chunks], ignore_index=True)
+
+
+def _label(frame: pd.DataFrame, study: Study, point: int) -> pd.DataFrame:
+    """Insert the swept values of ``point`` as columns after ``point`` and ``realization``."""
+    for k in study.sweep_keys:
+        frame.insert(2, k, study.grid[point][k])
+    return frame
+
+
 @dataclass
 class PointState:
     """What the driver has folded of one sweep point, in realisation order."""
@@ -279,8 +301,7 @@ def run(study: Study, directory: str | Path | None = None, *, workers: int | Non
         folding = False
         try:
             for c, (frame, paths) in results:
-                for k in study.sweep_keys:
-                    frame.insert(2, k, study.grid[c[0]][k])
+                _label(frame, study, c[0])
                 write_table(frame, part_path(directory, *c))
                 ready[c] = (frame, paths)
                 folding = True
@@ -329,4 +350,4 @@ def _consolidate(study: Study, the_plan: Plan, states: list[PointState], directo
     return read_results(directory)
 
 
-__all__ = ["METRICS", "generator", "plan", "run", "run_chunk"]
+__all__ = ["METRICS", "generator", "plan", "run", "run_chunk", "sample"]

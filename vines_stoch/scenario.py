@@ -469,6 +469,54 @@ Distribution = Annotated[
 ]
 
 
+class Bound(_Model):
+    """Range searched for one optimised parameter, its starting value (default: the middle,
+    geometric on a log scale) and whether the search works on its logarithm."""
+
+    low: Real
+    high: Real
+    start: Real | None = None
+    scale: Literal["linear", "log"] = "linear"
+
+    @model_validator(mode="after")
+    def _range(self) -> "Bound":
+        if not self.low < self.high:
+            raise _KeyError("high", self.high, f"must be > low ({self.low:g})")
+        if self.scale == "log" and self.low <= 0:
+            raise _KeyError("low", self.low, "must be > 0 with scale = 'log'")
+        if self.start is not None and not self.low <= self.start <= self.high:
+            raise _KeyError("start", self.start, f"must be in [{self.low:g}, {self.high:g}]")
+        return self
+
+    @property
+    def initial(self) -> float:
+        if self.start is not None:
+            return self.start
+        return math.sqrt(self.low * self.high) if self.scale == "log" else 0.5 * (self.low + self.high)
+
+
+#: Metrics an optimisation can target, and their default goal.
+OBJECTIVES = {"edm": "maximize", "e1_max": "minimize", "energy_integral": "minimize",
+              "x1_max": "minimize", "x1_rms": "minimize"}
+
+
+class Optimize(_Model):
+    """Robust design (``vines-stoch optimize``): tune ``parameters`` within their bounds so that
+    the mean of ``objective`` over the realisations and sweep points is best."""
+
+    objective: Literal[tuple(OBJECTIVES)] = "edm"  # type: ignore[valid-type]
+    goal: Literal["maximize", "minimize"] | None = None
+    method: Literal["nelder-mead", "powell"] = "nelder-mead"
+    max_evaluations: Annotated[int, Field(ge=1, le=100_000)] = 200
+    tolerance: Annotated[float, Field(gt=0, le=0.5)] = 1e-3
+    parameters: Annotated[dict[str, Bound], Field(min_length=1)]
+
+    @property
+    def sign(self) -> float:
+        """+1 to minimise the objective, -1 to maximise it."""
+        return -1.0 if (self.goal or OBJECTIVES[self.objective]) == "maximize" else 1.0
+
+
 class Output(_Model):
     """Where results go (default ``results/<name>``)."""
 
@@ -487,6 +535,7 @@ class Scenario(_Model):
     ensemble: Ensemble = Ensemble()
     sweep: dict[str, Any] = {}
     uncertain: dict[str, Distribution] = {}
+    optimize: Optimize | None = None
     output: Output = Output()
 
     @model_validator(mode="after")
@@ -770,12 +819,29 @@ def _require_numeric(data: dict[str, Any], key: str, where: str, spec: Any, sour
                                     "must name an existing numeric field of the file (e.g. loads.0.velocity)"))
 
 
+def _check_values(data: dict[str, Any], key: str, ends: tuple[float, float], where: str, spec: Any,
+                  source: str, message: str) -> None:
+    """Validate the file with ``key`` set to each of ``ends``; on failure raise ``message``
+    (formatted with ``end`` and the field's ``rule``) at ``where`` (whose value is ``spec``)."""
+    for end in ends:
+        variant = copy.deepcopy(data)
+        set_path(variant, key, end)
+        variant.pop("uncertain", None)
+        variant.pop("optimize", None)
+        try:
+            _validate(variant, source)
+        except ScenarioError as exc:
+            rule = str(exc).split("\n")[0].rsplit(": ", 1)[-1]
+            raise ScenarioError(_format(source, where, spec, message.format(end=end, rule=rule))) from None
+
+
 class Study:
     """A validated scenario file: the base scenario and its sweep points."""
 
     def __init__(self, source: str, text: str, data: dict[str, Any], directory: Path = Path(".")):
         self.source = source
         self.text = text
+        self.data = data
         self.directory = directory
         self._records: dict[tuple[Any, ...], tuple[np.ndarray, np.ndarray]] = {}
         self.base = self._read_records(_validate(data, source), source)
@@ -792,6 +858,8 @@ class Study:
                 raise ScenarioError(_format(source, f"uncertain.{key}", data["uncertain"][key],
                                             "is also swept: a parameter is either swept or uncertain"))
             self._check_support(data, key, dist, source)
+        if self.base.optimize is not None:
+            self._check_optimize(data, source)
         self.grid = _product(grids, zipped, source)
         self.points: list[Scenario] = []
         self._point_data: list[dict[str, Any]] = []
@@ -805,19 +873,24 @@ class Study:
     def _check_support(self, data: dict[str, Any], key: str, dist: Any, source: str) -> None:
         """Every value ``dist`` can draw must be valid for ``key``: check both ends of its support."""
         lo, hi = dist.support()
-        for end in (lo if math.isfinite(lo) else -1e300, hi if math.isfinite(hi) else 1e300):
-            end = end if end != 0.0 or not isinstance(dist, LognormalDistribution) else 2.2e-308
-            variant = copy.deepcopy(data)
-            set_path(variant, key, end)
-            variant.pop("uncertain")
-            try:
-                _validate(variant, source)
-            except ScenarioError as exc:
-                rule = str(exc).split("\n")[0].rsplit(": ", 1)[-1]
-                raise ScenarioError(_format(
-                    source, f"uncertain.{key}", data["uncertain"][key],
-                    f"{dist.distribution} draws reach {end:g}, but the value {rule}; choose a distribution whose "
-                    "support fits (lognormal for positive values, uniform or truncated-normal within bounds)")) from None
+        lo = lo if math.isfinite(lo) else -1e300
+        lo = lo if lo != 0.0 or not isinstance(dist, LognormalDistribution) else 2.2e-308
+        _check_values(data, key, (lo, hi if math.isfinite(hi) else 1e300), f"uncertain.{key}",
+                      data["uncertain"][key], source,
+                      f"{dist.distribution} draws reach {{end:g}}, but the value {{rule}}; choose a distribution whose "
+                      "support fits (lognormal for positive values, uniform or truncated-normal within bounds)")
+
+    def _check_optimize(self, data: dict[str, Any], source: str) -> None:
+        """Optimised parameters: numeric fields, neither swept nor uncertain, valid at both bounds."""
+        for key, bound in self.base.optimize.parameters.items():
+            where = f"optimize.parameters.{key}"
+            spec = data["optimize"]["parameters"][key]
+            _require_numeric(data, key, where, spec, source)
+            if key in self.sweep_keys or key in self.uncertain_keys:
+                raise ScenarioError(_format(source, where, spec, "is swept or uncertain: an optimised parameter "
+                                                                 "must be neither"))
+            _check_values(data, key, (bound.low, bound.high), where, spec, source,
+                          "the bound {end:g} is not allowed: the value {rule}")
 
     def realise(self, point: int, values: dict[str, float]) -> Scenario:
         """Sweep point ``point`` with its uncertain parameters set to ``values``."""
@@ -825,6 +898,13 @@ class Study:
         for key, value in values.items():
             set_path(variant, key, value)
         return self._read_records(_validate(variant, self.source), self.source)
+
+    def with_values(self, values: dict[str, float]) -> "Study":
+        """The study with the fields named by ``values`` set (e.g. an optimiser's candidate)."""
+        data = copy.deepcopy(self.data)
+        for key, value in values.items():
+            set_path(data, key, value)
+        return Study(self.source, self.text, data, self.directory)
 
     def _read_records(self, scenario: Scenario, source: str) -> Scenario:
         """Read the files of record loads (paths relative to the scenario file), once each."""

@@ -1,0 +1,130 @@
+"""Robust design: the optimiser against the closed-form optimal tuning of a TMD under white
+noise, its output files, and the validation of ``[optimize]`` tables."""
+
+from __future__ import annotations
+
+import math
+import subprocess
+import sys
+import tomllib
+
+import pandas as pd
+import pytest
+
+from vines_stoch import ScenarioError, parse_scenario
+from vines_stoch.optimize import from_unit, to_unit
+from vines_stoch.scenario import Bound
+
+MU = 0.05
+
+#: Undamped primary (m = k = 1) with a linear TMD of mass ratio MU under a white-noise force;
+#: x1_rms is the root mean square displacement over 2000 s of stationary response.
+TMD = f"""
+name = "tmd-white-noise"
+[primary]
+mass = 1.0
+stiffness = 1.0
+[[absorbers]]
+type = "linear"
+mass = {MU}
+stiffness = 0.05
+damping = 0.01
+[[loads]]
+type = "white-noise"
+intensity = 1.0
+[simulation]
+duration = 2100.0
+dt = 0.05
+metrics_from = 100.0
+[ensemble]
+realizations = 32
+seed = 7
+"""
+
+OPTIMIZE = """
+[optimize]
+objective = "x1_rms"
+[optimize.parameters]
+"absorbers.0.stiffness" = { low = 0.03, high = 0.07 }
+"absorbers.0.damping" = { low = 0.002, high = 0.05, scale = "log" }
+"""
+
+
+def warburton() -> tuple[float, float]:
+    """Optimal frequency ratio and damping ratio of a TMD on an undamped primary for the least
+    displacement variance under a white-noise force (Warburton 1982)."""
+    return (math.sqrt(1 + MU / 2) / (1 + MU),
+            math.sqrt(MU * (1 + 3 * MU / 4) / (4 * (1 + MU) * (1 + MU / 2))))
+
+
+def test_finds_the_closed_form_tmd_tuning_within_two_percent(write, tmp_path):
+    path = write(TMD + OPTIMIZE)
+    out = tmp_path / "opt"
+    done = subprocess.run([sys.executable, "-m", "vines_stoch.cli", "optimize", str(path), "--out", str(out)],
+                          capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    optimum = tomllib.loads((out / "optimum.toml").read_text())["absorbers"][0]
+    f = math.sqrt(optimum["stiffness"] / MU)            # absorber frequency / primary frequency
+    zeta = optimum["damping"] / (2 * MU * f)
+    f_opt, zeta_opt = warburton()
+    assert abs(f / f_opt - 1) < 0.02, (f, f_opt)
+    assert abs(zeta / zeta_opt - 1) < 0.02, (zeta, zeta_opt)
+    # the objective history holds every evaluation; the optimum is its best, rerun as a scenario
+    history = pd.read_parquet(out / "optimization.parquet")
+    assert len(history) >= 10 and history["n_failed"].eq(0).all()
+    best = history.loc[history["x1_rms"].idxmin()]
+    assert best["absorbers.0.stiffness"] == optimum["stiffness"]
+    summary = pd.read_parquet(out / "summary.parquet")
+    assert summary["x1_rms_mean"].iloc[0] == pytest.approx(best["x1_rms"], rel=1e-12)
+    report = (out / "report.md").read_text()
+    assert "## Optimum" in report and (out / "objective_history.png").stat().st_size > 1000
+    assert "[optimize]" not in (out / "optimum.toml").read_text()
+
+
+def test_common_random_numbers_make_the_objective_a_function_of_the_parameters(write, tmp_path):
+    from vines_stoch.ensemble import sample
+    from vines_stoch.optimize import objective
+
+    study = parse_scenario(TMD.replace("realizations = 32", "realizations = 4")
+                           .replace("duration = 2100.0", "duration = 300.0") + OPTIMIZE)
+    values = {"absorbers.0.stiffness": 0.046, "absorbers.0.damping": 0.0105}
+    first = objective(sample(study.with_values(values), workers=1), "x1_rms")
+    again = objective(sample(study.with_values(values), workers=2), "x1_rms")
+    assert first == again
+
+
+@pytest.mark.parametrize("scale", ["linear", "log"])
+def test_scaled_coordinates_round_trip(scale):
+    bound = Bound(low=0.002, high=0.05, scale=scale)
+    for value in (0.002, 0.01, 0.05):
+        assert from_unit(bound, to_unit(bound, value)) == pytest.approx(value, rel=1e-12)
+    assert from_unit(bound, 1.5) == 0.05 and from_unit(bound, -0.5) == 0.002
+
+
+@pytest.mark.parametrize("table, message", [
+    ('"absorbers.0.damping" = { low = -0.01, high = 0.05 }',
+     "optimize.parameters.absorbers.0.damping = {'low': -0.01, 'high': 0.05}: the bound -0.01 is not allowed: "
+     "the value must be >= 0"),
+    ('"absorbers.0.damping" = { low = 0.0, high = 0.05, scale = "log" }', "must be > 0 with scale = 'log'"),
+    ('"absorbers.0.damping" = { low = 0.05, high = 0.01 }', "must be > low (0.05)"),
+    ('"absorbers.0.damping" = { low = 0.01, high = 0.05, start = 0.1 }', "must be in [0.01, 0.05]"),
+    ('"absorbers.0.colour" = { low = 0.01, high = 0.05 }', "must name an existing numeric field"),
+    ('"loads.0.intensity" = { low = 0.5, high = 2.0 }', "is swept or uncertain"),
+])
+def test_bad_optimize_tables_are_named(table, message):
+    text = TMD + '[sweep]\n"loads.0.intensity" = [1.0, 2.0]\n[optimize]\n[optimize.parameters]\n' + table + "\n"
+    with pytest.raises(ScenarioError) as err:
+        parse_scenario(text, "tmd.toml")
+    assert message in str(err.value)
+    assert str(err.value).startswith("tmd.toml: optimize.parameters.")
+
+
+def test_unknown_objective_lists_the_allowed_ones():
+    with pytest.raises(ScenarioError, match="optimize.objective = 'impacts': must be 'edm', 'e1_max'"):
+        parse_scenario(TMD + OPTIMIZE.replace('"x1_rms"', '"impacts"'), "tmd.toml")
+
+
+def test_optimize_without_table_is_refused(write):
+    done = subprocess.run([sys.executable, "-m", "vines_stoch.cli", "optimize", str(write(TMD))],
+                          capture_output=True, text=True)
+    assert done.returncode == 2 and "no [optimize] table" in done.stderr
