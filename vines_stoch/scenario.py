@@ -572,6 +572,26 @@ class Scenario(_Model):
         return self.has_noise or bool(self.uncertain)
 
     @property
+    def scheme(self) -> str:
+        """The scheme that runs: ``"auto"`` is RK4 without noise, Euler-Maruyama with it."""
+        if self.simulation.scheme != "auto":
+            return self.simulation.scheme
+        return "euler-maruyama" if self.has_noise else "rk4"
+
+    def highest_frequency(self) -> float:
+        """Highest natural frequency (rad/s) of the bodies on their linear springs: the primary's
+        and every absorber attachment's (cubic terms, impacts and contacts left out)."""
+        mass = np.array([self.primary.mass] + [a.mass for a in self.absorbers])
+        k = np.zeros((mass.shape[0], mass.shape[0]))
+        k[0, 0] = self.primary.stiffness
+        for j, a in enumerate(self.absorbers, start=1):
+            spring = a.linear_stiffness if isinstance(a, CubicAbsorber) else a.stiffness
+            k[[0, j], [0, j]] += spring
+            k[[0, j], [j, 0]] -= spring
+        scale = 1.0 / np.sqrt(mass)
+        return float(np.sqrt(max(np.linalg.eigvalsh(k * np.outer(scale, scale)).max(), 0.0)))
+
+    @property
     def has_noise(self) -> bool:
         """True when any random load acts (white, filtered noise, stochastic ground motion)."""
         return any(isinstance(l, (WhiteNoiseLoad, _FilteredLoad)) and l.intensity > 0 for l in self.loads)
@@ -835,6 +855,23 @@ def _check_values(data: dict[str, Any], key: str, ends: tuple[float, float], whe
             raise ScenarioError(_format(source, where, spec, message.format(end=end, rule=rule))) from None
 
 
+#: Largest ``omega dt`` at which each scheme is stable on an undamped linear oscillator
+#: (velocity Verlet: 2; classical RK4: 2 sqrt 2).
+STABILITY = {"euler-maruyama": 2.0, "rk4": 2.0 * math.sqrt(2.0)}
+
+
+def _check_stability(scenario: Scenario, source: str) -> None:
+    """Refuse a ``dt`` past the linear stability limit of the scheme that would run."""
+    omega, dt = scenario.highest_frequency(), scenario.simulation.dt
+    limit = STABILITY[scenario.scheme]
+    if omega * dt >= limit:
+        raise ScenarioError(_format(
+            source, "simulation.dt", dt,
+            f"is past the stability limit of the {scenario.scheme} scheme: the highest linear natural frequency "
+            f"of the scene is {omega:.6g} rad/s, which needs dt < {limit:.4g} / omega = {limit / omega:.4g} "
+            f"(use about a tenth of that for accuracy)"))
+
+
 class Study:
     """A validated scenario file: the base scenario and its sweep points."""
 
@@ -868,7 +905,9 @@ class Study:
             for key, value in values.items():
                 set_path(variant, key, value)
             self._point_data.append(variant)
-            self.points.append(self._read_records(_validate(variant, f"{source} (sweep point {values})"), source))
+            where = f"{source} (sweep point {values})" if values else source
+            self.points.append(self._read_records(_validate(variant, where), source))
+            _check_stability(self.points[-1], where)
 
     def _check_support(self, data: dict[str, Any], key: str, dist: Any, source: str) -> None:
         """Every value ``dist`` can draw must be valid for ``key``: check both ends of its support."""

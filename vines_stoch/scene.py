@@ -126,9 +126,7 @@ def build_scene(scenario: Scenario) -> Scene:
             filter_list.append(_filter(load))
     sim = scenario.simulation
     n_steps = max(1, math.ceil(sim.duration / sim.dt - 1e-9))
-    scheme = sim.scheme
-    if scheme == "auto":
-        scheme = "euler-maruyama" if variance > 0 or filter_list else "rk4"
+    scheme = scenario.scheme
     period = sample_from = 0.0
     frequencies = [f[2] for f in forces if f[0] == HARMONIC]
     if scheme == "rk4" and len(frequencies) == 1 and frequencies[0] > 0:

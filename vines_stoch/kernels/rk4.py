@@ -276,7 +276,8 @@ def rk4_kernel(has_impact: bool, has_hertz: bool, sampling: bool):
                     n_impacts += 1
                     x[j] = x[0] + side * clearance[q]
                     accelerations(x, v, t, t, p, stuck, False, acc, True, contact)
-                    plastic = sticks(side, v[j] - v[0], (acc[j] - acc[0]) * dt)
+                    # the last impact a step may resolve ends a chatter sequence: inelastic collapse
+                    plastic = sticks(side, v[j] - v[0], (acc[j] - acc[0]) * dt) or n_impacts >= MAX_EVENTS
                     r = 0.0 if plastic else restitution[q]
                     v[0], v[j], loss = restitution_impact(m0, mass[j], v[0], v[j], r)
                     for s in range(stuck.shape[0]):

@@ -1,0 +1,85 @@
+"""The numerical stability suite (vines_stoch/stability.py): every case ends within its time
+bound with a result whose energy balance closes, or with a clear error; a diverging
+realisation is counted, not averaged."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from vines_stoch import ScenarioError, parse_scenario, run
+from vines_stoch.stability import CASES, run_case
+
+
+@pytest.mark.parametrize("case", [pytest.param(c, marks=pytest.mark.xfail(reason=c.defect, strict=True))
+                                  if c.defect else c for c in CASES], ids=[c.name for c in CASES])
+def test_case_ends_in_time_with_a_result_or_a_clear_error(case):
+    """Bounds include compiling the case's kernel on a cold cache (up to about 30 s)."""
+    outcome = run_case(case)
+    assert outcome.seconds < case.bound_s
+    if case.expect == "error":
+        assert "simulation.dt" in outcome.error and "stability limit" in outcome.error
+        return
+    assert outcome.error == ""
+    assert outcome.n_failed == 0 and outcome.n_ok == case.realizations
+    assert outcome.residual < case.tolerance
+    assert 0.0 <= outcome.edm[0] <= outcome.edm[1] <= 1.0 + case.tolerance
+    if case.order:  # the residual is the scheme's own error: it falls like dt^order
+        assert run_case(case.halved()).residual <= 1.5 * outcome.residual / 2 ** case.order
+
+
+def test_step_past_the_stability_limit_names_the_limit():
+    case = next(c for c in CASES if c.expect == "error")
+    with pytest.raises(ScenarioError) as err:
+        parse_scenario(case.text, "coarse.toml")
+    message = str(err.value)
+    # absorber m = 0.05 on k = 1e6 over a primary m = k = 1: omega^2 = k (1/m1 + 1/m2) + ...
+    omega = math.sqrt(np.linalg.eigvalsh(np.array([[1.0 + 1e6, -1e6 / math.sqrt(0.05)],
+                                                   [-1e6 / math.sqrt(0.05), 1e6 / 0.05]])).max())
+    assert message.startswith("coarse.toml: simulation.dt = 0.001: is past the stability limit of the rk4 scheme")
+    assert f"{omega:.6g} rad/s" in message and f"{2 * math.sqrt(2) / omega:.4g}" in message
+
+
+def test_a_single_nan_realisation_is_counted_and_left_out(tmp_path):
+    """One of 20 drawn absorber stiffnesses (seed 3) puts the velocity Verlet step past its
+    limit (omega dt = 2.07 > 2; the next largest is 1.94): that realisation overflows, n_failed = 1
+    and the statistics are those of the other 19."""
+    text = """
+name = "one-nan"
+[primary]
+mass = 1.0
+stiffness = 1.0
+damping = 0.02
+[[absorbers]]
+type = "linear"
+mass = 0.05
+stiffness = 1.0
+[[loads]]
+type = "impulse"
+velocity = 0.5
+[simulation]
+duration = 200.0
+dt = 0.1
+scheme = "euler-maruyama"
+[ensemble]
+realizations = 20
+seed = 3
+[uncertain]
+"absorbers.0.stiffness" = { distribution = "uniform", low = 0.5, high = 20.5 }
+"""
+    realizations, summary = run(parse_scenario(text), tmp_path, workers=1)
+    k = realizations["absorbers.0.stiffness"].to_numpy()
+    root_m = math.sqrt(0.05)
+    omega = np.array([math.sqrt(np.linalg.eigvalsh(np.array([[1.0 + ka, -ka / root_m], [-ka / root_m, ka / 0.05]])).max())
+                      for ka in k])
+    assert (omega * 0.1 > 2.0).sum() == 1
+    failed = realizations[realizations["status"] != "ok"]
+    ok = realizations[realizations["status"] == "ok"]
+    assert len(failed) == 1 and failed["status"].iloc[0] == "diverged"
+    assert omega[failed.index[0]] * 0.1 > 2.0
+    assert summary["n_failed"].iloc[0] == 1 and summary["n_ok"].iloc[0] == 19
+    for m in ("edm", "e1_max", "x1_rms"):
+        assert summary[f"{m}_mean"].iloc[0] == pytest.approx(ok[m].mean(), rel=1e-12)
+        assert np.isfinite(summary[f"{m}_std"].iloc[0])
