@@ -29,26 +29,15 @@ from pathlib import Path
 import numpy as np
 from numba import njit
 
-from . import parse_scenario, precision, run, stability
+from . import parse_scenario, precision, run
 from .kernels import load_history, simulate
 from .kernels.common import (ABSORBER_DISS, E1_MAX, FINAL_ENERGY, IMPACT_LOSS, INPUT,
                              PRIMARY_DISS)
 from .records import G, write_at2
 from .physics import KERNEL, hertz_constant
+from .precision import BODIES
 from .reference import hertz_reference
 from .scene import build_scene
-
-#: The bodies of the smooth and history scenes: LPO m = k = 1 (damping c1) with a cubic NES.
-BODIES = """[primary]
-mass = 1.0
-stiffness = 1.0
-damping = {c1}
-[[absorbers]]
-type = "cubic"
-mass = 0.05
-stiffness = 1.0
-damping = 0.01
-"""
 
 SMOOTH = """
 name = "bench-smooth"
@@ -336,6 +325,8 @@ def main(out: Path = Path("reports/benchmarks.md"), n_paths: int = 200) -> str:
     ssvi = _ssvi()
     out.parent.mkdir(parents=True, exist_ok=True)
     work_precision = precision.section(out.parent)
+    from . import stability  # it takes its Hertz scene from this module
+
     stability_suite = stability.section()
     cores = os.cpu_count()
     scipy_row = (f"| scipy DOP853 + events, rtol {ssvi['scipy_rtol']:.0e} | {ssvi['scipy_s'] * 1e3:.1f} | "

@@ -26,18 +26,20 @@ from .metrics import finish
 from .reference import parallel_nes_reference
 from .scene import build_scene
 
-#: Primary m = k = 1 (undamped) with the cubic NES of seed 000 (and the impact NES).
-IMPULSE = """
-name = "wp-impulse"
-[primary]
+#: The bodies of the smooth scenes: LPO m = k = 1 (damping c1) with the cubic NES of seed 000.
+BODIES = """[primary]
 mass = 1.0
 stiffness = 1.0
+damping = {c1}
 [[absorbers]]
 type = "cubic"
 mass = 0.05
 stiffness = 1.0
 damping = 0.01
-{impact}[[loads]]
+"""
+
+#: The undamped LPO with the cubic NES (and the impact NES) under an impulse.
+IMPULSE = 'name = "wp-impulse"\n' + BODIES.format(c1=0.0) + """{impact}[[loads]]
 type = "impulse"
 velocity = 1.0
 [simulation]
@@ -47,17 +49,7 @@ dt = {dt}
 IMPACT = '[[absorbers]]\ntype = "impact"\nmass = 0.05\nclearance = 0.2\nrestitution = 0.6\n'
 
 #: The smooth stochastic scene of the throughput benchmark.
-NOISY = """
-name = "wp-noise"
-[primary]
-mass = 1.0
-stiffness = 1.0
-[[absorbers]]
-type = "cubic"
-mass = 0.05
-stiffness = 1.0
-damping = 0.01
-[[loads]]
+NOISY = 'name = "wp-noise"\n' + BODIES.format(c1=0.0) + """[[loads]]
 type = "harmonic"
 amplitude = 0.1
 frequency = 1.0
