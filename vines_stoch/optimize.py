@@ -22,7 +22,7 @@ import pandas as pd
 
 from .ensemble import run, sample
 from .reports import markdown
-from .scenario import Bound, Optimize, Study, parse_scenario
+from .scenario import Bound, Optimize, Study, parse_scenario, set_path
 from .store import write_table
 
 #: Side of the starting simplex, in scaled coordinates (a fifth of each range).
@@ -97,8 +97,9 @@ def optimize(study: Study, directory: Path, workers: int | None = None,
     u0 = np.array([to_unit(b, b.initial) for b in bounds])
     f0 = evaluate(u0)
     if not math.isfinite(f0):
-        raise ValueError(f"optimize: the starting point {dict(zip(keys, (b.initial for b in bounds)))} has failed "
-                         "realisations; choose optimize.parameters.*.start where the scene is stable")
+        raise ValueError(f"{study.source}: optimize.parameters: the starting point "
+                         f"{dict(zip(keys, (b.initial for b in bounds)))} has failed (diverged) realisations; "
+                         "set each parameter's start (within [low, high]) where the scene is stable")
     options: dict = {"maxfev": spec.max_evaluations}
     if spec.method == "nelder-mead":
         simplex = [u0] + [u0 + np.eye(len(u0))[i] * (SIMPLEX_STEP if u0[i] <= 0.5 else -SIMPLEX_STEP)
@@ -120,13 +121,9 @@ def optimum_text(study: Study, values: dict[str, float], directory: Path) -> str
     output sent to ``directory`` (comments and layout kept)."""
     import tomlkit
 
-    doc = tomlkit.parse(study.text)
+    doc = tomlkit.parse(study.text)  # tables are dicts and arrays of tables lists: set_path walks them
     for key, value in values.items():
-        *parents, last = key.split(".")
-        node = doc
-        for part in parents:
-            node = node[int(part)] if part.isdigit() else node[part]
-        node[int(last) if last.isdigit() else last] = value
+        set_path(doc, key, value)
     doc.remove("optimize")
     for load in doc.get("loads", []):
         if "file" in load:  # record files: found relative to the new file's folder

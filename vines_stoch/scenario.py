@@ -875,12 +875,13 @@ def _check_stability(scenario: Scenario, source: str) -> None:
 class Study:
     """A validated scenario file: the base scenario and its sweep points."""
 
-    def __init__(self, source: str, text: str, data: dict[str, Any], directory: Path = Path(".")):
+    def __init__(self, source: str, text: str, data: dict[str, Any], directory: Path = Path("."),
+                 records: dict[tuple[Any, ...], tuple[np.ndarray, np.ndarray]] | None = None):
         self.source = source
         self.text = text
         self.data = data
         self.directory = directory
-        self._records: dict[tuple[Any, ...], tuple[np.ndarray, np.ndarray]] = {}
+        self._records = {} if records is None else records  # record files read so far, shared by variants
         self.base = self._read_records(_validate(data, source), source)
         sweep = dict(self.base.sweep)
         zipped = _zipped(sweep.pop("zip", []), sweep, source)
@@ -943,7 +944,7 @@ class Study:
         data = copy.deepcopy(self.data)
         for key, value in values.items():
             set_path(data, key, value)
-        return Study(self.source, self.text, data, self.directory)
+        return Study(self.source, self.text, data, self.directory, self._records)
 
     def _read_records(self, scenario: Scenario, source: str) -> Scenario:
         """Read the files of record loads (paths relative to the scenario file), once each."""
