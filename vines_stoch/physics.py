@@ -12,7 +12,10 @@ from numba import njit
 #: Options of every compiled loop: cached on disk, GIL released, IEEE division (no Python
 #: ZeroDivisionError checks in hot loops).
 KERNEL = dict(cache=True, nogil=True, error_model="numpy")
-#: Options of the small formula functions the loops inline.
+#: Options of the small formula functions the loops inline.  An inlined function that takes
+#: arrays, called inside a branch the compiler cannot remove, costs atomic reference counting
+#: of those arrays each time the enclosing loop passes it: the step loops call such functions
+#: unconditionally or under compile-time flags, and keep rare work out of the step loop.
 INLINE = dict(KERNEL, inline="always")
 
 

@@ -40,14 +40,13 @@ ROOT_ITERATIONS = 100
 
 
 @njit(**INLINE)
-def kick(v, s, dws, load, ag, force, mass, stuck, impact_body, release, vn):
+def kick(v, s, dws, load, ag, force, mass, vn):
     """Velocities after a kick of length ``s`` into ``vn``: forces, the load ``load`` and
-    Wiener increment ``dws`` on the primary, ground acceleration ``ag`` on every body."""
+    Wiener increment ``dws`` on the primary, ground acceleration ``ag`` on every body (the
+    caller makes stuck absorbers move with the primary)."""
     vn[0] = v[0] + ((force[0] + load) * s + dws) / mass[0] - ag * s
     for b in range(1, mass.shape[0]):
         vn[b] = v[b] + force[b] * s / mass[b] - ag * s
-    if impact_body.shape[0] > 0:
-        stick_together(mass, vn, stuck, impact_body, release)
 
 
 @njit(**INLINE)
@@ -74,7 +73,8 @@ def crossing(x, v, length, total, z, load, ag, force, mass, stuck, impact_body, 
     ``wall`` (side ``side``), by the Illinois method on the bracket ``[0, length]``."""
     lo, hi = 0.0, length
     g_lo = min(side * (x[j] - x[0]) - wall, 0.0)  # on the wall counts as inside
-    kick(v, 0.5 * length, total, load, ag, force, mass, stuck, impact_body, False, vt)
+    kick(v, 0.5 * length, total, load, ag, force, mass, vt)
+    stick_together(mass, vt, stuck, impact_body, False)
     g_hi = side * (x[j] - x[0] + length * (vt[j] - vt[0])) - wall
     s = hi
     last = 0
@@ -82,7 +82,8 @@ def crossing(x, v, length, total, z, load, ag, force, mass, stuck, impact_body, 
         s = hi - g_hi * (hi - lo) / (g_hi - g_lo)
         if not (lo < s < hi):
             s = 0.5 * (lo + hi)
-        kick(v, 0.5 * s, bridge(total, length, s, z), load, ag, force, mass, stuck, impact_body, False, vt)
+        kick(v, 0.5 * s, bridge(total, length, s, z), load, ag, force, mass, vt)
+        stick_together(mass, vt, stuck, impact_body, False)
         g = side * (x[j] - x[0] + s * (vt[j] - vt[0])) - wall
         if g > 0.0:
             hi, g_hi = s, g
@@ -136,122 +137,140 @@ def sie_kernel(has_noise: bool, has_impact: bool, filtered: bool, replay: bool =
         # accumulators in registers; written to ``out`` once at the end
         work = d_primary = d_absorber = e_integral = x2_integral = e1_max = x1_max = 0.0
         loss_sum = n_left = n_right = 0.0
-        for i in range(n_steps):
-            inside = i >= i0
+        i = 0
+        inside = i0 == 0
+        while i < n_steps:
+            # rare work between blocks of steps, out of the step loop: the window opening,
+            # the divergence check, history rows
             if i == i0:
+                inside = True
                 work = stored_energy(x, v, mass, k1, k_lin, k_cubic, rest, hertz_body, hertz_k, hertz_walls)
                 e1_max = e1_prev
                 x1_max = abs(x[0])
             if i % CHECK_EVERY == 0 and diverged(x):
                 out[STATUS] = STATUS_DIVERGED
                 break
-            t_step = i * dt
-            tm = t_step + 0.5 * dt
-            if filtered:
-                for r in range(nz):
-                    z[r] = zn[r]
-                advance_filters(z, zn, t_step, dt, phi, chol, envelopes, gen, draws)
-            load, ag = load_next, ag_next
-            if jumps:
-                load, ag = excitation(t_step, tm, 0.0, forces, series_t, series_v, series_ptr, series_ground, filtered, c_force, c_ground, z, zn)
-            load_next, ag_next = excitation(t_step + dt, tm, 1.0, forces, series_t, series_v, series_ptr, series_ground, filtered, c_force, c_ground, z, zn)
-            dw = 0.0
-            if has_noise:
-                dw = noise_scale * (normals[i] if replay else gen.standard_normal())
-            left = dt
-            t = t_step
-            for event in range(EVENTS):
-                if event > 0 and left <= 0.0:
-                    break
-                attachment_forces(x, v, k1, c1, k_lin, k_cubic, c_abs, rest, force)
-                kick(v, 0.5 * left, dw, load, ag, force, mass, stuck, impact_body, True, vn)
-                s = left
-                hit, side = -1, 0
-                zb = 0.0
-                if has_impact and event < MAX_EVENTS:
+            end = min(n_steps, (i // CHECK_EVERY + 1) * CHECK_EVERY)
+            if i < i0:
+                end = min(end, i0)
+            if h_next > 0:
+                end = min(end, h_next)
+            for i in range(i, end):
+                t_step = i * dt
+                tm = t_step + 0.5 * dt
+                if filtered:
+                    for r in range(nz):
+                        z[r] = zn[r]
+                    advance_filters(z, zn, t_step, dt, phi, chol, envelopes, gen, draws)
+                load, ag = load_next, ag_next
+                if jumps:
+                    load, ag = excitation(t_step, tm, 0.0, forces, series_t, series_v, series_ptr, series_ground, filtered, c_force, c_ground, z, zn)
+                load_next, ag_next = excitation(t_step + dt, tm, 1.0, forces, series_t, series_v, series_ptr, series_ground, filtered, c_force, c_ground, z, zn)
+                dw = 0.0
+                if has_noise:
+                    dw = noise_scale * (normals[i] if replay else gen.standard_normal())
+                left = dt
+                t = t_step
+                for event in range(EVENTS):
+                    if event > 0 and left <= 0.0:
+                        break
+                    attachment_forces(x, v, k1, c1, k_lin, k_cubic, c_abs, rest, force)
+                    kick(v, 0.5 * left, dw, load, ag, force, mass, vn)
+                    if has_impact:
+                        stick_together(mass, vn, stuck, impact_body, True)
+                    s = left
+                    hit, side = -1, 0
+                    zb = 0.0
+                    if has_impact and event < MAX_EVENTS:
+                        for q in range(ni):
+                            j = impact_body[q] + 1
+                            u_end = x[j] - x[0] + left * (vn[j] - vn[0])
+                            if stuck[q] == 0 and abs(u_end) > clearance[q]:
+                                if has_noise and hit < 0:  # one bridge draw per split step
+                                    zb = sigma * gen.standard_normal()
+                                sq = 1 if u_end > 0.0 else -1
+                                sc = crossing(x, v, left, dw, zb, load, ag, force, mass, stuck, impact_body,
+                                              j, sq, clearance[q], vt)
+                                if hit < 0 or sc < s:
+                                    hit, side, s = q, sq, sc
+                        if hit >= 0:
+                            kick(v, 0.5 * s, bridge(dw, left, s, zb), load, ag, force, mass, vn)
+                            stick_together(mass, vn, stuck, impact_body, False)
+                    dws = dw
+                    if has_impact:  # the increment of the sub-step before an impact
+                        dws = bridge(dw, left, s, zb)
+                    if inside:
+                        v_mid = 0.5 * (v[0] + vn[0])
+                        work += (0.5 * load * s + dws) * v_mid - (0.5 * ag * s * momentum(mass, v, vn) if ag != 0.0 else 0.0)
+                        d_primary += c1 * v[0] * 0.5 * s * v_mid
+                        for a in range(nb - 1):
+                            w = v[a + 1] - v[0]
+                            d_absorber += c_abs[a] * w * 0.5 * s * 0.5 * (w + vn[a + 1] - vn[0])
+                    for b in range(nb):
+                        x[b] += s * vn[b]
+                        v[b] = vn[b]
+                    # closing half kick with the forces at the new positions
+                    load_end, ag_end = load_next, ag_next
+                    if hit >= 0:
+                        load_end, ag_end = excitation(t + s, tm, (t + s - t_step) / dt, forces, series_t, series_v, series_ptr, series_ground,
+                                                      filtered, c_force, c_ground, z, zn)
+                    attachment_forces(x, v, k1, c1, k_lin, k_cubic, c_abs, rest, force)
+                    kick(v, 0.5 * s, 0.0, load_end, ag_end, force, mass, vn)
+                    if has_impact:
+                        stick_together(mass, vn, stuck, impact_body, False)
+                    if inside:
+                        v_mid = 0.5 * (v[0] + vn[0])
+                        work += 0.5 * load_end * s * v_mid - (0.5 * ag_end * s * momentum(mass, v, vn) if ag_end != 0.0 else 0.0)
+                        d_primary += c1 * v[0] * 0.5 * s * v_mid
+                        for a in range(nb - 1):
+                            w = v[a + 1] - v[0]
+                            d_absorber += c_abs[a] * w * 0.5 * s * 0.5 * (w + vn[a + 1] - vn[0])
+                    for b in range(nb):
+                        v[b] = vn[b]
+                    if hit < 0:
+                        break
+                    # the impact, at t + s; the rest of the step keeps the rest of the increment
+                    j = impact_body[hit] + 1
+                    x[j] = x[0] + side * clearance[hit]
+                    t += s
+                    left -= s
+                    dw -= dws
+                    load, ag = load_end, ag_end
+                    gain = (force[j] / mass[j] - (force[0] + load) / m0) * dt
+                    # the last impact a step may resolve ends a chatter sequence: inelastic collapse
+                    plastic = sticks(side, v[j] - v[0], gain) or event == MAX_EVENTS - 1
+                    r = 0.0 if plastic else restitution[hit]
+                    v[0], v[j], loss = restitution_impact(m0, mass[j], v[0], v[j], r)
+                    for q in range(ni):  # the primary's velocity jumped: re-examine every contact
+                        stuck[q] = 0
+                    if plastic:
+                        v[j] = v[0]
+                        stuck[hit] = side
+                    if inside:
+                        loss_sum += loss
+                        if side < 0:
+                            n_left += 1.0
+                        else:
+                            n_right += 1.0
+                    if event == MAX_EVENTS - 1:
+                        out[CAPPED] += 1
+                if has_impact:
                     for q in range(ni):
                         j = impact_body[q] + 1
-                        u_end = x[j] - x[0] + left * (vn[j] - vn[0])
-                        if stuck[q] == 0 and abs(u_end) > clearance[q]:
-                            if has_noise and hit < 0:  # one bridge draw per split step
-                                zb = sigma * gen.standard_normal()
-                            sq = 1 if u_end > 0.0 else -1
-                            sc = crossing(x, v, left, dw, zb, load, ag, force, mass, stuck, impact_body,
-                                          j, sq, clearance[q], vt)
-                            if hit < 0 or sc < s:
-                                hit, side, s = q, sq, sc
-                    if hit >= 0:
-                        kick(v, 0.5 * s, bridge(dw, left, s, zb), load, ag, force, mass, stuck, impact_body, False, vn)
-                dws = bridge(dw, left, s, zb)
+                        x[j] = x[0] + min(max(x[j] - x[0], -clearance[q]), clearance[q])
+                    pin_to_walls(x, stuck, impact_body, clearance)
+                e1 = primary_energy(m0, k1, x[0], v[0])
+                x2 = x[0] * x[0]
                 if inside:
-                    v_mid = 0.5 * (v[0] + vn[0])
-                    work += (0.5 * load * s + dws) * v_mid - (0.5 * ag * s * momentum(mass, v, vn) if ag != 0.0 else 0.0)
-                    d_primary += c1 * v[0] * 0.5 * s * v_mid
-                    for a in range(nb - 1):
-                        w = v[a + 1] - v[0]
-                        d_absorber += c_abs[a] * w * 0.5 * s * 0.5 * (w + vn[a + 1] - vn[0])
-                for b in range(nb):
-                    x[b] += s * vn[b]
-                    v[b] = vn[b]
-                # closing half kick with the forces at the new positions
-                load_end, ag_end = load_next, ag_next
-                if hit >= 0:
-                    load_end, ag_end = excitation(t + s, tm, (t + s - t_step) / dt, forces, series_t, series_v, series_ptr, series_ground,
-                                                  filtered, c_force, c_ground, z, zn)
-                attachment_forces(x, v, k1, c1, k_lin, k_cubic, c_abs, rest, force)
-                kick(v, 0.5 * s, 0.0, load_end, ag_end, force, mass, stuck, impact_body, False, vn)
-                if inside:
-                    v_mid = 0.5 * (v[0] + vn[0])
-                    work += 0.5 * load_end * s * v_mid - (0.5 * ag_end * s * momentum(mass, v, vn) if ag_end != 0.0 else 0.0)
-                    d_primary += c1 * v[0] * 0.5 * s * v_mid
-                    for a in range(nb - 1):
-                        w = v[a + 1] - v[0]
-                        d_absorber += c_abs[a] * w * 0.5 * s * 0.5 * (w + vn[a + 1] - vn[0])
-                for b in range(nb):
-                    v[b] = vn[b]
-                if hit < 0:
-                    break
-                # the impact, at t + s; the rest of the step keeps the rest of the increment
-                j = impact_body[hit] + 1
-                x[j] = x[0] + side * clearance[hit]
-                t += s
-                left -= s
-                dw -= dws
-                load, ag = load_end, ag_end
-                gain = (force[j] / mass[j] - (force[0] + load) / m0) * dt
-                # the last impact a step may resolve ends a chatter sequence: inelastic collapse
-                plastic = sticks(side, v[j] - v[0], gain) or event == MAX_EVENTS - 1
-                r = 0.0 if plastic else restitution[hit]
-                v[0], v[j], loss = restitution_impact(m0, mass[j], v[0], v[j], r)
-                for q in range(ni):  # the primary's velocity jumped: re-examine every contact
-                    stuck[q] = 0
-                if plastic:
-                    v[j] = v[0]
-                    stuck[hit] = side
-                if inside:
-                    loss_sum += loss
-                    if side < 0:
-                        n_left += 1.0
-                    else:
-                        n_right += 1.0
-                if event == MAX_EVENTS - 1:
-                    out[CAPPED] += 1
-            if has_impact:
-                for q in range(ni):
-                    j = impact_body[q] + 1
-                    x[j] = x[0] + min(max(x[j] - x[0], -clearance[q]), clearance[q])
-                pin_to_walls(x, stuck, impact_body, clearance)
-            e1 = primary_energy(m0, k1, x[0], v[0])
-            x2 = x[0] * x[0]
-            if inside:
-                e_integral += 0.5 * (e1 + e1_prev) * dt
-                x2_integral += 0.5 * (x2 + x2_prev) * dt
-                e1_max = max(e1_max, e1)
-                x1_max = max(x1_max, abs(x[0]))
-            e1_prev = e1
-            x2_prev = x2
-            if i + 1 == h_next:
-                h_next = record_history(history, stride, h_next, x[0], e1)
+                    e_integral += 0.5 * (e1 + e1_prev) * dt
+                    x2_integral += 0.5 * (x2 + x2_prev) * dt
+                    e1_max = max(e1_max, e1)
+                    x1_max = max(x1_max, abs(x[0]))
+                e1_prev = e1
+                x2_prev = x2
+            i = end
+            if i == h_next:
+                h_next = record_history(history, stride, h_next, x[0], e1_prev)
         if diverged(x):
             out[STATUS] = STATUS_DIVERGED
         out[INPUT] = work
