@@ -46,10 +46,10 @@ def attachment_forces(x, v, k1, c1, k_lin, k_cubic, c_abs, rest, force):
 
 
 @njit(**INLINE)
-def contact_forces(x, hertz_body, hertz_k, hertz_walls, force):
+def contact_forces(x, hertz_body, hertz_k, hertz_walls, force, active=True):
     """Add the Hertz contact forces (MODEL.md section 2): ``+K_L z_L^1.5 - K_R z_R^1.5`` on
-    each Hertz absorber, the opposite on the primary."""
-    for q in range(hertz_body.shape[0]):
+    each Hertz absorber, the opposite on the primary; nothing unless ``active``."""
+    for q in range(hertz_body.shape[0] if active else 0):
         j = hertz_body[q] + 1
         u = x[j] - x[0]
         f = (hertz_force(hertz_walls[q, 0] - u, hertz_k[q, 0])
@@ -81,37 +81,36 @@ def stored_energy(x, v, mass, k1, k_lin, k_cubic, rest, hertz_body, hertz_k, her
 
 
 @njit(**INLINE)
-def common_value(mass, values, stuck, impact_body):
-    """Mass-weighted mean of ``values`` over the primary and the stuck absorbers."""
-    total_mass = mass[0]
-    total = mass[0] * values[0]
-    for q in range(stuck.shape[0]):
-        if stuck[q] != 0:
-            j = impact_body[q] + 1
-            total_mass += mass[j]
-            total += mass[j] * values[j]
-    return total / total_mass
-
-
-@njit(**INLINE)
-def stick_together(mass, values, stuck, impact_body, release):
+def stick_together(mass, values, stuck, impact_body, release, active=True):
     """Primary and absorbers stuck to a cavity wall move as one body (MODEL.md section 2).
 
     ``values`` holds velocities (after a kick) or accelerations; stuck bodies get the
     mass-weighted common value.  With ``release``, an absorber the wall would have to pull
-    (constraint of the wrong sign) is released first.
+    (constraint of the wrong sign) is released first.  Nothing happens unless ``active``
+    (a flag rather than a branch around the call: see ``physics.INLINE``).
     """
-    common = common_value(mass, values, stuck, impact_body)
-    if release:
+    passes = (2 if release else 1) if active else 0
+    common = values[0]
+    for attempt in range(passes):
+        # mass-weighted mean over the primary and the stuck absorbers
+        total_mass = mass[0]
+        total = mass[0] * values[0]
         for q in range(stuck.shape[0]):
-            # wall force on the absorber ~ mass * (common - free value); a wall only pushes
-            if stuck[q] * (common - values[impact_body[q] + 1]) > 0.0:
-                stuck[q] = 0
-        common = common_value(mass, values, stuck, impact_body)
-    values[0] = common
-    for q in range(stuck.shape[0]):
-        if stuck[q] != 0:
-            values[impact_body[q] + 1] = common
+            if stuck[q] != 0:
+                j = impact_body[q] + 1
+                total_mass += mass[j]
+                total += mass[j] * values[j]
+        common = total / total_mass
+        if attempt + 1 < passes:
+            for q in range(stuck.shape[0]):
+                # wall force on the absorber ~ mass * (common - free value); a wall only pushes
+                if stuck[q] * (common - values[impact_body[q] + 1]) > 0.0:
+                    stuck[q] = 0
+    if passes > 0:
+        values[0] = common
+        for q in range(stuck.shape[0]):
+            if stuck[q] != 0:
+                values[impact_body[q] + 1] = common
 
 
 @njit(**INLINE)

@@ -42,20 +42,20 @@ NONE, IMPACT, ONSET, EXIT = 0, 1, 2, 3
 
 
 @njit(**INLINE)
-def accelerations(x, v, t, tm, p, stuck, release, acc, sticking, contact):
+def accelerations(x, v, t, tm, mass, k1, c1, k_lin, k_cubic, c_abs, rest, forces, series_t, series_v,
+                  series_ptr, series_ground, impact_body, hertz_body, hertz_k, hertz_walls, stuck, release,
+                  acc, sticking, contact):
     """Accelerations of all bodies into ``acc``; returns the rates of the energy integrals
     (load power, primary damping power, absorber damping power, ``E1``, ``x1^2``).
 
-    ``p`` is the scene tuple ``(mass, k1, c1, k_lin, k_cubic, c_abs, rest, ex,
-    impact_body, hertz_body, hertz_k, hertz_walls)`` (``ex``: kernels/loads.py, piecewise
-    loads on the piece of ``tm``); ``sticking`` applies the contact constraint of stuck impact
-    absorbers, ``contact`` the Hertz contact forces.
+    The scene's arrays come one by one (``forces .. series_ground``: the loads of
+    kernels/loads.py, piecewise loads on the piece of ``tm``): unpacking a tuple of arrays
+    costs reference counting at every call.  ``sticking`` applies the contact constraint of
+    stuck impact absorbers, ``contact`` the Hertz contact forces (flags, not branches around
+    the calls: see ``physics.INLINE``).
     """
-    mass, k1, c1, k_lin, k_cubic, c_abs, rest, ex, impact_body, hertz_body, hertz_k, hertz_walls = p
     attachment_forces(x, v, k1, c1, k_lin, k_cubic, c_abs, rest, acc)
-    if contact:
-        contact_forces(x, hertz_body, hertz_k, hertz_walls, acc)
-    forces, series_t, series_v, series_ptr, series_ground = ex
+    contact_forces(x, hertz_body, hertz_k, hertz_walls, acc, contact)
     load, ag = applied(t, tm, forces, series_t, series_v, series_ptr, series_ground)
     acc[0] += load
     power = load * v[0]
@@ -64,8 +64,7 @@ def accelerations(x, v, t, tm, p, stuck, release, acc, sticking, contact):
     if ag != 0.0:
         for b in range(mass.shape[0]):
             power -= ag * mass[b] * v[b]
-    if sticking:
-        stick_together(mass, acc, stuck, impact_body, release)
+    stick_together(mass, acc, stuck, impact_body, release, sticking)
     absorber_power = 0.0
     for a in range(c_abs.shape[0]):
         w = v[a + 1] - v[0]
@@ -75,33 +74,47 @@ def accelerations(x, v, t, tm, p, stuck, release, acc, sticking, contact):
 
 
 @njit(**KERNEL)
-def rk4_step(x, v, t, h, xo, vo, work, p, stuck, sticking, contact):
+def rk4_step(x, v, t, h, xo, vo, acc, xs, vs, mass, k1, c1, k_lin, k_cubic, c_abs, rest, forces, series_t,
+             series_v, series_ptr, series_ground, impact_body, hertz_body, hertz_k, hertz_walls, stuck,
+             sticking, contact):
     """One RK4 step of size ``h`` from ``(x, v)`` into ``(xo, vo)``; returns the increments
-    of the five energy integrals.  ``work`` holds eight scratch arrays."""
-    a1, a2, a3, a4, xs, v2, v3, v4 = work
+    of the five energy integrals.  ``acc``, ``xs``, ``vs`` are scratch (the stage's
+    accelerations and state); ``xo``, ``vo`` gather the weighted stage slopes."""
     nb = x.shape[0]
     tm = t + 0.5 * h
-    r1 = accelerations(x, v, t, tm, p, stuck, False, a1, sticking, contact)
+    q0 = q1 = q2 = q3 = q4 = 0.0
+    for stage in range(4):
+        if stage == 0:
+            for b in range(nb):
+                xs[b] = x[b]
+                vs[b] = v[b]
+        ts = t if stage == 0 else (t + h if stage == 3 else tm)
+        r = accelerations(xs, vs, ts, tm, mass, k1, c1, k_lin, k_cubic, c_abs, rest, forces, series_t,
+                          series_v, series_ptr, series_ground, impact_body, hertz_body, hertz_k, hertz_walls,
+                          stuck, False, acc, sticking, contact)
+        weight = 1.0 if stage == 0 or stage == 3 else 2.0
+        c = 0.5 * h if stage < 2 else h
+        for b in range(nb):
+            if stage == 0:
+                xo[b] = vs[b]
+                vo[b] = acc[b]
+            else:
+                xo[b] += weight * vs[b]
+                vo[b] += weight * acc[b]
+            xs[b] = x[b] + c * vs[b]
+            vs[b] = v[b] + c * acc[b]
+        if stage == 0:
+            q0, q1, q2, q3, q4 = r
+        else:
+            q0 += weight * r[0]
+            q1 += weight * r[1]
+            q2 += weight * r[2]
+            q3 += weight * r[3]
+            q4 += weight * r[4]
     for b in range(nb):
-        xs[b] = x[b] + 0.5 * h * v[b]
-        v2[b] = v[b] + 0.5 * h * a1[b]
-    r2 = accelerations(xs, v2, tm, tm, p, stuck, False, a2, sticking, contact)
-    for b in range(nb):
-        xs[b] = x[b] + 0.5 * h * v2[b]
-        v3[b] = v[b] + 0.5 * h * a2[b]
-    r3 = accelerations(xs, v3, tm, tm, p, stuck, False, a3, sticking, contact)
-    for b in range(nb):
-        xs[b] = x[b] + h * v3[b]
-        v4[b] = v[b] + h * a3[b]
-    r4 = accelerations(xs, v4, t + h, tm, p, stuck, False, a4, sticking, contact)
-    for b in range(nb):
-        xo[b] = x[b] + h / 6.0 * (v[b] + 2.0 * v2[b] + 2.0 * v3[b] + v4[b])
-        vo[b] = v[b] + h / 6.0 * (a1[b] + 2.0 * a2[b] + 2.0 * a3[b] + a4[b])
-    return (h / 6.0 * (r1[0] + 2.0 * r2[0] + 2.0 * r3[0] + r4[0]),
-            h / 6.0 * (r1[1] + 2.0 * r2[1] + 2.0 * r3[1] + r4[1]),
-            h / 6.0 * (r1[2] + 2.0 * r2[2] + 2.0 * r3[2] + r4[2]),
-            h / 6.0 * (r1[3] + 2.0 * r2[3] + 2.0 * r3[3] + r4[3]),
-            h / 6.0 * (r1[4] + 2.0 * r2[4] + 2.0 * r3[4] + r4[4]))
+        xo[b] = x[b] + h / 6.0 * xo[b]
+        vo[b] = v[b] + h / 6.0 * vo[b]
+    return h / 6.0 * q0, h / 6.0 * q1, h / 6.0 * q2, h / 6.0 * q3, h / 6.0 * q4
 
 
 @njit(**KERNEL)
@@ -184,16 +197,15 @@ def rk4_kernel(has_impact: bool, has_hertz: bool, sampling: bool):
                hertz_body, hertz_k, hertz_walls, ex, fl, sigma, x, v, dt, n_steps, i0,
                period, sample_from, gen, normals, out, samples, history, stride):
         nb = mass.shape[0]
-        p = (mass, k1, c1, k_lin, k_cubic, c_abs, rest, ex, impact_body, hertz_body,
-             hertz_k, hertz_walls)
+        forces, series_t, series_v, series_ptr, series_ground = ex
         breaks = has_breaks(ex)  # sub-steps end at the loads' kinks and jumps
         xn = np.zeros(nb)
         vn = np.zeros(nb)
         xp = x.copy()
         vp = v.copy()
         acc = np.zeros(nb)
-        work = (np.zeros(nb), np.zeros(nb), np.zeros(nb), np.zeros(nb),
-                np.zeros(nb), np.zeros(nb), np.zeros(nb), np.zeros(nb))
+        xs = np.zeros(nb)
+        vs = np.zeros(nb)
         stuck = np.zeros(impact_body.shape[0], np.int64)
         touching = np.zeros(hertz_body.shape[0], np.int64)
         m0 = mass[0]
@@ -228,7 +240,7 @@ def rk4_kernel(has_impact: bool, has_hertz: bool, sampling: bool):
                 if capped:  # take the rest of the step at once, keep absorbers in their cavity
                     h = left
                     out[CAPPED] += 1
-                inc = rk4_step(x, v, t, h, xn, vn, work, p, stuck, sticking, contact)
+                inc = rk4_step(x, v, t, h, xn, vn, acc, xs, vs, mass, k1, c1, k_lin, k_cubic, c_abs, rest, forces, series_t, series_v, series_ptr, series_ground, impact_body, hertz_body, hertz_k, hertz_walls, stuck, sticking, contact)
                 kind, q, side, j, sign, wall, tau = NONE, -1, 0, 0, 0, 0.0, h
                 if (has_impact or has_hertz) and not capped:
                     kind, q, side, tau = next_event(x, xn, h, impact_body, clearance, stuck,
@@ -236,7 +248,7 @@ def rk4_kernel(has_impact: bool, has_hertz: bool, sampling: bool):
                 if kind != NONE:
                     j, sign, wall = event_geometry(kind, q, side, impact_body, clearance, hertz_body, hertz_walls)
                     for _ in range(NEWTON_ITERATIONS):
-                        rk4_step(x, v, t, tau, xn, vn, work, p, stuck, sticking, contact)
+                        rk4_step(x, v, t, tau, xn, vn, acc, xs, vs, mass, k1, c1, k_lin, k_cubic, c_abs, rest, forces, series_t, series_v, series_ptr, series_ground, impact_body, hertz_body, hertz_k, hertz_walls, stuck, sticking, contact)
                         gap = sign * (xn[j] - xn[0] - wall)
                         approach = sign * (vn[j] - vn[0])
                         if approach <= 0.0:
@@ -245,7 +257,7 @@ def rk4_kernel(has_impact: bool, has_hertz: bool, sampling: bool):
                         tau = min(max(tau - correction, 0.0), h)
                         if abs(correction) <= 1e-15 * dt:
                             break
-                    inc = rk4_step(x, v, t, tau, xn, vn, work, p, stuck, sticking, contact)
+                    inc = rk4_step(x, v, t, tau, xn, vn, acc, xs, vs, mass, k1, c1, k_lin, k_cubic, c_abs, rest, forces, series_t, series_v, series_ptr, series_ground, impact_body, hertz_body, hertz_k, hertz_walls, stuck, sticking, contact)
                     h = tau
                 done = kind == NONE and h == left
                 for b in range(nb):
@@ -275,7 +287,7 @@ def rk4_kernel(has_impact: bool, has_hertz: bool, sampling: bool):
                 if kind == IMPACT:
                     n_impacts += 1
                     x[j] = x[0] + side * clearance[q]
-                    accelerations(x, v, t, t, p, stuck, False, acc, True, contact)
+                    accelerations(x, v, t, t, mass, k1, c1, k_lin, k_cubic, c_abs, rest, forces, series_t, series_v, series_ptr, series_ground, impact_body, hertz_body, hertz_k, hertz_walls, stuck, False, acc, True, contact)
                     # the last impact a step may resolve ends a chatter sequence: inelastic collapse
                     plastic = sticks(side, v[j] - v[0], (acc[j] - acc[0]) * dt) or n_impacts >= MAX_EVENTS
                     r = 0.0 if plastic else restitution[q]
@@ -298,7 +310,7 @@ def rk4_kernel(has_impact: bool, has_hertz: bool, sampling: bool):
             if has_impact and stuck.any():
                 pin_to_walls(x, stuck, impact_body, clearance)
                 # release contacts the wall would have to pull (checked at step ends)
-                accelerations(x, v, t, t, p, stuck, True, acc, True, False)
+                accelerations(x, v, t, t, mass, k1, c1, k_lin, k_cubic, c_abs, rest, forces, series_t, series_v, series_ptr, series_ground, impact_body, hertz_body, hertz_k, hertz_walls, stuck, True, acc, True, False)
             if sampling:
                 next_sample = record_sample(samples, next_sample, sample_from, period, i * dt, dt,
                                             xp, vp, x, v, out[IMPACTS_LEFT], out[IMPACTS_RIGHT])
