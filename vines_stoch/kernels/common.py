@@ -167,6 +167,20 @@ def record_sample(samples, k, sample_from, period, t0, dt, xp, vp, x, v, left, r
 
 
 @njit(**INLINE)
+def block_end(i: int, n_steps: int, i0: int, h_next: int) -> int:
+    """End of the block of steps from ``i`` that the step loops run without interruption: up
+    to the next divergence check, the opening of the metrics window (``i0``) or the next
+    history row (``h_next``, ``-1``: none).  The rare work in between stays out of the step
+    loop (see ``physics.INLINE``)."""
+    end = min(n_steps, (i // CHECK_EVERY + 1) * CHECK_EVERY)
+    if i < i0:
+        end = min(end, i0)
+    if h_next > 0:
+        end = min(end, h_next)
+    return end
+
+
+@njit(**INLINE)
 def start_history(history, stride, x1, e1) -> int:
     """Write the first history row (``t = 0``) when a history is kept; returns the step after
     which the next row is due (``-1``: never)."""

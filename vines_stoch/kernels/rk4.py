@@ -26,7 +26,7 @@ from ..physics import KERNEL, primary_energy, restitution_impact
 from .common import (ABSORBER_DISS, CAPPED, CHECK_EVERY, CONTACT_TIME, E1_MAX, ENERGY_INT,
                      FINAL_ENERGY, IMPACT_LOSS, IMPACTS, IMPACTS_LEFT, IMPACTS_RIGHT, INLINE,
                      INPUT, MAX_EVENTS, PEAK_FORCE, PRIMARY_DISS, STATUS, STATUS_DIVERGED, X1_MAX, X1_SQ_INT,
-                     attachment_forces, contact_force, contact_forces, diverged, pin_to_walls,
+                     attachment_forces, block_end, contact_force, contact_forces, diverged, pin_to_walls,
                      record_history, record_sample, start_history, stick_together, sticks,
                      stored_energy)
 from .loads import applied, has_breaks, next_break
@@ -211,110 +211,116 @@ def rk4_kernel(has_impact: bool, has_hertz: bool, sampling: bool):
         m0 = mass[0]
         next_sample = 0
         h_next = start_history(history, stride, x[0], primary_energy(m0, k1, x[0], v[0]))
-        for i in range(n_steps):
-            inside = i >= i0
+        i = 0
+        inside = i0 == 0
+        while i < n_steps:
+            # rare work between blocks of steps (see ``block_end``)
             if i == i0:
+                inside = True
                 out[INPUT] = stored_energy(x, v, mass, k1, k_lin, k_cubic, rest, hertz_body, hertz_k, hertz_walls)
                 out[E1_MAX] = primary_energy(m0, k1, x[0], v[0])
                 out[X1_MAX] = abs(x[0])
             if i % CHECK_EVERY == 0 and diverged(x):
                 out[STATUS] = STATUS_DIVERGED
                 break
-            if sampling:
-                xp[:] = x
-                vp[:] = v
-            t = i * dt
-            left = dt
-            n_impacts = 0
-            for sub in range(MAX_SUBSTEPS):
-                sticking = has_impact and stuck.any()
-                contact = has_hertz and touching.any()
-                h = left
-                if contact:
-                    h = min(left, contact_step(x, v, mass, hertz_body, hertz_k, hertz_walls, touching))
-                if breaks:
-                    tb = next_break(t + 1e-9 * dt, ex)
-                    if tb < t + h - 1e-9 * dt:
-                        h = tb - t
-                capped = sub == MAX_SUBSTEPS - 1 or n_impacts >= MAX_EVENTS
-                if capped:  # take the rest of the step at once, keep absorbers in their cavity
+            end = block_end(i, n_steps, i0, h_next)
+            for i in range(i, end):
+                if sampling:
+                    xp[:] = x
+                    vp[:] = v
+                t = i * dt
+                left = dt
+                n_impacts = 0
+                for sub in range(MAX_SUBSTEPS):
+                    sticking = has_impact and stuck.any()
+                    contact = has_hertz and touching.any()
                     h = left
-                    out[CAPPED] += 1
-                inc = rk4_step(x, v, t, h, xn, vn, acc, xs, vs, mass, k1, c1, k_lin, k_cubic, c_abs, rest, forces, series_t, series_v, series_ptr, series_ground, impact_body, hertz_body, hertz_k, hertz_walls, stuck, sticking, contact)
-                kind, q, side, j, sign, wall, tau = NONE, -1, 0, 0, 0, 0.0, h
-                if (has_impact or has_hertz) and not capped:
-                    kind, q, side, tau = next_event(x, xn, h, impact_body, clearance, stuck,
-                                                    hertz_body, hertz_walls, touching)
-                if kind != NONE:
-                    j, sign, wall = event_geometry(kind, q, side, impact_body, clearance, hertz_body, hertz_walls)
-                    for _ in range(NEWTON_ITERATIONS):
-                        rk4_step(x, v, t, tau, xn, vn, acc, xs, vs, mass, k1, c1, k_lin, k_cubic, c_abs, rest, forces, series_t, series_v, series_ptr, series_ground, impact_body, hertz_body, hertz_k, hertz_walls, stuck, sticking, contact)
-                        gap = sign * (xn[j] - xn[0] - wall)
-                        approach = sign * (vn[j] - vn[0])
-                        if approach <= 0.0:
-                            break
-                        correction = gap / approach
-                        tau = min(max(tau - correction, 0.0), h)
-                        if abs(correction) <= 1e-15 * dt:
-                            break
-                    inc = rk4_step(x, v, t, tau, xn, vn, acc, xs, vs, mass, k1, c1, k_lin, k_cubic, c_abs, rest, forces, series_t, series_v, series_ptr, series_ground, impact_body, hertz_body, hertz_k, hertz_walls, stuck, sticking, contact)
-                    h = tau
-                done = kind == NONE and h == left
-                for b in range(nb):
-                    x[b] = xn[b]
-                    v[b] = vn[b]
-                if inside:
-                    out[INPUT] += inc[0]
-                    out[PRIMARY_DISS] += inc[1]
-                    out[ABSORBER_DISS] += inc[2]
-                    out[ENERGY_INT] += inc[3]
-                    out[X1_SQ_INT] += inc[4]
-                    out[E1_MAX] = max(out[E1_MAX], primary_energy(m0, k1, x[0], v[0]))
-                    out[X1_MAX] = max(out[X1_MAX], abs(x[0]))
                     if contact:
-                        for c in range(touching.shape[0]):
-                            if touching[c] != 0:
-                                out[CONTACT_TIME] += h
-                                out[PEAK_FORCE] = max(out[PEAK_FORCE], contact_force(x, c, hertz_body, hertz_k, hertz_walls))
-                t += h
-                left -= h
-                if done:
-                    if capped:
-                        for s in range(impact_body.shape[0]):
-                            js = impact_body[s] + 1
-                            x[js] = x[0] + min(max(x[js] - x[0], -clearance[s]), clearance[s])
-                    break
-                if kind == IMPACT:
-                    n_impacts += 1
-                    x[j] = x[0] + side * clearance[q]
-                    accelerations(x, v, t, t, mass, k1, c1, k_lin, k_cubic, c_abs, rest, forces, series_t, series_v, series_ptr, series_ground, impact_body, hertz_body, hertz_k, hertz_walls, stuck, False, acc, True, contact)
-                    # the last impact a step may resolve ends a chatter sequence: inelastic collapse
-                    plastic = sticks(side, v[j] - v[0], (acc[j] - acc[0]) * dt) or n_impacts >= MAX_EVENTS
-                    r = 0.0 if plastic else restitution[q]
-                    v[0], v[j], loss = restitution_impact(m0, mass[j], v[0], v[j], r)
-                    for s in range(stuck.shape[0]):
-                        stuck[s] = 0
-                    if plastic:
-                        v[j] = v[0]
-                        stuck[q] = side
+                        h = min(left, contact_step(x, v, mass, hertz_body, hertz_k, hertz_walls, touching))
+                    if breaks:
+                        tb = next_break(t + 1e-9 * dt, ex)
+                        if tb < t + h - 1e-9 * dt:
+                            h = tb - t
+                    capped = sub == MAX_SUBSTEPS - 1 or n_impacts >= MAX_EVENTS
+                    if capped:  # take the rest of the step at once, keep absorbers in their cavity
+                        h = left
+                        out[CAPPED] += 1
+                    inc = rk4_step(x, v, t, h, xn, vn, acc, xs, vs, mass, k1, c1, k_lin, k_cubic, c_abs, rest, forces, series_t, series_v, series_ptr, series_ground, impact_body, hertz_body, hertz_k, hertz_walls, stuck, sticking, contact)
+                    kind, q, side, j, sign, wall, tau = NONE, -1, 0, 0, 0, 0.0, h
+                    if (has_impact or has_hertz) and not capped:
+                        kind, q, side, tau = next_event(x, xn, h, impact_body, clearance, stuck,
+                                                        hertz_body, hertz_walls, touching)
+                    if kind != NONE:
+                        j, sign, wall = event_geometry(kind, q, side, impact_body, clearance, hertz_body, hertz_walls)
+                        for _ in range(NEWTON_ITERATIONS):
+                            rk4_step(x, v, t, tau, xn, vn, acc, xs, vs, mass, k1, c1, k_lin, k_cubic, c_abs, rest, forces, series_t, series_v, series_ptr, series_ground, impact_body, hertz_body, hertz_k, hertz_walls, stuck, sticking, contact)
+                            gap = sign * (xn[j] - xn[0] - wall)
+                            approach = sign * (vn[j] - vn[0])
+                            if approach <= 0.0:
+                                break
+                            correction = gap / approach
+                            tau = min(max(tau - correction, 0.0), h)
+                            if abs(correction) <= 1e-15 * dt:
+                                break
+                        inc = rk4_step(x, v, t, tau, xn, vn, acc, xs, vs, mass, k1, c1, k_lin, k_cubic, c_abs, rest, forces, series_t, series_v, series_ptr, series_ground, impact_body, hertz_body, hertz_k, hertz_walls, stuck, sticking, contact)
+                        h = tau
+                    done = kind == NONE and h == left
+                    for b in range(nb):
+                        x[b] = xn[b]
+                        v[b] = vn[b]
                     if inside:
-                        out[IMPACT_LOSS] += loss
+                        out[INPUT] += inc[0]
+                        out[PRIMARY_DISS] += inc[1]
+                        out[ABSORBER_DISS] += inc[2]
+                        out[ENERGY_INT] += inc[3]
+                        out[X1_SQ_INT] += inc[4]
                         out[E1_MAX] = max(out[E1_MAX], primary_energy(m0, k1, x[0], v[0]))
-                elif kind == ONSET:
-                    touching[q] = side
-                elif kind == EXIT:
-                    touching[q] = 0
-                if inside and (kind == IMPACT or kind == ONSET):
-                    out[IMPACTS] += 1
-                    out[IMPACTS_LEFT if side < 0 else IMPACTS_RIGHT] += 1
-            if has_impact and stuck.any():
-                pin_to_walls(x, stuck, impact_body, clearance)
-                # release contacts the wall would have to pull (checked at step ends)
-                accelerations(x, v, t, t, mass, k1, c1, k_lin, k_cubic, c_abs, rest, forces, series_t, series_v, series_ptr, series_ground, impact_body, hertz_body, hertz_k, hertz_walls, stuck, True, acc, True, False)
-            if sampling:
-                next_sample = record_sample(samples, next_sample, sample_from, period, i * dt, dt,
-                                            xp, vp, x, v, out[IMPACTS_LEFT], out[IMPACTS_RIGHT])
-            if i + 1 == h_next:
+                        out[X1_MAX] = max(out[X1_MAX], abs(x[0]))
+                        if contact:
+                            for c in range(touching.shape[0]):
+                                if touching[c] != 0:
+                                    out[CONTACT_TIME] += h
+                                    out[PEAK_FORCE] = max(out[PEAK_FORCE], contact_force(x, c, hertz_body, hertz_k, hertz_walls))
+                    t += h
+                    left -= h
+                    if done:
+                        if capped:
+                            for s in range(impact_body.shape[0]):
+                                js = impact_body[s] + 1
+                                x[js] = x[0] + min(max(x[js] - x[0], -clearance[s]), clearance[s])
+                        break
+                    if kind == IMPACT:
+                        n_impacts += 1
+                        x[j] = x[0] + side * clearance[q]
+                        accelerations(x, v, t, t, mass, k1, c1, k_lin, k_cubic, c_abs, rest, forces, series_t, series_v, series_ptr, series_ground, impact_body, hertz_body, hertz_k, hertz_walls, stuck, False, acc, True, contact)
+                        # the last impact a step may resolve ends a chatter sequence: inelastic collapse
+                        plastic = sticks(side, v[j] - v[0], (acc[j] - acc[0]) * dt) or n_impacts >= MAX_EVENTS
+                        r = 0.0 if plastic else restitution[q]
+                        v[0], v[j], loss = restitution_impact(m0, mass[j], v[0], v[j], r)
+                        for s in range(stuck.shape[0]):
+                            stuck[s] = 0
+                        if plastic:
+                            v[j] = v[0]
+                            stuck[q] = side
+                        if inside:
+                            out[IMPACT_LOSS] += loss
+                            out[E1_MAX] = max(out[E1_MAX], primary_energy(m0, k1, x[0], v[0]))
+                    elif kind == ONSET:
+                        touching[q] = side
+                    elif kind == EXIT:
+                        touching[q] = 0
+                    if inside and (kind == IMPACT or kind == ONSET):
+                        out[IMPACTS] += 1
+                        out[IMPACTS_LEFT if side < 0 else IMPACTS_RIGHT] += 1
+                if has_impact and stuck.any():
+                    pin_to_walls(x, stuck, impact_body, clearance)
+                    # release contacts the wall would have to pull (checked at step ends)
+                    accelerations(x, v, t, t, mass, k1, c1, k_lin, k_cubic, c_abs, rest, forces, series_t, series_v, series_ptr, series_ground, impact_body, hertz_body, hertz_k, hertz_walls, stuck, True, acc, True, False)
+                if sampling:
+                    next_sample = record_sample(samples, next_sample, sample_from, period, i * dt, dt,
+                                                xp, vp, x, v, out[IMPACTS_LEFT], out[IMPACTS_RIGHT])
+            i = end
+            if i == h_next:
                 h_next = record_history(history, stride, h_next, x[0], primary_energy(m0, k1, x[0], v[0]))
         if diverged(x):
             out[STATUS] = STATUS_DIVERGED

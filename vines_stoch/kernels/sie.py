@@ -30,7 +30,7 @@ from numba import njit
 from ..physics import KERNEL, primary_energy, restitution_impact
 from .common import (ABSORBER_DISS, CAPPED, CHECK_EVERY, E1_MAX, ENERGY_INT, FINAL_ENERGY,
                      IMPACT_LOSS, IMPACTS, IMPACTS_LEFT, IMPACTS_RIGHT, INLINE, INPUT, MAX_EVENTS,
-                     PRIMARY_DISS, STATUS, STATUS_DIVERGED, X1_MAX, X1_SQ_INT, attachment_forces,
+                     PRIMARY_DISS, STATUS, STATUS_DIVERGED, X1_MAX, X1_SQ_INT, attachment_forces, block_end,
                      diverged, pin_to_walls, record_history, start_history, stick_together, sticks,
                      stored_energy)
 from .loads import advance_filters, excitation, has_breaks
@@ -150,11 +150,7 @@ def sie_kernel(has_noise: bool, has_impact: bool, filtered: bool, replay: bool =
             if i % CHECK_EVERY == 0 and diverged(x):
                 out[STATUS] = STATUS_DIVERGED
                 break
-            end = min(n_steps, (i // CHECK_EVERY + 1) * CHECK_EVERY)
-            if i < i0:
-                end = min(end, i0)
-            if h_next > 0:
-                end = min(end, h_next)
+            end = block_end(i, n_steps, i0, h_next)
             for i in range(i, end):
                 t_step = i * dt
                 tm = t_step + 0.5 * dt
