@@ -59,6 +59,7 @@ intensity = {sigma}
 [simulation]
 duration = {duration}
 dt = {dt}
+scheme = "{scheme}"
 """
 SIGMA = 0.05
 
@@ -117,8 +118,20 @@ def deterministic(impact: bool) -> list[Curve]:
     return [ours, peer]
 
 
-def _noisy_scene(dt: float, duration: float = 20.0):
-    return build_scene(parse_scenario(NOISY.format(sigma=SIGMA, duration=duration, dt=dt)).points[0])
+def _noisy_scene(dt: float, duration: float = 20.0, scheme: str = "euler-maruyama"):
+    return build_scene(parse_scenario(NOISY.format(sigma=SIGMA, duration=duration, dt=dt, scheme=scheme)).points[0])
+
+
+def coarse_increments(normals: np.ndarray, m: int) -> tuple[np.ndarray, np.ndarray]:
+    """Standard normals ``(u1, u2)`` of the steps of ``m`` fine steps of a Brownian path given
+    by one standard normal a fine step: ``dW = sqrt(h) u1`` and the time integral of ``W - W_0``
+    over the step, ``h^1.5 (u1 + u2 / sqrt 3) / 2`` (the SRA scheme's two draws), both exact
+    for the path that is linear between the fine points."""
+    n = normals[: (normals.shape[0] // m) * m].reshape(-1, m)
+    before = np.cumsum(n, axis=1) - n                        # W - W_0 before each fine step, in sqrt(fine dt)
+    u1 = n.sum(axis=1) / math.sqrt(m)
+    integral = (before + 0.5 * n).sum(axis=1) / m ** 1.5     # time integral over h^1.5
+    return u1, math.sqrt(3.0) * (2.0 * integral - u1)
 
 
 def strong(paths: int = 8, fine_dt: float = 2.5e-5, duration: float = 20.0,

@@ -373,7 +373,7 @@ class Simulation(_Model):
 
     duration: Positive
     dt: Positive
-    scheme: Literal["auto", "euler-maruyama", "rk4"] = "auto"
+    scheme: Literal["auto", "euler-maruyama", "rk4", "sra"] = "auto"
     history: History | None = None
     metrics_from: NonNegative = 0.0
 
@@ -562,6 +562,15 @@ class Scenario(_Model):
                 raise _KeyError(f"absorbers.{i}.type", "hertz",
                                 "Hertz contact is solved by the rk4 scheme only: remove noise loads "
                                 "and use scheme = 'auto' or 'rk4'")
+        if self.simulation.scheme == "sra":
+            for i, a in enumerate(self.absorbers):
+                if isinstance(a, (ImpactAbsorber, HertzAbsorber)):
+                    raise _KeyError("simulation.scheme", "sra", f"has no impact or contact events: absorbers.{i} "
+                                    f"is type '{a.type}'; use 'auto', 'euler-maruyama' or 'rk4'")
+            for i, load in enumerate(self.loads):
+                if isinstance(load, _FilteredLoad):
+                    raise _KeyError("simulation.scheme", "sra", f"takes white noise only: loads.{i} is type "
+                                    f"'{load.type}' (filtered noise); use 'auto' or 'euler-maruyama'")
         if self.simulation.scheme == "rk4" and self.has_noise:
             raise _KeyError("simulation.scheme", "rk4", "is deterministic; a scene with noise loads needs 'euler-maruyama' or 'auto'")
         return self
@@ -856,8 +865,9 @@ def _check_values(data: dict[str, Any], key: str, ends: tuple[float, float], whe
 
 
 #: Largest ``omega dt`` at which each scheme is stable on an undamped linear oscillator
-#: (velocity Verlet: 2; classical RK4: 2 sqrt 2).
-STABILITY = {"euler-maruyama": 2.0, "rk4": 2.0 * math.sqrt(2.0)}
+#: (velocity Verlet: 2; classical RK4: 2 sqrt 2; SRA3, whose drift part is the third-order SSP
+#: Runge-Kutta method: sqrt 3).
+STABILITY = {"euler-maruyama": 2.0, "rk4": 2.0 * math.sqrt(2.0), "sra": math.sqrt(3.0)}
 
 
 def _check_stability(scenario: Scenario, source: str) -> None:

@@ -44,7 +44,7 @@ class Scene:
     dt: float
     n_steps: int
     i0: int                   # first step of the metrics window
-    scheme: str               # "rk4" | "euler-maruyama"
+    scheme: str               # "rk4" | "euler-maruyama" | "sra"
     period: float = 0.0       # forcing period of Poincare samples (0: no regime)
     sample_from: float = 0.0  # time of the first Poincare sample
 

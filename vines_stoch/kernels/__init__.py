@@ -25,7 +25,8 @@ def kernel_for(scene, replay: bool = False):
     """The compiled loop for a scene's scheme and structure."""
     if scene.scheme == "rk4":
         return rk4_kernel(scene.has_impact, scene.has_hertz, scene.period > 0)
-    return sie_kernel(scene.sigma > 0.0, scene.has_impact, scene.filters["phi"].shape[0] > 0, replay)
+    return sie_kernel(scene.sigma > 0.0, scene.has_impact, scene.filters["phi"].shape[0] > 0, replay,
+                      scene.scheme == "sra")
 
 
 def sample_buffer(scene) -> np.ndarray:
@@ -49,7 +50,8 @@ def simulate(scene, generator: np.random.Generator | None = None, *, normals: np
              history: np.ndarray | None = None, stride: int = 1) -> np.ndarray:
     """Run one realisation of ``scene``; returns the raw metric vector (see ``SLOTS``).
 
-    ``normals`` replays a given Brownian path (one standard normal per step) instead of
+    ``normals`` replays a given Brownian path (one standard normal per step, two with the
+    ``sra`` scheme: see ``sie_kernel``) instead of
     drawing from ``generator``; ``final`` (shape ``(2, n_bodies)``) receives the final
     positions and velocities; ``samples`` (from ``sample_buffer``) receives the Poincare
     samples of periodic scenes; ``history`` (shape ``(G, 2)``) receives ``x1`` and ``E1`` at
@@ -60,8 +62,9 @@ def simulate(scene, generator: np.random.Generator | None = None, *, normals: np
     if samples is None:
         samples = sample_buffer(scene)
     replay = normals is not None
-    if replay and normals.shape[0] < scene.n_steps:
-        raise ValueError(f"normals: need {scene.n_steps} values, got {normals.shape[0]}")
+    needed = scene.n_steps * (2 if scene.scheme == "sra" else 1)
+    if replay and normals.shape[0] < needed:
+        raise ValueError(f"normals: need {needed} values, got {normals.shape[0]}")
     if replay and scene.filters["phi"].shape[0]:
         raise ValueError("normals: a replayed Brownian path drives white noise only, not filtered loads")
     kernel_for(scene, replay)(

@@ -100,17 +100,37 @@ def crossing(x, v, length, total, z, load, ag, force, mass, stuck, impact_body, 
     return hi
 
 
+@njit(**INLINE)
+def accelerate(force, load, ag, mass, acc):
+    """Accelerations ``acc`` from the attachment forces, the load on the primary and the ground
+    acceleration."""
+    acc[0] = (force[0] + load) / mass[0] - ag
+    for b in range(1, mass.shape[0]):
+        acc[b] = force[b] / mass[b] - ag
+
+
 @lru_cache(maxsize=None)
-def sie_kernel(has_noise: bool, has_impact: bool, filtered: bool, replay: bool = False):
+def sie_kernel(has_noise: bool, has_impact: bool, filtered: bool, replay: bool = False, sra: bool = False):
     """The semi-implicit Euler-Maruyama loop specialised to a scene's structure (white noise,
     impact absorbers, filtered loads).
 
     With ``replay``, the step increments are ``sigma sqrt(dt) normals[i]`` (a given Brownian
     path, for convergence studies) instead of draws from ``gen``.
+
+    With ``sra`` (scenes without impact absorbers and filtered loads), each step is the
+    stochastic Runge-Kutta method SRA3 of Roessler (2010) for additive noise instead: three
+    stages at ``t``, ``t + h`` and ``t + h/2`` (the deterministic part is the third-order
+    strong-stability-preserving Runge-Kutta method), strong order 1.5 and weak order 2 with
+    additive noise.  The step draws ``I1 = dW`` and ``I10`` (the time integral of ``W`` over
+    the step, ``sqrt(h) h / 2 (u1 + u2 / sqrt 3)``); replayed paths give two normals a step.
+    Its energy bookkeeping uses the mean of the step's end velocities, as the kicks do, so the
+    kinetic energy change equals the work of the step's impulses exactly.
     """
 
-    # passes of a step's event loop: one without impact absorbers (nothing to split at)
-    EVENTS = MAX_EVENTS + 1 if has_impact else 1
+    # passes of a step's event loop: one without impact absorbers (nothing to split at), none
+    # with the Runge-Kutta step
+    EVENTS = 0 if sra else (MAX_EVENTS + 1 if has_impact else 1)
+    ROOT3 = np.sqrt(3.0)
 
     @njit(**KERNEL)
     def kernel(mass, k1, c1, k_lin, k_cubic, c_abs, rest, impact_body, clearance, restitution,
@@ -124,6 +144,7 @@ def sie_kernel(has_noise: bool, has_impact: bool, filtered: bool, replay: bool =
         force = np.zeros(nb)
         vn = np.zeros(nb)
         vt = np.zeros(nb)
+        a1, a2, a3, xs, v2, v3 = np.zeros(nb), np.zeros(nb), np.zeros(nb), np.zeros(nb), np.zeros(nb), np.zeros(nb)
         zn = z.copy()
         draws = np.zeros(nz)
         stuck = np.zeros(ni, np.int64)
@@ -163,8 +184,46 @@ def sie_kernel(has_noise: bool, has_impact: bool, filtered: bool, replay: bool =
                     load, ag = excitation(t_step, tm, 0.0, forces, series_t, series_v, series_ptr, series_ground, filtered, c_force, c_ground, z, zn)
                 load_next, ag_next = excitation(t_step + dt, tm, 1.0, forces, series_t, series_v, series_ptr, series_ground, filtered, c_force, c_ground, z, zn)
                 dw = 0.0
-                if has_noise:
+                if has_noise and not sra:
                     dw = noise_scale * (normals[i] if replay else gen.standard_normal())
+                if sra:
+                    dz = 0.0  # sigma I10 / h
+                    if has_noise:
+                        u1 = normals[2 * i] if replay else gen.standard_normal()
+                        u2 = normals[2 * i + 1] if replay else gen.standard_normal()
+                        dw = noise_scale * u1
+                        dz = 0.5 * noise_scale * (u1 + u2 / ROOT3)
+                    load3, ag3 = excitation(t_step + 0.5 * dt, tm, 0.5, forces, series_t, series_v, series_ptr,
+                                            series_ground, filtered, c_force, c_ground, z, zn)
+                    attachment_forces(x, v, k1, c1, k_lin, k_cubic, c_abs, rest, force)
+                    accelerate(force, load, ag, mass, a1)
+                    for b in range(nb):
+                        xs[b] = x[b] + dt * v[b]
+                        v2[b] = v[b] + dt * a1[b]
+                    attachment_forces(xs, v2, k1, c1, k_lin, k_cubic, c_abs, rest, force)
+                    accelerate(force, load_next, ag_next, mass, a2)
+                    for b in range(nb):
+                        xs[b] = x[b] + 0.25 * dt * (v[b] + v2[b])
+                        v3[b] = v[b] + 0.25 * dt * (a1[b] + a2[b])
+                    v3[0] += 1.5 * dz / m0
+                    attachment_forces(xs, v3, k1, c1, k_lin, k_cubic, c_abs, rest, force)
+                    accelerate(force, load3, ag3, mass, a3)
+                    for b in range(nb):
+                        vn[b] = v[b] + dt * (a1[b] / 6.0 + a2[b] / 6.0 + 2.0 / 3.0 * a3[b])
+                    vn[0] += dw / m0
+                    if inside:
+                        v_mid = 0.5 * (v[0] + vn[0])
+                        impulse = dt * (load / 6.0 + load_next / 6.0 + 2.0 / 3.0 * load3) + dw
+                        ground = dt * (ag / 6.0 + ag_next / 6.0 + 2.0 / 3.0 * ag3)
+                        work += impulse * v_mid - (ground * momentum(mass, v, vn) if ground != 0.0 else 0.0)
+                        d_primary += c1 * dt * (v[0] / 6.0 + v2[0] / 6.0 + 2.0 / 3.0 * v3[0]) * v_mid
+                        for a in range(nb - 1):
+                            w = dt * ((v[a + 1] - v[0]) / 6.0 + (v2[a + 1] - v2[0]) / 6.0
+                                      + 2.0 / 3.0 * (v3[a + 1] - v3[0]))
+                            d_absorber += c_abs[a] * w * 0.5 * (v[a + 1] - v[0] + vn[a + 1] - vn[0])
+                    for b in range(nb):
+                        x[b] += dt * (v[b] / 6.0 + v2[b] / 6.0 + 2.0 / 3.0 * v3[b])
+                        v[b] = vn[b]
                 left = dt
                 t = t_step
                 for event in range(EVENTS):
