@@ -136,24 +136,26 @@ def coarse_increments(normals: np.ndarray, m: int) -> tuple[np.ndarray, np.ndarr
 
 def strong(paths: int = 8, fine_dt: float = 2.5e-5, duration: float = 20.0,
            sdeint_paths: int = 4) -> list[Curve]:
-    """Strong error (mean over paths of the state error at ``T``) against the fine-step
-    solution on the same Brownian path, for vines_stoch and sdeint."""
+    """Strong error (mean over paths of the state error at ``T``) against the fine-step SRA3
+    solution on the same Brownian path, for both our schemes and sdeint's."""
     import sdeint
 
-    fine = _noisy_scene(fine_dt, duration)
-    levels = (2e-2, 1e-2, 5e-3, 2.5e-3, 1.25e-3)
-    ours = Curve("vines_stoch kick-drift-kick")
+    fine = _noisy_scene(fine_dt, duration, "sra")
+    levels = (8e-2, 4e-2, 2e-2, 1e-2, 5e-3, 2.5e-3, 1.25e-3)
+    kdk, sra = Curve("vines_stoch kick-drift-kick"), Curve("vines_stoch SRA3")
     euler, sri2 = Curve("sdeint itoEuler"), Curve("sdeint itoSRI2")
     final = np.zeros((2, 2))
-    reference = []
     rng = np.random.default_rng(2026)
     normals = [rng.standard_normal(fine.n_steps) for _ in range(paths)]
-    for n in normals:
-        simulate(fine, normals=n, final=final)
-        reference.append(final.copy())
 
-    def coarse(n: np.ndarray, m: int) -> np.ndarray:
-        return n[: (n.shape[0] // m) * m].reshape(-1, m).sum(axis=1) / math.sqrt(m)
+    def replay(scene, n: np.ndarray, m: int) -> np.ndarray:
+        u1, u2 = coarse_increments(n, m)
+        return np.stack([u1, u2], axis=1).ravel() if scene.scheme == "sra" else u1
+
+    reference = []
+    for n in normals:
+        simulate(fine, normals=replay(fine, n, 1), final=final)
+        reference.append(final.copy())
 
     def f(y, t):
         x1, x2, v1, v2 = y
@@ -168,41 +170,50 @@ def strong(paths: int = 8, fine_dt: float = 2.5e-5, duration: float = 20.0,
 
     for dt in levels:
         m = round(dt / fine_dt)
-        scene = _noisy_scene(dt, duration)
-        simulate(scene, normals=coarse(normals[0], m))
-        errors, seconds = [], 0.0
-        for n, ref in zip(normals, reference):
-            c = coarse(n, m)
-            elapsed, _ = _timed(lambda: simulate(scene, normals=c, final=final))
-            seconds += elapsed
-            errors.append(np.linalg.norm(final - ref))
-        ours.points.append((f"dt = {dt:g}", seconds / paths, float(np.mean(errors))))
-        tspan = np.linspace(0.0, scene.n_steps * dt, scene.n_steps + 1)
+        for curve, scheme in ((kdk, "euler-maruyama"), (sra, "sra")):
+            if scheme == "euler-maruyama" and dt > 2e-2 or scheme == "sra" and dt < 5e-3:
+                continue  # outside the range where the scheme's error is worth plotting
+            scene = _noisy_scene(dt, duration, scheme)
+            simulate(scene, normals=replay(scene, normals[0], m))
+            errors, seconds = [], 0.0
+            for n, ref in zip(normals, reference):
+                c = replay(scene, n, m)
+                elapsed, _ = _timed(lambda: simulate(scene, normals=c, final=final))
+                seconds += elapsed
+                errors.append(np.linalg.norm(final - ref))
+            curve.points.append((f"dt = {dt:g}", seconds / paths, float(np.mean(errors))))
+        if dt > 2e-2:
+            continue
+        n_steps = math.ceil(duration / dt - 1e-9)
+        tspan = np.linspace(0.0, n_steps * dt, n_steps + 1)
         for curve, method in ((euler, sdeint.itoEuler), (sri2, sdeint.itoSRI2)):
             errors, seconds = [], 0.0
             for n, ref in list(zip(normals, reference))[:sdeint_paths]:
-                dw = (coarse(n, m) * math.sqrt(dt)).reshape(-1, 1)
+                dw = (coarse_increments(n, m)[0] * math.sqrt(dt)).reshape(-1, 1)
                 elapsed, y = _timed(lambda: method(f, g, np.zeros(4), tspan, dW=dw))
                 seconds += elapsed
                 errors.append(np.linalg.norm(np.array([y[-1, :2], y[-1, 2:]]) - ref))
             curve.points.append((f"dt = {dt:g}", seconds / sdeint_paths, float(np.mean(errors))))
-    return [ours, euler, sri2]
+    return [kdk, sra, euler, sri2]
 
 
-def weak(paths: int = 1024, duration: float = 1100.0) -> list[tuple[float, float, float, float]]:
+def weak(paths: int = 1024, duration: float = 1100.0) -> list[tuple[str, float, float, float, float]]:
     """Stationary variance of x1 of the linear oscillator, time- and ensemble-averaged over
-    ``[100, T]``, against ``sigma^2 / (2 c k) = 5``: rows ``(dt, estimate, its standard error,
-    seconds per path)``."""
+    ``[100, T]``, against ``sigma^2 / (2 c k) = 5``: rows ``(scheme, dt, estimate, its standard
+    error, seconds per path)`` (the same seeds for every row)."""
     exact = 1.0 / (2 * 0.1 * 1.0)
     rows = []
-    for dt in (0.2, 0.1, 0.05, 0.025):
-        scene = build_scene(parse_scenario(LINEAR.format(duration=duration, dt=dt)).points[0])
-        simulate(scene, np.random.default_rng(0))
-        start = time.perf_counter()
-        values = np.array([simulate(scene, np.random.default_rng(r))[X1_SQ_INT] / (duration - 100.0)
-                           for r in range(paths)])
-        seconds = (time.perf_counter() - start) / paths
-        rows.append((dt, float(values.mean()) - exact, float(values.std(ddof=1) / math.sqrt(paths)), seconds))
+    for scheme in ("euler-maruyama", "sra"):
+        for dt in (0.4, 0.2, 0.1, 0.05):
+            text = LINEAR.format(duration=duration, dt=dt).replace("metrics_from", f'scheme = "{scheme}"\nmetrics_from')
+            scene = build_scene(parse_scenario(text).points[0])
+            simulate(scene, np.random.default_rng(0))
+            start = time.perf_counter()
+            values = np.array([simulate(scene, np.random.default_rng(r))[X1_SQ_INT] / (duration - 100.0)
+                               for r in range(paths)])
+            seconds = (time.perf_counter() - start) / paths
+            rows.append((scheme, dt, float(values.mean()) - exact, float(values.std(ddof=1) / math.sqrt(paths)),
+                         seconds))
     return rows
 
 
@@ -264,8 +275,9 @@ def section(folder: Path) -> str:
     variance = weak()
     plot({"impulse, cubic NES (EDM error)": impulse, "impulse, parallel NES (EDM error)": impact,
           "noise, cubic NES (strong error at T)": noisy}, folder / "work-precision.png")
-    weak_rows = "\n".join(f"| {dt:g} | {bias:+.3f} | {se:.3f} | {100 * bias / 5.0:+.2f} % | {sec * 1e3:.1f} |"
-                          for dt, bias, se, sec in variance)
+    weak_rows = "\n".join(f"| {scheme} | {dt:g} | {bias:+.3f} | {se:.3f} | {100 * bias / 5.0:+.2f} % | {sec * 1e3:.1f} |"
+                          for scheme, dt, bias, se, sec in variance)
+    schemes = "\n".join(f"| {a} | {b} | {r:.1f}x |" for a, b, r in ratio_at_equal_error(noisy[1], noisy[0]))
     return f"""## Work-precision
 
 ![work-precision diagrams](work-precision.png)
@@ -293,20 +305,34 @@ a different impact sequence late in the run changes the EDM.)
 ### Stochastic smooth scene
 
 LPO with the cubic NES under 0.1 cos t plus white noise 0.05, T = 20: mean over paths of the
-norm of the state error at T against the vines_stoch solution at dt = 2.5e-5 on the same
-Brownian path (8 paths; sdeint 4 paths, given the same Wiener increments). Times per path include
-the per-call set-up (about 0.1 ms for vines_stoch), which dominates its shortest runs.
+norm of the state error at T against the vines_stoch SRA3 solution at dt = 2.5e-5 on the same
+Brownian path (8 paths; sdeint 4 paths, given the same Wiener increments; the SRA3 steps get
+the path's time integrals as well). Times per path include vines_stoch's per-call set-up (tens
+of microseconds), a large part of its shortest runs.
 
 {_table(noisy)}
 
-{_ratios(noisy[0], noisy[1:])}
+Kick-drift-kick against the peers:
+
+{_ratios(noisy[0], noisy[2:])}
+
+SRA3 against the peers:
+
+{_ratios(noisy[1], noisy[2:])}
+
+SRA3 against kick-drift-kick (`scheme = "sra"` against the default for noisy scenes):
+
+| kick-drift-kick setting | cheapest SRA3 setting with equal or smaller error | time ratio |
+| --- | --- | ---: |
+{schemes}
 
 ### Weak error of the stationary variance
 
 Linear oscillator m = k = 1, c = 0.1 under white noise 1: variance of x1, averaged over
-[100, 1100] and 1024 paths, against sigma^2 / (2 c k) = 5.
+[100, 1100] and 1024 paths (the same seeds in every row, so rows share their sampling error),
+against sigma^2 / (2 c k) = 5.
 
-| dt | error | standard error | relative | ms per path |
-| ---: | ---: | ---: | ---: | ---: |
+| scheme | dt | error | standard error | relative | ms per path |
+| --- | ---: | ---: | ---: | ---: | ---: |
 {weak_rows}
 """
