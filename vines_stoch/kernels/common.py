@@ -46,6 +46,15 @@ def attachment_forces(x, v, k1, c1, k_lin, k_cubic, c_abs, rest, force):
 
 
 @njit(**INLINE)
+def accelerate(force, load, ag, mass, acc):
+    """Accelerations ``acc`` from the attachment forces, the load on the primary and the ground
+    acceleration (``acc`` may be ``force``)."""
+    acc[0] = (force[0] + load) / mass[0] - ag
+    for b in range(1, mass.shape[0]):
+        acc[b] = force[b] / mass[b] - ag
+
+
+@njit(**INLINE)
 def contact_forces(x, hertz_body, hertz_k, hertz_walls, force, active=True):
     """Add the Hertz contact forces (MODEL.md section 2): ``+K_L z_L^1.5 - K_R z_R^1.5`` on
     each Hertz absorber, the opposite on the primary; nothing unless ``active``."""

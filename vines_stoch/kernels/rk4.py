@@ -25,10 +25,10 @@ from numba import njit
 from ..physics import KERNEL, primary_energy, restitution_impact
 from .common import (ABSORBER_DISS, CAPPED, CHECK_EVERY, CONTACT_TIME, E1_MAX, ENERGY_INT,
                      FINAL_ENERGY, IMPACT_LOSS, IMPACTS, IMPACTS_LEFT, IMPACTS_RIGHT, INLINE,
-                     INPUT, MAX_EVENTS, PEAK_FORCE, PRIMARY_DISS, STATUS, STATUS_DIVERGED, X1_MAX, X1_SQ_INT,
-                     attachment_forces, block_end, contact_force, contact_forces, diverged, pin_to_walls,
-                     record_history, record_sample, start_history, stick_together, sticks,
-                     stored_energy)
+                     INPUT, MAX_EVENTS, PEAK_FORCE, PRIMARY_DISS, STATUS, STATUS_DIVERGED, X1_MAX,
+                     X1_SQ_INT, accelerate, attachment_forces, block_end, contact_force, contact_forces,
+                     diverged, pin_to_walls, record_history, record_sample, start_history,
+                     stick_together, sticks, stored_energy)
 from .loads import applied, has_breaks, next_break
 
 NEWTON_ITERATIONS = 12
@@ -57,10 +57,8 @@ def accelerations(x, v, t, tm, mass, k1, c1, k_lin, k_cubic, c_abs, rest, forces
     attachment_forces(x, v, k1, c1, k_lin, k_cubic, c_abs, rest, acc)
     contact_forces(x, hertz_body, hertz_k, hertz_walls, acc, contact)
     load, ag = applied(t, tm, forces, series_t, series_v, series_ptr, series_ground)
-    acc[0] += load
+    accelerate(acc, load, ag, mass, acc)
     power = load * v[0]
-    for b in range(mass.shape[0]):
-        acc[b] = acc[b] / mass[b] - ag
     if ag != 0.0:
         for b in range(mass.shape[0]):
             power -= ag * mass[b] * v[b]

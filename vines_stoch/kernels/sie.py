@@ -30,9 +30,9 @@ from numba import njit
 from ..physics import KERNEL, primary_energy, restitution_impact
 from .common import (ABSORBER_DISS, CAPPED, CHECK_EVERY, E1_MAX, ENERGY_INT, FINAL_ENERGY,
                      IMPACT_LOSS, IMPACTS, IMPACTS_LEFT, IMPACTS_RIGHT, INLINE, INPUT, MAX_EVENTS,
-                     PRIMARY_DISS, STATUS, STATUS_DIVERGED, X1_MAX, X1_SQ_INT, attachment_forces, block_end,
-                     diverged, pin_to_walls, record_history, start_history, stick_together, sticks,
-                     stored_energy)
+                     PRIMARY_DISS, STATUS, STATUS_DIVERGED, X1_MAX, X1_SQ_INT, accelerate,
+                     attachment_forces, block_end, diverged, pin_to_walls, record_history,
+                     start_history, stick_together, sticks, stored_energy)
 from .loads import advance_filters, excitation, has_breaks
 
 #: Iterations of the bracketed search for the impact instant (Illinois method).
@@ -100,15 +100,6 @@ def crossing(x, v, length, total, z, load, ag, force, mass, stuck, impact_body, 
     return hi
 
 
-@njit(**INLINE)
-def accelerate(force, load, ag, mass, acc):
-    """Accelerations ``acc`` from the attachment forces, the load on the primary and the ground
-    acceleration."""
-    acc[0] = (force[0] + load) / mass[0] - ag
-    for b in range(1, mass.shape[0]):
-        acc[b] = force[b] / mass[b] - ag
-
-
 @lru_cache(maxsize=None)
 def sie_kernel(has_noise: bool, has_impact: bool, filtered: bool, replay: bool = False, sra: bool = False):
     """The semi-implicit Euler-Maruyama loop specialised to a scene's structure (white noise,
@@ -144,7 +135,8 @@ def sie_kernel(has_noise: bool, has_impact: bool, filtered: bool, replay: bool =
         force = np.zeros(nb)
         vn = np.zeros(nb)
         vt = np.zeros(nb)
-        a1, a2, a3, xs, v2, v3 = np.zeros(nb), np.zeros(nb), np.zeros(nb), np.zeros(nb), np.zeros(nb), np.zeros(nb)
+        ns = nb if sra else 0  # the Runge-Kutta stages' scratch, only where they run
+        a1, a2, a3, xs, v2, v3 = np.zeros(ns), np.zeros(ns), np.zeros(ns), np.zeros(ns), np.zeros(ns), np.zeros(ns)
         zn = z.copy()
         draws = np.zeros(nz)
         stuck = np.zeros(ni, np.int64)
