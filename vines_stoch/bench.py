@@ -117,21 +117,22 @@ def minimal_kdk(n_steps: int, dt: float, gen) -> float:
     """The smooth scene as the shortest loop of the same scheme, kick-drift-kick with the same
     noise and load evaluations (the roofline): no metrics, no generality."""
     x1 = v1 = x2 = v2 = 0.0
-    s = 0.05 * np.sqrt(dt)
+    s = 0.5 * 0.05 * np.sqrt(dt)  # half of sigma dW in each kick
     h = 0.5 * dt
     load = 0.1
     acc = 0.0
     for i in range(n_steps):
         u, w = x2 - x1, v2 - v1
         f = -u * u * u - 0.01 * w
-        v1 += h * (load - x1 - f) + s * gen.standard_normal()
+        dw = s * gen.standard_normal()
+        v1 += h * (load - x1 - f) + dw
         v2 += h * f / 0.05
         x1 += dt * v1
         x2 += dt * v2
         u, w = x2 - x1, v2 - v1
         f = -u * u * u - 0.01 * w
         load = 0.1 * np.cos((i + 1) * dt)
-        v1 += h * (load - x1 - f)
+        v1 += h * (load - x1 - f) + dw
         v2 += h * f / 0.05
         acc += x1 * x1
     return acc

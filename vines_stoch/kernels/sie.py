@@ -1,10 +1,16 @@
 """Euler-Maruyama for additive noise in kick-drift-kick (velocity Verlet) form, with impacts
 located on the Brownian path.
 
-Each step is a half *kick* (half the force impulse of the step plus the whole Wiener increment
-``sigma dW`` on the primary, Ito, additive), a *drift* (positions move linearly with the new
-velocities) and a closing half kick with the forces at the new positions.  Without noise this
-is the second-order velocity Verlet map; with additive noise it has strong order 1.
+Each step is a half *kick* (half the force impulse of the step plus half the Wiener increment
+``sigma dW`` on the primary, additive), a *drift* (positions move linearly with the new
+velocities) and a closing half kick with the forces at the new positions and the other half of
+``sigma dW``.  Without noise this is the second-order velocity Verlet map; with additive noise
+it has strong order 1.  The even split moves the positions by ``dt sigma dW / 2``, the mean
+of the exact ``sigma int W dt`` given ``dW``; it gives the linear oscillator's stationary
+position variance almost exactly (4e-6 relative at ``omega dt = 0.4``), and the noise's part
+of a step's energy residual is ``(F' - F) dt sigma dW / (8 m)``.  (With the whole increment in
+the first kick that part is ``F dt sigma dW / (4 m)``, whose mean is not zero where the moving
+mass depends on ``dW``: an absorber stuck to its wall and released by the noise.)
 
 When the drift would carry an impact absorber through its wall, the step is split at the
 impact: the sub-step of length ``s`` that lands exactly on the wall is found by a bracketed
@@ -73,7 +79,7 @@ def crossing(x, v, length, total, z, load, ag, force, mass, stuck, impact_body, 
     ``wall`` (side ``side``), by the Illinois method on the bracket ``[0, length]``."""
     lo, hi = 0.0, length
     g_lo = min(side * (x[j] - x[0]) - wall, 0.0)  # on the wall counts as inside
-    kick(v, 0.5 * length, total, load, ag, force, mass, vt)
+    kick(v, 0.5 * length, 0.5 * total, load, ag, force, mass, vt)
     stick_together(mass, vt, stuck, impact_body, False)
     g_hi = side * (x[j] - x[0] + length * (vt[j] - vt[0])) - wall
     s = hi
@@ -82,7 +88,7 @@ def crossing(x, v, length, total, z, load, ag, force, mass, stuck, impact_body, 
         s = hi - g_hi * (hi - lo) / (g_hi - g_lo)
         if not (lo < s < hi):
             s = 0.5 * (lo + hi)
-        kick(v, 0.5 * s, bridge(total, length, s, z), load, ag, force, mass, vt)
+        kick(v, 0.5 * s, 0.5 * bridge(total, length, s, z), load, ag, force, mass, vt)
         stick_together(mass, vt, stuck, impact_body, False)
         g = side * (x[j] - x[0] + s * (vt[j] - vt[0])) - wall
         if g > 0.0:
@@ -222,7 +228,7 @@ def sie_kernel(has_noise: bool, has_impact: bool, filtered: bool, replay: bool =
                     if event > 0 and left <= 0.0:
                         break
                     attachment_forces(x, v, k1, c1, k_lin, k_cubic, c_abs, rest, force)
-                    kick(v, 0.5 * left, dw, load, ag, force, mass, vn)
+                    kick(v, 0.5 * left, 0.5 * dw, load, ag, force, mass, vn)
                     if has_impact:
                         stick_together(mass, vn, stuck, impact_body, True)
                     s = left
@@ -241,14 +247,14 @@ def sie_kernel(has_noise: bool, has_impact: bool, filtered: bool, replay: bool =
                                 if hit < 0 or sc < s:
                                     hit, side, s = q, sq, sc
                         if hit >= 0:
-                            kick(v, 0.5 * s, bridge(dw, left, s, zb), load, ag, force, mass, vn)
+                            kick(v, 0.5 * s, 0.5 * bridge(dw, left, s, zb), load, ag, force, mass, vn)
                             stick_together(mass, vn, stuck, impact_body, False)
                     dws = dw
                     if has_impact:  # the increment of the sub-step before an impact
                         dws = bridge(dw, left, s, zb)
                     if inside:
                         v_mid = 0.5 * (v[0] + vn[0])
-                        work += (0.5 * load * s + dws) * v_mid - (0.5 * ag * s * momentum(mass, v, vn) if ag != 0.0 else 0.0)
+                        work += 0.5 * (load * s + dws) * v_mid - (0.5 * ag * s * momentum(mass, v, vn) if ag != 0.0 else 0.0)
                         d_primary += c1 * v[0] * 0.5 * s * v_mid
                         for a in range(nb - 1):
                             w = v[a + 1] - v[0]
@@ -262,12 +268,12 @@ def sie_kernel(has_noise: bool, has_impact: bool, filtered: bool, replay: bool =
                         load_end, ag_end = excitation(t + s, tm, (t + s - t_step) / dt, forces, series_t, series_v, series_ptr, series_ground,
                                                       filtered, c_force, c_ground, z, zn)
                     attachment_forces(x, v, k1, c1, k_lin, k_cubic, c_abs, rest, force)
-                    kick(v, 0.5 * s, 0.0, load_end, ag_end, force, mass, vn)
+                    kick(v, 0.5 * s, 0.5 * dws, load_end, ag_end, force, mass, vn)
                     if has_impact:
                         stick_together(mass, vn, stuck, impact_body, False)
                     if inside:
                         v_mid = 0.5 * (v[0] + vn[0])
-                        work += 0.5 * load_end * s * v_mid - (0.5 * ag_end * s * momentum(mass, v, vn) if ag_end != 0.0 else 0.0)
+                        work += 0.5 * (load_end * s + dws) * v_mid - (0.5 * ag_end * s * momentum(mass, v, vn) if ag_end != 0.0 else 0.0)
                         d_primary += c1 * v[0] * 0.5 * s * v_mid
                         for a in range(nb - 1):
                             w = v[a + 1] - v[0]
