@@ -72,12 +72,24 @@ def accelerations(x, v, t, tm, mass, k1, c1, k_lin, k_cubic, c_abs, rest, forces
 
 
 @njit(**KERNEL)
+def wall_accelerations(x, v, t, mass, k1, c1, k_lin, k_cubic, c_abs, rest, forces, series_t, series_v,
+                       series_ptr, series_ground, impact_body, hertz_body, hertz_k, hertz_walls, stuck,
+                       release, acc, sticking, contact):
+    """``accelerations`` at an instant (an impact, the end of a step with stuck absorbers),
+    out of line: rare work that need not grow the step loop."""
+    accelerations(x, v, t, t, mass, k1, c1, k_lin, k_cubic, c_abs, rest, forces, series_t, series_v, series_ptr,
+                  series_ground, impact_body, hertz_body, hertz_k, hertz_walls, stuck, release, acc, sticking,
+                  contact)
+
+
+@njit(**INLINE)
 def rk4_step(x, v, t, h, xo, vo, acc, xs, vs, mass, k1, c1, k_lin, k_cubic, c_abs, rest, forces, series_t,
              series_v, series_ptr, series_ground, impact_body, hertz_body, hertz_k, hertz_walls, stuck,
              sticking, contact):
     """One RK4 step of size ``h`` from ``(x, v)`` into ``(xo, vo)``; returns the increments
     of the five energy integrals.  ``acc``, ``xs``, ``vs`` are scratch (the stage's
-    accelerations and state); ``xo``, ``vo`` gather the weighted stage slopes."""
+    accelerations and state); ``xo``, ``vo`` gather the weighted stage slopes.  Inlined at one
+    call site of the step loop (a call with this many arrays costs a third of the step)."""
     nb = x.shape[0]
     tm = t + 0.5 * h
     q0 = q1 = q2 = q3 = q4 = 0.0
@@ -229,39 +241,46 @@ def rk4_kernel(has_impact: bool, has_hertz: bool, sampling: bool):
                 t = i * dt
                 left = dt
                 n_impacts = 0
-                for sub in range(MAX_SUBSTEPS):
-                    sticking = has_impact and stuck.any()
-                    contact = has_hertz and touching.any()
-                    h = left
-                    if contact:
-                        h = min(left, contact_step(x, v, mass, hertz_body, hertz_k, hertz_walls, touching))
-                    if breaks:
-                        tb = next_break(t + 1e-9 * dt, ex)
-                        if tb < t + h - 1e-9 * dt:
-                            h = tb - t
-                    capped = sub == MAX_SUBSTEPS - 1 or n_impacts >= MAX_EVENTS
-                    if capped:  # take the rest of the step at once, keep absorbers in their cavity
+                sub = 0
+                # phase 0: a new sub-step; 1 .. NEWTON_ITERATIONS: Newton iterations on the
+                # length of the sub-step that ends at an event; -1: the sub-step at the final
+                # length.  One call site of the (inlined) step for all of them.
+                phase = 0
+                while True:
+                    if phase == 0:
+                        sticking = has_impact and stuck.any()
+                        contact = has_hertz and touching.any()
                         h = left
-                        out[CAPPED] += 1
-                    inc = rk4_step(x, v, t, h, xn, vn, acc, xs, vs, mass, k1, c1, k_lin, k_cubic, c_abs, rest, forces, series_t, series_v, series_ptr, series_ground, impact_body, hertz_body, hertz_k, hertz_walls, stuck, sticking, contact)
-                    kind, q, side, j, sign, wall, tau = NONE, -1, 0, 0, 0, 0.0, h
-                    if (has_impact or has_hertz) and not capped:
-                        kind, q, side, tau = next_event(x, xn, h, impact_body, clearance, stuck,
-                                                        hertz_body, hertz_walls, touching)
-                    if kind != NONE:
-                        j, sign, wall = event_geometry(kind, q, side, impact_body, clearance, hertz_body, hertz_walls)
-                        for _ in range(NEWTON_ITERATIONS):
-                            rk4_step(x, v, t, tau, xn, vn, acc, xs, vs, mass, k1, c1, k_lin, k_cubic, c_abs, rest, forces, series_t, series_v, series_ptr, series_ground, impact_body, hertz_body, hertz_k, hertz_walls, stuck, sticking, contact)
-                            gap = sign * (xn[j] - xn[0] - wall)
-                            approach = sign * (vn[j] - vn[0])
-                            if approach <= 0.0:
-                                break
-                            correction = gap / approach
+                        if contact:
+                            h = min(left, contact_step(x, v, mass, hertz_body, hertz_k, hertz_walls, touching))
+                        if breaks:
+                            tb = next_break(t + 1e-9 * dt, ex)
+                            if tb < t + h - 1e-9 * dt:
+                                h = tb - t
+                        capped = sub == MAX_SUBSTEPS - 1 or n_impacts >= MAX_EVENTS
+                        if capped:  # take the rest of the step at once, keep absorbers in their cavity
+                            h = left
+                            out[CAPPED] += 1
+                        tau = h
+                    inc = rk4_step(x, v, t, tau, xn, vn, acc, xs, vs, mass, k1, c1, k_lin, k_cubic, c_abs, rest, forces, series_t, series_v, series_ptr, series_ground, impact_body, hertz_body, hertz_k, hertz_walls, stuck, sticking, contact)
+                    if phase == 0:
+                        kind, q, side, j, sign, wall = NONE, -1, 0, 0, 0, 0.0
+                        if (has_impact or has_hertz) and not capped:
+                            kind, q, side, tau = next_event(x, xn, h, impact_body, clearance, stuck,
+                                                            hertz_body, hertz_walls, touching)
+                        if kind != NONE:
+                            j, sign, wall = event_geometry(kind, q, side, impact_body, clearance, hertz_body, hertz_walls)
+                            phase = 1
+                            continue
+                    elif phase > 0:
+                        approach = sign * (vn[j] - vn[0])
+                        if approach > 0.0:
+                            correction = sign * (xn[j] - xn[0] - wall) / approach
                             tau = min(max(tau - correction, 0.0), h)
-                            if abs(correction) <= 1e-15 * dt:
-                                break
-                        inc = rk4_step(x, v, t, tau, xn, vn, acc, xs, vs, mass, k1, c1, k_lin, k_cubic, c_abs, rest, forces, series_t, series_v, series_ptr, series_ground, impact_body, hertz_body, hertz_k, hertz_walls, stuck, sticking, contact)
-                        h = tau
+                            phase = phase + 1 if abs(correction) > 1e-15 * dt and phase < NEWTON_ITERATIONS else -1
+                            continue
+                    phase = 0
+                    h = tau
                     done = kind == NONE and h == left
                     for b in range(nb):
                         x[b] = xn[b]
@@ -290,7 +309,7 @@ def rk4_kernel(has_impact: bool, has_hertz: bool, sampling: bool):
                     if kind == IMPACT:
                         n_impacts += 1
                         x[j] = x[0] + side * clearance[q]
-                        accelerations(x, v, t, t, mass, k1, c1, k_lin, k_cubic, c_abs, rest, forces, series_t, series_v, series_ptr, series_ground, impact_body, hertz_body, hertz_k, hertz_walls, stuck, False, acc, True, contact)
+                        wall_accelerations(x, v, t, mass, k1, c1, k_lin, k_cubic, c_abs, rest, forces, series_t, series_v, series_ptr, series_ground, impact_body, hertz_body, hertz_k, hertz_walls, stuck, False, acc, True, contact)
                         # the last impact a step may resolve ends a chatter sequence: inelastic collapse
                         plastic = sticks(side, v[j] - v[0], (acc[j] - acc[0]) * dt) or n_impacts >= MAX_EVENTS
                         r = 0.0 if plastic else restitution[q]
@@ -310,10 +329,11 @@ def rk4_kernel(has_impact: bool, has_hertz: bool, sampling: bool):
                     if inside and (kind == IMPACT or kind == ONSET):
                         out[IMPACTS] += 1
                         out[IMPACTS_LEFT if side < 0 else IMPACTS_RIGHT] += 1
+                    sub += 1
                 if has_impact and stuck.any():
                     pin_to_walls(x, stuck, impact_body, clearance)
                     # release contacts the wall would have to pull (checked at step ends)
-                    accelerations(x, v, t, t, mass, k1, c1, k_lin, k_cubic, c_abs, rest, forces, series_t, series_v, series_ptr, series_ground, impact_body, hertz_body, hertz_k, hertz_walls, stuck, True, acc, True, False)
+                    wall_accelerations(x, v, t, mass, k1, c1, k_lin, k_cubic, c_abs, rest, forces, series_t, series_v, series_ptr, series_ground, impact_body, hertz_body, hertz_k, hertz_walls, stuck, True, acc, True, False)
                 if sampling:
                     next_sample = record_sample(samples, next_sample, sample_from, period, i * dt, dt,
                                                 xp, vp, x, v, out[IMPACTS_LEFT], out[IMPACTS_RIGHT])
