@@ -180,7 +180,7 @@ def strong(paths: int = 8, fine_dt: float = 2.5e-5, duration: float = 20.0,
             simulate(scene, normals=_replay(scene, normals[0], m))
             errors, seconds = [], 0.0
             for n, ref in zip(normals, reference):
-                c = replay(scene, n, m)
+                c = _replay(scene, n, m)
                 elapsed, _ = _timed(lambda: simulate(scene, normals=c, final=final))
                 seconds += elapsed
                 errors.append(np.linalg.norm(final - ref))
