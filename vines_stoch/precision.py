@@ -118,8 +118,10 @@ def deterministic(impact: bool) -> list[Curve]:
     return [ours, peer]
 
 
-def _noisy_scene(dt: float, duration: float = 20.0, scheme: str = "euler-maruyama"):
-    return build_scene(parse_scenario(NOISY.format(sigma=SIGMA, duration=duration, dt=dt, scheme=scheme)).points[0])
+def _noisy_scene(dt: float, duration: float = 20.0, scheme: str = "euler-maruyama", sigma: float = SIGMA,
+                 amplitude: float = 0.1):
+    text = NOISY.format(sigma=sigma, duration=duration, dt=dt, scheme=scheme)
+    return build_scene(parse_scenario(text.replace("amplitude = 0.1", f"amplitude = {amplitude}")).points[0])
 
 
 def coarse_increments(normals: np.ndarray, m: int) -> tuple[np.ndarray, np.ndarray]:
@@ -231,22 +233,18 @@ def weak_metrics(paths: int = 200, duration: float = 100.0, fine_dt: float = 1e-
     coupling makes the standard errors those of the paired differences, small enough to show
     the bias itself.  Rows ``(loads, scheme, dt, energy-integral bias, its standard error,
     EDM bias, its standard error, seconds per path)``, biases relative to the fine means."""
+    def metrics(sc, raws: list[np.ndarray]) -> np.ndarray:
+        return np.array([[row["energy_integral"], row["edm"]] for row in (finish(raw, sc) for raw in raws)])
+
     rows = []
     rng = np.random.default_rng(2027)
     for label, amplitude, sigma in loads:
-        def scene(dt: float, scheme: str):
-            text = NOISY.format(sigma=sigma, duration=duration, dt=dt, scheme=scheme)
-            return build_scene(parse_scenario(text.replace("amplitude = 0.1", f"amplitude = {amplitude}")).points[0])
-
-        def metrics(sc, raws: list[np.ndarray]) -> np.ndarray:
-            return np.array([[row["energy_integral"], row["edm"]] for row in (finish(raw, sc) for raw in raws)])
-
-        fine = scene(fine_dt, "sra")
+        fine = _noisy_scene(fine_dt, duration, "sra", sigma, amplitude)
         normals = [rng.standard_normal(fine.n_steps) for _ in range(paths)]
         reference = metrics(fine, [simulate(fine, normals=_replay(fine, n, 1)) for n in normals])
         for scheme in ("euler-maruyama", "sra"):
             for dt in levels:
-                coarse = scene(dt, scheme)
+                coarse = _noisy_scene(dt, duration, scheme, sigma, amplitude)
                 replays = [_replay(coarse, n, round(dt / fine_dt)) for n in normals]
                 simulate(coarse, normals=replays[0])
                 start = time.perf_counter()
