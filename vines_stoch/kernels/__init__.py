@@ -24,8 +24,8 @@ _NO_HISTORY = np.zeros((0, 2))
 def kernel_for(scene, replay: bool = False):
     """The compiled loop for a scene's scheme and structure."""
     if scene.scheme == "rk4":
-        return rk4_kernel(scene.has_impact, scene.has_hertz, scene.period > 0)
-    return sie_kernel(scene.sigma > 0.0, scene.has_impact, scene.filters["phi"].shape[0] > 0, replay,
+        return rk4_kernel(scene.mass.shape[0], scene.has_impact, scene.has_hertz, scene.period > 0)
+    return sie_kernel(scene.mass.shape[0], scene.sigma > 0.0, scene.has_impact, scene.filters["phi"].shape[0] > 0, replay,
                       scene.scheme == "sra")
 
 

@@ -27,7 +27,7 @@ from .common import (ABSORBER_DISS, CAPPED, CHECK_EVERY, CONTACT_TIME, E1_MAX, E
                      FINAL_ENERGY, IMPACT_LOSS, IMPACTS, IMPACTS_LEFT, IMPACTS_RIGHT, INLINE,
                      INPUT, MAX_EVENTS, PEAK_FORCE, PRIMARY_DISS, STATUS, STATUS_DIVERGED, X1_MAX,
                      X1_SQ_INT, accelerate, attachment_forces, block_end, contact_force, contact_forces,
-                     diverged, pin_to_walls, record_history, record_sample, start_history,
+                     diverged, pin_to_walls, record_history, record_sample, scratch, start_history,
                      stick_together, sticks, stored_energy)
 from .loads import applied, has_breaks, next_break
 
@@ -42,7 +42,7 @@ NONE, IMPACT, ONSET, EXIT = 0, 1, 2, 3
 
 
 @njit(**INLINE)
-def accelerations(x, v, t, tm, mass, k1, c1, k_lin, k_cubic, c_abs, rest, forces, series_t, series_v,
+def accelerations(x, v, t, tm, mass, inv_mass, k1, c1, k_lin, k_cubic, c_abs, rest, forces, series_t, series_v,
                   series_ptr, series_ground, impact_body, hertz_body, hertz_k, hertz_walls, stuck, release,
                   acc, sticking, contact):
     """Accelerations of all bodies into ``acc``; returns the rates of the energy integrals
@@ -57,14 +57,14 @@ def accelerations(x, v, t, tm, mass, k1, c1, k_lin, k_cubic, c_abs, rest, forces
     attachment_forces(x, v, k1, c1, k_lin, k_cubic, c_abs, rest, acc)
     contact_forces(x, hertz_body, hertz_k, hertz_walls, acc, contact)
     load, ag = applied(t, tm, forces, series_t, series_v, series_ptr, series_ground)
-    accelerate(acc, load, ag, mass, acc)
+    accelerate(acc, load, ag, inv_mass, acc)
     power = load * v[0]
     if ag != 0.0:
-        for b in range(mass.shape[0]):
+        for b in range(v.shape[0]):
             power -= ag * mass[b] * v[b]
     stick_together(mass, acc, stuck, impact_body, release, sticking)
     absorber_power = 0.0
-    for a in range(c_abs.shape[0]):
+    for a in range(x.shape[0] - 1):
         w = v[a + 1] - v[0]
         absorber_power += c_abs[a] * w * w
     return (power, c1 * v[0] * v[0], absorber_power,
@@ -72,18 +72,18 @@ def accelerations(x, v, t, tm, mass, k1, c1, k_lin, k_cubic, c_abs, rest, forces
 
 
 @njit(**KERNEL)
-def wall_accelerations(x, v, t, mass, k1, c1, k_lin, k_cubic, c_abs, rest, forces, series_t, series_v,
+def wall_accelerations(x, v, t, mass, inv_mass, k1, c1, k_lin, k_cubic, c_abs, rest, forces, series_t, series_v,
                        series_ptr, series_ground, impact_body, hertz_body, hertz_k, hertz_walls, stuck,
                        release, acc, sticking, contact):
     """``accelerations`` at an instant (an impact, the end of a step with stuck absorbers),
     out of line: rare work that need not grow the step loop."""
-    accelerations(x, v, t, t, mass, k1, c1, k_lin, k_cubic, c_abs, rest, forces, series_t, series_v, series_ptr,
+    accelerations(x, v, t, t, mass, inv_mass, k1, c1, k_lin, k_cubic, c_abs, rest, forces, series_t, series_v, series_ptr,
                   series_ground, impact_body, hertz_body, hertz_k, hertz_walls, stuck, release, acc, sticking,
                   contact)
 
 
 @njit(**INLINE)
-def rk4_step(x, v, t, h, xo, vo, acc, xs, vs, mass, k1, c1, k_lin, k_cubic, c_abs, rest, forces, series_t,
+def rk4_step(x, v, t, h, xo, vo, acc, xs, vs, mass, inv_mass, k1, c1, k_lin, k_cubic, c_abs, rest, forces, series_t,
              series_v, series_ptr, series_ground, impact_body, hertz_body, hertz_k, hertz_walls, stuck,
              sticking, contact):
     """One RK4 step of size ``h`` from ``(x, v)`` into ``(xo, vo)``; returns the increments
@@ -99,7 +99,7 @@ def rk4_step(x, v, t, h, xo, vo, acc, xs, vs, mass, k1, c1, k_lin, k_cubic, c_ab
                 xs[b] = x[b]
                 vs[b] = v[b]
         ts = t if stage == 0 else (t + h if stage == 3 else tm)
-        r = accelerations(xs, vs, ts, tm, mass, k1, c1, k_lin, k_cubic, c_abs, rest, forces, series_t,
+        r = accelerations(xs, vs, ts, tm, mass, inv_mass, k1, c1, k_lin, k_cubic, c_abs, rest, forces, series_t,
                           series_v, series_ptr, series_ground, impact_body, hertz_body, hertz_k, hertz_walls,
                           stuck, False, acc, sticking, contact)
         weight = 1.0 if stage == 0 or stage == 3 else 2.0
@@ -198,24 +198,25 @@ def contact_step(x, v, mass, hertz_body, hertz_k, hertz_walls, touching) -> floa
 
 
 @lru_cache(maxsize=None)
-def rk4_kernel(has_impact: bool, has_hertz: bool, sampling: bool):
-    """The RK4 loop specialised to a scene's structure (impact absorbers, Hertz absorbers,
-    Poincare sampling for the regime)."""
+def rk4_kernel(n_bodies: int, has_impact: bool, has_hertz: bool, sampling: bool):
+    """The RK4 loop specialised to a scene's structure (number of bodies, impact absorbers,
+    Hertz absorbers, Poincare sampling for the regime)."""
+    NB = n_bodies
 
     @njit(**KERNEL)
     def kernel(mass, k1, c1, k_lin, k_cubic, c_abs, rest, impact_body, clearance, restitution,
-               hertz_body, hertz_k, hertz_walls, ex, fl, sigma, x, v, dt, n_steps, i0,
+               hertz_body, hertz_k, hertz_walls, ex, fl, sigma, state_x, state_v, dt, n_steps, i0,
                period, sample_from, gen, normals, out, samples, history, stride):
-        nb = mass.shape[0]
+        nb = NB
         forces, series_t, series_v, series_ptr, series_ground = ex
         breaks = has_breaks(ex)  # sub-steps end at the loads' kinks and jumps
-        xn = np.zeros(nb)
-        vn = np.zeros(nb)
-        xp = x.copy()
-        vp = v.copy()
-        acc = np.zeros(nb)
-        xs = np.zeros(nb)
-        vs = np.zeros(nb)
+        # the state and the stages' scratch on the stack (see ``common.scratch``)
+        x, v, xn, vn, xp, vp = scratch(NB), scratch(NB), scratch(NB), scratch(NB), scratch(NB), scratch(NB)
+        acc, xs, vs, inv_mass = scratch(NB), scratch(NB), scratch(NB), scratch(NB)
+        for b in range(nb):
+            x[b] = state_x[b]
+            v[b] = state_v[b]
+            inv_mass[b] = 1.0 / mass[b]
         stuck = np.zeros(impact_body.shape[0], np.int64)
         touching = np.zeros(hertz_body.shape[0], np.int64)
         m0 = mass[0]
@@ -262,7 +263,7 @@ def rk4_kernel(has_impact: bool, has_hertz: bool, sampling: bool):
                             h = left
                             out[CAPPED] += 1
                         tau = h
-                    inc = rk4_step(x, v, t, tau, xn, vn, acc, xs, vs, mass, k1, c1, k_lin, k_cubic, c_abs, rest, forces, series_t, series_v, series_ptr, series_ground, impact_body, hertz_body, hertz_k, hertz_walls, stuck, sticking, contact)
+                    inc = rk4_step(x, v, t, tau, xn, vn, acc, xs, vs, mass, inv_mass, k1, c1, k_lin, k_cubic, c_abs, rest, forces, series_t, series_v, series_ptr, series_ground, impact_body, hertz_body, hertz_k, hertz_walls, stuck, sticking, contact)
                     if phase == 0:
                         kind, q, side, j, sign, wall = NONE, -1, 0, 0, 0, 0.0
                         if (has_impact or has_hertz) and not capped:
@@ -309,7 +310,7 @@ def rk4_kernel(has_impact: bool, has_hertz: bool, sampling: bool):
                     if kind == IMPACT:
                         n_impacts += 1
                         x[j] = x[0] + side * clearance[q]
-                        wall_accelerations(x, v, t, mass, k1, c1, k_lin, k_cubic, c_abs, rest, forces, series_t, series_v, series_ptr, series_ground, impact_body, hertz_body, hertz_k, hertz_walls, stuck, False, acc, True, contact)
+                        wall_accelerations(x, v, t, mass, inv_mass, k1, c1, k_lin, k_cubic, c_abs, rest, forces, series_t, series_v, series_ptr, series_ground, impact_body, hertz_body, hertz_k, hertz_walls, stuck, False, acc, True, contact)
                         # the last impact a step may resolve ends a chatter sequence: inelastic collapse
                         plastic = sticks(side, v[j] - v[0], (acc[j] - acc[0]) * dt) or n_impacts >= MAX_EVENTS
                         r = 0.0 if plastic else restitution[q]
@@ -333,7 +334,7 @@ def rk4_kernel(has_impact: bool, has_hertz: bool, sampling: bool):
                 if has_impact and stuck.any():
                     pin_to_walls(x, stuck, impact_body, clearance)
                     # release contacts the wall would have to pull (checked at step ends)
-                    wall_accelerations(x, v, t, mass, k1, c1, k_lin, k_cubic, c_abs, rest, forces, series_t, series_v, series_ptr, series_ground, impact_body, hertz_body, hertz_k, hertz_walls, stuck, True, acc, True, False)
+                    wall_accelerations(x, v, t, mass, inv_mass, k1, c1, k_lin, k_cubic, c_abs, rest, forces, series_t, series_v, series_ptr, series_ground, impact_body, hertz_body, hertz_k, hertz_walls, stuck, True, acc, True, False)
                 if sampling:
                     next_sample = record_sample(samples, next_sample, sample_from, period, i * dt, dt,
                                                 xp, vp, x, v, out[IMPACTS_LEFT], out[IMPACTS_RIGHT])
@@ -342,6 +343,9 @@ def rk4_kernel(has_impact: bool, has_hertz: bool, sampling: bool):
                 h_next = record_history(history, stride, h_next, x[0], primary_energy(m0, k1, x[0], v[0]))
         if diverged(x):
             out[STATUS] = STATUS_DIVERGED
+        for b in range(nb):
+            state_x[b] = x[b]
+            state_v[b] = v[b]
         out[FINAL_ENERGY] = stored_energy(x, v, mass, k1, k_lin, k_cubic, rest, hertz_body, hertz_k, hertz_walls)
 
     return kernel

@@ -38,7 +38,7 @@ from .common import (ABSORBER_DISS, CAPPED, CHECK_EVERY, E1_MAX, ENERGY_INT, FIN
                      IMPACT_LOSS, IMPACTS, IMPACTS_LEFT, IMPACTS_RIGHT, INLINE, INPUT, MAX_EVENTS,
                      PRIMARY_DISS, STATUS, STATUS_DIVERGED, X1_MAX, X1_SQ_INT, accelerate,
                      attachment_forces, block_end, diverged, pin_to_walls, record_history,
-                     start_history, stick_together, sticks, stored_energy)
+                     scratch, start_history, stick_together, sticks, stored_energy)
 from .loads import advance_filters, excitation, has_breaks
 
 #: Iterations of the bracketed search for the impact instant (Illinois method).
@@ -46,20 +46,22 @@ ROOT_ITERATIONS = 100
 
 
 @njit(**INLINE)
-def kick(v, s, dws, load, ag, force, mass, vn):
+def kick(v, s, dws, load, ag, force, inv_mass, vn):
     """Velocities after a kick of length ``s`` into ``vn``: forces, the load ``load`` and
     Wiener increment ``dws`` on the primary, ground acceleration ``ag`` on every body (the
-    caller makes stuck absorbers move with the primary)."""
-    vn[0] = v[0] + ((force[0] + load) * s + dws) / mass[0] - ag * s
-    for b in range(1, mass.shape[0]):
-        vn[b] = v[b] + force[b] * s / mass[b] - ag * s
+    caller makes stuck absorbers move with the primary).  ``inv_mass``: the reciprocal masses.
+    The state-dependent force term comes last, one fused multiply-add after the forces (the
+    step's critical path)."""
+    vn[0] = (v[0] + ((load * s + dws) * inv_mass[0] - ag * s)) + force[0] * (s * inv_mass[0])
+    for b in range(1, vn.shape[0]):
+        vn[b] = (v[b] - ag * s) + force[b] * (s * inv_mass[b])
 
 
 @njit(**INLINE)
 def momentum(mass, v, vn) -> float:
     """Total momentum at the mean of two velocity vectors (work of the ground acceleration)."""
     p = 0.0
-    for b in range(mass.shape[0]):
+    for b in range(v.shape[0]):
         p += mass[b] * 0.5 * (v[b] + vn[b])
     return p
 
@@ -74,12 +76,12 @@ def bridge(total, length, s, z):
 
 
 @njit(**INLINE)
-def crossing(x, v, length, total, z, load, ag, force, mass, stuck, impact_body, j, side, wall, vt):
+def crossing(x, v, length, total, z, load, ag, force, mass, inv_mass, stuck, impact_body, j, side, wall, vt):
     """Sub-step length in ``(0, length]`` after which absorber body ``j`` is exactly at
     ``wall`` (side ``side``), by the Illinois method on the bracket ``[0, length]``."""
     lo, hi = 0.0, length
     g_lo = min(side * (x[j] - x[0]) - wall, 0.0)  # on the wall counts as inside
-    kick(v, 0.5 * length, 0.5 * total, load, ag, force, mass, vt)
+    kick(v, 0.5 * length, 0.5 * total, load, ag, force, inv_mass, vt)
     stick_together(mass, vt, stuck, impact_body, False)
     g_hi = side * (x[j] - x[0] + length * (vt[j] - vt[0])) - wall
     s = hi
@@ -88,7 +90,7 @@ def crossing(x, v, length, total, z, load, ag, force, mass, stuck, impact_body, 
         s = hi - g_hi * (hi - lo) / (g_hi - g_lo)
         if not (lo < s < hi):
             s = 0.5 * (lo + hi)
-        kick(v, 0.5 * s, 0.5 * bridge(total, length, s, z), load, ag, force, mass, vt)
+        kick(v, 0.5 * s, 0.5 * bridge(total, length, s, z), load, ag, force, inv_mass, vt)
         stick_together(mass, vt, stuck, impact_body, False)
         g = side * (x[j] - x[0] + s * (vt[j] - vt[0])) - wall
         if g > 0.0:
@@ -107,9 +109,10 @@ def crossing(x, v, length, total, z, load, ag, force, mass, stuck, impact_body, 
 
 
 @lru_cache(maxsize=None)
-def sie_kernel(has_noise: bool, has_impact: bool, filtered: bool, replay: bool = False, sra: bool = False):
-    """The semi-implicit Euler-Maruyama loop specialised to a scene's structure (white noise,
-    impact absorbers, filtered loads).
+def sie_kernel(n_bodies: int, has_noise: bool, has_impact: bool, filtered: bool, replay: bool = False,
+               sra: bool = False):
+    """The semi-implicit Euler-Maruyama loop specialised to a scene's structure (number of
+    bodies, white noise, impact absorbers, filtered loads).
 
     With ``replay``, the step increments are ``sigma sqrt(dt) normals[i]`` (a given Brownian
     path, for convergence studies) instead of draws from ``gen``.
@@ -127,22 +130,28 @@ def sie_kernel(has_noise: bool, has_impact: bool, filtered: bool, replay: bool =
     # passes of a step's event loop: one without impact absorbers (nothing to split at), none
     # with the Runge-Kutta step
     EVENTS = 0 if sra else (MAX_EVENTS + 1 if has_impact else 1)
+    NB = n_bodies
+    NS = n_bodies if sra else 0
     ROOT3 = np.sqrt(3.0)
 
     @njit(**KERNEL)
     def kernel(mass, k1, c1, k_lin, k_cubic, c_abs, rest, impact_body, clearance, restitution,
-               hertz_body, hertz_k, hertz_walls, ex, fl, sigma, x, v, dt, n_steps, i0,
+               hertz_body, hertz_k, hertz_walls, ex, fl, sigma, state_x, state_v, dt, n_steps, i0,
                period, sample_from, gen, normals, out, samples, history, stride):
-        nb = mass.shape[0]
+        nb = NB
         ni = impact_body.shape[0]
         phi, chol, envelopes, c_force, c_ground, z = fl
         forces, series_t, series_v, series_ptr, series_ground = ex
         nz = z.shape[0]
-        force = np.zeros(nb)
-        vn = np.zeros(nb)
-        vt = np.zeros(nb)
-        ns = nb if sra else 0  # the Runge-Kutta stages' scratch, only where they run
-        a1, a2, a3, xs, v2, v3 = np.zeros(ns), np.zeros(ns), np.zeros(ns), np.zeros(ns), np.zeros(ns), np.zeros(ns)
+        x, v = scratch(NB), scratch(NB)  # the state, on the stack (copied back at the end)
+        for b in range(nb):
+            x[b] = state_x[b]
+            v[b] = state_v[b]
+        force, vn, vt, inv_mass = scratch(NB), scratch(NB), scratch(NB), scratch(NB)
+        for b in range(nb):
+            inv_mass[b] = 1.0 / mass[b]
+        # the Runge-Kutta stages' scratch, only where they run
+        a1, a2, a3, xs, v2, v3 = scratch(NS), scratch(NS), scratch(NS), scratch(NS), scratch(NS), scratch(NS)
         zn = z.copy()
         draws = np.zeros(nz)
         stuck = np.zeros(ni, np.int64)
@@ -194,18 +203,18 @@ def sie_kernel(has_noise: bool, has_impact: bool, filtered: bool, replay: bool =
                     load3, ag3 = excitation(t_step + 0.5 * dt, tm, 0.5, forces, series_t, series_v, series_ptr,
                                             series_ground, filtered, c_force, c_ground, z, zn)
                     attachment_forces(x, v, k1, c1, k_lin, k_cubic, c_abs, rest, force)
-                    accelerate(force, load, ag, mass, a1)
+                    accelerate(force, load, ag, inv_mass, a1)
                     for b in range(nb):
                         xs[b] = x[b] + dt * v[b]
                         v2[b] = v[b] + dt * a1[b]
                     attachment_forces(xs, v2, k1, c1, k_lin, k_cubic, c_abs, rest, force)
-                    accelerate(force, load_next, ag_next, mass, a2)
+                    accelerate(force, load_next, ag_next, inv_mass, a2)
                     for b in range(nb):
                         xs[b] = x[b] + 0.25 * dt * (v[b] + v2[b])
                         v3[b] = v[b] + 0.25 * dt * (a1[b] + a2[b])
                     v3[0] += 1.5 * dz / m0
                     attachment_forces(xs, v3, k1, c1, k_lin, k_cubic, c_abs, rest, force)
-                    accelerate(force, load3, ag3, mass, a3)
+                    accelerate(force, load3, ag3, inv_mass, a3)
                     for b in range(nb):
                         vn[b] = v[b] + dt * (a1[b] / 6.0 + a2[b] / 6.0 + 2.0 / 3.0 * a3[b])
                     vn[0] += dw / m0
@@ -228,7 +237,7 @@ def sie_kernel(has_noise: bool, has_impact: bool, filtered: bool, replay: bool =
                     if event > 0 and left <= 0.0:
                         break
                     attachment_forces(x, v, k1, c1, k_lin, k_cubic, c_abs, rest, force)
-                    kick(v, 0.5 * left, 0.5 * dw, load, ag, force, mass, vn)
+                    kick(v, 0.5 * left, 0.5 * dw, load, ag, force, inv_mass, vn)
                     if has_impact:
                         stick_together(mass, vn, stuck, impact_body, True)
                     s = left
@@ -242,12 +251,12 @@ def sie_kernel(has_noise: bool, has_impact: bool, filtered: bool, replay: bool =
                                 if has_noise and hit < 0:  # one bridge draw per split step
                                     zb = sigma * gen.standard_normal()
                                 sq = 1 if u_end > 0.0 else -1
-                                sc = crossing(x, v, left, dw, zb, load, ag, force, mass, stuck, impact_body,
+                                sc = crossing(x, v, left, dw, zb, load, ag, force, mass, inv_mass, stuck, impact_body,
                                               j, sq, clearance[q], vt)
                                 if hit < 0 or sc < s:
                                     hit, side, s = q, sq, sc
                         if hit >= 0:
-                            kick(v, 0.5 * s, 0.5 * bridge(dw, left, s, zb), load, ag, force, mass, vn)
+                            kick(v, 0.5 * s, 0.5 * bridge(dw, left, s, zb), load, ag, force, inv_mass, vn)
                             stick_together(mass, vn, stuck, impact_body, False)
                     dws = dw
                     if has_impact:  # the increment of the sub-step before an impact
@@ -270,7 +279,7 @@ def sie_kernel(has_noise: bool, has_impact: bool, filtered: bool, replay: bool =
                         load_end, ag_end = excitation(t + s, tm, (t + s - t_step) / dt, forces, series_t, series_v, series_ptr, series_ground,
                                                       filtered, c_force, c_ground, z, zn)
                     attachment_forces(x, v, k1, c1, k_lin, k_cubic, c_abs, rest, force)
-                    kick(v, 0.5 * s, 0.5 * dws, load_end, ag_end, force, mass, vn)
+                    kick(v, 0.5 * s, 0.5 * dws, load_end, ag_end, force, inv_mass, vn)
                     if has_impact:
                         stick_together(mass, vn, stuck, impact_body, False)
                     if inside:
@@ -328,6 +337,9 @@ def sie_kernel(has_noise: bool, has_impact: bool, filtered: bool, replay: bool =
                 h_next = record_history(history, stride, h_next, x[0], e1_prev)
         if diverged(x):
             out[STATUS] = STATUS_DIVERGED
+        for b in range(nb):
+            state_x[b] = x[b]
+            state_v[b] = v[b]
         out[INPUT] = work
         out[PRIMARY_DISS] = d_primary
         out[ABSORBER_DISS] = d_absorber
