@@ -2,8 +2,8 @@
 compiled once.
 
 ``simulate(scene, generator)`` runs one realisation and returns the raw metric vector
-(``common.SLOTS``).  Kernels are memoised by scene structure; the parameters are arguments,
-so a sweep never recompiles.
+(``common.SLOTS``).  Kernels are memoised by scene structure (the number of bodies
+included); the parameters are arguments, so a sweep of parameters never recompiles.
 """
 
 from __future__ import annotations

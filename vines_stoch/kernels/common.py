@@ -1,4 +1,8 @@
-"""Pieces shared by the step loops: forces on all bodies, contact constraints, metric slots."""
+"""Pieces shared by the step loops: forces on all bodies, contact constraints, metric slots.
+
+Loops over bodies run to the length of the state arrays (not of the parameter arrays): the
+kernels make those lengths compile-time constants (``scratch``), so the loops unroll.
+"""
 
 from __future__ import annotations
 
