@@ -173,22 +173,26 @@ def minimal_euler(n_steps: int, dt: float, gen) -> float:
     return acc
 
 
-def _loop_rate(loop, n_paths: int, n_steps: int, dt: float, *args) -> float:
-    loop(10, dt, np.random.default_rng(0), *args)
-    start = time.perf_counter()
-    for r in range(n_paths):
-        loop(n_steps, dt, np.random.default_rng(r), *args)
-    return n_paths * n_steps / (time.perf_counter() - start)
-
-
-def _kernel_rate(n_paths: int) -> float:
-    """Path-steps/s of the smooth scene's step loop alone: ``simulate`` path after path."""
+def _step_loop_rates(n_paths: int, n_steps: int = 200_000, dt: float = 1e-3) -> dict[str, float]:
+    """Path-steps/s of the smooth scene's step loop (``simulate``, seeded as in an ensemble)
+    and of the minimal loops, one path of each in turn, so that every runner sees the same
+    machine (its speed drifts by up to 1.5x on a shared host)."""
     scene = build_scene(parse_scenario(SMOOTH.format(n=1)).points[0])
-    simulate(scene, np.random.default_rng(0))
-    start = time.perf_counter()
-    for r in range(n_paths):
-        simulate(scene, np.random.default_rng(r))
-    return n_paths * scene.n_steps / (time.perf_counter() - start)
+    assert scene.n_steps == n_steps and scene.dt == dt
+    runners = {
+        "roofline": lambda gen: minimal_kdk(n_steps, dt, gen, False),
+        "roofline with metrics": lambda gen: minimal_kdk(n_steps, dt, gen, True),
+        "euler": lambda gen: minimal_euler(n_steps, dt, gen),
+        "step loop": lambda gen: simulate(scene, gen),
+    }
+    seconds = dict.fromkeys(runners, 0.0)
+    for r in range(-1, n_paths):  # path -1 compiles or loads the loops
+        for name, runner in runners.items():
+            start = time.perf_counter()
+            runner(np.random.default_rng(r + 1))
+            if r >= 0:
+                seconds[name] += time.perf_counter() - start
+    return {name: n_paths * n_steps / t for name, t in seconds.items()}
 
 
 def _api_rate(n_paths: int, workers: int, directory: Path, impacts: bool = False) -> tuple[float, float]:
@@ -341,15 +345,10 @@ def main(out: Path = Path("reports/benchmarks.md"), n_paths: int = 200) -> str:
     with tempfile.TemporaryDirectory() as tmp:
         _api_rate(4, 1, Path(tmp) / "warm")  # compile (or load from cache) outside the timing
         _api_rate(4, 1, Path(tmp) / "warm-impact", impacts=True)
-        # the rooflines before and after the runs they are compared with, the faster reading
-        # kept (the machine's speed drifts; this is the conservative choice for the ratios)
-        loops = [_loop_rate(minimal_kdk, n_paths, 200_000, 1e-3, metrics) for metrics in (False, True)]
-        euler_loop = _loop_rate(minimal_euler, n_paths, 200_000, 1e-3)
-        kernel = _kernel_rate(n_paths // 4)
+        rates = _step_loop_rates(n_paths // 2)
+        loop, loop_metrics, euler_loop, kernel = rates.values()
         api1, res1 = _api_rate(n_paths, 1, Path(tmp) / "one")
         api2, res2 = _api_rate(n_paths, 2, Path(tmp) / "two")
-        loop, loop_metrics = (max(before, _loop_rate(minimal_kdk, n_paths, 200_000, 1e-3, metrics))
-                              for before, metrics in zip(loops, (False, True)))
         impact1, res_impact = _api_rate(n_paths, 1, Path(tmp) / "impact", impacts=True)
         seismic = _seismic(Path(tmp))
         memory = {n: _peak_memory(n, Path(tmp) / f"history{n}") for n in (10_000, 100_000)}
@@ -379,14 +378,16 @@ dt = 1e-3, {n_paths} realisations, Euler-Maruyama (kick-drift-kick).
 | roofline: minimal numba loop of the same scheme (kick-drift-kick), no metrics | 1 | {loop / 1e6:.1f} | 1.00 | - |
 | the same loop with the same metrics (scalar code for this one scene) | 1 | {loop_metrics / 1e6:.1f} | {loop_metrics / loop:.2f} | - |
 | minimal numba loop, semi-implicit Euler (one force evaluation a step) | 1 | {euler_loop / 1e6:.1f} | {euler_loop / loop:.2f} | - |
-| vines_stoch step loop (`simulate`, path after path) | 1 | {kernel / 1e6:.1f} | {kernel / loop:.2f} | - |
+| vines_stoch step loop (`simulate`, seeded as in an ensemble) | 1 | {kernel / 1e6:.1f} | {kernel / loop:.2f} | - |
 | `vines_stoch.run` | 1 | {api1 / 1e6:.1f} | {api1 / loop:.2f} | {res1:.1e} |
 | `vines_stoch.run` | 2 | {api2 / 1e6:.1f} | {api2 / loop:.2f} | {res2:.1e} |
 
 Against the roofline with the same metrics: step loop {kernel / loop_metrics:.2f}x, `vines_stoch.run`
 {api1 / loop_metrics:.2f}x on 1 thread. Scaling 1 -> 2 threads: {api2 / api1:.2f}x. Per core (1 thread):
 {api1 / 1e6:.1f} M path-steps/s. The API figures include seeding, metric reduction, dask scheduling
-and Parquet output. The rooflines are timed before and after the other rows; the faster reading is kept.
+and Parquet output. The first four rows run one path of each in turn ({n_paths // 2} paths each), so
+they see the same machine; the `run` rows are timed after them (this host's speed drifts by up to
+1.5x between minutes, which moves their ratios).
 
 ## Impact-rich stochastic scene
 
