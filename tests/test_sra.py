@@ -115,3 +115,13 @@ def test_weak_order_of_the_energy_integral():
         (b2, se2), (b1, se1) = [(bias, se) for _, s, _, bias, se, *_ in rows if s == scheme]
         assert abs(b2) > 4 * se2 and abs(b1) > 4 * se1, rows
         assert abs(b2) / abs(b1) > 3.0, (scheme, b2, b1)
+
+
+def test_noisy_scene_needs_a_generator():
+    """A noisy scene run without a generator is refused rather than drawn from a shared stream;
+    a replayed path without impacts needs none."""
+    scene = _noisy_scene(0.05, 1.0)
+    with pytest.raises(ValueError, match="generator"):
+        simulate(scene)
+    raw = simulate(scene, normals=np.zeros(scene.n_steps))
+    assert np.isfinite(raw).all()

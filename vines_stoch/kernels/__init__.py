@@ -15,8 +15,6 @@ from .loads import load_path
 from .rk4 import rk4_kernel
 from .sie import sie_kernel
 
-#: The generator of noisy scenes run without one.
-_NO_NOISE = np.random.default_rng(0)
 _NO_NORMALS = np.zeros(0)
 _NO_HISTORY = np.zeros((0, 2))
 
@@ -52,7 +50,10 @@ def _generator_for(scene, replay: bool, generator: np.random.Generator | None) -
     draws = scene.filters["phi"].shape[0] > 0 or scene.sigma > 0.0 and (not replay or scene.has_impact)
     if not draws:
         return None
-    return generator if generator is not None else _NO_NOISE
+    if generator is None:
+        raise ValueError("generator: this scene draws random numbers (white or filtered noise, or the "
+                         "Brownian-bridge draws of impacts under replayed noise); pass a numpy Generator")
+    return generator
 
 
 def simulate(scene, generator: np.random.Generator | None = None, *, normals: np.ndarray | None = None,
@@ -60,6 +61,7 @@ def simulate(scene, generator: np.random.Generator | None = None, *, normals: np
              history: np.ndarray | None = None, stride: int = 1) -> np.ndarray:
     """Run one realisation of ``scene``; returns the raw metric vector (see ``SLOTS``).
 
+    ``generator`` is required where the scene draws random numbers (a ``ValueError`` says so);
     ``normals`` replays a given Brownian path (one standard normal per step, two with the
     ``sra`` scheme: see ``sie_kernel``) instead of
     drawing from ``generator``; ``final`` (shape ``(2, n_bodies)``) receives the final
@@ -94,10 +96,11 @@ def simulate(scene, generator: np.random.Generator | None = None, *, normals: np
 def load_history(scene, generator: np.random.Generator | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """One sample path of a scene's loads on its time grid: ``(t, force on the primary,
     ground acceleration)``; filtered loads start from the same law and take the same exact
-    steps as in the step loops (white noise, having no path value, is left out)."""
+    steps as in the step loops (white noise, having no path value, is left out); ``generator``
+    draws the filter states (default: a generator seeded with 0)."""
     n = scene.n_steps
     force, ground = np.zeros(n + 1), np.zeros(n + 1)
-    gen = generator if generator is not None else _NO_NOISE
+    gen = generator if generator is not None else np.random.default_rng(0)
     load_path(scene.excitation, filter_tuple(scene, gen), scene.dt, n, gen, force, ground)
     return scene.dt * np.arange(n + 1), force, ground
 
