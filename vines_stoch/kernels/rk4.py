@@ -29,7 +29,7 @@ from .common import (ABSORBER_DISS, CAPPED, CHECK_EVERY, CONTACT_TIME, E1_MAX, E
                      X1_SQ_INT, accelerate, attachment_forces, block_end, contact_force, contact_forces,
                      diverged, pin_to_walls, record_history, record_sample, scratch, start_history,
                      stick_together, sticks, stored_energy)
-from .loads import applied, has_breaks, next_break
+from .loads import applied, next_break
 
 NEWTON_ITERATIONS = 12
 #: Sub-steps per Hertz contact duration.
@@ -198,9 +198,10 @@ def contact_step(x, v, mass, hertz_body, hertz_k, hertz_walls, touching) -> floa
 
 
 @lru_cache(maxsize=None)
-def rk4_kernel(n_bodies: int, has_impact: bool, has_hertz: bool, sampling: bool):
+def rk4_kernel(n_bodies: int, has_impact: bool, has_hertz: bool, sampling: bool, piecewise: bool):
     """The RK4 loop specialised to a scene's structure (number of bodies, impact absorbers,
-    Hertz absorbers, Poincare sampling for the regime)."""
+    Hertz absorbers, Poincare sampling for the regime, loads with kinks or jumps:
+    ``loads.has_breaks``)."""
     NB = n_bodies
 
     @njit(**KERNEL)
@@ -209,7 +210,6 @@ def rk4_kernel(n_bodies: int, has_impact: bool, has_hertz: bool, sampling: bool)
                period, sample_from, gen, normals, out, samples, history, stride):
         nb = NB
         forces, series_t, series_v, series_ptr, series_ground = ex
-        breaks = has_breaks(ex)  # sub-steps end at the loads' kinks and jumps
         # the state and the stages' scratch on the stack (see ``common.scratch``)
         x, v, xn, vn, xp, vp = scratch(NB), scratch(NB), scratch(NB), scratch(NB), scratch(NB), scratch(NB)
         acc, xs, vs, inv_mass = scratch(NB), scratch(NB), scratch(NB), scratch(NB)
@@ -254,7 +254,7 @@ def rk4_kernel(n_bodies: int, has_impact: bool, has_hertz: bool, sampling: bool)
                         h = left
                         if contact:
                             h = min(left, contact_step(x, v, mass, hertz_body, hertz_k, hertz_walls, touching))
-                        if breaks:
+                        if piecewise:  # sub-steps end at the loads' kinks and jumps
                             tb = next_break(t + 1e-9 * dt, ex)
                             if tb < t + h - 1e-9 * dt:
                                 h = tb - t

@@ -39,7 +39,7 @@ from .common import (ABSORBER_DISS, CAPPED, CHECK_EVERY, E1_MAX, ENERGY_INT, FIN
                      PRIMARY_DISS, STATUS, STATUS_DIVERGED, X1_MAX, X1_SQ_INT, accelerate,
                      attachment_forces, block_end, diverged, pin_to_walls, record_history,
                      scratch, start_history, stick_together, sticks, stored_energy)
-from .loads import advance_filters, excitation, has_breaks
+from .loads import advance_filters, excitation
 
 #: Iterations of the bracketed search for the impact instant (Illinois method).
 ROOT_ITERATIONS = 100
@@ -109,10 +109,11 @@ def crossing(x, v, length, total, z, load, ag, force, mass, inv_mass, stuck, imp
 
 
 @lru_cache(maxsize=None)
-def sie_kernel(n_bodies: int, has_noise: bool, has_impact: bool, filtered: bool, replay: bool = False,
-               sra: bool = False):
+def sie_kernel(n_bodies: int, has_noise: bool, has_impact: bool, filtered: bool, piecewise: bool,
+               replay: bool = False, sra: bool = False):
     """The semi-implicit Euler-Maruyama loop specialised to a scene's structure (number of
-    bodies, white noise, impact absorbers, filtered loads).
+    bodies, white noise, impact absorbers, filtered loads, loads with kinks or jumps:
+    ``loads.has_breaks``).
 
     With ``replay``, the step increments are ``sigma sqrt(dt) normals[i]`` (a given Brownian
     path, for convergence studies) instead of draws from ``gen``.
@@ -155,7 +156,6 @@ def sie_kernel(n_bodies: int, has_noise: bool, has_impact: bool, filtered: bool,
         zn = z.copy()
         draws = np.zeros(nz)
         stuck = np.zeros(ni, np.int64)
-        jumps = has_breaks(ex)  # piecewise loads: re-evaluate each step's start on its own piece
         noise_scale = sigma * np.sqrt(dt)
         m0 = mass[0]
         e1_prev = primary_energy(m0, k1, x[0], v[0])
@@ -187,7 +187,7 @@ def sie_kernel(n_bodies: int, has_noise: bool, has_impact: bool, filtered: bool,
                         z[r] = zn[r]
                     advance_filters(z, zn, t_step, dt, phi, chol, envelopes, gen, draws)
                 load, ag = load_next, ag_next
-                if jumps:
+                if piecewise:  # re-evaluate each step's start on its own piece
                     load, ag = excitation(t_step, tm, 0.0, forces, series_t, series_v, series_ptr, series_ground, filtered, c_force, c_ground, z, zn)
                 load_next, ag_next = excitation(t_step + dt, tm, 1.0, forces, series_t, series_v, series_ptr, series_ground, filtered, c_force, c_ground, z, zn)
                 dw = 0.0
