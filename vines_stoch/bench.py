@@ -173,10 +173,12 @@ def minimal_euler(n_steps: int, dt: float, gen) -> float:
     return acc
 
 
-def _step_loop_rates(n_paths: int, n_steps: int = 200_000, dt: float = 1e-3) -> dict[str, float]:
+def _step_loop_rates(n_paths: int, n_steps: int = 200_000, dt: float = 1e-3,
+                     only: tuple[str, ...] | None = None) -> dict[str, float]:
     """Path-steps/s of the smooth scene's step loop (``simulate``, seeded as in an ensemble)
-    and of the minimal loops, one path of each in turn, so that every runner sees the same
-    machine (its speed drifts by up to 1.5x on a shared host)."""
+    and of the minimal loops (or of the runners named in ``only``), one path of each in turn,
+    so that every runner sees the same machine (its speed drifts by up to 1.5x on a shared
+    host)."""
     scene = build_scene(parse_scenario(SMOOTH.format(n=1)).points[0])
     assert scene.n_steps == n_steps and scene.dt == dt
     runners = {
@@ -185,6 +187,7 @@ def _step_loop_rates(n_paths: int, n_steps: int = 200_000, dt: float = 1e-3) -> 
         "euler": lambda gen: minimal_euler(n_steps, dt, gen),
         "step loop": lambda gen: simulate(scene, gen),
     }
+    runners = {name: runner for name, runner in runners.items() if only is None or name in only}
     seconds = dict.fromkeys(runners, 0.0)
     for r in range(-1, n_paths):  # path -1 compiles or loads the loops
         for name, runner in runners.items():
@@ -350,7 +353,7 @@ def main(out: Path = Path("reports/benchmarks.md"), n_paths: int = 200) -> str:
         # two rounds of: a short roofline batch, then the 1- and 2-thread runs it is compared
         # with (the host's speed drifts between minutes); the round with the better 1-thread
         # ratio is reported
-        rounds = [(_step_loop_rates(10)["roofline"], *_api_rate(n_paths, 1, Path(tmp) / f"one{k}"),
+        rounds = [(_step_loop_rates(10, only=("roofline",))["roofline"], *_api_rate(n_paths, 1, Path(tmp) / f"one{k}"),
                    *_api_rate(n_paths, 2, Path(tmp) / f"two{k}")) for k in range(2)]
         near, api1, res1, api2, res2 = max(rounds, key=lambda r: r[1] / r[0])
         impact1, res_impact = _api_rate(n_paths, 1, Path(tmp) / "impact", impacts=True)

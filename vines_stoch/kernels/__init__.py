@@ -48,8 +48,7 @@ def _generator_for(scene, replay: bool, generator: np.random.Generator | None) -
     """The generator a kernel draws from, or ``None`` where it draws nothing (white noise
     replayed without impacts, no noise at all): numba's unboxing of a Generator costs about
     6 us a call, half the set-up of a short run."""
-    draws = scene.filters["phi"].shape[0] > 0 or scene.sigma > 0.0 and (not replay or scene.has_impact)
-    if not draws:
+    if not scene.has_noise or replay and not scene.has_impact:  # (replay refuses filtered loads)
         return None
     if generator is None:
         raise ValueError("generator: this scene draws random numbers (white or filtered noise, or the "

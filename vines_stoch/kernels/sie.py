@@ -144,12 +144,11 @@ def sie_kernel(n_bodies: int, has_noise: bool, has_impact: bool, filtered: bool,
         phi, chol, envelopes, c_force, c_ground, z = fl
         forces, series_t, series_v, series_ptr, series_ground = ex
         nz = z.shape[0]
-        x, v = scratch(NB), scratch(NB)  # the state, on the stack (copied back at the end)
+        # the state (copied back at the end) and the scratch, on the stack (see ``common.scratch``)
+        x, v, force, vn, vt, inv_mass = scratch(NB), scratch(NB), scratch(NB), scratch(NB), scratch(NB), scratch(NB)
         for b in range(nb):
             x[b] = state_x[b]
             v[b] = state_v[b]
-        force, vn, vt, inv_mass = scratch(NB), scratch(NB), scratch(NB), scratch(NB)
-        for b in range(nb):
             inv_mass[b] = 1.0 / mass[b]
         # the Runge-Kutta stages' scratch, only where they run
         a1, a2, a3, xs, v2, v3 = scratch(NS), scratch(NS), scratch(NS), scratch(NS), scratch(NS), scratch(NS)
