@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from .common import POINCARE_SAMPLES, SLOTS, new_metrics
-from .loads import has_breaks, load_path
+from .loads import has_breaks, has_ground, load_path
 from .rk4 import rk4_kernel
 from .sie import sie_kernel
 
@@ -24,8 +24,8 @@ def kernel_for(scene, replay: bool = False):
     piecewise = has_breaks(scene.excitation)
     if scene.scheme == "rk4":
         return rk4_kernel(scene.mass.shape[0], scene.has_impact, scene.has_hertz, scene.period > 0, piecewise)
-    return sie_kernel(scene.mass.shape[0], scene.sigma > 0.0, scene.has_impact, scene.filters["phi"].shape[0] > 0,
-                      piecewise, replay, scene.scheme == "sra")
+    return sie_kernel(scene.mass.shape[0], scene.forces.shape[0], scene.sigma > 0.0, scene.has_impact,
+                      scene.filters["phi"].shape[0] > 0, piecewise, has_ground(scene), replay, scene.scheme == "sra")
 
 
 def sample_buffer(scene) -> np.ndarray:

@@ -56,7 +56,7 @@ def accelerations(x, v, t, tm, mass, inv_mass, k1, c1, k_lin, k_cubic, c_abs, re
     """
     attachment_forces(x, v, k1, c1, k_lin, k_cubic, c_abs, rest, acc)
     contact_forces(x, hertz_body, hertz_k, hertz_walls, acc, contact)
-    load, ag = applied(t, tm, forces, series_t, series_v, series_ptr, series_ground)
+    load, ag = applied(t, tm, forces, series_t, series_v, series_ptr, series_ground, series_t, False)
     accelerate(acc, load, ag, inv_mass, acc)
     power = load * v[0]
     if ag != 0.0:

@@ -39,22 +39,24 @@ from .common import (ABSORBER_DISS, CAPPED, CHECK_EVERY, E1_MAX, ENERGY_INT, FIN
                      PRIMARY_DISS, STATUS, STATUS_DIVERGED, X1_MAX, X1_SQ_INT, accelerate,
                      attachment_forces, block_end, diverged, pin_to_walls, record_history,
                      scratch, start_history, stick_together, sticks, stored_energy)
-from .loads import advance_filters, excitation
+from .loads import advance_filters, excitation, phasors, rotations, turn
 
 #: Iterations of the bracketed search for the impact instant (Illinois method).
 ROOT_ITERATIONS = 100
 
 
 @njit(**INLINE)
-def kick(v, s, dws, load, ag, force, inv_mass, vn):
+def kick(v, s, dws, load, ag, force, inv_mass, vn, ground):
     """Velocities after a kick of length ``s`` into ``vn``: forces, the load ``load`` and
-    Wiener increment ``dws`` on the primary, ground acceleration ``ag`` on every body (the
+    Wiener increment ``dws`` on the primary, ground acceleration ``ag`` on every body if
+    ``ground`` (a compile-time flag: ``0 * s`` cannot be folded away under IEEE rules) (the
     caller makes stuck absorbers move with the primary).  ``inv_mass``: the reciprocal masses.
     The state-dependent force term comes last, one fused multiply-add after the forces (the
     step's critical path)."""
-    vn[0] = (v[0] + ((load * s + dws) * inv_mass[0] - ag * s)) + force[0] * (s * inv_mass[0])
+    base = ag * s if ground else 0.0
+    vn[0] = (v[0] + ((load * s + dws) * inv_mass[0] - base)) + force[0] * (s * inv_mass[0])
     for b in range(1, vn.shape[0]):
-        vn[b] = (v[b] - ag * s) + force[b] * (s * inv_mass[b])
+        vn[b] = (v[b] - base) + force[b] * (s * inv_mass[b])
 
 
 @njit(**INLINE)
@@ -76,12 +78,12 @@ def bridge(total, length, s, z):
 
 
 @njit(**INLINE)
-def crossing(x, v, length, total, z, load, ag, force, mass, inv_mass, stuck, impact_body, j, side, wall, vt):
+def crossing(x, v, length, total, z, load, ag, force, mass, inv_mass, stuck, impact_body, j, side, wall, vt, ground):
     """Sub-step length in ``(0, length]`` after which absorber body ``j`` is exactly at
     ``wall`` (side ``side``), by the Illinois method on the bracket ``[0, length]``."""
     lo, hi = 0.0, length
     g_lo = min(side * (x[j] - x[0]) - wall, 0.0)  # on the wall counts as inside
-    kick(v, 0.5 * length, 0.5 * total, load, ag, force, inv_mass, vt)
+    kick(v, 0.5 * length, 0.5 * total, load, ag, force, inv_mass, vt, ground)
     stick_together(mass, vt, stuck, impact_body, False)
     g_hi = side * (x[j] - x[0] + length * (vt[j] - vt[0])) - wall
     s = hi
@@ -90,7 +92,7 @@ def crossing(x, v, length, total, z, load, ag, force, mass, inv_mass, stuck, imp
         s = hi - g_hi * (hi - lo) / (g_hi - g_lo)
         if not (lo < s < hi):
             s = 0.5 * (lo + hi)
-        kick(v, 0.5 * s, 0.5 * bridge(total, length, s, z), load, ag, force, inv_mass, vt)
+        kick(v, 0.5 * s, 0.5 * bridge(total, length, s, z), load, ag, force, inv_mass, vt, ground)
         stick_together(mass, vt, stuck, impact_body, False)
         g = side * (x[j] - x[0] + s * (vt[j] - vt[0])) - wall
         if g > 0.0:
@@ -109,11 +111,13 @@ def crossing(x, v, length, total, z, load, ag, force, mass, inv_mass, stuck, imp
 
 
 @lru_cache(maxsize=None)
-def sie_kernel(n_bodies: int, has_noise: bool, has_impact: bool, filtered: bool, piecewise: bool,
-               replay: bool = False, sra: bool = False):
+def sie_kernel(n_bodies: int, n_rows: int, has_noise: bool, has_impact: bool, filtered: bool, piecewise: bool,
+               ground: bool, replay: bool = False, sra: bool = False):
     """The semi-implicit Euler-Maruyama loop specialised to a scene's structure (number of
-    bodies, white noise, impact absorbers, filtered loads, loads with kinks or jumps:
-    ``loads.has_breaks``).
+    bodies and of closed-form force rows, white noise, impact absorbers, filtered loads, loads
+    with kinks or jumps: ``loads.has_breaks``, ground acceleration: ``loads.has_ground``).
+    Harmonic loads on the step grid come from phasors (``loads.turn``), set exactly every
+    ``CHECK_EVERY`` steps.
 
     With ``replay``, the step increments are ``sigma sqrt(dt) normals[i]`` (a given Brownian
     path, for convergence studies) instead of draws from ``gen``.
@@ -132,7 +136,9 @@ def sie_kernel(n_bodies: int, has_noise: bool, has_impact: bool, filtered: bool,
     # with the Runge-Kutta step
     EVENTS = 0 if sra else (MAX_EVENTS + 1 if has_impact else 1)
     NB = n_bodies
+    NR = n_rows
     NS = n_bodies if sra else 0
+    GROUND = ground
     ROOT3 = np.sqrt(3.0)
 
     @njit(**KERNEL)
@@ -154,13 +160,21 @@ def sie_kernel(n_bodies: int, has_noise: bool, has_impact: bool, filtered: bool,
         a1, a2, a3, xs, v2, v3 = scratch(NS), scratch(NS), scratch(NS), scratch(NS), scratch(NS), scratch(NS)
         zn = z.copy()
         draws = np.zeros(nz)
+        # phasors (cos, sin) of the harmonic loads at the step's start and at its midpoint, and
+        # their turns in a step and in half a step; on the stack (heap arrays passed to the
+        # inlined load functions cost reference counting in the step loop)
+        pc, ps, mc, ms = scratch(NR), scratch(NR), scratch(NR), scratch(NR)
+        rc, rs, hc, hs = scratch(NR), scratch(NR), scratch(NR), scratch(NR)
+        rotations(forces, dt, rc, rs)
+        rotations(forces, 0.5 * dt, hc, hs)
         stuck = np.zeros(ni, np.int64)
         noise_scale = sigma * np.sqrt(dt)
         m0 = mass[0]
         e1_prev = primary_energy(m0, k1, x[0], v[0])
         x2_prev = x[0] * x[0]
         h_next = start_history(history, stride, x[0], e1_prev)
-        load_next, ag_next = excitation(0.0, 0.5 * dt, 0.0, forces, series_t, series_v, series_ptr, series_ground, filtered, c_force, c_ground, z, zn)
+        load_next, ag_next = excitation(0.0, 0.5 * dt, 0.0, forces, series_t, series_v, series_ptr, series_ground,
+                                        filtered, c_force, c_ground, z, zn, pc, False, GROUND)
         # accumulators in registers; written to ``out`` once at the end
         work = d_primary = d_absorber = e_integral = x2_integral = e1_max = x1_max = 0.0
         loss_sum = n_left = n_right = 0.0
@@ -174,9 +188,11 @@ def sie_kernel(n_bodies: int, has_noise: bool, has_impact: bool, filtered: bool,
                 work = stored_energy(x, v, mass, k1, k_lin, k_cubic, rest, hertz_body, hertz_k, hertz_walls)
                 e1_max = e1_prev
                 x1_max = abs(x[0])
-            if i % CHECK_EVERY == 0 and diverged(x):
-                out[STATUS] = STATUS_DIVERGED
-                break
+            if i % CHECK_EVERY == 0:
+                if diverged(x):
+                    out[STATUS] = STATUS_DIVERGED
+                    break
+                phasors(i * dt, forces, pc, ps)
             end = block_end(i, n_steps, i0, h_next)
             for i in range(i, end):
                 t_step = i * dt
@@ -187,8 +203,16 @@ def sie_kernel(n_bodies: int, has_noise: bool, has_impact: bool, filtered: bool,
                     advance_filters(z, zn, t_step, dt, phi, chol, envelopes, gen, draws)
                 load, ag = load_next, ag_next
                 if piecewise:  # re-evaluate each step's start on its own piece
-                    load, ag = excitation(t_step, tm, 0.0, forces, series_t, series_v, series_ptr, series_ground, filtered, c_force, c_ground, z, zn)
-                load_next, ag_next = excitation(t_step + dt, tm, 1.0, forces, series_t, series_v, series_ptr, series_ground, filtered, c_force, c_ground, z, zn)
+                    load, ag = excitation(t_step, tm, 0.0, forces, series_t, series_v, series_ptr, series_ground,
+                                          filtered, c_force, c_ground, z, zn, pc, True, GROUND)
+                load3, ag3 = 0.0, 0.0  # the Runge-Kutta step's mid-step loads
+                if sra:
+                    turn(pc, ps, hc, hs, mc, ms)
+                    load3, ag3 = excitation(t_step + 0.5 * dt, tm, 0.5, forces, series_t, series_v, series_ptr,
+                                            series_ground, filtered, c_force, c_ground, z, zn, mc, True, GROUND)
+                turn(pc, ps, rc, rs, pc, ps)
+                load_next, ag_next = excitation(t_step + dt, tm, 1.0, forces, series_t, series_v, series_ptr, series_ground,
+                                                filtered, c_force, c_ground, z, zn, pc, True, GROUND)
                 dw = 0.0
                 if has_noise and not sra:
                     dw = noise_scale * (normals[i] if replay else gen.standard_normal())
@@ -199,8 +223,6 @@ def sie_kernel(n_bodies: int, has_noise: bool, has_impact: bool, filtered: bool,
                         u2 = normals[2 * i + 1] if replay else gen.standard_normal()
                         dw = noise_scale * u1
                         dz = 0.5 * noise_scale * (u1 + u2 / ROOT3)
-                    load3, ag3 = excitation(t_step + 0.5 * dt, tm, 0.5, forces, series_t, series_v, series_ptr,
-                                            series_ground, filtered, c_force, c_ground, z, zn)
                     attachment_forces(x, v, k1, c1, k_lin, k_cubic, c_abs, rest, force)
                     accelerate(force, load, ag, inv_mass, a1)
                     for b in range(nb):
@@ -236,7 +258,7 @@ def sie_kernel(n_bodies: int, has_noise: bool, has_impact: bool, filtered: bool,
                     if event > 0 and left <= 0.0:
                         break
                     attachment_forces(x, v, k1, c1, k_lin, k_cubic, c_abs, rest, force)
-                    kick(v, 0.5 * left, 0.5 * dw, load, ag, force, inv_mass, vn)
+                    kick(v, 0.5 * left, 0.5 * dw, load, ag, force, inv_mass, vn, GROUND)
                     if has_impact:
                         stick_together(mass, vn, stuck, impact_body, True)
                     s = left
@@ -251,11 +273,11 @@ def sie_kernel(n_bodies: int, has_noise: bool, has_impact: bool, filtered: bool,
                                     zb = sigma * gen.standard_normal()
                                 sq = 1 if u_end > 0.0 else -1
                                 sc = crossing(x, v, left, dw, zb, load, ag, force, mass, inv_mass, stuck, impact_body,
-                                              j, sq, clearance[q], vt)
+                                              j, sq, clearance[q], vt, GROUND)
                                 if hit < 0 or sc < s:
                                     hit, side, s = q, sq, sc
                         if hit >= 0:
-                            kick(v, 0.5 * s, 0.5 * bridge(dw, left, s, zb), load, ag, force, inv_mass, vn)
+                            kick(v, 0.5 * s, 0.5 * bridge(dw, left, s, zb), load, ag, force, inv_mass, vn, GROUND)
                             stick_together(mass, vn, stuck, impact_body, False)
                     dws = dw
                     if has_impact:  # the increment of the sub-step before an impact
@@ -276,9 +298,9 @@ def sie_kernel(n_bodies: int, has_noise: bool, has_impact: bool, filtered: bool,
                     load_end, ag_end = load_next, ag_next
                     if hit >= 0:
                         load_end, ag_end = excitation(t + s, tm, (t + s - t_step) / dt, forces, series_t, series_v, series_ptr, series_ground,
-                                                      filtered, c_force, c_ground, z, zn)
+                                                      filtered, c_force, c_ground, z, zn, pc, False, GROUND)
                     attachment_forces(x, v, k1, c1, k_lin, k_cubic, c_abs, rest, force)
-                    kick(v, 0.5 * s, 0.5 * dws, load_end, ag_end, force, inv_mass, vn)
+                    kick(v, 0.5 * s, 0.5 * dws, load_end, ag_end, force, inv_mass, vn, GROUND)
                     if has_impact:
                         stick_together(mass, vn, stuck, impact_body, False)
                     if inside:
