@@ -65,6 +65,26 @@ def scratch(typingctx, size):
 
 
 @njit(**INLINE)
+def pick(a, j: int) -> float:
+    """``a[j]`` for a run-time ``j``, as a scan over constant indices: an array on the stack
+    (``scratch``) indexed only at constant positions stays in registers, one indexed at a
+    run-time position is kept in memory, where every access waits on a store."""
+    value = a[0]
+    for b in range(1, a.shape[0]):
+        if b == j:
+            value = a[b]
+    return value
+
+
+@njit(**INLINE)
+def put(a, j: int, value: float) -> None:
+    """``a[j] = value`` for a run-time ``j`` (see ``pick``)."""
+    for b in range(a.shape[0]):
+        if b == j:
+            a[b] = value
+
+
+@njit(**INLINE)
 def attachment_forces(x, v, k1, c1, k_lin, k_cubic, c_abs, rest, force):
     """``force[b]``: force on body ``b`` from the primary's spring and damper and every
     absorber attachment (MODEL.md section 1); external loads are added by the caller."""
@@ -90,10 +110,10 @@ def contact_forces(x, hertz_body, hertz_k, hertz_walls, force, active=True):
     each Hertz absorber, the opposite on the primary; nothing unless ``active``."""
     for q in range(hertz_body.shape[0] if active else 0):
         j = hertz_body[q] + 1
-        u = x[j] - x[0]
+        u = pick(x, j) - x[0]
         f = (hertz_force(hertz_walls[q, 0] - u, hertz_k[q, 0])
              - hertz_force(u - hertz_walls[q, 1], hertz_k[q, 1]))
-        force[j] += f
+        put(force, j, pick(force, j) + f)
         force[0] -= f
 
 
@@ -138,18 +158,18 @@ def stick_together(mass, values, stuck, impact_body, release, active=True):
             if stuck[q] != 0:
                 j = impact_body[q] + 1
                 total_mass += mass[j]
-                total += mass[j] * values[j]
+                total += mass[j] * pick(values, j)
         common = total / total_mass
         if attempt + 1 < passes:
             for q in range(stuck.shape[0]):
                 # wall force on the absorber ~ mass * (common - free value); a wall only pushes
-                if stuck[q] * (common - values[impact_body[q] + 1]) > 0.0:
+                if stuck[q] * (common - pick(values, impact_body[q] + 1)) > 0.0:
                     stuck[q] = 0
     if passes > 0:
         values[0] = common
         for q in range(stuck.shape[0]):
             if stuck[q] != 0:
-                values[impact_body[q] + 1] = common
+                put(values, impact_body[q] + 1, common)
 
 
 @njit(**INLINE)

@@ -27,7 +27,7 @@ from .common import (ABSORBER_DISS, CAPPED, CHECK_EVERY, CONTACT_TIME, E1_MAX, E
                      FINAL_ENERGY, IMPACT_LOSS, IMPACTS, IMPACTS_LEFT, IMPACTS_RIGHT, INLINE,
                      INPUT, MAX_EVENTS, PEAK_FORCE, PRIMARY_DISS, STATUS, STATUS_DIVERGED, X1_MAX,
                      X1_SQ_INT, accelerate, attachment_forces, block_end, contact_force, contact_forces,
-                     diverged, pin_to_walls, record_history, record_sample, scratch, start_history,
+                     diverged, pick, pin_to_walls, record_history, record_sample, scratch, start_history,
                      stick_together, sticks, stored_energy)
 from .loads import applied, next_break
 
@@ -213,6 +213,8 @@ def rk4_kernel(n_bodies: int, has_impact: bool, has_hertz: bool, sampling: bool,
         # the state and the stages' scratch on the stack (see ``common.scratch``)
         x, v, xn, vn, xp, vp = scratch(NB), scratch(NB), scratch(NB), scratch(NB), scratch(NB), scratch(NB)
         acc, xs, vs, inv_mass = scratch(NB), scratch(NB), scratch(NB), scratch(NB)
+        # the out-of-line calls' own arrays, so that the stages' stay in registers
+        acc_wall, x_event = scratch(NB), scratch(NB)
         for b in range(nb):
             x[b] = state_x[b]
             v[b] = state_v[b]
@@ -267,16 +269,18 @@ def rk4_kernel(n_bodies: int, has_impact: bool, has_hertz: bool, sampling: bool,
                     if phase == 0:
                         kind, q, side, j, sign, wall = NONE, -1, 0, 0, 0, 0.0
                         if (has_impact or has_hertz) and not capped:
-                            kind, q, side, tau = next_event(x, xn, h, impact_body, clearance, stuck,
+                            for b in range(nb):
+                                x_event[b] = xn[b]
+                            kind, q, side, tau = next_event(x, x_event, h, impact_body, clearance, stuck,
                                                             hertz_body, hertz_walls, touching)
                         if kind != NONE:
                             j, sign, wall = event_geometry(kind, q, side, impact_body, clearance, hertz_body, hertz_walls)
                             phase = 1
                             continue
                     elif phase > 0:
-                        approach = sign * (vn[j] - vn[0])
+                        approach = sign * (pick(vn, j) - vn[0])
                         if approach > 0.0:
-                            correction = sign * (xn[j] - xn[0] - wall) / approach
+                            correction = sign * (pick(xn, j) - xn[0] - wall) / approach
                             tau = min(max(tau - correction, 0.0), h)
                             phase = phase + 1 if abs(correction) > 1e-15 * dt and phase < NEWTON_ITERATIONS else -1
                             continue
@@ -310,9 +314,9 @@ def rk4_kernel(n_bodies: int, has_impact: bool, has_hertz: bool, sampling: bool,
                     if kind == IMPACT:
                         n_impacts += 1
                         x[j] = x[0] + side * clearance[q]
-                        wall_accelerations(x, v, t, mass, inv_mass, k1, c1, k_lin, k_cubic, c_abs, rest, forces, series_t, series_v, series_ptr, series_ground, impact_body, hertz_body, hertz_k, hertz_walls, stuck, False, acc, True, contact)
+                        wall_accelerations(x, v, t, mass, inv_mass, k1, c1, k_lin, k_cubic, c_abs, rest, forces, series_t, series_v, series_ptr, series_ground, impact_body, hertz_body, hertz_k, hertz_walls, stuck, False, acc_wall, True, contact)
                         # the last impact a step may resolve ends a chatter sequence: inelastic collapse
-                        plastic = sticks(side, v[j] - v[0], (acc[j] - acc[0]) * dt) or n_impacts >= MAX_EVENTS
+                        plastic = sticks(side, v[j] - v[0], (acc_wall[j] - acc_wall[0]) * dt) or n_impacts >= MAX_EVENTS
                         r = 0.0 if plastic else restitution[q]
                         v[0], v[j], loss = restitution_impact(m0, mass[j], v[0], v[j], r)
                         for s in range(stuck.shape[0]):
@@ -334,7 +338,7 @@ def rk4_kernel(n_bodies: int, has_impact: bool, has_hertz: bool, sampling: bool,
                 if has_impact and stuck.any():
                     pin_to_walls(x, stuck, impact_body, clearance)
                     # release contacts the wall would have to pull (checked at step ends)
-                    wall_accelerations(x, v, t, mass, inv_mass, k1, c1, k_lin, k_cubic, c_abs, rest, forces, series_t, series_v, series_ptr, series_ground, impact_body, hertz_body, hertz_k, hertz_walls, stuck, True, acc, True, False)
+                    wall_accelerations(x, v, t, mass, inv_mass, k1, c1, k_lin, k_cubic, c_abs, rest, forces, series_t, series_v, series_ptr, series_ground, impact_body, hertz_body, hertz_k, hertz_walls, stuck, True, acc_wall, True, False)
                 if sampling:
                     next_sample = record_sample(samples, next_sample, sample_from, period, i * dt, dt,
                                                 xp, vp, x, v, out[IMPACTS_LEFT], out[IMPACTS_RIGHT])
