@@ -4,12 +4,14 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
 from . import filters
 from .kernels.common import POINCARE_SAMPLES
-from .kernels.loads import CHIRP, HALF_SINE, HARMONIC, JENNINGS, PULSE_TRAIN, SARAGONI_HART, STATIONARY
+from .kernels.loads import (CHIRP, HALF_SINE, HARMONIC, JENNINGS, PULSE_TRAIN, SARAGONI_HART, STATIONARY,
+                           has_breaks)
 from .scenario import (ChirpLoad, CubicAbsorber, FilteredNoiseLoad, ForceRecordLoad, GroundMotionLoad,
                        HalfSineLoad, HarmonicLoad, HertzAbsorber, ImpactAbsorber, ImpulseLoad, InitialLoad,
                        JenningsEnvelope, PulseTrainLoad, RecordLoad, Scenario, WhiteNoiseLoad)
@@ -57,6 +59,14 @@ class Scene:
     def excitation(self) -> tuple:
         """The kernels' tuple of closed-form loads and records (kernels/loads.py)."""
         return self.forces, self.series_t, self.series_v, self.series_ptr, self.series_ground
+
+    @cached_property
+    def kernel_flags(self) -> tuple[bool, bool]:
+        """Compile-time flags of the step loops, computed once a scene: loads with kinks or
+        jumps inside the run (pulses, half-sines, records: sub-steps and pieces) and ground
+        acceleration (records or filtered ground motion)."""
+        ground = self.series_ground.any() or self.filters["c_ground"].any()
+        return bool(has_breaks(self.excitation)), bool(ground)
 
     @property
     def has_impact(self) -> bool:

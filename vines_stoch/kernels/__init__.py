@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from .common import POINCARE_SAMPLES, SLOTS, new_metrics
-from .loads import has_breaks, has_ground, load_path
+from .loads import load_path
 from .rk4 import rk4_kernel
 from .sie import sie_kernel
 
@@ -21,17 +21,18 @@ _NO_HISTORY = np.zeros((0, 2))
 
 def kernel_for(scene, replay: bool = False):
     """The compiled loop for a scene's scheme and structure."""
-    piecewise = has_breaks(scene.excitation)
+    piecewise, ground = scene.kernel_flags
     if scene.scheme == "rk4":
         return rk4_kernel(scene.mass.shape[0], scene.has_impact, scene.has_hertz, scene.period > 0, piecewise)
     return sie_kernel(scene.mass.shape[0], scene.forces.shape[0], scene.sigma > 0.0, scene.has_impact,
-                      scene.filters["phi"].shape[0] > 0, piecewise, has_ground(scene), replay, scene.scheme == "sra")
+                      scene.filters["phi"].shape[0] > 0, piecewise, ground, replay, scene.scheme == "sra")
 
 
 def sample_buffer(scene) -> np.ndarray:
     """Empty Poincare sample rows (positions, velocities, impacts left and right)."""
-    rows = POINCARE_SAMPLES if scene.period > 0 else 0
-    return np.full((rows, 2 * scene.mass.shape[0] + 2), np.nan)
+    if scene.period <= 0:
+        return np.empty((0, 2 * scene.mass.shape[0] + 2))
+    return np.full((POINCARE_SAMPLES, 2 * scene.mass.shape[0] + 2), np.nan)
 
 
 def filter_tuple(scene, generator: np.random.Generator | None) -> tuple:

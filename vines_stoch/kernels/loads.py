@@ -231,18 +231,13 @@ def excitation(t: float, tm: float, theta: float, forces, series_t, series_v, se
     """``(force on the primary, ground acceleration)`` of all loads at ``t``, the filtered
     ones (if ``filtered``, a compile-time constant of the kernels) at ``theta`` of the way
     from the grid states ``z`` to ``zn``; harmonic rows from the phasor cosines ``pc`` if
-    ``on_grid`` (see ``applied``).  Without ``has_ground`` (a compile-time constant: the scene has no ground
-    acceleration, see ``has_ground``) the ground acceleration is the constant 0."""
+    ``on_grid`` (see ``applied``).  Without ``has_ground`` (a compile-time constant: the scene has
+    no ground acceleration, see ``Scene.kernel_flags``) the ground acceleration is the constant 0."""
     force, ground = applied(t, tm, forces, series_t, series_v, series_ptr, series_ground, pc, on_grid)
     if filtered:
         force += readout(c_force, z, zn, theta)
         ground += readout(c_ground, z, zn, theta)
     return force, (ground if has_ground else 0.0)
-
-
-def has_ground(scene) -> bool:
-    """True when some load of ``scene`` is a ground acceleration (records or filtered)."""
-    return bool(scene.series_ground.any() or scene.filters["c_ground"].any())
 
 
 @njit(**KERNEL)

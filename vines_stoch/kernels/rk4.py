@@ -201,7 +201,7 @@ def contact_step(x, v, mass, hertz_body, hertz_k, hertz_walls, touching) -> floa
 def rk4_kernel(n_bodies: int, has_impact: bool, has_hertz: bool, sampling: bool, piecewise: bool):
     """The RK4 loop specialised to a scene's structure (number of bodies, impact absorbers,
     Hertz absorbers, Poincare sampling for the regime, loads with kinks or jumps:
-    ``loads.has_breaks``)."""
+    ``Scene.kernel_flags``)."""
     NB = n_bodies
 
     @njit(**KERNEL)

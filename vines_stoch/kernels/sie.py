@@ -115,7 +115,7 @@ def sie_kernel(n_bodies: int, n_rows: int, has_noise: bool, has_impact: bool, fi
                ground: bool, replay: bool = False, sra: bool = False):
     """The semi-implicit Euler-Maruyama loop specialised to a scene's structure (number of
     bodies and of closed-form force rows, white noise, impact absorbers, filtered loads, loads
-    with kinks or jumps: ``loads.has_breaks``, ground acceleration: ``loads.has_ground``).
+    with kinks or jumps, ground acceleration: ``Scene.kernel_flags``).
     Harmonic loads on the step grid come from phasors (``loads.turn``), set exactly every
     ``CHECK_EVERY`` steps.
 
