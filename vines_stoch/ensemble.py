@@ -1,9 +1,10 @@
 """Monte Carlo ensembles: chunk plan, per-realisation random streams, dask execution,
 streamed Parquet parts, resume and convergence stopping.
 
-Realisation ``r`` of sweep point ``p`` draws its noise from
-``PCG64(SeedSequence(seed, spawn_key=(p, r)))``: its numbers depend on nothing else, so results
-are bitwise identical for any chunk size, worker count or scheduler.  Chunks run on
+Realisation ``r`` draws from one stream per purpose (``streams``: step increments, bridge
+draws, filter noise, uncertain parameters), each keyed by (seed, purpose, realisation): its
+numbers depend on nothing else, so results are bitwise identical for any chunk size, worker
+count or scheduler, and with common random numbers the same at every sweep point.  Chunks run on
 dask's embedded threaded scheduler or a ``dask.distributed`` cluster; each finished chunk is
 written at once as an atomic part file, and the driver folds chunks into the history
 statistics and the ``target_sem`` test in realisation order, so neither depends on which chunk
@@ -27,8 +28,9 @@ import pandas as pd
 
 from . import history as hist
 from . import schedulers
-from .kernels import sample_buffer, simulate
+from .kernels import needed_streams, sample_buffer, simulate
 from .metrics import METRICS, finish, summarise
+from .streams import PARAMETERS, generator, streams
 from .progress import Progress
 from .scenario import History, Study
 from .scene import Scene, build_scene
@@ -43,18 +45,6 @@ CHUNKS_PER_POINT = 32
 HISTORY_CHUNK_BYTES = 8_000_000
 #: ``target_sem`` is tested at every multiple of this many realisations (and never before).
 TARGET_STEP = 100
-
-
-#: Random streams of a realisation: its noise, its uncertain parameters.
-NOISE, PARAMETERS = 0, 1
-
-
-def generator(seed: int, point: int, realization: int, stream: int = NOISE,
-              common: bool = True) -> np.random.Generator:
-    """The random stream ``stream`` of one realisation: with common random numbers the same at
-    every sweep point, otherwise its own per point."""
-    key = (stream, realization) if common else (stream, point, realization)
-    return np.random.Generator(np.random.PCG64(np.random.SeedSequence(seed, spawn_key=key)))
 
 
 def draw_parameters(study: Study, seed: int, point: int, realization: int, common: bool = True) -> dict[str, float]:
@@ -81,8 +71,9 @@ def run_chunk(scene: Scene, seed: int, point: int, start: int, stop: int,
         samples = sample_buffer(scene)
         if path is not None:
             path.fill(np.nan)
-        gen = generator(seed, point, r, NOISE, common) if scene.has_noise else None
-        raw = simulate(scene, gen, samples=samples, history=path, stride=grid[0] if grid else 1)
+        increments, bridge, filters = needed_streams(scene)
+        gens = streams(seed, point, r, increments=increments, bridge=bridge, filters=filters, common=common)
+        raw = simulate(scene, gens, samples=samples, history=path, stride=grid[0] if grid else 1)
         if paths is not None:
             paths[:, :, r - start] = path.T
         rows.append({"point": point, "realization": r, **drawn, **finish(raw, scene, samples)})

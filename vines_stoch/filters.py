@@ -2,7 +2,7 @@
 
 Each filtered load is a small linear SDE ``dz = A z dt + b e(t) dW`` with one Wiener process
 ``W`` of its own and an amplitude envelope ``e(t)``; the load is a linear read-out of ``z``:
-a force on the primary (``filtered-noise``, Wei et al. eq. 23) or a ground acceleration
+a force on a floor (``filtered-noise``, Wei et al. eq. 23) or a ground acceleration
 (``ground-motion``: Kanai-Tajimi, Clough-Penzien).
 
 Kernels advance the filter states by the exact Gaussian transition of a step,
@@ -35,10 +35,11 @@ class Filter:
 
     a: np.ndarray          # (n, n) drift matrix
     b: np.ndarray          # (n,) noise input
-    c: np.ndarray          # (n,) read-out: force on the primary or ground acceleration
+    c: np.ndarray          # (n,) read-out: force on a floor or ground acceleration
     ground: bool           # True: the read-out is a ground acceleration
     envelope: tuple        # (kind, p1, p2, p3), kinds of kernels/loads.py
     stationary: bool       # start from the stationary law
+    floor: int = 0         # the floor (index) a force read-out acts on
 
 
 def oscillator(frequency: float, damping: float) -> np.ndarray:
@@ -96,14 +97,14 @@ def _sqrt_psd(cov: np.ndarray) -> np.ndarray:
     return q * np.sqrt(np.clip(w, 0.0, None))
 
 
-def block_diagonal(filters: list[Filter], dt: float) -> dict[str, np.ndarray]:
+def block_diagonal(filters: list[Filter], dt: float, n_floors: int = 1) -> dict[str, np.ndarray]:
     """Kernel arrays of all filtered loads, stacked block-diagonally: ``phi``, ``chol``
-    (step transition and noise root), ``envelope`` (one row per state), ``c_force`` and
-    ``c_ground`` (read-outs), ``p0`` (root of the stationary covariance, zero for filters
-    that start from rest)."""
+    (step transition and noise root), ``envelope`` (one row per state), ``c_force`` (one
+    read-out row per floor) and ``c_ground`` (one row), ``p0`` (root of the stationary
+    covariance, zero for filters that start from rest)."""
     n = sum(f.a.shape[0] for f in filters)
     arrays = {name: np.zeros((n, n)) for name in ("phi", "chol", "p0")}
-    arrays.update(envelope=np.zeros((n, 4)), c_force=np.zeros(n), c_ground=np.zeros(n))
+    arrays.update(envelope=np.zeros((n, 4)), c_force=np.zeros((n_floors, n)), c_ground=np.zeros((1, n)))
     k = 0
     for f in filters:
         m = f.a.shape[0]
@@ -112,6 +113,6 @@ def block_diagonal(filters: list[Filter], dt: float) -> dict[str, np.ndarray]:
         if f.stationary:
             arrays["p0"][s, s] = _sqrt_psd(stationary_covariance(f.a, f.b))
         arrays["envelope"][s] = f.envelope
-        arrays["c_ground" if f.ground else "c_force"][s] = f.c
+        (arrays["c_ground"][0] if f.ground else arrays["c_force"][f.floor])[s] = f.c
         k += m
     return arrays

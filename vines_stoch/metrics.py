@@ -8,10 +8,11 @@ import numpy as np
 import pandas as pd
 from scipy.special import stdtrit
 
-from .kernels.common import SLOTS, STATUS_DIVERGED
+from .kernels.common import FLOOR_SLOTS, SLOTS, STATUS_DIVERGED, X_SQ_INT_K
 from .scene import Scene
 
-#: Metric columns of realizations.parquet, in order; each gets summary statistics.
+#: Metric columns of realizations.parquet, in order (then the per-floor columns of
+#: ``floor_metrics``); each gets summary statistics.
 METRICS = (
     "input_energy", "edm", "energy_integral", "e1_max", "x1_max", "x1_rms", "impacts",
     "energy_residual", "primary_dissipation", "absorber_dissipation", "impact_loss",
@@ -27,6 +28,22 @@ PERIODIC_TOLERANCE = 1e-3
 STATISTICS = ("mean", "std", "sem", "ci95_lo", "ci95_hi", "q05", "q50", "q95")
 
 _S = {name: i for i, name in enumerate(SLOTS)}
+
+#: Per-floor metric columns, ``<name>_<k>`` for floor ``k = 1..n`` (MODEL.md section 4).
+FLOOR_METRICS = ("x_max", "x_rms", "drift_max", "acc_max")
+
+
+def floor_metrics(n_floors: int) -> list[str]:
+    """The per-floor metric columns of a primary with ``n_floors`` floors, floor by floor."""
+    return [f"{name}_{k}" for k in range(1, n_floors + 1) for name in FLOOR_METRICS]
+
+
+def metric_columns(frame: pd.DataFrame) -> list[str]:
+    """The metric columns present in a realisations table: ``METRICS``, then the floors'."""
+    n = 0
+    while f"x_max_{n + 1}" in frame.columns:
+        n += 1
+    return list(METRICS) + floor_metrics(n)
 
 
 def regime(samples: np.ndarray, omega: float) -> str | None:
@@ -53,8 +70,8 @@ def regime(samples: np.ndarray, omega: float) -> str | None:
 
 
 def finish(raw: np.ndarray, scene: Scene, samples: np.ndarray | None = None) -> dict[str, float | str | None]:
-    """Metric columns of one realisation from a kernel's raw vector ``raw`` (shape (n_slots,))
-    and, for periodically forced scenes, its Poincare ``samples``."""
+    """Metric columns of one realisation from a kernel's raw vector ``raw`` (``SLOTS``, then
+    the per-floor blocks) and, for periodically forced scenes, its Poincare ``samples``."""
     g = raw.tolist().__getitem__  # Python floats: no numpy scalar overhead, no warnings to silence
     input_energy = g(_S["input_energy"])
     absorbed = g(_S["absorber_dissipation"]) + g(_S["impact_loss"])
@@ -78,6 +95,14 @@ def finish(raw: np.ndarray, scene: Scene, samples: np.ndarray | None = None) -> 
         "peak_force": g(_S["peak_force"]),
         "contact_time": g(_S["contact_time"]),
     }
+    nf = scene.n_floors
+    base = len(SLOTS)
+    for k in range(nf):
+        block = {name: g(base + b * nf + k) for b, name in enumerate(FLOOR_SLOTS)}
+        row[f"x_max_{k + 1}"] = block["x_max"]
+        row[f"x_rms_{k + 1}"] = math.sqrt(max(g(base + X_SQ_INT_K * nf + k), 0.0) / scene.window)
+        row[f"drift_max_{k + 1}"] = block["drift_max"]
+        row[f"acc_max_{k + 1}"] = block["acc_max"]
     finite = all(math.isfinite(v) for k, v in row.items() if k not in ("edm", "energy_residual"))
     row["status"] = "diverged" if g(_S["status"]) == STATUS_DIVERGED or not finite else "ok"
     row["regime"] = (regime(samples, 2.0 * np.pi / scene.period)
@@ -100,7 +125,7 @@ def summarise(realizations: pd.DataFrame, parameters: list[str]) -> pd.DataFrame
             row[p] = group[p].iloc[0]
         row["n_ok"] = len(ok)
         row["n_failed"] = len(group) - len(ok)
-        for m in METRICS:
+        for m in metric_columns(realizations):
             values = ok[m].to_numpy(dtype=float)
             n = values.size
             std = float(np.std(values, ddof=1)) if n > 1 else np.nan

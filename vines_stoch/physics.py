@@ -1,7 +1,15 @@
 """Physics formulae of MODEL.md, written as small numba functions that the kernels inline.
 
-Bodies are numbered 0 (primary) and 1..n (absorbers).  Relative motion of absorber ``a`` is
-``u = x_a - x_1``, ``w = v_a - v_1``; ``f`` is the force the primary exerts on the absorber.
+Bodies are numbered ``0 .. n_floors - 1`` (the primary's floors, lowest first; the last is the
+roof) and then one per absorber.  Absorber ``a`` hangs on its host floor ``h``: its relative
+motion is ``u = x_a - x_h``, ``w = v_a - v_h``; ``f`` is the force the host exerts on it.
+
+Absorbers reach the kernels as kind-coded rows (``LAWS``, the columns ``K_LIN .. WALL_HI``):
+every law has the spring-damper attachment of ``spring_damper_force`` (its coefficients zero
+where a law has none); an ``IMPACT`` row adds rigid walls at ``+-CLEARANCE`` (Newton
+restitution, ``restitution_impact``), a ``HERTZ`` row finite-duration contact forces
+(``contact_force_law``).  A new law is one formula here, one schema class and one entry in
+``LAWS`` and ``scene.absorber_row``.
 """
 
 from __future__ import annotations
@@ -21,6 +29,15 @@ KERNEL = dict(cache=True, nogil=True, error_model="numpy", fastmath={"contract"}
 #: inlined copy also costs compile time: a large inlined function gets one call site, and rare
 #: work calls it through an out-of-line wrapper (``rk4.rk4_step``, ``rk4.wall_accelerations``).
 INLINE = dict(KERNEL, inline="always")
+
+#: Kind codes of absorber rows (MODEL.md section 2), by the ``type`` of a scenario's absorber.
+LINEAR, CUBIC, IMPACT, HERTZ = 0, 1, 2, 3
+LAWS = {"linear": LINEAR, "cubic": CUBIC, "impact": IMPACT, "hertz": HERTZ}
+#: Columns of an absorber row: attachment (linear and cubic stiffness, damping, spring rest
+#: offset), impact walls (clearance, restitution), Hertz contact (constants ``K`` and contact
+#: surfaces ``z_L = WALL_LO - u``, ``z_R = u - WALL_HI``).
+K_LIN, K_CUBIC, DAMPING, REST, CLEARANCE, RESTITUTION, K_LEFT, K_RIGHT, WALL_LO, WALL_HI = range(10)
+ROW = 10
 
 
 @njit(**INLINE)
@@ -56,9 +73,15 @@ def restitution_impact(m1: float, ma: float, v1: float, va: float, r: float):
 
 
 @njit(**INLINE)
-def primary_energy(m1: float, k1: float, x1: float, v1: float) -> float:
-    """``E1 = m1 v1^2 / 2 + k1 x1^2 / 2`` (MODEL.md section 4)."""
-    return 0.5 * m1 * v1 * v1 + 0.5 * k1 * x1 * x1
+def primary_energy(mass, storey_k, x, v, nf: int) -> float:
+    """``E1``: kinetic energy of the ``nf`` floors plus the strain energy of their storeys,
+    ``sum m_k v_k^2 / 2 + sum k_k d_k^2 / 2``, ``d_k = x_k - x_{k-1}`` (MODEL.md sections 1a, 4;
+    one floor: ``m1 v1^2 / 2 + k1 x1^2 / 2``)."""
+    e = 0.0
+    for k in range(nf):
+        d = x[k] - x[k - 1] if k > 0 else x[k]
+        e += 0.5 * mass[k] * v[k] * v[k] + 0.5 * storey_k[k] * d * d
+    return e
 
 
 def hertz_constant(young, poisson, radius: float, q: float = 0.318) -> float:
@@ -73,6 +96,20 @@ def hertz_constant(young, poisson, radius: float, q: float = 0.318) -> float:
 def hertz_force(z: float, k: float) -> float:
     """Quasi-static Hertz contact force ``K z^1.5`` for an approach ``z > 0``, else 0."""
     return k * z * np.sqrt(z) if z > 0.0 else 0.0
+
+
+@njit(**INLINE)
+def contact_force_law(rows, a: int, u: float) -> float:
+    """Hertz contact force on absorber row ``a`` at relative position ``u``: ``+K_L z_L^1.5 -
+    K_R z_R^1.5`` (MODEL.md section 2); the opposite acts on its host floor.  (Rows are
+    indexed in place: a row view would cost reference counting in the step loops.)"""
+    return hertz_force(rows[a, WALL_LO] - u, rows[a, K_LEFT]) - hertz_force(u - rows[a, WALL_HI], rows[a, K_RIGHT])
+
+
+@njit(**INLINE)
+def contact_energy(rows, a: int, u: float) -> float:
+    """Energy stored in both Hertz contacts of absorber row ``a`` at relative position ``u``."""
+    return hertz_energy(rows[a, WALL_LO] - u, rows[a, K_LEFT]) + hertz_energy(u - rows[a, WALL_HI], rows[a, K_RIGHT])
 
 
 @njit(**INLINE)

@@ -18,6 +18,7 @@ from annotated_types import Ge, Gt, Le, Lt
 from pydantic import (BaseModel, ConfigDict, Field, PrivateAttr, ValidationError, field_validator,
                       model_validator)
 
+from . import schemes
 from .filters import SOILS
 from .physics import hertz_constant
 from .records import G, RecordError, read_record
@@ -36,18 +37,127 @@ NonNegative = Annotated[float, Field(ge=0, allow_inf_nan=False)]
 Real = Annotated[float, Field(allow_inf_nan=False)]
 
 
-class Primary(_Model):
-    """The linear primary oscillator (MODEL.md section 1)."""
+class Rayleigh(_Model):
+    """Rayleigh damping ``C = alpha M + beta K`` with damping ``ratio`` at two ``modes`` of the
+    primary (1-based): ``alpha = 2 z w_i w_j / (w_i + w_j)``, ``beta = 2 z / (w_i + w_j)``
+    (Chopra, Dynamics of Structures, section 11.4)."""
 
-    mass: Positive
-    stiffness: NonNegative = 0.0
-    damping: NonNegative = 0.0
+    ratio: Annotated[float, Field(ge=0, lt=1)]
+    modes: Annotated[list[Annotated[int, Field(ge=1)]], Field(min_length=2, max_length=2)]
+
+
+Floor = Annotated[int, Field(ge=1)]
+
+
+class Primary(_Model):
+    """The linear primary (MODEL.md sections 1, 1a): one storey (``mass``, ``stiffness``,
+    ``damping``) or a shear building (``masses``, ``stiffnesses`` and ``dampings`` or
+    ``rayleigh``, floors from the lowest to the roof; storey ``k`` joins floor ``k - 1``, the
+    ground for ``k = 1``, to floor ``k``)."""
+
+    mass: Positive | None = None
+    stiffness: NonNegative | None = None
+    damping: NonNegative | None = None
+    masses: Annotated[list[Positive], Field(min_length=1)] | None = None
+    stiffnesses: list[NonNegative] | None = None
+    dampings: list[NonNegative] | None = None
+    rayleigh: Rayleigh | None = None
+
+    @model_validator(mode="after")
+    def _layout(self) -> "Primary":
+        scalars = {"mass": self.mass, "stiffness": self.stiffness, "damping": self.damping}
+        lists = {"masses": self.masses, "stiffnesses": self.stiffnesses, "dampings": self.dampings}
+        if self.masses is None:
+            if self.mass is None:
+                raise _KeyError("mass", None, "missing: give mass (one storey) or masses = [...] (floors from the "
+                                "lowest to the roof)")
+            for name, value in lists.items():
+                if value is not None:
+                    raise _KeyError(name, value, "needs masses = [...]: a one-storey primary takes mass, stiffness "
+                                    "and damping")
+            if self.rayleigh is not None:
+                raise _KeyError("rayleigh", None, "needs a multi-storey primary (masses = [...]); give damping")
+            return self
+        for name, value in scalars.items():
+            if value is not None:
+                raise _KeyError(name, value, f"give either {name} (one storey) or the lists masses, stiffnesses, "
+                                "dampings, not both")
+        n = len(self.masses)
+        for name in ("stiffnesses", "dampings"):
+            value = lists[name]
+            if value is not None and len(value) != n:
+                raise _KeyError(name, value, f"must list {n} values (one per storey, as primary.masses)")
+        if self.stiffnesses is None:
+            raise _KeyError("stiffnesses", None, f"missing: give {n} storey stiffnesses")
+        if self.dampings is not None and self.rayleigh is not None:
+            raise _KeyError("rayleigh", None, "give either dampings (storey dashpots) or rayleigh, not both")
+        if self.rayleigh is not None:
+            modes = self.rayleigh.modes
+            if modes[0] == modes[1] or max(modes) > n:
+                raise _KeyError("rayleigh.modes", modes, f"must be two different modes in [1, {n}]")
+            if self.frequencies()[0] <= 0.0:
+                raise _KeyError("rayleigh", None, "needs a primary fixed to the ground (every storey stiffness > 0)")
+        return self
+
+    @property
+    def n_floors(self) -> int:
+        return 1 if self.masses is None else len(self.masses)
+
+    @property
+    def floor_masses(self) -> list[float]:
+        return [float(self.mass)] if self.masses is None else [float(m) for m in self.masses]
+
+    @property
+    def storey_stiffnesses(self) -> list[float]:
+        if self.masses is None:
+            return [float(self.stiffness or 0.0)]
+        return [float(k) for k in self.stiffnesses]
+
+    def frequencies(self) -> np.ndarray:
+        """Natural frequencies (rad/s, ascending) of the primary alone (no absorbers)."""
+        mass, stiffness = np.array(self.floor_masses), _shear_stiffness(self.storey_stiffnesses)
+        return _frequencies(mass, stiffness)
+
+    def damping_matrices(self) -> tuple[list[float], list[float]]:
+        """``(storey dashpots, mass-proportional dashpots to the ground)``, one per floor:
+        the given dashpots, or Rayleigh's ``beta k_k`` and ``alpha m_k``."""
+        n = self.n_floors
+        if self.masses is None:
+            return [float(self.damping or 0.0)], [0.0]
+        if self.rayleigh is None:
+            return [float(c) for c in (self.dampings or [0.0] * n)], [0.0] * n
+        w = self.frequencies()
+        wi, wj = (w[m - 1] for m in self.rayleigh.modes)
+        z = self.rayleigh.ratio
+        alpha, beta = 2.0 * z * wi * wj / (wi + wj), 2.0 * z / (wi + wj)
+        return [beta * k for k in self.storey_stiffnesses], [alpha * m for m in self.floor_masses]
+
+
+def _shear_stiffness(storeys: list[float]) -> np.ndarray:
+    """Stiffness matrix of a shear building (MODEL.md 1a) from its storey stiffnesses."""
+    n = len(storeys)
+    k = np.zeros((n, n))
+    for i, ks in enumerate(storeys):
+        k[i, i] += ks
+        if i > 0:
+            k[i - 1, i - 1] += ks
+            k[i - 1, i] -= ks
+            k[i, i - 1] -= ks
+    return k
+
+
+def _frequencies(mass: np.ndarray, stiffness: np.ndarray) -> np.ndarray:
+    """Square roots of the eigenvalues of ``M^-1 K`` (diagonal ``M``), ascending."""
+    scale = 1.0 / np.sqrt(mass)
+    eig = np.linalg.eigvalsh(stiffness * np.outer(scale, scale))
+    return np.sqrt(np.clip(eig, 0.0, None))
 
 
 class LinearAbsorber(_Model):
     """Tuned mass damper: ``f = -k u - c w`` (MODEL.md section 2)."""
 
     type: Literal["linear"]
+    floor: Floor | None = None
     mass: Positive
     stiffness: NonNegative = 0.0
     damping: NonNegative = 0.0
@@ -57,6 +167,7 @@ class CubicAbsorber(_Model):
     """Cubic NES: ``f = -k u^3 - k_lin u - c w`` (MODEL.md section 2, Wei et al. eq. 1)."""
 
     type: Literal["cubic"]
+    floor: Floor | None = None
     mass: Positive
     stiffness: NonNegative = 0.0
     damping: NonNegative = 0.0
@@ -67,6 +178,7 @@ class ImpactAbsorber(_Model):
     """Vibro-impact NES in a symmetric cavity with Newton restitution (MODEL.md section 2)."""
 
     type: Literal["impact"]
+    floor: Floor | None = None
     mass: Positive
     clearance: Positive
     restitution: Annotated[float, Field(ge=0, le=1)]
@@ -113,6 +225,7 @@ class HertzAbsorber(_Model):
 
     type: Literal["hertz"]
     geometry: Literal["single-sided", "double-sided"]
+    floor: Floor | None = None
     mass: Positive
     stiffness: NonNegative = 0.0
     damping: NonNegative = 0.0
@@ -160,14 +273,17 @@ Absorber = Annotated[
 
 
 class ImpulseLoad(_Model):
-    """Initial velocity ``v1(0) = velocity`` of the primary (Wei's impulse strength X)."""
+    """Initial velocity ``v(0) = velocity`` of a floor (default the roof; Wei's impulse
+    strength X)."""
 
     type: Literal["impulse"]
     velocity: Real
+    floor: Floor | None = None
 
 
 class InitialLoad(_Model):
-    """Initial displacements and velocities of all bodies (primary first)."""
+    """Initial displacements and velocities of all bodies (the floors from the lowest, then
+    the absorbers)."""
 
     type: Literal["initial"]
     displacement: list[Real] | None = None
@@ -181,6 +297,7 @@ class HarmonicLoad(_Model):
     amplitude: Real
     frequency: NonNegative
     phase: Real = 0.0
+    floor: Floor | None = None
 
 
 class WhiteNoiseLoad(_Model):
@@ -188,6 +305,7 @@ class WhiteNoiseLoad(_Model):
 
     type: Literal["white-noise"]
     intensity: NonNegative
+    floor: Floor | None = None
 
 
 class JenningsEnvelope(_Model):
@@ -239,6 +357,7 @@ class FilteredNoiseLoad(_FilteredLoad):
     type: Literal["filtered-noise"]
     frequency: Positive
     damping: Positive
+    floor: Floor | None = None
 
 
 class GroundMotionLoad(_FilteredLoad):
@@ -276,6 +395,7 @@ class HalfSineLoad(_Model):
     amplitude: Real
     duration: Positive
     start: NonNegative = 0.0
+    floor: Floor | None = None
 
 
 class PulseTrainLoad(_Model):
@@ -288,6 +408,7 @@ class PulseTrainLoad(_Model):
     period: Positive
     start: NonNegative = 0.0
     count: Annotated[int, Field(ge=0)] = 0
+    floor: Floor | None = None
 
     @model_validator(mode="after")
     def _width(self) -> "PulseTrainLoad":
@@ -304,6 +425,7 @@ class ChirpLoad(_Model):
     f0: NonNegative
     f1: NonNegative
     duration: Positive
+    floor: Floor | None = None
 
 
 class _RecordLoad(_Model):
@@ -332,9 +454,10 @@ class RecordLoad(_RecordLoad):
 
 
 class ForceRecordLoad(_RecordLoad):
-    """Force record acting on the primary (scenario force units)."""
+    """Force record acting on a floor (default the roof; scenario force units)."""
 
     type: Literal["force-record"]
+    floor: Floor | None = None
 
 
 Load = Annotated[
@@ -342,8 +465,6 @@ Load = Annotated[
           HalfSineLoad, PulseTrainLoad, ChirpLoad, RecordLoad, ForceRecordLoad],
     Field(discriminator="type"),
 ]
-
-SCHEMES = ("auto", "euler-maruyama", "rk4")
 
 
 class History(_Model):
@@ -547,7 +668,13 @@ class Scenario(_Model):
             raise _KeyError(
                 "simulation.metrics_from", sim.metrics_from, f"must be in [0, {sim.duration:g})"
             )
-        nbodies = 1 + len(self.absorbers)
+        n = self.primary.n_floors
+        nbodies = n + len(self.absorbers)
+        for i, item in [(f"absorbers.{i}", a) for i, a in enumerate(self.absorbers)] + \
+                       [(f"loads.{i}", l) for i, l in enumerate(self.loads)]:
+            floor = getattr(item, "floor", None)
+            if floor is not None and floor > n:
+                raise _KeyError(f"{i}.floor", floor, f"must be in [1, {n}] (the primary has {n} floor{'s' * (n > 1)})")
         for i, load in enumerate(self.loads):
             if isinstance(load, InitialLoad):
                 for field in ("displacement", "velocity"):
@@ -555,25 +682,27 @@ class Scenario(_Model):
                     if values is not None and len(values) != nbodies:
                         raise _KeyError(
                             f"loads.{i}.{field}", values,
-                            f"must list {nbodies} values (primary, then each absorber)",
+                            f"must list {nbodies} values (the {n} floor{'s' * (n > 1)} from the lowest, then each "
+                            "absorber)",
                         )
-        for i, a in enumerate(self.absorbers):
-            if isinstance(a, HertzAbsorber) and (self.has_noise or sim.scheme == "euler-maruyama"):
-                raise _KeyError(f"absorbers.{i}.type", "hertz",
-                                "Hertz contact is solved by the rk4 scheme only: remove noise loads "
-                                "and use scheme = 'auto' or 'rk4'")
-        if self.simulation.scheme == "sra":
-            for i, a in enumerate(self.absorbers):
-                if isinstance(a, (ImpactAbsorber, HertzAbsorber)):
-                    raise _KeyError("simulation.scheme", "sra", f"has no impact or contact events: absorbers.{i} "
-                                    f"is type '{a.type}'; use 'auto', 'euler-maruyama' or 'rk4'")
-            for i, load in enumerate(self.loads):
-                if isinstance(load, _FilteredLoad):
-                    raise _KeyError("simulation.scheme", "sra", f"takes white noise only: loads.{i} is type "
-                                    f"'{load.type}' (filtered noise); use 'auto' or 'euler-maruyama'")
-        if self.simulation.scheme == "rk4" and self.has_noise:
-            raise _KeyError("simulation.scheme", "rk4", "is deterministic; a scene with noise loads needs 'euler-maruyama' or 'auto'")
+        contents = self.contents
+        if sim.scheme != "auto":
+            why = schemes.refusal(schemes.SCHEMES[sim.scheme], *contents)
+            if why is not None:
+                raise _KeyError("simulation.scheme", sim.scheme, why)
+        elif schemes.refusal(schemes.SCHEMES[self.scheme], *contents) is not None:
+            i = next(i for i, a in enumerate(self.absorbers) if isinstance(a, HertzAbsorber))
+            raise _KeyError(f"absorbers.{i}.type", "hertz",
+                            "Hertz contact is solved by the rk4 scheme only: remove noise loads "
+                            "and use scheme = 'auto' or 'rk4'")
         return self
+
+    @property
+    def contents(self) -> tuple[bool, bool, bool, bool]:
+        """What the schemes must accept: noise, filtered loads, impact absorbers, Hertz absorbers."""
+        return (self.has_noise, any(isinstance(l, _FilteredLoad) and l.intensity > 0 for l in self.loads),
+                any(isinstance(a, ImpactAbsorber) for a in self.absorbers),
+                any(isinstance(a, HertzAbsorber) for a in self.absorbers))
 
     @property
     def is_random(self) -> bool:
@@ -582,23 +711,29 @@ class Scenario(_Model):
 
     @property
     def scheme(self) -> str:
-        """The scheme that runs: ``"auto"`` is RK4 without noise, Euler-Maruyama with it."""
+        """The scheme that runs (``schemes.choose`` for ``"auto"``)."""
         if self.simulation.scheme != "auto":
             return self.simulation.scheme
-        return "euler-maruyama" if self.has_noise else "rk4"
+        return schemes.choose(*self.contents)
+
+    def natural_frequencies(self) -> np.ndarray:
+        """Natural frequencies (rad/s, ascending) of the linear structure: the floors and every
+        absorber on the linear part of its attachment to its host floor (cubic terms, impacts and
+        contacts left out; an absorber without a linear spring is a free mass, frequency 0)."""
+        n = self.primary.n_floors
+        mass = np.array(self.primary.floor_masses + [a.mass for a in self.absorbers])
+        k = np.zeros((mass.shape[0], mass.shape[0]))
+        k[:n, :n] = _shear_stiffness(self.primary.storey_stiffnesses)
+        for j, a in enumerate(self.absorbers, start=n):
+            spring = a.linear_stiffness if isinstance(a, CubicAbsorber) else a.stiffness
+            h = (a.floor or n) - 1
+            k[[h, j], [h, j]] += spring
+            k[[h, j], [j, h]] -= spring
+        return _frequencies(mass, k)
 
     def highest_frequency(self) -> float:
-        """Highest natural frequency (rad/s) of the bodies on their linear springs: the primary's
-        and every absorber attachment's (cubic terms, impacts and contacts left out)."""
-        mass = np.array([self.primary.mass] + [a.mass for a in self.absorbers])
-        k = np.zeros((mass.shape[0], mass.shape[0]))
-        k[0, 0] = self.primary.stiffness
-        for j, a in enumerate(self.absorbers, start=1):
-            spring = a.linear_stiffness if isinstance(a, CubicAbsorber) else a.stiffness
-            k[[0, j], [0, j]] += spring
-            k[[0, j], [j, 0]] -= spring
-        scale = 1.0 / np.sqrt(mass)
-        return float(np.sqrt(max(np.linalg.eigvalsh(k * np.outer(scale, scale)).max(), 0.0)))
+        """The highest of ``natural_frequencies`` (the stability limit of ``dt``)."""
+        return float(self.natural_frequencies().max())
 
     @property
     def has_noise(self) -> bool:
@@ -864,16 +999,10 @@ def _check_values(data: dict[str, Any], key: str, ends: tuple[float, float], whe
             raise ScenarioError(_format(source, where, spec, message.format(end=end, rule=rule))) from None
 
 
-#: Largest ``omega dt`` at which each scheme is stable on an undamped linear oscillator
-#: (velocity Verlet: 2; classical RK4: 2 sqrt 2; SRA3, whose drift part is the third-order SSP
-#: Runge-Kutta method: sqrt 3).
-STABILITY = {"euler-maruyama": 2.0, "rk4": 2.0 * math.sqrt(2.0), "sra": math.sqrt(3.0)}
-
-
 def _check_stability(scenario: Scenario, source: str) -> None:
     """Refuse a ``dt`` past the linear stability limit of the scheme that would run."""
     omega, dt = scenario.highest_frequency(), scenario.simulation.dt
-    limit = STABILITY[scenario.scheme]
+    limit = schemes.SCHEMES[scenario.scheme].stability
     if omega * dt >= limit:
         raise ScenarioError(_format(
             source, "simulation.dt", dt,

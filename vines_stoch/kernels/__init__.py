@@ -1,31 +1,36 @@
-"""Numba step loops, specialised to what a scene contains (noise, impacts, contact) and
+"""Numba step loops, specialised to what a scene contains (floors, noise, impacts, contact) and
 compiled once.
 
-``simulate(scene, generator)`` runs one realisation and returns the raw metric vector
-(``common.SLOTS``).  Kernels are memoised by scene structure (the number of bodies
-included); the parameters are arguments, so a sweep of parameters never recompiles.
+``simulate(scene, streams)`` runs one realisation and returns the raw metric vector
+(``common.SLOTS``, then the per-floor blocks of ``common.FLOOR_SLOTS``).  Kernels are
+memoised by scene structure (the numbers of bodies and floors included); the parameters are
+arguments, so a sweep of parameters never recompiles.  Every kernel takes the same bundles
+(``bundles``): bodies, absorbers, loads, filters, noise, grid, outputs and streams.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from ..schemes import SCHEMES
+from ..streams import Streams
 from .common import POINCARE_SAMPLES, SLOTS, new_metrics
+from .kdk import kdk_kernel
 from .loads import load_path
 from .rk4 import rk4_kernel
-from .sie import sie_kernel
 
 _NO_NORMALS = np.zeros(0)
 _NO_HISTORY = np.zeros((0, 2))
 
 
 def kernel_for(scene, replay: bool = False):
-    """The compiled loop for a scene's scheme and structure."""
+    """The compiled loop for a scene's scheme (``schemes.SCHEMES``) and structure."""
     piecewise, ground = scene.kernel_flags
-    if scene.scheme == "rk4":
-        return rk4_kernel(scene.mass.shape[0], scene.has_impact, scene.has_hertz, scene.period > 0, piecewise)
-    return sie_kernel(scene.mass.shape[0], scene.forces.shape[0], scene.sigma > 0.0, scene.has_impact,
-                      scene.filters["phi"].shape[0] > 0, piecewise, ground, replay, scene.scheme == "sra")
+    nb, nf = scene.mass.shape[0], scene.n_floors
+    if SCHEMES[scene.scheme].kernel == "rk4":
+        return rk4_kernel(nb, nf, scene.has_impact, scene.has_hertz, scene.period > 0, piecewise)
+    return kdk_kernel(nb, nf, scene.forces.shape[0], scene.has_white_noise, scene.has_impact, scene.has_filters,
+                      piecewise, ground, replay, scene.scheme == "sra")
 
 
 def sample_buffer(scene) -> np.ndarray:
@@ -37,7 +42,8 @@ def sample_buffer(scene) -> np.ndarray:
 
 def filter_tuple(scene, generator: np.random.Generator | None) -> tuple:
     """The kernels' filter arrays with the initial filter state: zero (from rest) or a draw
-    from the stationary law (``p0`` is the root of its covariance)."""
+    from the stationary law (``p0`` is the root of its covariance) from ``generator`` (the
+    filter stream)."""
     f = scene.filters
     z = np.zeros(f["phi"].shape[0])
     if z.shape[0] and f["p0"].any():
@@ -45,65 +51,98 @@ def filter_tuple(scene, generator: np.random.Generator | None) -> tuple:
     return f["phi"], f["chol"], f["envelope"], f["c_force"], f["c_ground"], z
 
 
-def _generator_for(scene, replay: bool, generator: np.random.Generator | None) -> np.random.Generator | None:
-    """The generator a kernel draws from, or ``None`` where it draws nothing (white noise
-    replayed without impacts, no noise at all): numba's unboxing of a Generator costs about
-    6 us a call, half the set-up of a short run."""
-    if not scene.has_noise or replay and not scene.has_impact:  # (replay refuses filtered loads)
-        return None
-    if generator is None:
-        raise ValueError("generator: this scene draws random numbers (white or filtered noise, or the "
-                         "Brownian-bridge draws of impacts under replayed noise); pass a numpy Generator")
-    return generator
+def needed_streams(scene, replay: bool = False) -> tuple[bool, bool, bool]:
+    """Which streams a scene's kernel draws from: step increments (white noise not replayed),
+    Brownian-bridge values (white noise with impacts), filter noise (filtered loads)."""
+    white = scene.has_white_noise
+    return white and not replay, white and scene.has_impact, scene.has_filters
 
 
-def simulate(scene, generator: np.random.Generator | None = None, *, normals: np.ndarray | None = None,
+def _streams_for(scene, replay: bool, streams: Streams | np.random.Generator | None) -> tuple:
+    """The kernel's generators, ``None`` where it draws nothing (numba's unboxing of a
+    Generator costs about 6 us a call, half the set-up of a short run)."""
+    wanted = needed_streams(scene, replay)
+    if not any(wanted):
+        return None, None, None
+    if streams is None:
+        raise ValueError("streams: this scene draws random numbers (white or filtered noise, or the "
+                         "Brownian-bridge draws of impacts under replayed noise); pass vines_stoch.streams.Streams "
+                         "or a numpy Generator")
+    if isinstance(streams, np.random.Generator):
+        streams = Streams.shared(streams)
+    chosen = (streams.increments, streams.bridge, streams.filter)
+    for name, want, gen in zip(("increments", "bridge", "filter"), wanted, chosen):
+        if want and gen is None:
+            raise ValueError(f"streams: this scene draws from the {name} stream; it is None")
+    return tuple(gen if want else None for want, gen in zip(wanted, chosen))
+
+
+def bundles(scene, x: np.ndarray, v: np.ndarray, fl: tuple, normals: np.ndarray, out: np.ndarray,
+            samples: np.ndarray, history: np.ndarray, stride: int, gens: tuple) -> tuple:
+    """The kernels' arguments as named bundles: bodies (masses, storey stiffnesses and dashpots,
+    mass-proportional dashpots, state), absorbers (kinds, hosts, rows), loads, filters, noise
+    (intensity per floor, replayed normals), grid, outputs, streams."""
+    return (
+        (scene.mass, scene.storey_k, scene.storey_c, scene.floor_c, x, v),
+        (scene.kind, scene.host, scene.rows),
+        scene.excitation,
+        fl,
+        (scene.sigma, normals),
+        (scene.dt, scene.n_steps, scene.i0, scene.period, scene.sample_from, stride),
+        (out, samples, history),
+        gens,
+    )
+
+
+def simulate(scene, streams: Streams | np.random.Generator | None = None, *, normals: np.ndarray | None = None,
              final: np.ndarray | None = None, samples: np.ndarray | None = None,
              history: np.ndarray | None = None, stride: int = 1) -> np.ndarray:
     """Run one realisation of ``scene``; returns the raw metric vector (see ``SLOTS``).
 
-    ``generator`` is required where the scene draws random numbers (a ``ValueError`` says so);
-    ``normals`` replays a given Brownian path (one standard normal per step, two with the
-    ``sra`` scheme: see ``sie_kernel``) instead of
-    drawing from ``generator``; ``final`` (shape ``(2, n_bodies)``) receives the final
+    ``streams`` (``vines_stoch.streams.Streams``: increments, bridge draws, filter noise; or
+    one numpy Generator for every purpose) is required where the scene draws random numbers
+    (a ``ValueError`` says so); ``normals`` replays a given Brownian path (one standard normal
+    per noisy floor and step, two with the ``sra`` scheme: see ``kdk_kernel``) instead of
+    drawing the increments; ``final`` (shape ``(2, n_bodies)``) receives the final
     positions and velocities; ``samples`` (from ``sample_buffer``) receives the Poincare
-    samples of periodic scenes; ``history`` (shape ``(G, 2)``) receives ``x1`` and ``E1`` at
-    ``t = j stride dt``, ``j < G`` (rows after a divergence keep their previous content).
+    samples of periodic scenes; ``history`` (shape ``(G, 2)``) receives the roof's ``x`` and
+    ``E1`` at ``t = j stride dt``, ``j < G`` (rows after a divergence keep their previous
+    content).
     """
-    out = new_metrics()
+    out = new_metrics(scene.n_floors)
     x, v = scene.x0.copy(), scene.v0.copy()
     if samples is None:
         samples = sample_buffer(scene)
     replay = normals is not None
-    needed = scene.n_steps * (2 if scene.scheme == "sra" else 1)
+    needed = scene.n_steps * SCHEMES[scene.scheme].normals * max(scene.noisy_floors, 1)
     if replay and normals.shape[0] < needed:
         raise ValueError(f"normals: need {needed} values, got {normals.shape[0]}")
-    if replay and scene.filters["phi"].shape[0]:
+    if replay and scene.has_filters:
         raise ValueError("normals: a replayed Brownian path drives white noise only, not filtered loads")
-    kernel_for(scene, replay)(
-        scene.mass, scene.k1, scene.c1, scene.k_lin, scene.k_cubic, scene.c_abs, scene.rest,
-        scene.impact_body, scene.clearance, scene.restitution, scene.hertz_body, scene.hertz_k,
-        scene.hertz_walls, scene.excitation, filter_tuple(scene, generator), scene.sigma, x, v,
-        scene.dt, scene.n_steps, scene.i0,
-        scene.period, scene.sample_from, _generator_for(scene, replay, generator),
-        normals if replay else _NO_NORMALS, out, samples,
-        _NO_HISTORY if history is None else history, stride,
-    )
+    gens = _streams_for(scene, replay, streams)
+    fl = filter_tuple(scene, gens[2])
+    kernel_for(scene, replay)(*bundles(scene, x, v, fl, normals if replay else _NO_NORMALS, out, samples,
+                                       _NO_HISTORY if history is None else history, stride, gens))
     if final is not None:
         final[0], final[1] = x, v
     return out
 
 
-def load_history(scene, generator: np.random.Generator | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """One sample path of a scene's loads on its time grid: ``(t, force on the primary,
-    ground acceleration)``; filtered loads start from the same law and take the same exact
-    steps as in the step loops (white noise, having no path value, is left out); ``generator``
-    draws the filter states (default: a generator seeded with 0)."""
+def load_history(scene, streams: Streams | np.random.Generator | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """One sample path of a scene's loads on its time grid: ``(t, force on each floor (shape
+    (n_steps + 1, n_floors)), ground acceleration)``; filtered loads start from the same law
+    and take the same exact steps as in the step loops (white noise, having no path value, is
+    left out); ``streams`` gives the filter stream (default: a generator seeded with 0), so
+    the streams of an ensemble's realisation give the path that realisation saw."""
     n = scene.n_steps
-    force, ground = np.zeros(n + 1), np.zeros(n + 1)
-    gen = generator if generator is not None else np.random.default_rng(0)
+    force, ground = np.zeros((n + 1, scene.n_floors)), np.zeros(n + 1)
+    if streams is None:
+        streams = np.random.default_rng(0)
+    gen = streams if isinstance(streams, np.random.Generator) else streams.filter
+    if gen is None:
+        gen = np.random.default_rng(0)  # a scene without filters draws nothing
     load_path(scene.excitation, filter_tuple(scene, gen), scene.dt, n, gen, force, ground)
     return scene.dt * np.arange(n + 1), force, ground
 
 
-__all__ = ["SLOTS", "kernel_for", "load_history", "sample_buffer", "simulate"]
+__all__ = ["SLOTS", "bundles", "kernel_for", "load_history", "sample_buffer", "simulate"]

@@ -1,7 +1,10 @@
-"""Pieces shared by the step loops: forces on all bodies, contact constraints, metric slots.
+"""Pieces shared by the step loops: forces on all bodies, contact constraints, the impact
+resolver, metric slots.
 
-Loops over bodies run to the length of the state arrays (not of the parameter arrays): the
-kernels make those lengths compile-time constants (``scratch``), so the loops unroll.
+Loops over bodies run to the length of the state arrays (not of the parameter arrays) or to
+the floor count ``nf``: the kernels make both compile-time constants (``scratch`` and the
+kernel factories' arguments), so the loops unroll.  Indices that are known only at run time
+(an absorber's host floor, the absorber that hit its wall) go through ``pick`` and ``put``.
 """
 
 from __future__ import annotations
@@ -13,7 +16,9 @@ from numba.core import cgutils
 from numba.extending import intrinsic
 from numba.np.arrayobj import make_array, populate_array
 
-from ..physics import INLINE, hertz_energy, hertz_force, spring_damper_energy, spring_damper_force
+from ..physics import (CLEARANCE, DAMPING, HERTZ, IMPACT, INLINE, K_CUBIC, K_LEFT, K_LIN, K_RIGHT, REST, WALL_HI,
+                       WALL_LO, contact_energy, contact_force_law, hertz_force, primary_energy,
+                       restitution_impact, spring_damper_energy, spring_damper_force)
 
 #: Slots of the raw metric vector a kernel fills; ``metrics.finish`` turns it into columns.
 SLOTS = (
@@ -25,6 +30,11 @@ SLOTS = (
 (INPUT, PRIMARY_DISS, ABSORBER_DISS, IMPACT_LOSS, ENERGY_INT, E1_MAX, X1_MAX, X1_SQ_INT,
  IMPACTS, FINAL_ENERGY, STATUS, CAPPED, IMPACTS_LEFT, IMPACTS_RIGHT, PEAK_FORCE,
  CONTACT_TIME) = range(len(SLOTS))
+
+#: Per-floor blocks after the slots above, ``n_floors`` entries each (``floor_slot``): peak
+#: displacement, peak drift, peak absolute acceleration, integral of ``x_k^2``.
+FLOOR_SLOTS = ("x_max", "drift_max", "acc_max", "x_square_integral")
+X_MAX_K, DRIFT_MAX_K, ACC_MAX_K, X_SQ_INT_K = range(len(FLOOR_SLOTS))
 
 #: Status codes written into the ``status`` slot.
 STATUS_OK, STATUS_DIVERGED = 0, 1
@@ -85,99 +95,226 @@ def put(a, j: int, value: float) -> None:
 
 
 @njit(**INLINE)
-def attachment_forces(x, v, k1, c1, k_lin, k_cubic, c_abs, rest, force):
-    """``force[b]``: force on body ``b`` from the primary's spring and damper and every
-    absorber attachment (MODEL.md section 1); external loads are added by the caller."""
-    force[0] = -k1 * x[0] - c1 * v[0]
-    for a in range(x.shape[0] - 1):
-        f = spring_damper_force(x[a + 1] - x[0] - rest[a], v[a + 1] - v[0], k_lin[a], k_cubic[a], c_abs[a])
-        force[a + 1] = f
-        force[0] -= f
+def host_of(host, a: int, nf: int) -> int:
+    """Host floor of absorber ``a`` (the constant 0 on a one-storey primary, so the compiler
+    keeps every index into the state constant there)."""
+    return host[a] if nf > 1 else 0
+
+
+@njit(**INLINE)
+def structure_forces(x, v, nf: int, storey_k, storey_c, floor_c, force):
+    """``force[k]``, ``k < nf``: the forces of the storey springs and dashpots and of the
+    mass-proportional (Rayleigh) damping on each floor, ``-(K x + C v)`` of MODEL.md 1a;
+    storey ``k`` joins floor ``k - 1`` (the ground for ``k = 0``) to floor ``k``."""
+    for k in range(nf):
+        force[k] = -floor_c[k] * v[k]
+    for k in range(nf):
+        d = x[k] - x[k - 1] if k > 0 else x[k]
+        dv = v[k] - v[k - 1] if k > 0 else v[k]
+        f = storey_k[k] * d + storey_c[k] * dv
+        force[k] -= f
+        if k > 0:
+            force[k - 1] += f
+
+
+@njit(**INLINE)
+def attachment_forces(x, v, nf: int, storey_k, storey_c, floor_c, host, rows, force):
+    """``force[b]``: force on body ``b`` from the structure and every absorber attachment
+    (MODEL.md sections 1, 1a, 2; ``physics.spring_damper_force``); loads and contact forces are
+    added by the caller."""
+    structure_forces(x, v, nf, storey_k, storey_c, floor_c, force)
+    for a in range(x.shape[0] - nf):
+        h = host_of(host, a, nf)
+        j = nf + a
+        f = spring_damper_force(x[j] - pick(x, h) - rows[a, REST], v[j] - pick(v, h), rows[a, K_LIN],
+                                rows[a, K_CUBIC], rows[a, DAMPING])
+        force[j] = f
+        put(force, h, pick(force, h) - f)
 
 
 @njit(**INLINE)
 def accelerate(force, load, ag, inv_mass, acc):
-    """Accelerations ``acc`` from the attachment forces, the load on the primary and the ground
-    acceleration (``acc`` may be ``force``; ``inv_mass``: the reciprocal masses)."""
-    acc[0] = (force[0] + load) * inv_mass[0] - ag
-    for b in range(1, acc.shape[0]):
+    """Accelerations ``acc`` from the attachment forces, the loads on the floors (``load``, one
+    per floor) and the ground acceleration (``acc`` may be ``force``; ``inv_mass``: the
+    reciprocal masses)."""
+    nf = load.shape[0]
+    for k in range(nf):
+        acc[k] = (force[k] + load[k]) * inv_mass[k] - ag
+    for b in range(nf, acc.shape[0]):
         acc[b] = force[b] * inv_mass[b] - ag
 
 
 @njit(**INLINE)
-def contact_forces(x, hertz_body, hertz_k, hertz_walls, force, active=True):
-    """Add the Hertz contact forces (MODEL.md section 2): ``+K_L z_L^1.5 - K_R z_R^1.5`` on
-    each Hertz absorber, the opposite on the primary; nothing unless ``active``."""
-    for q in range(hertz_body.shape[0] if active else 0):
-        j = hertz_body[q] + 1
-        u = pick(x, j) - x[0]
-        f = (hertz_force(hertz_walls[q, 0] - u, hertz_k[q, 0])
-             - hertz_force(u - hertz_walls[q, 1], hertz_k[q, 1]))
-        put(force, j, pick(force, j) + f)
-        force[0] -= f
+def contact_forces(x, nf: int, kind, host, rows, force, active=True):
+    """Add the Hertz contact forces (MODEL.md section 2, ``physics.contact_force_law``) on each
+    Hertz absorber, the opposite on its host floor; nothing unless ``active``."""
+    for a in range(x.shape[0] - nf if active else 0):
+        if kind[a] == HERTZ:
+            h = host_of(host, a, nf)
+            j = nf + a
+            f = contact_force_law(rows, a, pick(x, j) - pick(x, h))
+            put(force, j, pick(force, j) + f)
+            put(force, h, pick(force, h) - f)
 
 
 @njit(**INLINE)
-def contact_force(x, q, hertz_body, hertz_k, hertz_walls) -> float:
-    """Magnitude of the contact force on Hertz absorber ``q`` (either side)."""
-    u = x[hertz_body[q] + 1] - x[0]
-    return (hertz_force(hertz_walls[q, 0] - u, hertz_k[q, 0])
-            + hertz_force(u - hertz_walls[q, 1], hertz_k[q, 1]))
+def contact_force(x, nf: int, a: int, host, rows) -> float:
+    """Magnitude of the contact force on Hertz absorber ``a`` (either side)."""
+    u = x[nf + a] - x[host_of(host, a, nf)]
+    return (hertz_force(rows[a, WALL_LO] - u, rows[a, K_LEFT]) + hertz_force(u - rows[a, WALL_HI], rows[a, K_RIGHT]))
 
 
 @njit(**INLINE)
-def stored_energy(x, v, mass, k1, k_lin, k_cubic, rest, hertz_body, hertz_k, hertz_walls) -> float:
-    """Mechanical energy stored in all bodies, springs and Hertz contacts."""
-    e = 0.5 * k1 * x[0] * x[0]
-    for i in range(v.shape[0]):
-        e += 0.5 * mass[i] * v[i] * v[i]
-    for a in range(x.shape[0] - 1):
-        e += spring_damper_energy(x[a + 1] - x[0] - rest[a], k_lin[a], k_cubic[a])
-    for q in range(hertz_body.shape[0]):
-        u = x[hertz_body[q] + 1] - x[0]
-        e += hertz_energy(hertz_walls[q, 0] - u, hertz_k[q, 0]) + hertz_energy(u - hertz_walls[q, 1], hertz_k[q, 1])
+def stored_energy(x, v, mass, nf: int, storey_k, kind, host, rows) -> float:
+    """Mechanical energy stored in all bodies, storeys, attachment springs and Hertz contacts."""
+    e = primary_energy(mass, storey_k, x, v, nf)
+    for b in range(nf, v.shape[0]):
+        e += 0.5 * mass[b] * v[b] * v[b]
+    for a in range(x.shape[0] - nf):
+        u = x[nf + a] - x[host_of(host, a, nf)]
+        e += spring_damper_energy(u - rows[a, REST], rows[a, K_LIN], rows[a, K_CUBIC])
+        if kind[a] == HERTZ:
+            e += contact_energy(rows, a, u)
     return e
 
 
 @njit(**INLINE)
-def stick_together(mass, values, stuck, impact_body, release, active=True):
-    """Primary and absorbers stuck to a cavity wall move as one body (MODEL.md section 2).
-
-    ``values`` holds velocities (after a kick) or accelerations; stuck bodies get the
-    mass-weighted common value.  With ``release``, an absorber the wall would have to pull
-    (constraint of the wrong sign) is released first.  Nothing happens unless ``active``
-    (a flag rather than a branch around the call: see ``physics.INLINE``).
-    """
-    passes = (2 if release else 1) if active else 0
-    common = values[0]
-    for attempt in range(passes):
-        # mass-weighted mean over the primary and the stuck absorbers
-        total_mass = mass[0]
-        total = mass[0] * values[0]
-        for q in range(stuck.shape[0]):
-            if stuck[q] != 0:
-                j = impact_body[q] + 1
-                total_mass += mass[j]
-                total += mass[j] * pick(values, j)
-        common = total / total_mass
-        if attempt + 1 < passes:
-            for q in range(stuck.shape[0]):
-                # wall force on the absorber ~ mass * (common - free value); a wall only pushes
-                if stuck[q] * (common - pick(values, impact_body[q] + 1)) > 0.0:
-                    stuck[q] = 0
-    if passes > 0:
-        values[0] = common
-        for q in range(stuck.shape[0]):
-            if stuck[q] != 0:
-                put(values, impact_body[q] + 1, common)
+def structure_power(v, nf: int, storey_c, floor_c) -> float:
+    """Power dissipated by the structure's dashpots, ``v^T C v``."""
+    p = 0.0
+    for k in range(nf):
+        dv = v[k] - v[k - 1] if k > 0 else v[k]
+        p += storey_c[k] * dv * dv + floor_c[k] * v[k] * v[k]
+    return p
 
 
 @njit(**INLINE)
-def pin_to_walls(x, stuck, impact_body, clearance):
+def structure_dissipation(v, vn, nf: int, storey_c, floor_c, s: float) -> float:
+    """Energy the structure's dashpots take in a half kick of length ``s``: their forces at the
+    velocities ``v`` times the mean of ``v`` and ``vn`` (see ``kdk``)."""
+    d = 0.0
+    for k in range(nf):
+        dv = v[k] - v[k - 1] if k > 0 else v[k]
+        dvn = vn[k] - vn[k - 1] if k > 0 else vn[k]
+        d += storey_c[k] * dv * 0.5 * s * (0.5 * (dv + dvn)) + floor_c[k] * v[k] * 0.5 * s * (0.5 * (v[k] + vn[k]))
+    return d
+
+
+@njit(**INLINE)
+def absorber_dissipation(v, vn, nf: int, host, rows, s: float) -> float:
+    """Energy the absorbers' dashpots take in a half kick of length ``s`` (see
+    ``structure_dissipation``)."""
+    d = 0.0
+    for a in range(v.shape[0] - nf):
+        h = host_of(host, a, nf)
+        w = v[nf + a] - pick(v, h)
+        d += rows[a, DAMPING] * w * 0.5 * s * 0.5 * (w + vn[nf + a] - pick(vn, h))
+    return d
+
+
+@njit(**INLINE)
+def stick_together(mass, values, nf: int, stuck, host, group_mass, group_sum, release, active=True):
+    """Floors and the absorbers stuck to their cavity walls move as one body (MODEL.md section 2).
+
+    ``values`` holds velocities (after a kick) or accelerations; each floor and the absorbers
+    stuck on it get their mass-weighted common value.  With ``release``, an absorber the wall
+    would have to pull (constraint of the wrong sign) is released first.  ``group_mass`` and
+    ``group_sum`` are scratch (one entry per floor).  Nothing happens unless ``active`` (a flag
+    rather than a branch around the call: see ``physics.INLINE``).
+    """
+    passes = (2 if release else 1) if active else 0
+    for attempt in range(passes):
+        # mass-weighted mean over each floor and its stuck absorbers
+        for k in range(nf):
+            group_mass[k] = mass[k]
+            group_sum[k] = mass[k] * values[k]
+        for a in range(stuck.shape[0]):
+            if stuck[a] != 0:
+                h = host_of(host, a, nf)
+                j = nf + a
+                put(group_mass, h, pick(group_mass, h) + mass[j])
+                put(group_sum, h, pick(group_sum, h) + mass[j] * pick(values, j))
+        for k in range(nf):
+            group_sum[k] = group_sum[k] / group_mass[k]
+        if attempt + 1 < passes:
+            for a in range(stuck.shape[0]):
+                # wall force on the absorber ~ mass * (common - free value); a wall only pushes
+                if stuck[a] * (pick(group_sum, host_of(host, a, nf)) - pick(values, nf + a)) > 0.0:
+                    stuck[a] = 0
+    if passes > 0:
+        for k in range(nf):
+            values[k] = group_sum[k]
+        for a in range(stuck.shape[0]):
+            if stuck[a] != 0:
+                put(values, nf + a, pick(group_sum, host_of(host, a, nf)))
+
+
+@njit(**INLINE)
+def pin_to_walls(x, nf: int, stuck, host, rows):
     """Place stuck absorbers exactly at their wall (removes round-off drift)."""
+    for a in range(stuck.shape[0]):
+        if stuck[a] != 0:
+            put(x, nf + a, pick(x, host_of(host, a, nf)) + stuck[a] * rows[a, CLEARANCE])
+
+
+@njit(**INLINE)
+def keep_in_cavities(x, nf: int, kind, host, rows):
+    """Clip impact absorbers into their cavities ``|u| <= clearance`` (round-off of a located
+    impact, or the rest of a step taken at once after the event cap)."""
+    for a in range(x.shape[0] - nf):
+        if kind[a] == IMPACT:
+            h = host_of(host, a, nf)
+            c = rows[a, CLEARANCE]
+            x[nf + a] = pick(x, h) + min(max(x[nf + a] - pick(x, h), -c), c)
+
+
+@njit(**INLINE)
+def resolve_impact(mass, v, nf: int, a: int, side: int, gain: float, restitution: float, last: bool,
+                   stuck, host) -> float:
+    """The Newton impact of absorber ``a`` on the ``side`` wall of its host floor's cavity
+    (MODEL.md section 2, Wei et al. eqs. 2-3), the one impact resolver of every scheme.
+
+    An impact slower than ``gain`` (the relative velocity the loads add in one step, pressing
+    into the wall) or the ``last`` one a step may resolve is plastic and starts sticking.  The
+    host's velocity jumps, so the absorbers stuck on it are re-examined.  Returns the energy
+    lost."""
+    h = host_of(host, a, nf)
+    j = nf + a
+    vh, vj = pick(v, h), pick(v, j)
+    plastic = sticks(side, vj - vh, gain) or last
+    vh, vj, loss = restitution_impact(mass[h], mass[j], vh, vj, 0.0 if plastic else restitution)
     for q in range(stuck.shape[0]):
-        if stuck[q] != 0:
-            x[impact_body[q] + 1] = x[0] + stuck[q] * clearance[q]
+        if host_of(host, q, nf) == h:
+            stuck[q] = 0
+    if plastic:
+        vj = vh
+        stuck[a] = side
+    put(v, h, vh)
+    put(v, j, vj)
+    return loss
+
+
+@njit(**INLINE)
+def floor_peaks(x, nf: int, acc, x_max, drift_max, acc_max):
+    """Fold a state into the per-floor peaks of ``|x_k|``, of the drift ``|x_k - x_{k-1}|``
+    and of the absolute acceleration ``|acc[k]|`` (MODEL.md section 4)."""
+    for k in range(nf):
+        d = x[k] - x[k - 1] if k > 0 else x[k]
+        x_max[k] = max(x_max[k], abs(x[k]))
+        drift_max[k] = max(drift_max[k], abs(d))
+        acc_max[k] = max(acc_max[k], abs(acc[k]))
+
+
+@njit(**INLINE)
+def write_floor_metrics(out, nf: int, x_max, drift_max, acc_max, x2_integral):
+    """Per-floor slots of the raw metric vector (``floor_slot``) and the roof's ``x1`` slots."""
+    for k in range(nf):
+        out[floor_slot(nf, X_MAX_K, k)] = x_max[k]
+        out[floor_slot(nf, DRIFT_MAX_K, k)] = drift_max[k]
+        out[floor_slot(nf, ACC_MAX_K, k)] = acc_max[k]
+        out[floor_slot(nf, X_SQ_INT_K, k)] = x2_integral[k]
+    out[X1_MAX] = x_max[nf - 1]
+    out[X1_SQ_INT] = x2_integral[nf - 1]
 
 
 @njit(**INLINE)
@@ -196,9 +333,15 @@ def sticks(side: int, w_in: float, w_gain: float) -> bool:
     return side * w_gain > 0.0 and abs(w_in) <= side * w_gain
 
 
-def new_metrics() -> np.ndarray:
-    """A zeroed raw metric vector."""
-    return np.zeros(len(SLOTS))
+@njit(**INLINE)
+def floor_slot(nf: int, block: int, k: int) -> int:
+    """Index of floor ``k``'s entry of a per-floor block (``FLOOR_SLOTS``) in the raw vector."""
+    return len(SLOTS) + block * nf + k
+
+
+def new_metrics(n_floors: int = 1) -> np.ndarray:
+    """A zeroed raw metric vector of a primary with ``n_floors`` floors."""
+    return np.zeros(len(SLOTS) + len(FLOOR_SLOTS) * n_floors)
 
 
 @njit(**INLINE)

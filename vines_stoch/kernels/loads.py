@@ -1,13 +1,16 @@
 """Loads evaluated inside the step loops (MODEL.md section 3): no per-step Python.
 
 A scene's time-dependent loads reach a kernel as the tuple
-``ex = (forces, series_t, series_v, series_ptr, series_ground)``:
+``ex = (forces, series_t, series_v, series_ptr, series_target)``:
 
-- ``forces`` rows ``(kind, amplitude, p1, p2, p3, p4)`` of closed-form forces on the primary
-  (``HARMONIC``, ``HALF_SINE``, ``PULSE_TRAIN``, ``CHIRP``);
+- ``forces`` rows ``(kind, amplitude, p1, p2, p3, p4, floor)`` of closed-form forces on a
+  floor (``HARMONIC``, ``HALF_SINE``, ``PULSE_TRAIN``, ``CHIRP``);
 - sampled series (records), concatenated: series ``s`` holds ``series_t/v[ptr[s]:ptr[s+1]]``,
-  linearly interpolated and zero outside its time span; ``series_ground[s]`` is 1 for a
-  ground acceleration (base excitation) and 0 for a force on the primary.
+  linearly interpolated and zero outside its time span; ``series_target[s]`` is ``GROUND``
+  (-1) for a ground acceleration (base excitation) or the floor a force acts on.
+
+Loads reach the step loops as one force per floor (an array ``load``) and the ground
+acceleration.
 
 Piecewise loads are evaluated with a *piece time* ``tm``: the piece (pulse on or off, record
 segment) is the one containing ``tm`` and its formula is evaluated at ``t``.  A step that
@@ -31,9 +34,13 @@ import numpy as np
 from numba import njit
 
 from ..physics import INLINE, KERNEL
+from .common import pick, put
 
-#: Kinds of closed-form force rows.
+#: Kinds of closed-form force rows, their width and the column of their floor.
 HARMONIC, HALF_SINE, PULSE_TRAIN, CHIRP = 0, 1, 2, 3
+FORCE_ROW, FLOOR = 7, 6
+#: ``series_target`` of a ground acceleration.
+GROUND = -1
 #: Envelope kinds of filter rows (``filters.STATIONARY`` etc.).
 STATIONARY, JENNINGS, SARAGONI_HART = 0, 1, 2
 
@@ -123,38 +130,48 @@ def turn(pc, ps, rc, rs, oc, os):
 
 
 @njit(**INLINE)
-def applied(t: float, tm: float, forces, series_t, series_v, series_ptr, series_ground, pc, on_grid: bool):
-    """``(force on the primary, ground acceleration)`` of the closed-form loads and records
-    (the arrays of ``ex``, passed one by one: unpacking a tuple in a hot loop costs reference
-    counting); with ``on_grid``, harmonic rows are read from the phasor cosines ``pc`` at
-    ``t`` (a float array of any length otherwise)."""
-    force = 0.0
+def target(row: float, nf: int) -> int:
+    """Floor index stored in a row (the constant 0 on a one-storey primary)."""
+    return int(row) if nf > 1 else 0
+
+
+@njit(**INLINE)
+def applied(t: float, tm: float, forces, series_t, series_v, series_ptr, series_target, pc, on_grid: bool, load) -> float:
+    """The closed-form loads and records at ``t``: the force on each floor into ``load`` (one
+    entry per floor); returns the ground acceleration.  The arrays of ``ex`` come one by one
+    (unpacking a tuple in a hot loop costs reference counting); with ``on_grid``, harmonic rows
+    are read from the phasor cosines ``pc`` at ``t`` (a float array of any length otherwise)."""
+    nf = load.shape[0]
+    for k in range(nf):
+        load[k] = 0.0
     ground = 0.0
     for r in range(forces.shape[0]):
-        force += closed_form_force(t, tm, forces, r, pc, on_grid)
-    for s in range(series_ground.shape[0]):
+        k = target(forces[r, FLOOR], nf)
+        put(load, k, pick(load, k) + closed_form_force(t, tm, forces, r, pc, on_grid))
+    for s in range(series_target.shape[0]):
         value = series_value(t, tm, series_t, series_v, series_ptr[s], series_ptr[s + 1])
-        if series_ground[s] != 0:
+        if series_target[s] == GROUND:
             ground += value
         else:
-            force += value
-    return force, ground
+            k = target(series_target[s], nf)
+            put(load, k, pick(load, k) + value)
+    return ground
 
 
 @njit(**INLINE)
 def has_breaks(ex) -> bool:
     """True when some load has kinks or jumps inside the run (pulses, half-sines, records)."""
-    forces, series_t, series_v, series_ptr, series_ground = ex
+    forces, series_t, series_v, series_ptr, series_target = ex
     for r in range(forces.shape[0]):
         if forces[r, 0] == HALF_SINE or forces[r, 0] == PULSE_TRAIN:
             return True
-    return series_ground.shape[0] > 0
+    return series_target.shape[0] > 0
 
 
 @njit(**INLINE)
 def next_break(t: float, ex) -> float:
     """The first break point of the loads after ``t`` (``inf`` if none)."""
-    forces, series_t, series_v, series_ptr, series_ground = ex
+    forces, series_t, series_v, series_ptr, series_target = ex
     first = np.inf
     for r in range(forces.shape[0]):
         row = forces[r]
@@ -173,7 +190,7 @@ def next_break(t: float, ex) -> float:
                 k += 1.0
             if count <= 0 or k < count:
                 first = min(first, tb)
-    for s in range(series_ground.shape[0]):
+    for s in range(series_target.shape[0]):
         lo, hi = series_ptr[s], series_ptr[s + 1]
         if t < series_t[lo]:
             first = min(first, series_t[lo])
@@ -217,41 +234,45 @@ def advance_filters(z, zn, t: float, dt: float, phi, chol, envelopes, gen, draws
 
 
 @njit(**INLINE)
-def readout(c, z, zn, theta: float) -> float:
-    """``c . ((1 - theta) z + theta zn)``: a filtered load between two grid states."""
+def readout(c, row: int, z, zn, theta: float) -> float:
+    """``c[row] . ((1 - theta) z + theta zn)``: a filtered load between two grid states."""
     f = 0.0
-    for r in range(c.shape[0]):
-        f += c[r] * (z[r] + theta * (zn[r] - z[r]))
+    for r in range(z.shape[0]):
+        f += c[row, r] * (z[r] + theta * (zn[r] - z[r]))
     return f
 
 
 @njit(**INLINE)
-def excitation(t: float, tm: float, theta: float, forces, series_t, series_v, series_ptr, series_ground,
-               filtered: bool, c_force, c_ground, z, zn, pc, on_grid: bool, has_ground: bool = True):
-    """``(force on the primary, ground acceleration)`` of all loads at ``t``, the filtered
-    ones (if ``filtered``, a compile-time constant of the kernels) at ``theta`` of the way
-    from the grid states ``z`` to ``zn``; harmonic rows from the phasor cosines ``pc`` if
-    ``on_grid`` (see ``applied``).  Without ``has_ground`` (a compile-time constant: the scene has
-    no ground acceleration, see ``Scene.kernel_flags``) the ground acceleration is the constant 0."""
-    force, ground = applied(t, tm, forces, series_t, series_v, series_ptr, series_ground, pc, on_grid)
+def excitation(t: float, tm: float, theta: float, forces, series_t, series_v, series_ptr, series_target,
+               filtered: bool, c_force, c_ground, z, zn, pc, on_grid: bool, has_ground: bool, load) -> float:
+    """All loads at ``t``: the force on each floor into ``load``; returns the ground
+    acceleration.  The filtered loads (if ``filtered``, a compile-time constant of the kernels)
+    are read ``theta`` of the way from the grid states ``z`` to ``zn`` (``c_force`` has one
+    read-out row per floor, ``c_ground`` one row); harmonic rows from the phasor cosines ``pc``
+    if ``on_grid`` (see ``applied``).  Without ``has_ground`` (a compile-time constant: the
+    scene has no ground acceleration, see ``Scene.kernel_flags``) the ground acceleration is the
+    constant 0."""
+    ground = applied(t, tm, forces, series_t, series_v, series_ptr, series_target, pc, on_grid, load)
     if filtered:
-        force += readout(c_force, z, zn, theta)
-        ground += readout(c_ground, z, zn, theta)
-    return force, (ground if has_ground else 0.0)
+        for k in range(load.shape[0]):
+            load[k] += readout(c_force, k, z, zn, theta)
+        ground += readout(c_ground, 0, z, zn, theta)
+    return ground if has_ground else 0.0
 
 
 @njit(**KERNEL)
 def load_path(ex, fl, dt: float, n_steps: int, gen, force, ground):
-    """Force on the primary and ground acceleration at ``t = i dt``, ``i = 0..n_steps``, with
-    the filters advanced exactly as in the step loops (``fl`` as the kernels take it)."""
+    """Force on each floor (``force``, shape ``(n_steps + 1, n_floors)``) and ground
+    acceleration at ``t = i dt``, ``i = 0..n_steps``, with the filters advanced exactly as in
+    the step loops (``fl`` as the kernels take it; ``gen``: the filter stream)."""
     phi, chol, envelopes, c_force, c_ground, z = fl
-    forces, series_t, series_v, series_ptr, series_ground = ex
+    forces, series_t, series_v, series_ptr, series_target = ex
     zn = z.copy()
     draws = np.zeros(z.shape[0])
     for i in range(n_steps + 1):
         t = i * dt
-        force[i], ground[i] = excitation(t, t, 0.0, forces, series_t, series_v, series_ptr, series_ground, True,
-                                         c_force, c_ground, zn, zn, zn, False)
+        ground[i] = excitation(t, t, 0.0, forces, series_t, series_v, series_ptr, series_target, True,
+                               c_force, c_ground, zn, zn, zn, False, True, force[i])
         if z.shape[0] > 0 and i < n_steps:
             z[:] = zn
             advance_filters(z, zn, t, dt, phi, chol, envelopes, gen, draws)
