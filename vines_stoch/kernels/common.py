@@ -3,8 +3,10 @@ resolver, metric slots.
 
 Loops over bodies run to the length of the state arrays (not of the parameter arrays) or to
 the floor count ``nf``: the kernels make both compile-time constants (``scratch`` and the
-kernel factories' arguments), so the loops unroll.  Indices that are known only at run time
-(an absorber's host floor, the absorber that hit its wall) go through ``pick`` and ``put``.
+kernel factories' arguments), so the loops unroll.  An absorber's host floor is the constant
+0 on a one-storey primary (``host_of``), so its state stays in registers there; on several
+floors the host is a run-time index (``pick`` and ``put`` would keep those arrays in
+registers too, at several times the compile time of every kernel).
 """
 
 from __future__ import annotations
@@ -126,10 +128,10 @@ def attachment_forces(x, v, nf: int, storey_k, storey_c, floor_c, host, rows, fo
     for a in range(x.shape[0] - nf):
         h = host_of(host, a, nf)
         j = nf + a
-        f = spring_damper_force(x[j] - pick(x, h) - rows[a, REST], v[j] - pick(v, h), rows[a, K_LIN],
+        f = spring_damper_force(x[j] - x[h] - rows[a, REST], v[j] - v[h], rows[a, K_LIN],
                                 rows[a, K_CUBIC], rows[a, DAMPING])
         force[j] = f
-        put(force, h, pick(force, h) - f)
+        force[h] -= f
 
 
 @njit(**INLINE)
@@ -152,9 +154,9 @@ def contact_forces(x, nf: int, kind, host, rows, force, active=True):
         if kind[a] == HERTZ:
             h = host_of(host, a, nf)
             j = nf + a
-            f = contact_force_law(rows, a, pick(x, j) - pick(x, h))
-            put(force, j, pick(force, j) + f)
-            put(force, h, pick(force, h) - f)
+            f = contact_force_law(rows, a, x[j] - x[h])
+            force[j] += f
+            force[h] -= f
 
 
 @njit(**INLINE)
@@ -207,8 +209,8 @@ def absorber_dissipation(v, vn, nf: int, host, rows, s: float) -> float:
     d = 0.0
     for a in range(v.shape[0] - nf):
         h = host_of(host, a, nf)
-        w = v[nf + a] - pick(v, h)
-        d += rows[a, DAMPING] * w * 0.5 * s * 0.5 * (w + vn[nf + a] - pick(vn, h))
+        w = v[nf + a] - v[h]
+        d += rows[a, DAMPING] * w * 0.5 * s * 0.5 * (w + vn[nf + a] - vn[h])
     return d
 
 
@@ -228,33 +230,33 @@ def stick_together(mass, values, nf: int, stuck, host, group_mass, group_sum, re
         for k in range(nf):
             group_mass[k] = mass[k]
             group_sum[k] = mass[k] * values[k]
-        for a in range(stuck.shape[0]):
+        for a in range(values.shape[0] - nf):
             if stuck[a] != 0:
                 h = host_of(host, a, nf)
                 j = nf + a
-                put(group_mass, h, pick(group_mass, h) + mass[j])
-                put(group_sum, h, pick(group_sum, h) + mass[j] * pick(values, j))
+                group_mass[h] += mass[j]
+                group_sum[h] += mass[j] * values[j]
         for k in range(nf):
             group_sum[k] = group_sum[k] / group_mass[k]
         if attempt + 1 < passes:
-            for a in range(stuck.shape[0]):
+            for a in range(values.shape[0] - nf):
                 # wall force on the absorber ~ mass * (common - free value); a wall only pushes
-                if stuck[a] * (pick(group_sum, host_of(host, a, nf)) - pick(values, nf + a)) > 0.0:
+                if stuck[a] * (group_sum[host_of(host, a, nf)] - values[nf + a]) > 0.0:
                     stuck[a] = 0
     if passes > 0:
         for k in range(nf):
             values[k] = group_sum[k]
-        for a in range(stuck.shape[0]):
+        for a in range(values.shape[0] - nf):
             if stuck[a] != 0:
-                put(values, nf + a, pick(group_sum, host_of(host, a, nf)))
+                values[nf + a] = group_sum[host_of(host, a, nf)]
 
 
 @njit(**INLINE)
 def pin_to_walls(x, nf: int, stuck, host, rows):
     """Place stuck absorbers exactly at their wall (removes round-off drift)."""
-    for a in range(stuck.shape[0]):
+    for a in range(x.shape[0] - nf):
         if stuck[a] != 0:
-            put(x, nf + a, pick(x, host_of(host, a, nf)) + stuck[a] * rows[a, CLEARANCE])
+            x[nf + a] = x[host_of(host, a, nf)] + stuck[a] * rows[a, CLEARANCE]
 
 
 @njit(**INLINE)
@@ -265,7 +267,7 @@ def keep_in_cavities(x, nf: int, kind, host, rows):
         if kind[a] == IMPACT:
             h = host_of(host, a, nf)
             c = rows[a, CLEARANCE]
-            x[nf + a] = pick(x, h) + min(max(x[nf + a] - pick(x, h), -c), c)
+            x[nf + a] = x[h] + min(max(x[nf + a] - x[h], -c), c)
 
 
 @njit(**INLINE)
@@ -280,7 +282,7 @@ def resolve_impact(mass, v, nf: int, a: int, side: int, gain: float, restitution
     lost."""
     h = host_of(host, a, nf)
     j = nf + a
-    vh, vj = pick(v, h), pick(v, j)
+    vh, vj = v[h], pick(v, j)
     plastic = sticks(side, vj - vh, gain) or last
     vh, vj, loss = restitution_impact(mass[h], mass[j], vh, vj, 0.0 if plastic else restitution)
     for q in range(stuck.shape[0]):
@@ -289,7 +291,7 @@ def resolve_impact(mass, v, nf: int, a: int, side: int, gain: float, restitution
     if plastic:
         vj = vh
         stuck[a] = side
-    put(v, h, vh)
+    v[h] = vh
     put(v, j, vj)
     return loss
 

@@ -38,8 +38,8 @@ from ..physics import CLEARANCE, DAMPING, IMPACT, KERNEL, RESTITUTION, primary_e
 from .common import (ABSORBER_DISS, CAPPED, CHECK_EVERY, E1_MAX, ENERGY_INT, FINAL_ENERGY,
                      IMPACT_LOSS, IMPACTS, IMPACTS_LEFT, IMPACTS_RIGHT, INLINE, INPUT, MAX_EVENTS,
                      PRIMARY_DISS, STATUS, STATUS_DIVERGED, absorber_dissipation, accelerate,
-                     attachment_forces, block_end, diverged, floor_peaks, host_of, keep_in_cavities, pick,
-                     pin_to_walls, put, record_history, resolve_impact, scratch, start_history,
+                     attachment_forces, block_end, diverged, floor_peaks, host_of, keep_in_cavities,
+                     pin_to_walls, record_history, resolve_impact, scratch, start_history,
                      stick_together, stored_energy, structure_dissipation, write_floor_metrics)
 from .loads import advance_filters, excitation, phasors, rotations, turn
 
@@ -106,12 +106,12 @@ def crossing(x, v, length, total, z, load, ag, force, mass, inv_mass, nf, stuck,
     h = host_of(host, a, nf)
     j = nf + a
     lo, hi = 0.0, length
-    g_lo = min(side * (pick(x, j) - pick(x, h)) - wall, 0.0)  # on the wall counts as inside
+    g_lo = min(side * (x[j] - x[h]) - wall, 0.0)  # on the wall counts as inside
     for k in range(nf):
         dws[k] = 0.5 * total[k]
     kick(v, 0.5 * length, dws, load, ag, force, inv_mass, vt, ground)
     stick_together(mass, vt, nf, stuck, host, group_mass, group_sum, False)
-    g_hi = side * (pick(x, j) - pick(x, h) + length * (pick(vt, j) - pick(vt, h))) - wall
+    g_hi = side * (x[j] - x[h] + length * (vt[j] - vt[h])) - wall
     s = hi
     last = 0
     for _ in range(ROOT_ITERATIONS):
@@ -123,7 +123,7 @@ def crossing(x, v, length, total, z, load, ag, force, mass, inv_mass, nf, stuck,
             dws[k] *= 0.5
         kick(v, 0.5 * s, dws, load, ag, force, inv_mass, vt, ground)
         stick_together(mass, vt, nf, stuck, host, group_mass, group_sum, False)
-        g = side * (pick(x, j) - pick(x, h) + s * (pick(vt, j) - pick(vt, h))) - wall
+        g = side * (x[j] - x[h] + s * (vt[j] - vt[h])) - wall
         if g > 0.0:
             hi, g_hi = s, g
             if last > 0:
@@ -276,19 +276,20 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
                 # the step's Wiener increments on the noisy floors (two integrals each for
                 # SRA3), from the increment stream or a replayed path: one normal per noisy floor
                 # (SRA3: all floors' first normals, then their second)
-                for part in range(2 if sra else 1):
-                    for k in range(nf if has_noise else 0):
-                        if nf == 1 or noise_scale[k] > 0.0:
-                            u = normals[replayed] if replay else gen.standard_normal()
-                            replayed += 1
-                            if part == 0:
-                                u1[k] = u
-                            else:
-                                u2[k] = u
-                for k in range(nf if has_noise else 0):
-                    dw[k] = noise_scale[k] * u1[k]
-                    if sra:
-                        dz[k] = 0.5 * noise_scale[k] * (u1[k] + u2[k] / ROOT3)  # sigma I10 / h
+                if has_noise:
+                    for part in range(2 if sra else 1):
+                        for k in range(nf):
+                            if nf == 1 or noise_scale[k] > 0.0:
+                                u = normals[replayed] if replay else gen.standard_normal()
+                                replayed += 1
+                                if part == 0:
+                                    u1[k] = u
+                                else:
+                                    u2[k] = u
+                    for k in range(nf):
+                        dw[k] = noise_scale[k] * u1[k]
+                        if sra:
+                            dz[k] = 0.5 * noise_scale[k] * (u1[k] + u2[k] / ROOT3)  # sigma I10 / h
                 if sra:
                     attachment_forces(x, v, nf, storey_k, storey_c, floor_c, host, rows, force)
                     accelerate(force, load, ag, inv_mass, a1)
@@ -327,9 +328,9 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
                         for a in range(na):
                             h = host_of(host, a, nf)
                             j = nf + a
-                            w = dt * ((v[j] - pick(v, h)) / 6.0 + (v2[j] - pick(v2, h)) / 6.0
-                                      + 2.0 / 3.0 * (v3[j] - pick(v3, h)))
-                            d_absorber += rows[a, DAMPING] * w * 0.5 * (v[j] - pick(v, h) + vn[j] - pick(vn, h))
+                            w = dt * ((v[j] - v[h]) / 6.0 + (v2[j] - v2[h]) / 6.0
+                                      + 2.0 / 3.0 * (v3[j] - v3[h]))
+                            d_absorber += rows[a, DAMPING] * w * 0.5 * (v[j] - v[h] + vn[j] - vn[h])
                     for b in range(nb):
                         x[b] += dt * (v[b] / 6.0 + v2[b] / 6.0 + 2.0 / 3.0 * v3[b])
                         v[b] = vn[b]
@@ -351,7 +352,7 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
                             if kind[a] == IMPACT and stuck[a] == 0:
                                 h = host_of(host, a, nf)
                                 j = nf + a
-                                u_end = x[j] - pick(x, h) + left * (vn[j] - pick(vn, h))
+                                u_end = x[j] - x[h] + left * (vn[j] - vn[h])
                                 if abs(u_end) > rows[a, CLEARANCE]:
                                     if has_noise and hit < 0:  # one bridge draw per floor and split step
                                         for k in range(nf):
@@ -410,11 +411,11 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
                     # the impact, at t + s; the rest of the step keeps the rest of the increments
                     h = host_of(host, hit, nf)
                     j = nf + hit
-                    put(x, j, pick(x, h) + side * rows[hit, CLEARANCE])
+                    x[j] = x[h] + side * rows[hit, CLEARANCE]
                     t += s
                     left -= s
                     ag = ag_end
-                    gain = (pick(force, j) / mass[j] - (pick(force, h) + pick(load_end, h)) / mass[h]) * dt
+                    gain = (force[j] / mass[j] - (force[h] + load_end[h]) / mass[h]) * dt
                     for k in range(nf):
                         dw[k] -= dws[k]
                         load[k] = load_end[k]

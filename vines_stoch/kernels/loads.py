@@ -34,7 +34,6 @@ import numpy as np
 from numba import njit
 
 from ..physics import INLINE, KERNEL
-from .common import pick, put
 
 #: Kinds of closed-form force rows, their width and the column of their floor.
 HARMONIC, HALF_SINE, PULSE_TRAIN, CHIRP = 0, 1, 2, 3
@@ -147,14 +146,14 @@ def applied(t: float, tm: float, forces, series_t, series_v, series_ptr, series_
     ground = 0.0
     for r in range(forces.shape[0]):
         k = target(forces[r, FLOOR], nf)
-        put(load, k, pick(load, k) + closed_form_force(t, tm, forces, r, pc, on_grid))
+        load[k] += closed_form_force(t, tm, forces, r, pc, on_grid)
     for s in range(series_target.shape[0]):
         value = series_value(t, tm, series_t, series_v, series_ptr[s], series_ptr[s + 1])
         if series_target[s] == GROUND:
             ground += value
         else:
             k = target(series_target[s], nf)
-            put(load, k, pick(load, k) + value)
+            load[k] += value
     return ground
 
 

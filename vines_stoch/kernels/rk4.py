@@ -70,7 +70,7 @@ def accelerations(x, v, t, tm, nf, mass, inv_mass, storey_k, storey_c, floor_c, 
     stick_together(mass, acc, nf, stuck, host, group_mass, group_sum, release, sticking)
     absorber_power = 0.0
     for a in range(x.shape[0] - nf):
-        w = v[nf + a] - pick(v, host_of(host, a, nf))
+        w = v[nf + a] - v[host_of(host, a, nf)]
         absorber_power += rows[a, DAMPING] * w * w
     return (power, structure_power(v, nf, storey_c, floor_c), absorber_power,
             primary_energy(mass, storey_k, x, v, nf), ag)
@@ -309,9 +309,9 @@ def rk4_kernel(n_bodies: int, n_floors: int, has_impact: bool, has_hertz: bool, 
                             phase = 1
                             continue
                     elif phase > 0:
-                        approach = sign * (pick(vn, j) - pick(vn, hf))
+                        approach = sign * (pick(vn, j) - vn[hf])
                         if approach > 0.0:
-                            correction = sign * (pick(xn, j) - pick(xn, hf) - wall) / approach
+                            correction = sign * (pick(xn, j) - xn[hf] - wall) / approach
                             tau = min(max(tau - correction, 0.0), h)
                             phase = phase + 1 if abs(correction) > 1e-15 * dt and phase < NEWTON_ITERATIONS else -1
                             continue
@@ -344,12 +344,12 @@ def rk4_kernel(n_bodies: int, n_floors: int, has_impact: bool, has_hertz: bool, 
                         break
                     if event_kind == IMPACT_EVENT:
                         n_impacts += 1
-                        put(x, j, pick(x, hf) + side * rows[q, CLEARANCE])
+                        put(x, j, x[hf] + side * rows[q, CLEARANCE])
                         wall_accelerations(x, v, t, nf, mass, inv_mass, storey_k, storey_c, floor_c, kind, host, rows,
                                            forces, series_t, series_v, series_ptr, series_target, stuck, False, acc_wall,
                                            load_wall, gm_wall, gs_wall, True, contact)
                         # the last impact a step may resolve ends a chatter sequence: inelastic collapse
-                        gain = (pick(acc_wall, j) - pick(acc_wall, hf)) * dt
+                        gain = (pick(acc_wall, j) - acc_wall[hf]) * dt
                         loss = resolve_impact(mass, v, nf, q, side, gain, rows[q, RESTITUTION], n_impacts >= MAX_EVENTS,
                                               stuck, host)
                         if inside:
