@@ -207,11 +207,11 @@ def test_filtered_noise_force_variance_and_psd():
     variance = sigma**2 / (4.0 * eta * w0**3)
     # variance: final values of independent short paths (chi-square: SE = var sqrt(2 / (n - 1)))
     short = scene_of(primary_text(load, 1.0, dt=dt))
-    finals = np.array([load_history(short, np.random.default_rng(r))[1][-1] for r in range(4000)])
+    finals = np.array([load_history(short, np.random.default_rng(r))[1][-1, 0] for r in range(4000)])
     assert abs(finals.var() - variance) < 4.0 * variance * np.sqrt(2.0 / 3999)
     # PSD of one long path: about 3900 Welch segments, 1.7 % scatter per bin
     long = scene_of(primary_text(load, 200_000.0, dt=dt))
-    _, force, _ = load_history(long, np.random.default_rng(5))
+    force = load_history(long, np.random.default_rng(5))[1][:, 0]  # (the primary's one floor)
     freq, psd = welch(force, fs=1.0 / dt, nperseg=2048)
     w = 2.0 * np.pi * freq
     theory = 4.0 * np.pi * sigma**2 / (2.0 * np.pi) / ((w0**2 - w**2) ** 2 + (2.0 * eta * w0 * w) ** 2)

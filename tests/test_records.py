@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from vines_stoch import ScenarioError, load_scenario
+from vines_stoch.kernels.loads import GROUND
 from vines_stoch.records import G, RecordError, read_record
 from vines_stoch.scene import build_scene
 
@@ -97,7 +98,7 @@ def test_scenario_reads_records_relative_to_its_file(tmp_path):
     path.write_text(SCENARIO.format(file="records/r.AT2", units="g", scale=2.0, extra=""))
     scene = build_scene(load_scenario(path).points[0])
     np.testing.assert_allclose(scene.series_v, 2.0 * G * VALUES)
-    assert scene.series_ground.tolist() == [1]
+    assert scene.series_target.tolist() == [GROUND]
     assert scene.scheme == "rk4"
 
 

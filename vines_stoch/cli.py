@@ -72,17 +72,20 @@ def validate(scenario: Path = typer.Argument(..., help="Scenario TOML file.")) -
 def loads(
     scenario: Path = typer.Argument(..., help="Scenario TOML file."),
     out: Path = typer.Argument(..., help="File to write: .AT2 (ground acceleration in g) or .csv (t, force, ground)."),
-    seed: int = typer.Option(0, "--seed", help="Seed of the random loads."),
+    seed: Optional[int] = typer.Option(None, "--seed", help="Seed (default: the scenario's [ensemble] seed)."),
+    realization: int = typer.Option(0, "--realization", min=0, help="Realisation whose loads to write."),
     point: int = typer.Option(0, "--point", min=0, help="Sweep point."),
     pga: Optional[float] = typer.Option(None, "--pga", min=0.0, help="Scale the ground acceleration to this peak (in g)."),
     every: int = typer.Option(1, "--every", min=1, help="Keep every N-th sample of the time grid."),
 ) -> None:
-    """Write one sample path of a scenario's loads (e.g. a synthetic accelerogram)."""
+    """Write one sample path of a scenario's loads (e.g. a synthetic accelerogram): the path
+    realisation ``--realization`` of an ensemble run with ``--seed`` sees (the same streams)."""
     import numpy as np
 
     from .kernels import load_history
     from .records import G, write_at2
     from .scene import build_scene
+    from .streams import streams
 
     try:
         study = load_scenario(scenario)
@@ -90,16 +93,21 @@ def loads(
         _fail(str(exc))
     if point >= len(study.points):
         _fail(f"--point {point}: the scenario has {len(study.points)} sweep point(s)")
-    t, force, ground = (a[::every] for a in load_history(build_scene(study.points[point]), np.random.default_rng(seed)))
+    ens = study.base.ensemble
+    seed = ens.seed if seed is None else seed
+    gens = streams(seed, point, realization, increments=False, bridge=False, common=ens.common_random_numbers)
+    t, force, ground = (a[::every] for a in load_history(build_scene(study.points[point]), gens))
     if pga is not None:
         peak = np.max(np.abs(ground))
         if peak == 0.0:
             _fail(f"--pga: {scenario} has no ground acceleration to scale")
         ground *= pga * G / peak
     if out.suffix.lower() == ".at2":
-        write_at2(out, t[1] - t[0], ground / G, f"{study.name}, sweep point {point}, seed {seed}")
+        write_at2(out, t[1] - t[0], ground / G, f"{study.name}, sweep point {point}, seed {seed}, realisation {realization}")
     else:
-        np.savetxt(out, np.c_[t, force, ground], header="t force ground_acceleration", comments="# ")
+        floors = force.shape[1]
+        names = ["force"] if floors == 1 else [f"force_{k}" for k in range(1, floors + 1)]
+        np.savetxt(out, np.c_[t, force, ground], header=" ".join(["t", *names, "ground_acceleration"]), comments="# ")
     typer.echo(f"wrote {out} ({len(t)} samples)")
 
 

@@ -46,7 +46,8 @@ class Rayleigh(_Model):
     modes: Annotated[list[Annotated[int, Field(ge=1)]], Field(min_length=2, max_length=2)]
 
 
-Floor = Annotated[int, Field(ge=1)]
+#: A floor number, 1 (lowest) to the roof; its range is checked against the primary's floors.
+Floor = int
 
 
 class Primary(_Model):
@@ -673,7 +674,7 @@ class Scenario(_Model):
         for i, item in [(f"absorbers.{i}", a) for i, a in enumerate(self.absorbers)] + \
                        [(f"loads.{i}", l) for i, l in enumerate(self.loads)]:
             floor = getattr(item, "floor", None)
-            if floor is not None and floor > n:
+            if floor is not None and not 1 <= floor <= n:
                 raise _KeyError(f"{i}.floor", floor, f"must be in [1, {n}] (the primary has {n} floor{'s' * (n > 1)})")
         for i, load in enumerate(self.loads):
             if isinstance(load, InitialLoad):
@@ -774,11 +775,17 @@ def _interval(metadata: list[Any]) -> str | None:
 
 
 def _constraints(info: Any) -> list[Any]:
-    """Bound constraints of a field, also inside ``Optional[Annotated[...]]``."""
+    """Bound constraints of a field, also inside ``Optional[Annotated[...]]`` and lists of
+    them (``Optional[list[Annotated[...]]]``: the bound of the items)."""
     found = list(info.metadata)
-    for arg in getattr(info.annotation, "__args__", ()):
-        for meta in getattr(arg, "__metadata__", ()):
-            found += getattr(meta, "metadata", [meta])
+
+    def walk(annotation: Any) -> None:
+        for arg in getattr(annotation, "__args__", ()):
+            for meta in getattr(arg, "__metadata__", ()):
+                found.extend(getattr(meta, "metadata", [meta]))
+            walk(arg)
+
+    walk(info.annotation)
     return found
 
 
