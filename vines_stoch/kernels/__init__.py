@@ -66,8 +66,8 @@ def _streams_for(scene, replay: bool, streams: Streams | np.random.Generator | N
         return None, None, None
     if streams is None:
         raise ValueError("streams: this scene draws random numbers (white or filtered noise, or the "
-                         "Brownian-bridge draws of impacts under replayed noise); pass vines_stoch.streams.Streams "
-                         "or a numpy Generator")
+                         "Brownian-bridge draws of impacts under replayed noise); pass a numpy generator (one for every "
+                         "purpose) or vines_stoch.streams.Streams")
     if isinstance(streams, np.random.Generator):
         streams = Streams.shared(streams)
     chosen = (streams.increments, streams.bridge, streams.filter)
