@@ -411,3 +411,60 @@ def test_one_storey_lists_equal_scalars():
         assert (frame["x_max_1"] == frame["x1_max"]).all()
         assert (frame["x_rms_1"] == frame["x1_rms"]).all()
         assert (frame["drift_max_1"] == frame["x_max_1"]).all()  # d_1 = x_1 - 0
+
+
+HISTORY_TEXT = """
+name = "floor-history"
+[primary]
+masses = [1.0, 0.8]
+stiffnesses = [20.0, 15.0]
+dampings = [0.2, 0.2]
+[[absorbers]]
+type = "cubic"
+mass = 0.05
+stiffness = 1.0
+damping = 0.01
+[[loads]]
+type = "white-noise"
+intensity = 0.3
+floor = 1
+[simulation]
+duration = 5.0
+dt = 1e-2
+history = {{ points = 51, signals = {signals} }}
+[ensemble]
+realizations = 12
+seed = 3
+chunk = 5
+"""
+
+
+def test_history_selects_floor_signals(tmp_path):
+    """``history.signals`` names floor displacements and drifts: their ensemble means and
+    standard deviations equal those of the stored paths (the kernel's rows of every floor's
+    displacement, drift ``x_2 - x_1`` formed here) to round-off; ``x1`` is the roof's."""
+    from vines_stoch.ensemble import run
+    from vines_stoch.kernels import simulate
+    from vines_stoch.scene import build_scene
+    from vines_stoch.streams import streams
+
+    study = parse_scenario(HISTORY_TEXT.format(signals='["x_1", "drift_2", "x1"]'))
+    run(study, tmp_path, workers=1)
+    h = pd.read_parquet(tmp_path / "history.parquet")
+    scene = build_scene(study.points[0])
+    stride = scene.n_steps // 50
+    rows = np.empty((12, 51, 4))
+    for r in range(12):
+        rows[r] = np.nan
+        simulate(scene, streams(3, 0, r, bridge=False, filters=False), history=rows[r], stride=stride)
+    expected = {"x_1": rows[:, :, 2], "drift_2": rows[:, :, 3] - rows[:, :, 2], "x1": rows[:, :, 0]}
+    np.testing.assert_array_equal(rows[:, :, 0], rows[:, :, 3])  # the roof is floor 2
+    for name, paths in expected.items():
+        np.testing.assert_allclose(h[f"{name}_mean"], paths.mean(axis=0), rtol=1e-12, atol=1e-15)
+        np.testing.assert_allclose(h[f"{name}_std"], paths.std(axis=0, ddof=1), rtol=1e-11, atol=1e-15)
+    assert "e1_mean" not in h.columns
+
+
+def test_history_signal_out_of_range_is_refused():
+    with pytest.raises(ScenarioError, match=r"simulation\.history\.signals.*'drift_3'.*\[1, 2\]"):
+        parse_scenario(HISTORY_TEXT.format(signals='["drift_3"]'))

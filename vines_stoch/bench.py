@@ -297,6 +297,68 @@ print(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024, time.perf_count
 """
 
 
+FLOORS = """
+name = "bench-floors"
+[primary]
+masses = {masses}
+stiffnesses = {stiffnesses}
+dampings = {dampings}
+[[absorbers]]
+type = "cubic"
+mass = 0.05
+stiffness = 1.0
+damping = 0.01
+[[absorbers]]
+type = "impact"
+floor = {impact_floor}
+mass = 0.05
+clearance = 0.2
+restitution = 0.6
+[[loads]]
+type = "white-noise"
+intensity = 0.05
+[simulation]
+duration = 200.0
+dt = 0.005
+"""
+
+
+def _floors(counts: tuple[int, ...] = (1, 3, 9, 20), repeats: int = 5) -> list[tuple[str, float, float, float]]:
+    """Cost against size: rows ``(scene, M steps/s, ns a step, first call s)`` of ``n``-storey
+    buildings (unit floor masses, storey stiffness ``4 n^2``: the first mode near 1 rad/s) with
+    a cubic NES on the roof and an impact absorber on the floor below it, under white noise on
+    the roof (kick-drift-kick, best of ``repeats`` paths), and of the seed 001 nine-storey frame
+    (RK4, two Hertz NES)."""
+    rows = []
+    for n in counts:
+        text = FLOORS.format(masses=[1.0] * n, stiffnesses=[4.0 * n * n] * n, dampings=[0.05] * n,
+                             impact_floor=max(1, n - 1))
+        rows.append((f"{n} floor{'s' * (n > 1)}, kick-drift-kick, white noise",
+                     *_path_rate(build_scene(parse_scenario(text).points[0]), repeats)))
+    nine = Path("scenarios/seed001_nine_storey_ssvi.toml")
+    if nine.exists():
+        from .scenario import load_scenario
+
+        rows.append(("seed 001 nine-storey frame, RK4, 2 Hertz NES (outer steps)",
+                     *_path_rate(build_scene(load_scenario(nine).points[0]), 2)))
+    return rows
+
+
+def _path_rate(scene, repeats: int) -> tuple[float, float, float]:
+    """``(M steps/s, ns a step, s of the first call)`` of single paths of ``scene``."""
+    from .streams import streams
+
+    start = time.perf_counter()
+    simulate(scene, streams(1, 0, 0))
+    first = time.perf_counter() - start
+    best = 0.0
+    for r in range(repeats):
+        start = time.perf_counter()
+        simulate(scene, streams(1, 0, r + 1))
+        best = max(best, scene.n_steps / (time.perf_counter() - start))
+    return best / 1e6, 1e9 / best, first
+
+
 def _peak_memory(n: int, directory: Path) -> tuple[float, float]:
     """Peak RSS (MiB) and wall time (s) of a fresh process running ``n`` realisations of the
     2-DOF history scene (1001-point grid)."""
@@ -378,6 +440,7 @@ def main(out: Path = Path("reports/benchmarks.md"), n_paths: int = 200) -> str:
         memory = {n: _peak_memory(n, Path(tmp) / f"history{n}") for n in (10_000, 100_000)}
         overhead = _distributed_overhead(Path(tmp))
         startup = _startup(Path(tmp))
+    floors = _floors()
     ssvi = _ssvi()
     out.parent.mkdir(parents=True, exist_ok=True)
     work_precision = precision.section(out.parent)
@@ -457,6 +520,15 @@ samples) and under a harmonic force of the same peak (`m1 * 0.3 g * cos 6t`).
 | --- | ---: | ---: | ---: | ---: |
 | harmonic force | {seismic['harmonic'][0] / 1e6:.2f} | 1.00 | {seismic['harmonic'][1]:.1e} | {seismic['harmonic'][2]:.1e} |
 | record (base excitation) | {seismic['record'][0] / 1e6:.2f} | {seismic['record'][0] / seismic['harmonic'][0]:.2f} | {seismic['record'][1]:.1e} | {seismic['record'][2]:.1e} |
+
+## Floors
+
+Cost against size (one thread, one path at a time; the first call includes compilation when
+the kernel is not cached yet):
+
+| scene | M path-steps/s | ns a step | first call (s) |
+| --- | ---: | ---: | ---: |
+{chr(10).join(f"| {name} | {rate:.2f} | {ns:.0f} | {first:.1f} |" for name, rate, ns, first in floors)}
 
 ## Scale
 

@@ -55,15 +55,16 @@ def draw_parameters(study: Study, seed: int, point: int, realization: int, commo
 
 def run_chunk(scene: Scene, seed: int, point: int, start: int, stop: int,
               grid: tuple[int, int] | None = None, study: Study | None = None,
-              common: bool = True) -> tuple[pd.DataFrame, np.ndarray | None]:
+              common: bool = True, signals: tuple[str, ...] = hist.SIGNALS) -> tuple[pd.DataFrame, np.ndarray | None]:
     """Realisations ``start..stop-1`` of one sweep point: one metric row each and, when a
-    history ``grid = (stride, size)`` is asked for, their ``x1`` and ``E1`` paths
-    ``(2, size, stop - start)``.  With ``study`` (a study with uncertain parameters) each
+    history ``grid = (stride, size)`` is asked for, the paths of the history ``signals``
+    ``(len(signals), size, stop - start)``.  With ``study`` (a study with uncertain parameters) each
     realisation runs its own scene, its drawn values in columns named by their keys.
     ``common``: common random numbers across sweep points (see ``generator``)."""
     rows = []
-    paths = None if grid is None else np.full((len(hist.SIGNALS), grid[1], stop - start), np.nan)
-    path = None if grid is None else np.full((grid[1], len(hist.SIGNALS)), np.nan)
+    paths = None if grid is None else np.full((len(signals), grid[1], stop - start), np.nan)
+    columns = len(hist.SIGNALS) + (scene.n_floors if hist.needs_floors(signals) else 0)
+    path = None if grid is None else np.full((grid[1], columns), np.nan)
     for r in range(start, stop):
         drawn = draw_parameters(study, seed, point, r, common) if study is not None else {}
         if drawn:
@@ -75,7 +76,7 @@ def run_chunk(scene: Scene, seed: int, point: int, start: int, stop: int,
         gens = streams(seed, point, r, increments=increments, bridge=bridge, filters=filters, common=common)
         raw = simulate(scene, gens, samples=samples, history=path, stride=grid[0] if grid else 1)
         if paths is not None:
-            paths[:, :, r - start] = path.T
+            paths[:, :, r - start] = hist.select(path, signals)
         rows.append({"point": point, "realization": r, **drawn, **finish(raw, scene, samples)})
     frame = pd.DataFrame(rows)
     frame["regime"] = frame["regime"].astype("string")
@@ -104,7 +105,7 @@ def plan(study: Study, chunk: int | None = None, realizations: int | None = None
     for p, (scene, n) in enumerate(zip(scenes, counts)):
         size = chunk or _auto_chunk(scene, n)
         if spec:
-            row_bytes = 8 * len(hist.SIGNALS) * hist.grid(scene.n_steps, spec.points)[1]
+            row_bytes = 8 * len(spec.signals) * hist.grid(scene.n_steps, spec.points)[1]
             size = min(size, max(1, HISTORY_CHUNK_BYTES // row_bytes))
         chunks += [(p, s, min(s + size, n)) for s in range(0, n, size)]
     return Plan(scenes, chunks)
@@ -277,7 +278,7 @@ def run(study: Study, directory: str | Path | None = None, *, workers: int | Non
     done = total - sum(c[2] - c[1] for c in todo)
     def call(c: tuple[int, int, int]) -> tuple:
         return run_chunk, (the_plan.scenes[c[0]], seed, *c, grids[c[0]], study if base.uncertain else None,
-                           base.ensemble.common_random_numbers)
+                           base.ensemble.common_random_numbers, tuple(spec.signals) if spec else hist.SIGNALS)
 
     def skip(c: tuple[int, int, int]) -> bool:
         return states[c[0]].done

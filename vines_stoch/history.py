@@ -26,8 +26,32 @@ from .scenario import History, quantile_name
 
 #: Realisations per leaf, and the largest quantile buffer of a node.
 BLOCK = 512
-#: Signals recorded by the kernels, in column order of their history arrays.
+#: The first columns of a kernel's history rows (the roof's displacement, the structure's
+#: energy); with ``2 + n_floors`` columns the rows go on with every floor's displacement.
 SIGNALS = ("x1", "e1")
+
+
+def needs_floors(signals: list[str] | tuple[str, ...]) -> bool:
+    """True when ``signals`` name a floor's displacement or drift (the kernel then records
+    every floor)."""
+    return any(s not in SIGNALS for s in signals)
+
+
+def select(rows: np.ndarray, signals: list[str] | tuple[str, ...]) -> np.ndarray:
+    """The ``signals`` (``scenario.history_signals``) of a kernel's history rows ``(grid,
+    2 [+ n_floors])``, as ``(len(signals), grid)``: ``x1``, ``e1``, ``x_k``, ``drift_k =
+    x_k - x_{k-1}``."""
+    out = np.empty((len(signals), rows.shape[0]))
+    for i, name in enumerate(signals):
+        if name in SIGNALS:
+            out[i] = rows[:, SIGNALS.index(name)]
+            continue
+        kind, k = name.rsplit("_", 1)
+        k = int(k)
+        out[i] = rows[:, 1 + k]
+        if kind == "drift" and k > 1:
+            out[i] -= rows[:, k]
+    return out
 
 
 def grid(n_steps: int, points: int) -> tuple[int, int]:
@@ -140,7 +164,7 @@ def frame(node: Node | None, spec: History, t: np.ndarray) -> pd.DataFrame:
     columns: dict[str, np.ndarray] = {"t": t}
     n = node.count if node is not None else 0
     columns["n"] = np.full(t.shape[0], n, dtype=np.int64)
-    for s, name in enumerate(SIGNALS):
+    for s, name in enumerate(spec.signals):
         if n == 0:
             nan = np.full(t.shape[0], np.nan)
             columns[f"{name}_mean"], columns[f"{name}_std"] = nan, nan

@@ -214,7 +214,7 @@ def _plots(runs: list[Run], out: Path, point: int | None) -> list[str]:
     ax.legend(fontsize=8)
     save(fig, "edm_histogram.png")
 
-    histories = [run for run in runs if run.history is not None]
+    histories = [run for run in runs if run.history is not None and "e1_mean" in run.history.columns]
     if histories:
         fig, ax = plt.subplots(figsize=(6.4, 4.2))
         shares = all(h.history.loc[h.history["point"] == _point(h, point), "e1_mean"].iloc[0] > 0 for h in histories)

@@ -469,18 +469,31 @@ Load = Annotated[
 
 
 class History(_Model):
-    """Ensemble statistics of ``x1(t)`` and ``E1(t)`` on a decimated grid (history.parquet)."""
+    """Ensemble statistics of time histories on a decimated grid (history.parquet): by default
+    the roof's displacement ``x1`` and the structure's energy ``e1``; ``signals`` may also name
+    a floor's displacement ``x_k`` or inter-storey drift ``drift_k`` (``k = 1..n``)."""
 
     points: Annotated[int, Field(ge=2, le=100_000)] = 1000
     quantiles: list[Annotated[float, Field(gt=0, lt=1, allow_inf_nan=False)]] = [0.05, 0.5, 0.95]
+    signals: Annotated[list[str], Field(min_length=1)] = ["x1", "e1"]
 
     @model_validator(mode="after")
     def _distinct(self) -> "History":
+        if len(set(self.signals)) != len(self.signals):
+            raise _KeyError("signals", self.signals, "must not repeat a signal")
         if len(set(self.quantiles)) != len(self.quantiles):
             raise _KeyError("quantiles", self.quantiles, "must not repeat a value")
         if len({quantile_name(q) for q in self.quantiles}) != len(self.quantiles):
             raise _KeyError("quantiles", self.quantiles, "must differ in their first 4 decimals")
         return self
+
+
+def history_signals(n_floors: int) -> list[str]:
+    """Signals a history can record on a primary with ``n_floors`` floors: the roof's
+    displacement ``x1``, the structure's energy ``e1``, each floor's displacement ``x_k`` and
+    inter-storey drift ``drift_k``."""
+    floors = range(1, n_floors + 1)
+    return ["x1", "e1", *(f"x_{k}" for k in floors), *(f"drift_{k}" for k in floors)]
 
 
 def quantile_name(q: float) -> str:
@@ -686,6 +699,12 @@ class Scenario(_Model):
                             f"must list {nbodies} values (the {n} floor{'s' * (n > 1)} from the lowest, then each "
                             "absorber)",
                         )
+        if sim.history is not None:
+            allowed = history_signals(n)
+            for signal in sim.history.signals:
+                if signal not in allowed:
+                    raise _KeyError("simulation.history.signals", sim.history.signals,
+                                    f"{signal!r} is not a signal: give x1, e1, x_k or drift_k with k in [1, {n}]")
         contents = self.contents
         if sim.scheme != "auto":
             why = schemes.refusal(schemes.SCHEMES[sim.scheme], *contents)

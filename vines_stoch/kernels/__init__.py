@@ -105,9 +105,9 @@ def simulate(scene, streams: Streams | np.random.Generator | None = None, *, nor
     per noisy floor and step, two with the ``sra`` scheme: see ``kdk_kernel``) instead of
     drawing the increments; ``final`` (shape ``(2, n_bodies)``) receives the final
     positions and velocities; ``samples`` (from ``sample_buffer``) receives the Poincare
-    samples of periodic scenes; ``history`` (shape ``(G, 2)``) receives the roof's ``x`` and
-    ``E1`` at ``t = j stride dt``, ``j < G`` (rows after a divergence keep their previous
-    content).
+    samples of periodic scenes; ``history`` (shape ``(G, 2)`` or ``(G, 2 + n_floors)``)
+    receives the roof's ``x``, ``E1`` (and every floor's ``x``) at ``t = j stride dt``,
+    ``j < G`` (rows after a divergence keep their previous content).
     """
     out = new_metrics(scene.n_floors)
     x, v = scene.x0.copy(), scene.v0.copy()

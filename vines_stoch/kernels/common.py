@@ -107,9 +107,11 @@ def host_of(host, a: int, nf: int) -> int:
 def structure_forces(x, v, nf: int, storey_k, storey_c, floor_c, force):
     """``force[k]``, ``k < nf``: the forces of the storey springs and dashpots and of the
     mass-proportional (Rayleigh) damping on each floor, ``-(K x + C v)`` of MODEL.md 1a;
-    storey ``k`` joins floor ``k - 1`` (the ground for ``k = 0``) to floor ``k``."""
+    storey ``k`` joins floor ``k - 1`` (the ground for ``k = 0``) to floor ``k``.  (Rayleigh
+    damping needs two modes, so a one-storey primary has no mass-proportional term: its
+    multiply is left out there, about 5 % of a smooth scene's step.)"""
     for k in range(nf):
-        force[k] = -floor_c[k] * v[k]
+        force[k] = -floor_c[k] * v[k] if nf > 1 else 0.0
     for k in range(nf):
         d = x[k] - x[k - 1] if k > 0 else x[k]
         dv = v[k] - v[k - 1] if k > 0 else v[k]
@@ -186,7 +188,7 @@ def structure_power(v, nf: int, storey_c, floor_c) -> float:
     p = 0.0
     for k in range(nf):
         dv = v[k] - v[k - 1] if k > 0 else v[k]
-        p += storey_c[k] * dv * dv + floor_c[k] * v[k] * v[k]
+        p += storey_c[k] * dv * dv + (floor_c[k] * v[k] * v[k] if nf > 1 else 0.0)
     return p
 
 
@@ -198,7 +200,9 @@ def structure_dissipation(v, vn, nf: int, storey_c, floor_c, s: float) -> float:
     for k in range(nf):
         dv = v[k] - v[k - 1] if k > 0 else v[k]
         dvn = vn[k] - vn[k - 1] if k > 0 else vn[k]
-        d += storey_c[k] * dv * 0.5 * s * (0.5 * (dv + dvn)) + floor_c[k] * v[k] * 0.5 * s * (0.5 * (v[k] + vn[k]))
+        d += storey_c[k] * dv * 0.5 * s * (0.5 * (dv + dvn))
+        if nf > 1:
+            d += floor_c[k] * v[k] * 0.5 * s * (0.5 * (v[k] + vn[k]))
     return d
 
 
@@ -385,20 +389,30 @@ def block_end(i: int, n_steps: int, i0: int, h_next: int) -> int:
 
 
 @njit(**INLINE)
-def start_history(history, stride, x1, e1) -> int:
+def history_row(history, j: int, x, nf: int, e1: float) -> None:
+    """History row ``j``: the roof's displacement, ``E1`` and, when the buffer has the columns
+    (``2 + nf``), every floor's displacement (constant indices into the state: see
+    ``scratch``)."""
+    history[j, 0] = x[nf - 1]
+    history[j, 1] = e1
+    for k in range(nf):
+        if k + 2 < history.shape[1]:
+            history[j, k + 2] = x[k]
+
+
+@njit(**INLINE)
+def start_history(history, stride, x, nf, e1) -> int:
     """Write the first history row (``t = 0``) when a history is kept; returns the step after
     which the next row is due (``-1``: never)."""
     if history.shape[0] == 0:
         return -1
-    history[0, 0] = x1
-    history[0, 1] = e1
+    history_row(history, 0, x, nf, e1)
     return stride if history.shape[0] > 1 else -1
 
 
 @njit(**INLINE)
-def record_history(history, stride, step, x1, e1) -> int:
-    """Write the history row of ``t = step dt`` (``x1``, ``E1``); returns the next due step."""
+def record_history(history, stride, step, x, nf, e1) -> int:
+    """Write the history row of ``t = step dt`` (``history_row``); returns the next due step."""
     j = step // stride
-    history[j, 0] = x1
-    history[j, 1] = e1
+    history_row(history, j, x, nf, e1)
     return step + stride if j + 1 < history.shape[0] else -1

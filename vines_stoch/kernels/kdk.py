@@ -184,7 +184,6 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
     def kernel(bodies, absorbers, ex, fl, noise, grid, outputs, streams):
         nb = NB
         nf = NF
-        roof = NF - 1
         mass, storey_k, storey_c, floor_c, state_x, state_v = bodies
         kind, host, rows = absorbers
         forces, series_t, series_v, series_ptr, series_target = ex
@@ -226,7 +225,7 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
         e1_prev = primary_energy(mass, storey_k, x, v, nf)
         for k in range(nf):
             x2_prev[k] = x[k] * x[k]
-        h_next = start_history(history, stride, x[roof], e1_prev)
+        h_next = start_history(history, stride, x, nf, e1_prev)
         ag_next = excitation(0.0, 0.5 * dt, 0.0, forces, series_t, series_v, series_ptr, series_target,
                              filtered, c_force, c_ground, z, zn, pc, False, GROUND, load_next)
         # accumulators in registers; written to ``out`` once at the end
@@ -321,8 +320,9 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
                             dv2 = v2[k] - v2[k - 1] if k > 0 else v2[k]
                             dv3 = v3[k] - v3[k - 1] if k > 0 else v3[k]
                             dvn = vn[k] - vn[k - 1] if k > 0 else vn[k]
-                            d_primary += (storey_c[k] * dt * (dv / 6.0 + dv2 / 6.0 + 2.0 / 3.0 * dv3) * (0.5 * (dv + dvn))
-                                          + floor_c[k] * dt * (v[k] / 6.0 + v2[k] / 6.0 + 2.0 / 3.0 * v3[k]) * v_mid)
+                            d_primary += storey_c[k] * dt * (dv / 6.0 + dv2 / 6.0 + 2.0 / 3.0 * dv3) * (0.5 * (dv + dvn))
+                            if nf > 1:  # (mass-proportional damping: several floors only)
+                                d_primary += floor_c[k] * dt * (v[k] / 6.0 + v2[k] / 6.0 + 2.0 / 3.0 * v3[k]) * v_mid
                         if GROUND:
                             work -= ground_impulse * momentum(mass, v, vn)
                         for a in range(na):
@@ -448,7 +448,7 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
                 e1_prev = e1
             i = end
             if i == h_next:
-                h_next = record_history(history, stride, h_next, x[roof], e1_prev)
+                h_next = record_history(history, stride, h_next, x, nf, e1_prev)
         if diverged(x):
             out[STATUS] = STATUS_DIVERGED
         for b in range(nb):

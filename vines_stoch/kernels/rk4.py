@@ -228,7 +228,6 @@ def rk4_kernel(n_bodies: int, n_floors: int, has_impact: bool, has_hertz: bool, 
     def kernel(bodies, absorbers, ex, fl, noise, grid, outputs, streams):
         nb = NB
         nf = NF
-        roof = NF - 1
         mass, storey_k, storey_c, floor_c, state_x, state_v = bodies
         kind, host, rows = absorbers
         forces, series_t, series_v, series_ptr, series_target = ex
@@ -251,7 +250,7 @@ def rk4_kernel(n_bodies: int, n_floors: int, has_impact: bool, has_hertz: bool, 
         stuck = np.zeros(na, np.int64)
         touching = np.zeros(na, np.int64)
         next_sample = 0
-        h_next = start_history(history, stride, x[roof], primary_energy(mass, storey_k, x, v, nf))
+        h_next = start_history(history, stride, x, nf, primary_energy(mass, storey_k, x, v, nf))
         i = 0
         inside = i0 == 0
         while i < n_steps:
@@ -374,7 +373,7 @@ def rk4_kernel(n_bodies: int, n_floors: int, has_impact: bool, has_hertz: bool, 
                                                 xp, vp, x, v, out[IMPACTS_LEFT], out[IMPACTS_RIGHT])
             i = end
             if i == h_next:
-                h_next = record_history(history, stride, h_next, x[roof], primary_energy(mass, storey_k, x, v, nf))
+                h_next = record_history(history, stride, h_next, x, nf, primary_energy(mass, storey_k, x, v, nf))
         if diverged(x):
             out[STATUS] = STATUS_DIVERGED
         for b in range(nb):
