@@ -183,6 +183,15 @@ def stored_energy(x, v, mass, nf: int, storey_k, kind, host, rows) -> float:
 
 
 @njit(**INLINE)
+def momentum(mass, v, vn) -> float:
+    """Total momentum at the mean of two velocity vectors (work of the ground acceleration)."""
+    p = 0.0
+    for b in range(v.shape[0]):
+        p += mass[b] * 0.5 * (v[b] + vn[b])
+    return p
+
+
+@njit(**INLINE)
 def structure_power(v, nf: int, storey_c, floor_c) -> float:
     """Power dissipated by the structure's dashpots, ``v^T C v``."""
     p = 0.0

@@ -22,6 +22,9 @@ continues from the post-impact state with the rest of the increment.  (Applying 
 at a grid state of a symmetric map matters: with a kick-drift map the energy balance drifts
 by ``O(dt)`` per impact.)
 
+The same step loop (``kdk_kernel``: the time grid, the noise draws, the loads, the metrics)
+runs the SRA3 step of ``sra3.py`` for the ``sra`` scheme in place of the kick-drift-kick step.
+
 Energy bookkeeping uses the midpoint velocity of each kick, for which the change of kinetic
 energy equals the work of the impulses exactly; the only residual left in the energy balance
 is the scheme's own error in the potential energy (MODEL.md section 4).
@@ -34,14 +37,15 @@ from functools import lru_cache
 import numpy as np
 from numba import njit
 
-from ..physics import CLEARANCE, DAMPING, IMPACT, KERNEL, RESTITUTION, primary_energy
+from ..physics import CLEARANCE, IMPACT, KERNEL, RESTITUTION, primary_energy
 from .common import (ABSORBER_DISS, CAPPED, CHECK_EVERY, E1_MAX, ENERGY_INT, FINAL_ENERGY,
                      IMPACT_LOSS, IMPACTS, IMPACTS_LEFT, IMPACTS_RIGHT, INLINE, INPUT, MAX_EVENTS,
-                     PRIMARY_DISS, STATUS, STATUS_DIVERGED, absorber_dissipation, accelerate,
-                     attachment_forces, block_end, diverged, floor_peaks, host_of, keep_in_cavities,
+                     PRIMARY_DISS, STATUS, STATUS_DIVERGED, absorber_dissipation,
+                     attachment_forces, block_end, diverged, floor_peaks, host_of, keep_in_cavities, momentum,
                      pin_to_walls, record_history, resolve_impact, scratch, start_history,
                      stick_together, stored_energy, structure_dissipation, write_floor_metrics)
 from .loads import advance_filters, excitation, phasors, rotations, turn
+from .sra3 import sra3_step
 
 #: Iterations of the bracketed search for the impact instant (Illinois method).
 ROOT_ITERATIONS = 100
@@ -61,15 +65,6 @@ def kick(v, s, dws, load, ag, force, inv_mass, vn, ground):
         vn[k] = (v[k] + ((load[k] * s + dws[k]) * inv_mass[k] - base)) + force[k] * (s * inv_mass[k])
     for b in range(nf, vn.shape[0]):
         vn[b] = (v[b] - base) + force[b] * (s * inv_mass[b])
-
-
-@njit(**INLINE)
-def momentum(mass, v, vn) -> float:
-    """Total momentum at the mean of two velocity vectors (work of the ground acceleration)."""
-    p = 0.0
-    for b in range(v.shape[0]):
-        p += mass[b] * 0.5 * (v[b] + vn[b])
-    return p
 
 
 @njit(**INLINE)
@@ -160,14 +155,9 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
     path, one normal per noisy floor and step, for convergence studies) instead of draws.
 
     With ``sra`` (scenes without impact absorbers and filtered loads), each step is the
-    stochastic Runge-Kutta method SRA3 of Roessler (2010), SIAM J. Numer. Anal. 48(3), 922-952,
-    doi:10.1137/09076636X, for additive noise instead: three stages at ``t``, ``t + h`` and
-    ``t + h/2`` (the deterministic part is the third-order strong-stability-preserving
-    Runge-Kutta method), strong order 1.5 and weak order 2 with additive noise.  The step draws
-    ``I1 = dW`` and ``I10`` (the time integral of ``W`` over the step,
-    ``sqrt(h) h / 2 (u1 + u2 / sqrt 3)``) per noisy floor; replayed paths give two normals a
-    step and floor.  Its energy bookkeeping uses the mean of the step's end velocities, as the
-    kicks do, so the kinetic energy change equals the work of the step's impulses exactly.
+    stochastic Runge-Kutta step of ``sra3.sra3_step`` instead of the kick-drift-kick one; it
+    draws two normals a step and noisy floor (replayed: all floors' first normals, then their
+    second).
     """
 
     # passes of a step's event loop: one without impact absorbers (nothing to split at), none
@@ -290,50 +280,14 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
                         if sra:
                             dz[k] = 0.5 * noise_scale[k] * (u1[k] + u2[k] / ROOT3)  # sigma I10 / h
                 if sra:
-                    attachment_forces(x, v, nf, storey_k, storey_c, floor_c, host, rows, force)
-                    accelerate(force, load, ag, inv_mass, a1)
+                    dwork, dprimary, dabsorber = sra3_step(x, v, vn, force, a1, a2, a3, xs, v2, v3, load, load_next, load3,
+                                                           ag, ag_next, ag3, dw, dz, dt, mass, inv_mass, storey_k,
+                                                           storey_c, floor_c, host, rows, inside, GROUND)
+                    work += dwork
+                    d_primary += dprimary
+                    d_absorber += dabsorber
                     for k in range(nf):
                         acc[k] = a1[k] + ag  # the step start's absolute acceleration, for the peaks
-                    for b in range(nb):
-                        xs[b] = x[b] + dt * v[b]
-                        v2[b] = v[b] + dt * a1[b]
-                    attachment_forces(xs, v2, nf, storey_k, storey_c, floor_c, host, rows, force)
-                    accelerate(force, load_next, ag_next, inv_mass, a2)
-                    for b in range(nb):
-                        xs[b] = x[b] + 0.25 * dt * (v[b] + v2[b])
-                        v3[b] = v[b] + 0.25 * dt * (a1[b] + a2[b])
-                    for k in range(nf):
-                        v3[k] += 1.5 * dz[k] / mass[k]
-                    attachment_forces(xs, v3, nf, storey_k, storey_c, floor_c, host, rows, force)
-                    accelerate(force, load3, ag3, inv_mass, a3)
-                    for b in range(nb):
-                        vn[b] = v[b] + dt * (a1[b] / 6.0 + a2[b] / 6.0 + 2.0 / 3.0 * a3[b])
-                    for k in range(nf):
-                        vn[k] += dw[k] / mass[k]
-                    if inside:
-                        ground_impulse = dt * (ag / 6.0 + ag_next / 6.0 + 2.0 / 3.0 * ag3)
-                        for k in range(nf):
-                            v_mid = 0.5 * (v[k] + vn[k])
-                            impulse = dt * (load[k] / 6.0 + load_next[k] / 6.0 + 2.0 / 3.0 * load3[k]) + dw[k]
-                            work += impulse * v_mid
-                            dv = v[k] - v[k - 1] if k > 0 else v[k]
-                            dv2 = v2[k] - v2[k - 1] if k > 0 else v2[k]
-                            dv3 = v3[k] - v3[k - 1] if k > 0 else v3[k]
-                            dvn = vn[k] - vn[k - 1] if k > 0 else vn[k]
-                            d_primary += storey_c[k] * dt * (dv / 6.0 + dv2 / 6.0 + 2.0 / 3.0 * dv3) * (0.5 * (dv + dvn))
-                            if nf > 1:  # (mass-proportional damping: several floors only)
-                                d_primary += floor_c[k] * dt * (v[k] / 6.0 + v2[k] / 6.0 + 2.0 / 3.0 * v3[k]) * v_mid
-                        if GROUND:
-                            work -= ground_impulse * momentum(mass, v, vn)
-                        for a in range(na):
-                            h = host_of(host, a, nf)
-                            j = nf + a
-                            w = dt * ((v[j] - v[h]) / 6.0 + (v2[j] - v2[h]) / 6.0
-                                      + 2.0 / 3.0 * (v3[j] - v3[h]))
-                            d_absorber += rows[a, DAMPING] * w * 0.5 * (v[j] - v[h] + vn[j] - vn[h])
-                    for b in range(nb):
-                        x[b] += dt * (v[b] / 6.0 + v2[b] / 6.0 + 2.0 / 3.0 * v3[b])
-                        v[b] = vn[b]
                 left = dt
                 t = t_step
                 for event in range(EVENTS):
