@@ -77,9 +77,9 @@ def primary_energy(mass, storey_k, x, v, nf: int) -> float:
     """``E1``: kinetic energy of the ``nf`` floors plus the strain energy of their storeys,
     ``sum m_k v_k^2 / 2 + sum k_k d_k^2 / 2``, ``d_k = x_k - x_{k-1}`` (MODEL.md sections 1a, 4;
     one floor: ``m1 v1^2 / 2 + k1 x1^2 / 2``)."""
-    e = 0.0
-    for k in range(nf):
-        d = x[k] - x[k - 1] if k > 0 else x[k]
+    e = 0.5 * mass[0] * v[0] * v[0] + 0.5 * storey_k[0] * x[0] * x[0]
+    for k in range(1, nf):
+        d = x[k] - x[k - 1]
         e += 0.5 * mass[k] * v[k] * v[k] + 0.5 * storey_k[k] * d * d
     return e
 

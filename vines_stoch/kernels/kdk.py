@@ -72,7 +72,8 @@ def impulse_work(load, s, dws, v, vn) -> float:
     """Work of the floors' load impulses ``load s + dws`` at the mean of ``v`` and ``vn``."""
     w = 0.0
     for k in range(load.shape[0]):
-        w += (load[k] * s + dws[k]) * (0.5 * (v[k] + vn[k]))
+        term = (load[k] * s + dws[k]) * (0.5 * (v[k] + vn[k]))
+        w = term if k == 0 else w + term  # (see ``common.structure_dissipation``)
     return w
 
 
