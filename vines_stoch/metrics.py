@@ -8,7 +8,7 @@ import numpy as np
 import pandas as pd
 from scipy.special import stdtrit
 
-from .kernels.common import FLOOR_SLOTS, SLOTS, STATUS_DIVERGED, X_SQ_INT_K
+from .kernels.common import ACC_MAX_K, DRIFT_MAX_K, SLOTS, STATUS_DIVERGED, X_MAX_K, X_SQ_INT_K
 from .scene import Scene
 
 #: Metric columns of realizations.parquet, in order (then the per-floor columns of
@@ -96,13 +96,12 @@ def finish(raw: np.ndarray, scene: Scene, samples: np.ndarray | None = None) -> 
         "contact_time": g(_S["contact_time"]),
     }
     nf = scene.n_floors
-    base = len(SLOTS)
     for k in range(nf):
-        block = {name: g(base + b * nf + k) for b, name in enumerate(FLOOR_SLOTS)}
-        row[f"x_max_{k + 1}"] = block["x_max"]
-        row[f"x_rms_{k + 1}"] = math.sqrt(max(g(base + X_SQ_INT_K * nf + k), 0.0) / scene.window)
-        row[f"drift_max_{k + 1}"] = block["drift_max"]
-        row[f"acc_max_{k + 1}"] = block["acc_max"]
+        slot = len(SLOTS) + k  # the floor's entry of the first per-floor block (FLOOR_SLOTS)
+        row[f"x_max_{k + 1}"] = g(slot + X_MAX_K * nf)
+        row[f"x_rms_{k + 1}"] = math.sqrt(max(g(slot + X_SQ_INT_K * nf), 0.0) / scene.window)
+        row[f"drift_max_{k + 1}"] = g(slot + DRIFT_MAX_K * nf)
+        row[f"acc_max_{k + 1}"] = g(slot + ACC_MAX_K * nf)
     finite = all(math.isfinite(v) for k, v in row.items() if k not in ("edm", "energy_residual"))
     row["status"] = "diverged" if g(_S["status"]) == STATUS_DIVERGED or not finite else "ok"
     row["regime"] = (regime(samples, 2.0 * np.pi / scene.period)

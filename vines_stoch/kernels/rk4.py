@@ -147,7 +147,7 @@ def rk4_step(x, v, t, h, xo, vo, acc, xs, vs, x2, a0, mass, inv_mass, storey_k, 
 def event_geometry(kind_of_event, a, side, nf, host, rows):
     """Absorber body ``j``, its host floor, sign and wall of an event's gap
     ``g = sign * (x_j - x_host - wall)``, which crosses zero upwards when the event happens."""
-    h = host[a] if nf > 1 else 0
+    h = host_of(host, a, nf)
     if kind_of_event == IMPACT_EVENT:
         return nf + a, h, side, side * rows[a, CLEARANCE]
     wall = rows[a, WALL_LO] if side < 0 else rows[a, WALL_HI]
@@ -162,7 +162,7 @@ def next_event(x, xn, h, nf, kind, host, rows, stuck, touching):
     event_kind, hit, hit_side, first = NONE, -1, 0, h
     for a in range(kind.shape[0]):
         j = nf + a
-        hf = host[a] if nf > 1 else 0
+        hf = host_of(host, a, nf)
         u0 = x[j] - x[hf]
         u1 = xn[j] - xn[hf]
         if kind[a] == IMPACT and stuck[a] == 0:
@@ -200,7 +200,7 @@ def contact_step(x, v, nf, mass, host, rows, touching) -> float:
     for a in range(touching.shape[0]):
         side = touching[a]
         if side != 0:
-            hf = host[a] if nf > 1 else 0
+            hf = host_of(host, a, nf)
             j = nf + a
             m_eff = mass[hf] * mass[j] / (mass[hf] + mass[j])
             u = x[j] - x[hf]
