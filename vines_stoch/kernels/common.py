@@ -18,7 +18,7 @@ from numba.core import cgutils
 from numba.extending import intrinsic
 from numba.np.arrayobj import make_array, populate_array
 
-from ..physics import (CLEARANCE, DAMPING, HERTZ, IMPACT, INLINE, K_CUBIC, K_LEFT, K_LIN, K_RIGHT, REST, WALL_HI,
+from ..physics import (CLEARANCE, DAMPING, HERTZ, IMPACT, INLINE, KERNEL, K_CUBIC, K_LEFT, K_LIN, K_RIGHT, REST, WALL_HI,
                        WALL_LO, contact_energy, contact_force_law, hertz_force, primary_energy,
                        restitution_impact, spring_damper_energy, spring_damper_force)
 
@@ -33,7 +33,8 @@ SLOTS = (
  IMPACTS, FINAL_ENERGY, STATUS, CAPPED, IMPACTS_LEFT, IMPACTS_RIGHT, PEAK_FORCE,
  CONTACT_TIME) = range(len(SLOTS))
 
-#: Per-floor blocks after the slots above, ``n_floors`` entries each (``floor_slot``): peak
+#: Per-floor blocks after the slots above, ``n_floors`` entries each (block ``b``, floor ``k``
+#: at ``len(SLOTS) + b n_floors + k``): peak
 #: displacement, peak drift, peak absolute acceleration, integral of ``x_k^2``.
 FLOOR_SLOTS = ("x_max", "drift_max", "acc_max", "x_square_integral")
 X_MAX_K, DRIFT_MAX_K, ACC_MAX_K, X_SQ_INT_K = range(len(FLOOR_SLOTS))
@@ -171,9 +172,13 @@ def contact_force(x, nf: int, a: int, host, rows) -> float:
     return (hertz_force(rows[a, WALL_LO] - u, rows[a, K_LEFT]) + hertz_force(u - rows[a, WALL_HI], rows[a, K_RIGHT]))
 
 
-@njit(**INLINE)
+@njit(**KERNEL)
 def stored_energy(x, v, mass, nf: int, storey_k, kind, host, rows) -> float:
-    """Mechanical energy stored in all bodies, storeys, attachment springs and Hertz contacts."""
+    """Mechanical energy stored in all bodies, storeys, attachment springs and Hertz contacts.
+
+    Out of line: it runs twice a path (the window's opening, the end), and every inlined copy
+    costs compile time.  Callers pass copies of a state kept in registers (an array whose
+    address reaches an out-of-line call is kept in memory across the generator's calls)."""
     e = primary_energy(mass, storey_k, x, v, nf)
     for b in range(nf, v.shape[0]):
         e += 0.5 * mass[b] * v[b] * v[b]
@@ -330,12 +335,13 @@ def floor_peaks(x, nf: int, acc, x_max, drift_max, acc_max):
 
 @njit(**INLINE)
 def write_floor_metrics(out, nf: int, x_max, drift_max, acc_max, x2_integral):
-    """Per-floor slots of the raw metric vector (``floor_slot``) and the roof's ``x1`` slots."""
+    """Per-floor slots of the raw metric vector (``FLOOR_SLOTS``) and the roof's ``x1`` slots."""
+    base = len(SLOTS)
     for k in range(nf):
-        out[floor_slot(nf, X_MAX_K, k)] = x_max[k]
-        out[floor_slot(nf, DRIFT_MAX_K, k)] = drift_max[k] if k > 0 else x_max[0]
-        out[floor_slot(nf, ACC_MAX_K, k)] = acc_max[k]
-        out[floor_slot(nf, X_SQ_INT_K, k)] = x2_integral[k]
+        out[base + X_MAX_K * nf + k] = x_max[k]
+        out[base + DRIFT_MAX_K * nf + k] = drift_max[k] if k > 0 else x_max[0]
+        out[base + ACC_MAX_K * nf + k] = acc_max[k]
+        out[base + X_SQ_INT_K * nf + k] = x2_integral[k]
     out[X1_MAX] = x_max[nf - 1]
     out[X1_SQ_INT] = x2_integral[nf - 1]
 
@@ -354,12 +360,6 @@ def sticks(side: int, w_in: float, w_gain: float) -> bool:
     """Sticking rule: an impact slower than the relative velocity the loads add in one step,
     with the loads pressing into the wall, is plastic and starts a sticking phase."""
     return side * w_gain > 0.0 and abs(w_in) <= side * w_gain
-
-
-@njit(**INLINE)
-def floor_slot(nf: int, block: int, k: int) -> int:
-    """Index of floor ``k``'s entry of a per-floor block (``FLOOR_SLOTS``) in the raw vector."""
-    return len(SLOTS) + block * nf + k
 
 
 def new_metrics(n_floors: int = 1) -> np.ndarray:

@@ -187,6 +187,7 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
         nz = z.shape[0]
         # the state (copied back at the end) and the scratch, on the stack (see ``common.scratch``)
         x, v, force, vn, vt, inv_mass = scratch(NB), scratch(NB), scratch(NB), scratch(NB), scratch(NB), scratch(NB)
+        xt = scratch(NB)  # with vt: copies of the state for the out-of-line calls
         for b in range(nb):
             x[b] = state_x[b]
             v[b] = state_v[b]
@@ -230,7 +231,10 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
             # the divergence check, history rows
             if i == i0:
                 inside = True
-                work = stored_energy(x, v, mass, nf, storey_k, kind, host, rows)
+                for b in range(nb):  # (copies for the out-of-line call: see ``stored_energy``)
+                    xt[b] = x[b]
+                    vt[b] = v[b]
+                work = stored_energy(xt, vt, mass, nf, storey_k, kind, host, rows)
                 e1_max = e1_prev
                 attachment_forces(x, v, nf, storey_k, storey_c, floor_c, host, rows, force)
                 for k in range(nf):
@@ -418,7 +422,10 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
         out[IMPACTS] = n_left + n_right
         out[IMPACTS_LEFT] = n_left
         out[IMPACTS_RIGHT] = n_right
-        out[FINAL_ENERGY] = stored_energy(x, v, mass, nf, storey_k, kind, host, rows)
+        for b in range(nb):
+            xt[b] = x[b]
+            vt[b] = v[b]
+        out[FINAL_ENERGY] = stored_energy(xt, vt, mass, nf, storey_k, kind, host, rows)
         write_floor_metrics(out, nf, x_max, drift_max, acc_max, x2_integral)
 
     return kernel

@@ -257,7 +257,7 @@ def rk4_kernel(n_bodies: int, n_floors: int, has_impact: bool, has_hertz: bool, 
             # rare work between blocks of steps (see ``block_end``)
             if i == i0:
                 inside = True
-                out[INPUT] = stored_energy(x, v, mass, nf, storey_k, kind, host, rows)
+                out[INPUT] = stored_energy(x, v, mass, nf, storey_k, kind, host, rows)  # (x, v reach out-of-line calls anyway)
                 out[E1_MAX] = primary_energy(mass, storey_k, x, v, nf)
                 for k in range(nf):  # (the accelerations from the window's first sub-step on)
                     x_max[k] = abs(x[k])
