@@ -274,8 +274,11 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
                     for part in range(2 if sra else 1):
                         for k in range(nf):
                             if nf == 1 or noise_scale[k] > 0.0:
-                                u = normals[replayed] if replay else gen.standard_normal()
-                                replayed += 1
+                                if replay:  # (no counter carried through the loop otherwise)
+                                    u = normals[replayed]
+                                    replayed += 1
+                                else:
+                                    u = gen.standard_normal()
                                 if part == 0:
                                     u1[k] = u
                                 else:
