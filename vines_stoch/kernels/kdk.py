@@ -199,7 +199,7 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
         dw, dws, dwh, zb, noise_scale = scratch(NF), scratch(NF), scratch(NF), scratch(NF), scratch(NF)
         u1, u2, dz = scratch(NF), scratch(NF), scratch(NF)
         group_mass, group_sum, acc = scratch(NF), scratch(NF), scratch(NF)
-        x_max, drift_max, acc_max, x2_integral, x2_prev = scratch(NF), scratch(NF), scratch(NF), scratch(NF), scratch(NF)
+        x_max, drift_max, acc_max, x2_integral = scratch(NF), scratch(NF), scratch(NF), scratch(NF)
         for k in range(nf):
             noise_scale[k] = sigma[k] * np.sqrt(dt)
         # the Runge-Kutta stages' scratch, only where they run
@@ -215,13 +215,13 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
         rotations(forces, 0.5 * dt, hc, hs)
         stuck = np.zeros(na, np.int64)
         e1_prev = primary_energy(mass, storey_k, x, v, nf)
-        for k in range(nf):
-            x2_prev[k] = x[k] * x[k]
         h_next = start_history(history, stride, x, nf, e1_prev)
         ag_next = excitation(0.0, 0.5 * dt, 0.0, forces, series_t, series_v, series_ptr, series_target,
                              filtered, c_force, c_ground, z, zn, pc, False, GROUND, load_next)
         # accumulators in registers; written to ``out`` once at the end
-        work = d_primary = d_absorber = e_integral = e1_max = 0.0
+        # (the trapezoid integrals of E1 and x_k^2 as plain sums of the step ends' values, the
+        # window's ends at half weight: one add a step each)
+        work = d_primary = d_absorber = e_sum = e1_max = 0.0
         loss_sum = n_left = n_right = 0.0
         replayed = 0
         i = 0
@@ -236,9 +236,13 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
                     vt[b] = v[b]
                 work = stored_energy(xt, vt, mass, nf, storey_k, kind, host, rows)
                 e1_max = e1_prev
+                e_sum = 0.5 * e1_prev
                 attachment_forces(x, v, nf, storey_k, storey_c, floor_c, host, rows, force)
                 for k in range(nf):
-                    acc[k] = (force[k] + load_next[k]) * inv_mass[k]
+                    x2_integral[k] = 0.5 * x[k] * x[k]
+                    acc[k] = force[k] + load_next[k]  # (the floors' forces: see ``acc_max`` below)
+                    if sra:
+                        acc[k] *= inv_mass[k]
                 floor_peaks(x, nf, acc, x_max, drift_max, acc_max)
             if i % CHECK_EVERY == 0:
                 if diverged(x):
@@ -397,16 +401,13 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
                     pin_to_walls(x, nf, stuck, host, rows)
                 e1 = primary_energy(mass, storey_k, x, v, nf)
                 if inside:
-                    e_integral += 0.5 * (e1 + e1_prev) * dt
+                    e_sum += e1
                     e1_max = max(e1_max, e1)
                     for k in range(nf):
-                        x2 = x[k] * x[k]
-                        x2_integral[k] += 0.5 * (x2 + x2_prev[k]) * dt
-                        if not sra:  # absolute acceleration: the forces on the floor at the step's end
-                            acc[k] = (force[k] + load_end[k]) * inv_mass[k]
+                        x2_integral[k] += x[k] * x[k]
+                        if not sra:  # the forces on the floor at the step's end
+                            acc[k] = force[k] + load_end[k]
                     floor_peaks(x, nf, acc, x_max, drift_max, acc_max)
-                for k in range(nf):
-                    x2_prev[k] = x[k] * x[k]
                 e1_prev = e1
             i = end
             if i == h_next:
@@ -419,6 +420,13 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
         out[INPUT] = work
         out[PRIMARY_DISS] = d_primary
         out[ABSORBER_DISS] = d_absorber
+        e_integral = 0.0
+        if inside and i0 < n_steps:  # (the window's last state at half weight)
+            e_integral = (e_sum - 0.5 * e1_prev) * dt
+            for k in range(nf):
+                x2_integral[k] = (x2_integral[k] - 0.5 * x[k] * x[k]) * dt
+                if not sra:  # peak absolute acceleration: the peak floor force over the mass
+                    acc_max[k] *= inv_mass[k]
         out[ENERGY_INT] = e_integral
         out[E1_MAX] = e1_max
         out[IMPACT_LOSS] = loss_sum
