@@ -20,7 +20,8 @@ from scipy.integrate import solve_ivp
 from numba import njit
 from scipy.signal import welch
 
-from vines_stoch.filters import SOILS, oscillator, stationary_covariance
+from vines_stoch.filters import oscillator, stationary_covariance
+from vines_stoch.scenario.loads import SOILS
 from vines_stoch.kernels import load_history, simulate
 from vines_stoch.kernels.common import CHECK_EVERY
 from vines_stoch.kernels.loads import HARMONIC, phasors, rotations, turn

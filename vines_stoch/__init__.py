@@ -5,12 +5,28 @@ Public API::
     study = load_scenario("scenarios/parallel_nes_impulse.toml")
     realizations, summary = run(study, "results/x")
     realizations, summary = read_results("results/x")
+
+``run`` and ``read_results`` are imported on first use (PEP 562): reading and validating a
+scenario does not import numba, dask or pandas.
 """
+
+from __future__ import annotations
+
+from typing import Any
 
 __version__ = "0.1.0"
 
-from .ensemble import run  # noqa: E402
 from .scenario import ScenarioError, load_scenario, parse_scenario  # noqa: E402
-from .store import read_results  # noqa: E402
+
+#: Public names imported on first use, and their modules.
+_LAZY = {"run": "ensemble", "read_results": "store"}
 
 __all__ = ["ScenarioError", "__version__", "load_scenario", "parse_scenario", "read_results", "run"]
+
+
+def __getattr__(name: str) -> Any:
+    if name in _LAZY:
+        from importlib import import_module
+
+        return getattr(import_module(f".{_LAZY[name]}", __name__), name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

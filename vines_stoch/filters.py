@@ -18,17 +18,6 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.linalg import expm, solve_continuous_lyapunov
 
-#: Soil presets of the Clough-Penzien (and Kanai-Tajimi) filter: ground frequency and damping,
-#: high-pass frequency and damping (rad/s, fraction of critical).  Der Kiureghian, A. and
-#: Neuenhofer, A. (1992), "Response spectrum method for multi-support seismic excitations",
-#: Earthquake Engineering and Structural Dynamics 21(8), 713-740.
-SOILS = {
-    "firm": (15.0, 0.6, 1.5, 0.6),
-    "medium": (10.0, 0.4, 1.0, 0.6),
-    "soft": (5.0, 0.2, 0.5, 0.6),
-}
-
-
 @dataclass(frozen=True)
 class Filter:
     """One filtered load: ``dz = A z dt + b e(t) dW``, load ``= c . z``."""

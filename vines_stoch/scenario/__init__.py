@@ -1,0 +1,35 @@
+"""Scenario files: parsing, validation and sweep expansion (SCENARIOS.md).
+
+A scenario is validated completely before anything is computed.  Every mistake is reported
+as one line naming the file, the dotted key, the value and what is allowed, e.g.
+``scenarios/x.toml: absorbers.1.restitution = 1.4: must be in [0, 1]``.
+
+The package by topic: ``bodies`` (primary and absorbers), ``loads``, ``settings`` (simulation,
+history, ensemble, optimisation, output), ``distributions``, ``model`` (the root model),
+``errors`` (the translator from pydantic's errors), ``sweeps`` and ``study`` (a file read and
+expanded).  It imports neither numba, dask nor pandas: ``vines-stoch validate`` stays light.
+"""
+
+from .bodies import (Absorber, Contact, CubicAbsorber, HertzAbsorber, ImpactAbsorber, LinearAbsorber, Primary,
+                     Rayleigh)
+from .distributions import (Distribution, LognormalDistribution, NormalDistribution, TruncatedNormalDistribution,
+                            UniformDistribution)
+from .errors import ScenarioError
+from .loads import (ChirpLoad, FilteredNoiseLoad, ForceRecordLoad, GroundMotionLoad, HalfSineLoad, HarmonicLoad,
+                    ImpulseLoad, InitialLoad, JenningsEnvelope, Load, PulseTrainLoad, RecordLoad,
+                    SaragoniHartEnvelope, WhiteNoiseLoad)
+from .model import Scenario
+from .settings import (OBJECTIVES, Bound, Ensemble, History, Optimize, Output, Simulation, history_signals,
+                       quantile_name)
+from .study import Study, load_scenario, parse_scenario
+from .sweeps import get_path, set_path
+
+__all__ = [
+    "OBJECTIVES", "Absorber", "Bound", "ChirpLoad", "Contact", "CubicAbsorber", "Distribution", "Ensemble",
+    "FilteredNoiseLoad", "ForceRecordLoad", "GroundMotionLoad", "HalfSineLoad", "HarmonicLoad", "HertzAbsorber",
+    "History", "ImpactAbsorber", "ImpulseLoad", "InitialLoad", "JenningsEnvelope", "LinearAbsorber", "Load",
+    "LognormalDistribution", "NormalDistribution", "Optimize", "Output", "Primary", "PulseTrainLoad", "Rayleigh",
+    "RecordLoad", "SaragoniHartEnvelope", "Scenario", "ScenarioError", "Simulation", "Study",
+    "TruncatedNormalDistribution", "UniformDistribution", "WhiteNoiseLoad", "get_path", "history_signals",
+    "load_scenario", "parse_scenario", "quantile_name", "set_path",
+]

@@ -1,0 +1,245 @@
+"""The bodies: the primary structure (one storey or a shear building) and the absorbers
+(MODEL.md sections 1, 1a, 2)."""
+
+from __future__ import annotations
+
+from typing import Annotated, Literal, Union
+
+import numpy as np
+from pydantic import Field, model_validator
+
+from .errors import FieldError
+from .fields import Floor, NonNegative, Positive, Real, _Model
+
+class Rayleigh(_Model):
+    """Rayleigh damping ``C = alpha M + beta K`` with damping ``ratio`` at two ``modes`` of the
+    primary (1-based): ``alpha = 2 z w_i w_j / (w_i + w_j)``, ``beta = 2 z / (w_i + w_j)``
+    (Chopra, Dynamics of Structures, section 11.4)."""
+
+    ratio: Annotated[float, Field(ge=0, lt=1)]
+    modes: Annotated[list[Annotated[int, Field(ge=1)]], Field(min_length=2, max_length=2)]
+
+
+class Primary(_Model):
+    """The linear primary (MODEL.md sections 1, 1a): one storey (``mass``, ``stiffness``,
+    ``damping``) or a shear building (``masses``, ``stiffnesses`` and ``dampings`` or
+    ``rayleigh``, floors from the lowest to the roof; storey ``k`` joins floor ``k - 1``, the
+    ground for ``k = 1``, to floor ``k``)."""
+
+    mass: Positive | None = None
+    stiffness: NonNegative | None = None
+    damping: NonNegative | None = None
+    masses: Annotated[list[Positive], Field(min_length=1)] | None = None
+    stiffnesses: list[NonNegative] | None = None
+    dampings: list[NonNegative] | None = None
+    rayleigh: Rayleigh | None = None
+
+    @model_validator(mode="after")
+    def _layout(self) -> "Primary":
+        scalars = {"mass": self.mass, "stiffness": self.stiffness, "damping": self.damping}
+        lists = {"masses": self.masses, "stiffnesses": self.stiffnesses, "dampings": self.dampings}
+        if self.masses is None:
+            if self.mass is None:
+                raise FieldError("mass", None, "missing: give mass (one storey) or masses = [...] (floors from the "
+                                "lowest to the roof)")
+            for name, value in lists.items():
+                if value is not None:
+                    raise FieldError(name, value, "needs masses = [...]: a one-storey primary takes mass, stiffness "
+                                    "and damping")
+            if self.rayleigh is not None:
+                raise FieldError("rayleigh", None, "needs a multi-storey primary (masses = [...]); give damping")
+            return self
+        for name, value in scalars.items():
+            if value is not None:
+                raise FieldError(name, value, f"give either {name} (one storey) or the lists masses, stiffnesses, "
+                                "dampings, not both")
+        n = len(self.masses)
+        for name in ("stiffnesses", "dampings"):
+            value = lists[name]
+            if value is not None and len(value) != n:
+                raise FieldError(name, value, f"must list {n} values (one per storey, as primary.masses)")
+        if self.stiffnesses is None:
+            raise FieldError("stiffnesses", None, f"missing: give {n} storey stiffnesses")
+        if self.dampings is not None and self.rayleigh is not None:
+            raise FieldError("rayleigh", None, "give either dampings (storey dashpots) or rayleigh, not both")
+        if self.rayleigh is not None:
+            modes = self.rayleigh.modes
+            if modes[0] == modes[1] or max(modes) > n:
+                raise FieldError("rayleigh.modes", modes, f"must be two different modes in [1, {n}]")
+            if self.frequencies()[0] <= 0.0:
+                raise FieldError("rayleigh", None, "needs a primary fixed to the ground (every storey stiffness > 0)")
+        return self
+
+    @property
+    def n_floors(self) -> int:
+        return 1 if self.masses is None else len(self.masses)
+
+    @property
+    def floor_masses(self) -> list[float]:
+        return [float(self.mass)] if self.masses is None else [float(m) for m in self.masses]
+
+    @property
+    def storey_stiffnesses(self) -> list[float]:
+        if self.masses is None:
+            return [float(self.stiffness or 0.0)]
+        return [float(k) for k in self.stiffnesses]
+
+    def frequencies(self) -> np.ndarray:
+        """Natural frequencies (rad/s, ascending) of the primary alone (no absorbers)."""
+        mass, stiffness = np.array(self.floor_masses), shear_stiffness(self.storey_stiffnesses)
+        return eigenfrequencies(mass, stiffness)
+
+    def damping_matrices(self) -> tuple[list[float], list[float]]:
+        """``(storey dashpots, mass-proportional dashpots to the ground)``, one per floor:
+        the given dashpots, or Rayleigh's ``beta k_k`` and ``alpha m_k``."""
+        n = self.n_floors
+        if self.masses is None:
+            return [float(self.damping or 0.0)], [0.0]
+        if self.rayleigh is None:
+            return [float(c) for c in (self.dampings or [0.0] * n)], [0.0] * n
+        w = self.frequencies()
+        wi, wj = (w[m - 1] for m in self.rayleigh.modes)
+        z = self.rayleigh.ratio
+        alpha, beta = 2.0 * z * wi * wj / (wi + wj), 2.0 * z / (wi + wj)
+        return [beta * k for k in self.storey_stiffnesses], [alpha * m for m in self.floor_masses]
+
+
+def shear_stiffness(storeys: list[float]) -> np.ndarray:
+    """Stiffness matrix of a shear building (MODEL.md 1a) from its storey stiffnesses."""
+    n = len(storeys)
+    k = np.zeros((n, n))
+    for i, ks in enumerate(storeys):
+        k[i, i] += ks
+        if i > 0:
+            k[i - 1, i - 1] += ks
+            k[i - 1, i] -= ks
+            k[i, i - 1] -= ks
+    return k
+
+
+def eigenfrequencies(mass: np.ndarray, stiffness: np.ndarray) -> np.ndarray:
+    """Square roots of the eigenvalues of ``M^-1 K`` (diagonal ``M``), ascending."""
+    scale = 1.0 / np.sqrt(mass)
+    eig = np.linalg.eigvalsh(stiffness * np.outer(scale, scale))
+    return np.sqrt(np.clip(eig, 0.0, None))
+
+
+class LinearAbsorber(_Model):
+    """Tuned mass damper: ``f = -k u - c w`` (MODEL.md section 2)."""
+
+    type: Literal["linear"]
+    floor: Floor | None = None
+    mass: Positive
+    stiffness: NonNegative = 0.0
+    damping: NonNegative = 0.0
+
+
+class CubicAbsorber(_Model):
+    """Cubic NES: ``f = -k u^3 - k_lin u - c w`` (MODEL.md section 2, Wei et al. eq. 1)."""
+
+    type: Literal["cubic"]
+    floor: Floor | None = None
+    mass: Positive
+    stiffness: NonNegative = 0.0
+    damping: NonNegative = 0.0
+    linear_stiffness: NonNegative = 0.0
+
+
+class ImpactAbsorber(_Model):
+    """Vibro-impact NES in a symmetric cavity with Newton restitution (MODEL.md section 2)."""
+
+    type: Literal["impact"]
+    floor: Floor | None = None
+    mass: Positive
+    clearance: Positive
+    restitution: Annotated[float, Field(ge=0, le=1)]
+    stiffness: NonNegative = 0.0
+    damping: NonNegative = 0.0
+
+
+class Contact(_Model):
+    """Hertz contact constant ``K`` of one side, given directly (``k``) or from the surfaces:
+    Young's moduli and Poisson ratios ``[barrier, absorber]`` and the sphere ``radius``
+    (MODEL.md section 2)."""
+
+    k: Positive | None = None
+    young: Annotated[list[Positive], Field(min_length=2, max_length=2)] | None = None
+    poisson: Annotated[list[Annotated[float, Field(ge=0, lt=0.5)]], Field(min_length=2, max_length=2)] | None = None
+    radius: Positive | None = None
+    q: Positive = 0.318
+
+    @model_validator(mode="after")
+    def _one_way(self) -> "Contact":
+        surfaces = (self.young, self.poisson, self.radius)
+        if self.k is not None and any(s is not None for s in surfaces):
+            raise FieldError("k", self.k, "give either k or young/poisson/radius, not both")
+        if self.k is None and any(s is None for s in surfaces):
+            missing = [n for n, s in zip(("young", "poisson", "radius"), surfaces) if s is None]
+            raise FieldError(missing[0], None, "missing: give k, or all of young = [barrier, absorber], "
+                            "poisson = [barrier, absorber] and radius")
+        return self
+
+    @property
+    def constant(self) -> float:
+        """``K`` of ``F = K z^1.5``."""
+        if self.k is not None:
+            return float(self.k)
+        from ..physics import hertz_constant  # (not at import: it brings in numba)
+
+        return hertz_constant(self.young, self.poisson, self.radius, self.q)
+
+
+class HertzAbsorber(_Model):
+    """Vibro-impact NES with finite-duration Hertz contact (MODEL.md section 2, Lizunov et al.).
+
+    ``offset`` is D (single-sided) or V (double-sided), ``gap`` is C.  ``rest`` overrides the
+    spring's rest offset (default D, or V + C for double-sided).
+    """
+
+    type: Literal["hertz"]
+    geometry: Literal["single-sided", "double-sided"]
+    floor: Floor | None = None
+    mass: Positive
+    stiffness: NonNegative = 0.0
+    damping: NonNegative = 0.0
+    offset: NonNegative
+    gap: Positive
+    contact_left: Contact
+    contact_right: Contact
+    obstacle: Literal["from-rest", "from-primary"] = "from-rest"
+    rest: Real | None = None
+
+    @model_validator(mode="after")
+    def _geometry(self) -> "HertzAbsorber":
+        if self.obstacle == "from-primary":
+            if self.geometry != "single-sided":
+                raise FieldError("obstacle", self.obstacle, "'from-primary' (seed 002) is defined for single-sided geometry only")
+            if self.offset >= self.gap:
+                raise FieldError("offset", self.offset, f"must be < gap ({self.gap:g}) with obstacle = 'from-primary' "
+                                "(the absorber would start inside the obstacle)")
+        return self
+
+    @property
+    def walls(self) -> tuple[float, float]:
+        """Relative positions ``(lo, hi)`` of the left and right contact surfaces:
+        ``z_L = lo - u``, ``z_R = u - hi``."""
+        if self.geometry == "double-sided":
+            return self.offset, self.offset + 2.0 * self.gap
+        if self.obstacle == "from-primary":
+            return 0.0, self.gap
+        return 0.0, self.offset + self.gap
+
+    @property
+    def start(self) -> float:
+        """Initial relative position: D (single-sided) or V + C (double-sided)."""
+        return self.offset + (self.gap if self.geometry == "double-sided" else 0.0)
+
+    @property
+    def spring_rest(self) -> float:
+        """Rest offset of the linear spring."""
+        return self.start if self.rest is None else self.rest
+
+
+Absorber = Annotated[
+    Union[LinearAbsorber, CubicAbsorber, ImpactAbsorber, HertzAbsorber], Field(discriminator="type")
+]

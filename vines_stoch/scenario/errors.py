@@ -1,0 +1,208 @@
+"""From pydantic's errors to one line per mistake naming the file, the dotted key, the value
+and what is allowed, e.g. ``scenarios/x.toml: absorbers.1.restitution = 1.4: must be in [0, 1]``.
+
+The translator walks the error locations through the root model it is given (``validate``).
+"""
+
+from __future__ import annotations
+
+from typing import Any, TypeVar
+
+from annotated_types import Ge, Gt, Le, Lt
+from pydantic import BaseModel, ValidationError
+
+ModelT = TypeVar("ModelT", bound=BaseModel)
+
+#: Marks a key absent from the file.
+MISSING = object()
+
+
+class ScenarioError(ValueError):
+    """A scenario file that cannot be run; the message names file, key, value and rule."""
+
+
+class FieldError(ValueError):
+    """Raised inside validators to report a dotted key with its value and rule."""
+
+    def __init__(self, key: str, value: Any, rule: str):
+        super().__init__(rule)
+        self.key, self.value, self.rule = key, value, rule
+
+
+def _interval(metadata: list[Any]) -> str | None:
+    lo = hi = None
+    lo_open = hi_open = True
+    for m in metadata:
+        if isinstance(m, Ge):
+            lo, lo_open = m.ge, False
+        elif isinstance(m, Gt):
+            lo, lo_open = m.gt, True
+        elif isinstance(m, Le):
+            hi, hi_open = m.le, False
+        elif isinstance(m, Lt):
+            hi, hi_open = m.lt, True
+    if lo is None and hi is None:
+        return None
+    if hi is None:
+        return f"must be {'>' if lo_open else '>='} {lo:g}"
+    if lo is None:
+        return f"must be {'<' if hi_open else '<='} {hi:g}"
+    return f"must be in {'(' if lo_open else '['}{lo:g}, {hi:g}{')' if hi_open else ']'}"
+
+
+def _constraints(info: Any) -> list[Any]:
+    """Bound constraints of a field, also inside ``Optional[Annotated[...]]`` and lists of
+    them (``Optional[list[Annotated[...]]]``: the bound of the items)."""
+    found = list(info.metadata)
+
+    def walk(annotation: Any) -> None:
+        for arg in getattr(annotation, "__args__", ()):
+            for meta in getattr(arg, "__metadata__", ()):
+                found.extend(getattr(meta, "metadata", [meta]))
+            walk(arg)
+
+    walk(info.annotation)
+    return found
+
+
+def _field_info(root: type[BaseModel], loc: tuple[Any, ...]):
+    """Walk a pydantic error location through the models from ``root`` to the FieldInfo it names."""
+    model: Any = root
+    info = None
+    for part in loc:
+        if isinstance(part, int) or model is None:
+            continue
+        if isinstance(model, type) and issubclass(model, BaseModel):
+            if part not in model.model_fields:
+                return None
+            info = model.model_fields[part]
+            model = _inner_model(info.annotation)
+        elif isinstance(model, dict):  # tagged union: part is the tag (or a key of a table of them)
+            model = model.get(part, model)
+    return info
+
+
+def _members(annotation: Any) -> list[type[BaseModel]]:
+    """Model classes inside an annotation (through lists, unions and Annotated)."""
+    found: list[type[BaseModel]] = []
+    for arg in getattr(annotation, "__args__", ()):
+        if isinstance(arg, type) and issubclass(arg, BaseModel):
+            found.append(arg)
+        else:
+            found += _members(arg)
+    return found
+
+
+def _inner_model(annotation: Any) -> Any:
+    """The model (or tag -> model map for a tagged union) inside an annotation, if any."""
+    if isinstance(annotation, type) and issubclass(annotation, BaseModel):
+        return annotation
+    members = _members(annotation)
+    if len(members) == 1:
+        return members[0]
+    if members:
+        return {m.model_fields[_tag(m)].annotation.__args__[0]: m for m in members}
+    return None
+
+
+#: Fields that tag the members of a tagged union (absorbers and loads, distributions).
+TAGS = ("type", "distribution")
+
+
+def _tag(model: type[BaseModel]) -> str:
+    return next(t for t in TAGS if t in model.model_fields)
+
+
+def _dotted(loc: tuple[Any, ...], data: Any) -> tuple[str, Any, tuple[Any, ...]]:
+    """Dotted key, the user's value at it, and the location without union tags."""
+    parts: list[str] = []
+    clean: list[Any] = []
+    node = data
+    for part in loc:
+        if isinstance(node, dict) and part in node:
+            node = node[part]
+        elif isinstance(node, list) and isinstance(part, int) and part < len(node):
+            node = node[part]
+        elif isinstance(part, str) and isinstance(node, dict) and part in (node.get(t) for t in TAGS):
+            continue  # the tag of a tagged union, not a key of the file
+        else:
+            node = MISSING
+        parts.append(str(part))
+        clean.append(part)
+    return ".".join(parts), node, tuple(clean)
+
+
+
+def _describe(root: type[BaseModel], err: dict[str, Any], data: Any) -> tuple[str, Any, str]:
+    key, value, loc = _dotted(tuple(err["loc"]), data)
+    kind = err["type"]
+    info = _field_info(root, tuple(err["loc"]))
+    if kind == "missing":
+        what = "section" if info is not None and _inner_model(info.annotation) is not None else "key"
+        return key, MISSING, f"missing required {what}"
+    if kind == "extra_forbidden":
+        allowed = _allowed_keys(root, loc[:-1], data)
+        return key, value, f"unknown key; allowed keys: {', '.join(allowed)}" if allowed else "unknown key"
+    if kind in ("union_tag_invalid", "union_tag_not_found"):
+        tag = err.get("ctx", {}).get("discriminator", "'type'").strip("'")
+        key = f"{key}.{tag}" if key else tag
+        value = value.get(tag, MISSING) if isinstance(value, dict) else value
+        tags = err.get("ctx", {}).get("expected_tags", "")
+        members = _inner_model(info.annotation) if info is not None else None
+        if not tags and isinstance(members, dict):
+            tags = ", ".join(repr(t) for t in members)
+        return key, value, f"must be one of {tags}"
+    if kind in ("greater_than", "greater_than_equal", "less_than", "less_than_equal") and info:
+        return key, value, _interval(_constraints(info)) or err["msg"]
+    if kind in ("float_parsing", "float_type", "int_parsing", "int_type", "int_from_float"):
+        return key, value, "must be " + ("an integer" if kind.startswith("int") else "a number")
+    if kind == "finite_number":
+        return key, value, "must be a finite number"
+    if kind == "literal_error":
+        return key, value, "must be " + err["msg"].removeprefix("Input should be ")
+    if kind in ("model_type", "model_attributes_type", "dict_type"):
+        return key, value, "must be a table"
+    if kind == "list_type":
+        return key, value, "must be a list"
+    if kind == "value_error" and isinstance(err.get("ctx", {}).get("error"), FieldError):
+        e = err["ctx"]["error"]
+        value = e.value if e.value is not None else MISSING
+        return (f"{key}.{e.key}" if key else e.key), value, e.rule
+    return key, value, err["msg"]
+
+
+def _allowed_keys(root: type[BaseModel], loc: tuple[Any, ...], data: Any) -> list[str]:
+    """The keys the model at ``loc`` (below ``root``) allows."""
+    model: Any = root
+    node = data
+    for part in loc:
+        node = node[part] if isinstance(node, (dict, list)) and part in (node if isinstance(node, dict) else range(len(node))) else None
+        if isinstance(part, int) or isinstance(model, dict):
+            continue  # a list index, or a key of a table of tagged models
+        info = model.model_fields.get(part) if isinstance(model, type) else None
+        model = _inner_model(info.annotation) if info else None
+    if isinstance(model, dict):
+        tag = next((node[t] for t in TAGS if isinstance(node, dict) and t in node), None)
+        model = model.get(tag)
+    return list(model.model_fields) if isinstance(model, type) else []
+
+
+def format_error(source: str, key: str, value: Any, rule: str) -> str:
+    """One line: ``source: key = value: rule`` (without ``= value`` where it is missing)."""
+    where = f"{source}: {key}" if key else source
+    if value is MISSING:
+        return f"{where}: {rule}"
+    return f"{where} = {value!r}: {rule}"
+
+
+def validate(root: type[ModelT], data: dict[str, Any], source: str) -> ModelT:
+    """``data`` validated as ``root``, or ScenarioError with one line per mistake."""
+    try:
+        return root.model_validate(data)
+    except ValidationError as exc:
+        errors = exc.errors(include_url=False)
+        lines = [format_error(source, *_describe(root, e, data)) for e in errors]
+        raise ScenarioError("\n".join(dict.fromkeys(lines))) from None
+
+
+

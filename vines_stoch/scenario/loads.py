@@ -1,0 +1,218 @@
+"""The loads: initial conditions, deterministic forces, white and filtered noise, stochastic
+ground motion and records (MODEL.md section 3)."""
+
+from __future__ import annotations
+
+from typing import Annotated, Literal, Union
+
+import numpy as np
+from pydantic import Field, PrivateAttr, model_validator
+
+from ..records import G
+from .errors import FieldError
+from .fields import Floor, NonNegative, Positive, Real, _Model
+
+#: Soil presets of the Clough-Penzien (and Kanai-Tajimi) filter: ground frequency and damping,
+#: high-pass frequency and damping (rad/s, fraction of critical).  Der Kiureghian, A. and
+#: Neuenhofer, A. (1992), "Response spectrum method for multi-support seismic excitations",
+#: Earthquake Engineering and Structural Dynamics 21(8), 713-740.
+SOILS = {
+    "firm": (15.0, 0.6, 1.5, 0.6),
+    "medium": (10.0, 0.4, 1.0, 0.6),
+    "soft": (5.0, 0.2, 0.5, 0.6),
+}
+
+
+class ImpulseLoad(_Model):
+    """Initial velocity ``v(0) = velocity`` of a floor (default the roof; Wei's impulse
+    strength X)."""
+
+    type: Literal["impulse"]
+    velocity: Real
+    floor: Floor | None = None
+
+
+class InitialLoad(_Model):
+    """Initial displacements and velocities of all bodies (the floors from the lowest, then
+    the absorbers)."""
+
+    type: Literal["initial"]
+    displacement: list[Real] | None = None
+    velocity: list[Real] | None = None
+
+
+class HarmonicLoad(_Model):
+    """``F = amplitude * cos(frequency * t + phase)``, frequency in rad/s."""
+
+    type: Literal["harmonic"]
+    amplitude: Real
+    frequency: NonNegative
+    phase: Real = 0.0
+    floor: Floor | None = None
+
+
+class WhiteNoiseLoad(_Model):
+    """Additive white-noise force, ``F dt = intensity dW`` (Ito)."""
+
+    type: Literal["white-noise"]
+    intensity: NonNegative
+    floor: Floor | None = None
+
+
+class JenningsEnvelope(_Model):
+    """Jennings et al. (1968): ``(t/rise)^2`` up to ``rise``, 1 up to ``hold``, then
+    ``exp(-decay (t - hold))``."""
+
+    type: Literal["jennings"]
+    rise: NonNegative
+    hold: NonNegative
+    decay: NonNegative
+
+    @model_validator(mode="after")
+    def _order(self) -> "JenningsEnvelope":
+        if self.hold < self.rise:
+            raise FieldError("hold", self.hold, f"must be >= rise ({self.rise:g})")
+        return self
+
+
+class SaragoniHartEnvelope(_Model):
+    """Saragoni and Hart (1974), normalised to peak 1 at ``t = peak``:
+    ``(t/peak)^shape exp(shape (1 - t/peak))``."""
+
+    type: Literal["saragoni-hart"]
+    peak: Positive
+    shape: Positive
+
+
+Envelope = Annotated[Union[JenningsEnvelope, SaragoniHartEnvelope], Field(discriminator="type")]
+
+
+class _FilteredLoad(_Model):
+    """Shared fields of loads made by filtering white noise (``filters.py``)."""
+
+    intensity: NonNegative
+    envelope: Envelope | None = None
+    start: Literal["rest", "stationary"] = "rest"
+
+    @model_validator(mode="after")
+    def _stationary(self) -> "_FilteredLoad":
+        if self.start == "stationary" and self.envelope is not None:
+            raise FieldError("start", self.start, "a stationary start needs a load without envelope")
+        return self
+
+
+class FilteredNoiseLoad(_FilteredLoad):
+    """Wei et al. eq. 23: ``f'' + 2 damping frequency f' + frequency^2 f = intensity xi``,
+    force ``F = f``."""
+
+    type: Literal["filtered-noise"]
+    frequency: Positive
+    damping: Positive
+    floor: Floor | None = None
+
+
+class GroundMotionLoad(_FilteredLoad):
+    """Stochastic ground acceleration: Kanai-Tajimi or Clough-Penzien filtered white noise
+    ``w dt = intensity dW`` (two-sided PSD ``S0 = intensity^2 / (2 pi)``) with an optional
+    envelope; filter parameters from a ``soil`` preset or given."""
+
+    type: Literal["ground-motion"]
+    model: Literal["kanai-tajimi", "clough-penzien"] = "clough-penzien"
+    soil: Literal["firm", "medium", "soft"] | None = None
+    ground_frequency: Positive | None = None
+    ground_damping: Positive | None = None
+    filter_frequency: Positive | None = None
+    filter_damping: Positive | None = None
+
+    @model_validator(mode="after")
+    def _parameters(self) -> "GroundMotionLoad":
+        preset = SOILS.get(self.soil, (None,) * 4)
+        names = ["ground_frequency", "ground_damping"]
+        if self.model == "clough-penzien":
+            names += ["filter_frequency", "filter_damping"]
+        for name, value in zip(["ground_frequency", "ground_damping", "filter_frequency", "filter_damping"], preset):
+            if getattr(self, name) is None:
+                setattr(self, name, value)
+        for name in names:
+            if getattr(self, name) is None:
+                raise FieldError(name, None, "missing: give it or a soil preset (firm, medium, soft)")
+        return self
+
+
+class HalfSineLoad(_Model):
+    """``F = amplitude sin(pi (t - start) / duration)`` for ``start <= t <= start + duration``."""
+
+    type: Literal["half-sine"]
+    amplitude: Real
+    duration: Positive
+    start: NonNegative = 0.0
+    floor: Floor | None = None
+
+
+class PulseTrainLoad(_Model):
+    """``F = amplitude`` while ``(t - start) mod period < width`` (``t >= start``), for ``count``
+    pulses (0: no end)."""
+
+    type: Literal["pulse-train"]
+    amplitude: Real
+    width: Positive
+    period: Positive
+    start: NonNegative = 0.0
+    count: Annotated[int, Field(ge=0)] = 0
+    floor: Floor | None = None
+
+    @model_validator(mode="after")
+    def _width(self) -> "PulseTrainLoad":
+        if self.width > self.period:
+            raise FieldError("width", self.width, f"must be <= period ({self.period:g})")
+        return self
+
+
+class ChirpLoad(_Model):
+    """``F = amplitude sin(2 pi (f0 t + (f1 - f0) t^2 / (2 duration)))``, ``f0``, ``f1`` in Hz."""
+
+    type: Literal["chirp"]
+    amplitude: Real
+    f0: NonNegative
+    f1: NonNegative
+    duration: Positive
+    floor: Floor | None = None
+
+
+class _RecordLoad(_Model):
+    """A sampled record: linear interpolation, zero outside its time span."""
+
+    file: Annotated[str, Field(min_length=1)]
+    dt: Positive | None = None
+    scale: Real = 1.0
+    format: Literal["auto", "at2", "two-column", "one-column"] = "auto"
+    _times: np.ndarray | None = PrivateAttr(default=None)
+    _values: np.ndarray | None = PrivateAttr(default=None)
+
+    def samples(self) -> tuple[np.ndarray, np.ndarray]:
+        """Times and values in scenario units (scale and units applied)."""
+        if self._times is None:
+            raise RuntimeError(f"record {self.file!r} was not read (use load_scenario)")
+        factor = G if getattr(self, "units", "m/s2") == "g" else 1.0
+        return self._times, self._values * (self.scale * factor)
+
+
+class RecordLoad(_RecordLoad):
+    """Ground acceleration record (base excitation: every mass gets ``-m a_g``)."""
+
+    type: Literal["record"]
+    units: Literal["g", "m/s2"]
+
+
+class ForceRecordLoad(_RecordLoad):
+    """Force record acting on a floor (default the roof; scenario force units)."""
+
+    type: Literal["force-record"]
+    floor: Floor | None = None
+
+
+Load = Annotated[
+    Union[ImpulseLoad, InitialLoad, HarmonicLoad, WhiteNoiseLoad, FilteredNoiseLoad, GroundMotionLoad,
+          HalfSineLoad, PulseTrainLoad, ChirpLoad, RecordLoad, ForceRecordLoad],
+    Field(discriminator="type"),
+]

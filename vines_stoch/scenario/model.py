@@ -1,0 +1,118 @@
+"""The root model of a scenario file (SCENARIOS.md) and its cross-section checks."""
+
+from __future__ import annotations
+
+from typing import Annotated, Any
+
+import numpy as np
+from pydantic import Field, model_validator
+
+from .. import schemes
+from .bodies import Absorber, CubicAbsorber, HertzAbsorber, ImpactAbsorber, Primary, eigenfrequencies, shear_stiffness
+from .distributions import Distribution
+from .errors import FieldError
+from .fields import _Model
+from .loads import InitialLoad, Load, WhiteNoiseLoad, _FilteredLoad
+from .settings import Ensemble, Optimize, Output, Simulation, history_signals
+
+class Scenario(_Model):
+    """A complete scenario file (SCENARIOS.md)."""
+
+    name: Annotated[str, Field(min_length=1)]
+    description: str = ""
+    primary: Primary
+    absorbers: list[Absorber] = []
+    loads: list[Load] = []
+    simulation: Simulation
+    ensemble: Ensemble = Ensemble()
+    sweep: dict[str, Any] = {}
+    uncertain: dict[str, Distribution] = {}
+    optimize: Optimize | None = None
+    output: Output = Output()
+
+    @model_validator(mode="after")
+    def _consistency(self) -> "Scenario":
+        sim = self.simulation
+        if sim.dt > sim.duration:
+            raise FieldError("simulation.dt", sim.dt, f"must be <= simulation.duration ({sim.duration:g})")
+        if sim.metrics_from >= sim.duration:
+            raise FieldError(
+                "simulation.metrics_from", sim.metrics_from, f"must be in [0, {sim.duration:g})"
+            )
+        n = self.primary.n_floors
+        nbodies = n + len(self.absorbers)
+        for i, item in [(f"absorbers.{i}", a) for i, a in enumerate(self.absorbers)] + \
+                       [(f"loads.{i}", l) for i, l in enumerate(self.loads)]:
+            floor = getattr(item, "floor", None)
+            if floor is not None and not 1 <= floor <= n:
+                raise FieldError(f"{i}.floor", floor, f"must be in [1, {n}] (the primary has {n} floor{'s' * (n > 1)})")
+        for i, load in enumerate(self.loads):
+            if isinstance(load, InitialLoad):
+                for field in ("displacement", "velocity"):
+                    values = getattr(load, field)
+                    if values is not None and len(values) != nbodies:
+                        raise FieldError(
+                            f"loads.{i}.{field}", values,
+                            f"must list {nbodies} values (the {n} floor{'s' * (n > 1)} from the lowest, then each "
+                            "absorber)",
+                        )
+        if sim.history is not None:
+            allowed = history_signals(n)
+            for signal in sim.history.signals:
+                if signal not in allowed:
+                    raise FieldError("simulation.history.signals", sim.history.signals,
+                                    f"{signal!r} is not a signal: give x1, e1, x_k or drift_k with k in [1, {n}]")
+        contents = self.contents
+        if sim.scheme != "auto":
+            why = schemes.refusal(schemes.SCHEMES[sim.scheme], *contents)
+            if why is not None:
+                raise FieldError("simulation.scheme", sim.scheme, why)
+        elif schemes.refusal(schemes.SCHEMES[self.scheme], *contents) is not None:
+            i = next(i for i, a in enumerate(self.absorbers) if isinstance(a, HertzAbsorber))
+            raise FieldError(f"absorbers.{i}.type", "hertz",
+                            "Hertz contact is solved by the rk4 scheme only: remove noise loads "
+                            "and use scheme = 'auto' or 'rk4'")
+        return self
+
+    @property
+    def contents(self) -> tuple[bool, bool, bool, bool]:
+        """What the schemes must accept: noise, filtered loads, impact absorbers, Hertz absorbers."""
+        return (self.has_noise, any(isinstance(l, _FilteredLoad) and l.intensity > 0 for l in self.loads),
+                any(isinstance(a, ImpactAbsorber) for a in self.absorbers),
+                any(isinstance(a, HertzAbsorber) for a in self.absorbers))
+
+    @property
+    def is_random(self) -> bool:
+        """True when realisations differ: random loads or uncertain parameters."""
+        return self.has_noise or bool(self.uncertain)
+
+    @property
+    def scheme(self) -> str:
+        """The scheme that runs (``schemes.choose`` for ``"auto"``)."""
+        if self.simulation.scheme != "auto":
+            return self.simulation.scheme
+        return schemes.choose(*self.contents)
+
+    def naturaleigenfrequencies(self) -> np.ndarray:
+        """Natural frequencies (rad/s, ascending) of the linear structure: the floors and every
+        absorber on the linear part of its attachment to its host floor (cubic terms, impacts and
+        contacts left out; an absorber without a linear spring is a free mass, frequency 0)."""
+        n = self.primary.n_floors
+        mass = np.array(self.primary.floor_masses + [a.mass for a in self.absorbers])
+        k = np.zeros((mass.shape[0], mass.shape[0]))
+        k[:n, :n] = shear_stiffness(self.primary.storey_stiffnesses)
+        for j, a in enumerate(self.absorbers, start=n):
+            spring = a.linear_stiffness if isinstance(a, CubicAbsorber) else a.stiffness
+            h = (a.floor or n) - 1
+            k[[h, j], [h, j]] += spring
+            k[[h, j], [j, h]] -= spring
+        return eigenfrequencies(mass, k)
+
+    def highest_frequency(self) -> float:
+        """The highest of ``natural_frequencies`` (the stability limit of ``dt``)."""
+        return float(self.naturaleigenfrequencies().max())
+
+    @property
+    def has_noise(self) -> bool:
+        """True when any random load acts (white, filtered noise, stochastic ground motion)."""
+        return any(isinstance(l, (WhiteNoiseLoad, _FilteredLoad)) and l.intensity > 0 for l in self.loads)

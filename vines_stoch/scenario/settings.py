@@ -1,0 +1,129 @@
+"""Settings: the time grid and scheme, histories, the ensemble, optimisation and output."""
+
+from __future__ import annotations
+
+import math
+from typing import Annotated, Any, Literal
+
+from pydantic import Field, field_validator, model_validator
+
+from .errors import FieldError
+from .fields import NonNegative, Positive, Real, _Model
+
+class History(_Model):
+    """Ensemble statistics of time histories on a decimated grid (history.parquet): by default
+    the roof's displacement ``x1`` and the structure's energy ``e1``; ``signals`` may also name
+    a floor's displacement ``x_k`` or inter-storey drift ``drift_k`` (``k = 1..n``)."""
+
+    points: Annotated[int, Field(ge=2, le=100_000)] = 1000
+    quantiles: list[Annotated[float, Field(gt=0, lt=1, allow_inf_nan=False)]] = [0.05, 0.5, 0.95]
+    signals: Annotated[list[str], Field(min_length=1)] = ["x1", "e1"]
+
+    @model_validator(mode="after")
+    def _distinct(self) -> "History":
+        if len(set(self.signals)) != len(self.signals):
+            raise FieldError("signals", self.signals, "must not repeat a signal")
+        if len(set(self.quantiles)) != len(self.quantiles):
+            raise FieldError("quantiles", self.quantiles, "must not repeat a value")
+        if len({quantile_name(q) for q in self.quantiles}) != len(self.quantiles):
+            raise FieldError("quantiles", self.quantiles, "must differ in their first 4 decimals")
+        return self
+
+
+def history_signals(n_floors: int) -> list[str]:
+    """Signals a history can record on a primary with ``n_floors`` floors: the roof's
+    displacement ``x1``, the structure's energy ``e1``, each floor's displacement ``x_k`` and
+    inter-storey drift ``drift_k``."""
+    floors = range(1, n_floors + 1)
+    return ["x1", "e1", *(f"x_{k}" for k in floors), *(f"drift_{k}" for k in floors)]
+
+
+def quantile_name(q: float) -> str:
+    """Column suffix of a quantile: ``q05`` for 0.05, ``q50`` for 0.5, ``q025`` for 0.025."""
+    digits = f"{q:.4f}"[2:].rstrip("0")
+    return "q" + digits.ljust(2, "0")
+
+
+class Simulation(_Model):
+    """Time grid and scheme; ``metrics_from`` opens the metrics window ``[t0, T]``; ``history``
+    asks for ensemble statistics of time histories (``true``: the default grid and quantiles)."""
+
+    duration: Positive
+    dt: Positive
+    scheme: Literal["auto", "euler-maruyama", "rk4", "sra"] = "auto"
+    history: History | None = None
+    metrics_from: NonNegative = 0.0
+
+    @field_validator("history", mode="before")
+    @classmethod
+    def _history_switch(cls, value: Any) -> Any:
+        """``true``: the default grid and quantiles; ``false``: none."""
+        if isinstance(value, bool):
+            return History() if value else None
+        return value
+
+
+class Ensemble(_Model):
+    """Monte Carlo ensemble size, master seed, chunk size (0 = automatic), the EDM standard
+    error at which a sweep point stops early, and whether sweep points share their random
+    numbers (realisation ``r`` sees the same noise and parameter draws at every point)."""
+
+    realizations: Annotated[int, Field(ge=1)] = 1
+    seed: Annotated[int, Field(ge=0)] = 0
+    chunk: Annotated[int, Field(ge=0)] = 0
+    target_sem: Positive | None = None
+    common_random_numbers: bool = True
+
+
+class Bound(_Model):
+    """Range searched for one optimised parameter, its starting value (default: the middle,
+    geometric on a log scale) and whether the search works on its logarithm."""
+
+    low: Real
+    high: Real
+    start: Real | None = None
+    scale: Literal["linear", "log"] = "linear"
+
+    @model_validator(mode="after")
+    def _range(self) -> "Bound":
+        if not self.low < self.high:
+            raise FieldError("high", self.high, f"must be > low ({self.low:g})")
+        if self.scale == "log" and self.low <= 0:
+            raise FieldError("low", self.low, "must be > 0 with scale = 'log'")
+        if self.start is not None and not self.low <= self.start <= self.high:
+            raise FieldError("start", self.start, f"must be in [{self.low:g}, {self.high:g}]")
+        return self
+
+    @property
+    def initial(self) -> float:
+        if self.start is not None:
+            return self.start
+        return math.sqrt(self.low * self.high) if self.scale == "log" else 0.5 * (self.low + self.high)
+
+
+#: Metrics an optimisation can target, and their default goal.
+OBJECTIVES = {"edm": "maximize", "e1_max": "minimize", "energy_integral": "minimize",
+              "x1_max": "minimize", "x1_rms": "minimize"}
+
+
+class Optimize(_Model):
+    """Robust design (``vines-stoch optimize``): tune ``parameters`` within their bounds so that
+    the mean of ``objective`` over the realisations and sweep points is best."""
+
+    objective: Literal[tuple(OBJECTIVES)] = "edm"  # type: ignore[valid-type]
+    goal: Literal["maximize", "minimize"] | None = None
+    method: Literal["nelder-mead", "powell"] = "nelder-mead"
+    max_evaluations: Annotated[int, Field(ge=1, le=100_000)] = 200
+    tolerance: Annotated[float, Field(gt=0, le=0.5)] = 1e-3
+    parameters: Annotated[dict[str, Bound], Field(min_length=1)]
+
+    @property
+    def sign(self) -> float:
+        """+1 to minimise the objective, -1 to maximise it."""
+        return -1.0 if (self.goal or OBJECTIVES[self.objective]) == "maximize" else 1.0
+
+
+class Output(_Model):
+    """Where results go (default ``results/<name>``)."""
+
+    directory: str | None = None

@@ -1,0 +1,179 @@
+"""A scenario file read, validated and expanded: its sweep points, uncertain and optimised
+parameters checked at both ends of their ranges, and its record files read once."""
+
+from __future__ import annotations
+
+import copy
+import math
+import tomllib
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .. import schemes
+from ..records import RecordError, read_record
+from .distributions import LognormalDistribution
+from .errors import ScenarioError, format_error, validate
+from .loads import _RecordLoad
+from .model import Scenario
+from .sweeps import _grid, _product, _zipped, get_path, set_path
+
+
+def _validate(data: dict[str, Any], source: str) -> Scenario:
+    """``data`` as a Scenario, or ScenarioError with one line per mistake."""
+    return validate(Scenario, data, source)
+
+
+def _require_numeric(data: dict[str, Any], key: str, where: str, spec: Any, source: str) -> None:
+    """``key`` must address an existing numeric field of the file."""
+    try:
+        current = get_path(data, key)
+    except (KeyError, IndexError, ValueError, TypeError):
+        current = None
+    if isinstance(current, bool) or not isinstance(current, (int, float)):
+        raise ScenarioError(format_error(source, where, spec,
+                                    "must name an existing numeric field of the file (e.g. loads.0.velocity)"))
+
+
+def _check_values(data: dict[str, Any], key: str, ends: tuple[float, float], where: str, spec: Any,
+                  source: str, message: str) -> None:
+    """Validate the file with ``key`` set to each of ``ends``; on failure raise ``message``
+    (formatted with ``end`` and the field's ``rule``) at ``where`` (whose value is ``spec``)."""
+    for end in ends:
+        variant = copy.deepcopy(data)
+        set_path(variant, key, end)
+        variant.pop("uncertain", None)
+        variant.pop("optimize", None)
+        try:
+            _validate(variant, source)
+        except ScenarioError as exc:
+            rule = str(exc).split("\n")[0].rsplit(": ", 1)[-1]
+            raise ScenarioError(format_error(source, where, spec, message.format(end=end, rule=rule))) from None
+
+
+def _check_stability(scenario: Scenario, source: str) -> None:
+    """Refuse a ``dt`` past the linear stability limit of the scheme that would run."""
+    omega, dt = scenario.highest_frequency(), scenario.simulation.dt
+    limit = schemes.SCHEMES[scenario.scheme].stability
+    if omega * dt >= limit:
+        raise ScenarioError(format_error(
+            source, "simulation.dt", dt,
+            f"is past the stability limit of the {scenario.scheme} scheme: the highest linear natural frequency "
+            f"of the scene is {omega:.6g} rad/s, which needs dt < {limit:.4g} / omega = {limit / omega:.4g} "
+            f"(use about a tenth of that for accuracy)"))
+
+
+class Study:
+    """A validated scenario file: the base scenario and its sweep points."""
+
+    def __init__(self, source: str, text: str, data: dict[str, Any], directory: Path = Path("."),
+                 records: dict[tuple[Any, ...], tuple[np.ndarray, np.ndarray]] | None = None):
+        self.source = source
+        self.text = text
+        self.data = data
+        self.directory = directory
+        self._records = {} if records is None else records  # record files read so far, shared by variants
+        self.base = self._read_records(_validate(data, source), source)
+        sweep = dict(self.base.sweep)
+        zipped = _zipped(sweep.pop("zip", []), sweep, source)
+        self.sweep_keys = list(sweep)
+        grids = {k: _grid(k, sweep[k], source) for k in self.sweep_keys}
+        for key in self.sweep_keys:
+            _require_numeric(data, key, f"sweep.{key}", sweep[key], source)
+        self.uncertain_keys = list(self.base.uncertain)
+        for key, dist in self.base.uncertain.items():
+            _require_numeric(data, key, f"uncertain.{key}", data["uncertain"][key], source)
+            if key in self.sweep_keys:
+                raise ScenarioError(format_error(source, f"uncertain.{key}", data["uncertain"][key],
+                                            "is also swept: a parameter is either swept or uncertain"))
+            self._check_support(data, key, dist, source)
+        if self.base.optimize is not None:
+            self._check_optimize(data, source)
+        self.grid = _product(grids, zipped, source)
+        self.points: list[Scenario] = []
+        self._point_data: list[dict[str, Any]] = []
+        for values in self.grid:
+            variant = copy.deepcopy(data)
+            for key, value in values.items():
+                set_path(variant, key, value)
+            self._point_data.append(variant)
+            where = f"{source} (sweep point {values})" if values else source
+            self.points.append(self._read_records(_validate(variant, where), source))
+            _check_stability(self.points[-1], where)
+
+    def _check_support(self, data: dict[str, Any], key: str, dist: Any, source: str) -> None:
+        """Every value ``dist`` can draw must be valid for ``key``: check both ends of its support."""
+        lo, hi = dist.support()
+        lo = lo if math.isfinite(lo) else -1e300
+        lo = lo if lo != 0.0 or not isinstance(dist, LognormalDistribution) else 2.2e-308
+        _check_values(data, key, (lo, hi if math.isfinite(hi) else 1e300), f"uncertain.{key}",
+                      data["uncertain"][key], source,
+                      f"{dist.distribution} draws reach {{end:g}}, but the value {{rule}}; choose a distribution whose "
+                      "support fits (lognormal for positive values, uniform or truncated-normal within bounds)")
+
+    def _check_optimize(self, data: dict[str, Any], source: str) -> None:
+        """Optimised parameters: numeric fields, neither swept nor uncertain, valid at both bounds."""
+        for key, bound in self.base.optimize.parameters.items():
+            where = f"optimize.parameters.{key}"
+            spec = data["optimize"]["parameters"][key]
+            _require_numeric(data, key, where, spec, source)
+            if key in self.sweep_keys or key in self.uncertain_keys:
+                raise ScenarioError(format_error(source, where, spec, "is swept or uncertain: an optimised parameter "
+                                                                 "must be neither"))
+            _check_values(data, key, (bound.low, bound.high), where, spec, source,
+                          "the bound {end:g} is not allowed: the value {rule}")
+
+    def realise(self, point: int, values: dict[str, float]) -> Scenario:
+        """Sweep point ``point`` with its uncertain parameters set to ``values``."""
+        variant = copy.deepcopy(self._point_data[point])
+        for key, value in values.items():
+            set_path(variant, key, value)
+        return self._read_records(_validate(variant, self.source), self.source)
+
+    def with_values(self, values: dict[str, float]) -> "Study":
+        """The study with the fields named by ``values`` set (e.g. an optimiser's candidate)."""
+        data = copy.deepcopy(self.data)
+        for key, value in values.items():
+            set_path(data, key, value)
+        return Study(self.source, self.text, data, self.directory, self._records)
+
+    def _read_records(self, scenario: Scenario, source: str) -> Scenario:
+        """Read the files of record loads (paths relative to the scenario file), once each."""
+        for i, load in enumerate(scenario.loads):
+            if isinstance(load, _RecordLoad):
+                path = self.directory / load.file
+                key = (path.resolve(), load.format, load.dt)
+                if key not in self._records:
+                    try:
+                        self._records[key] = read_record(path, load.format, load.dt)
+                    except RecordError as exc:
+                        raise ScenarioError(format_error(source, f"loads.{i}.file", load.file, str(exc))) from None
+                load._times, load._values = self._records[key]
+        return scenario
+
+    @property
+    def name(self) -> str:
+        return self.base.name
+
+
+
+def load_scenario(path: str | Path) -> Study:
+    """Read and validate a scenario file; raise ScenarioError with a one-line reason per mistake."""
+    path = Path(path)
+    source = str(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except OSError as exc:
+        raise ScenarioError(f"{source}: cannot read file ({exc.strerror})") from None
+    return parse_scenario(text, source, path.parent)
+
+
+def parse_scenario(text: str, source: str = "<scenario>", directory: str | Path = ".") -> Study:
+    """Validate scenario TOML text (``source`` names it in messages; record files are found
+    relative to ``directory``)."""
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ScenarioError(f"{source}: TOML syntax error: {exc}") from None
+    return Study(source, text, data, Path(directory))
