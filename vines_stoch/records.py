@@ -11,6 +11,8 @@ from pathlib import Path
 
 import numpy as np
 
+from .textfile import TextFileError, read_text
+
 #: Standard gravity, for records in units of g.
 G = 9.80665
 
@@ -22,17 +24,27 @@ _DT = re.compile(r"\bDT\s*=?\s*([-+0-9.eE]+)", re.IGNORECASE)
 _OLD_HEADER = re.compile(r"^\s*(\d+)\s+([-+0-9.eE]+)\s+NPTS", re.IGNORECASE)
 
 
+#: The largest record file read (bytes).
+RECORD_BYTES = 256 * 2**20
+
+
 class RecordError(ValueError):
-    """A record file that cannot be read; the message names the file and line."""
+    """A record file that cannot be read; the message names the file and line (never its content)."""
+
+
+def _token(text: str) -> str:
+    """The offending token as quoted in a message: short ones as they are, long ones by length
+    (a long token is likely a line of some other file: it is not echoed)."""
+    return repr(text) if len(text) <= 24 and text.isprintable() else f"a token of {len(text)} characters"
 
 
 def _number(text: str, path: Path, line: int) -> float:
     try:
         value = float(text)
     except ValueError:
-        raise RecordError(f"{path}: line {line}: {text!r} is not a number") from None
+        raise RecordError(f"{path}: line {line}: {_token(text)} is not a number") from None
     if not np.isfinite(value):
-        raise RecordError(f"{path}: line {line}: {text!r} is not a finite number")
+        raise RecordError(f"{path}: line {line}: {_token(text)} is not a finite number")
     return value
 
 
@@ -46,7 +58,7 @@ def _at2_header(lines: list[str], path: Path) -> tuple[int, float, int] | None:
         if npts and dt:
             n = _number(npts.group(1).rstrip(",."), path, k + 1)
             if n != int(n):
-                raise RecordError(f"{path}: line {k + 1}: NPTS = {npts.group(1)} is not a whole number")
+                raise RecordError(f"{path}: line {k + 1}: NPTS = {_token(npts.group(1))} is not a whole number")
             return int(n), _number(dt.group(1).rstrip(","), path, k + 1), k + 1
     return None
 
@@ -62,9 +74,10 @@ def read_record(path: str | Path, fmt: str = "auto", dt: float | None = None) ->
     path = Path(path)
     if fmt not in FORMATS:
         raise RecordError(f"{path}: format {fmt!r}: must be one of {', '.join(FORMATS)}")
-    if not path.is_file():
-        raise RecordError(f"{path}: no such file")
-    lines = path.read_text(errors="replace").splitlines()
+    try:
+        lines = read_text(path, RECORD_BYTES).splitlines()
+    except TextFileError as exc:
+        raise RecordError(str(exc)) from None
     header = _at2_header(lines, path) if fmt in ("auto", "at2") else None
     if fmt == "at2" and header is None:
         raise RecordError(f"{path}: no AT2 header with NPTS and DT in the first lines")
@@ -74,6 +87,8 @@ def read_record(path: str | Path, fmt: str = "auto", dt: float | None = None) ->
             raise RecordError(f"{path}: the header says DT = {step:g}, the scenario dt = {dt:g}; give one")
         if step <= 0:
             raise RecordError(f"{path}: line {first}: DT = {step:g}: must be > 0")
+        if npts < 1:
+            raise RecordError(f"{path}: line {first}: NPTS = {npts}: must be >= 1")
         values = [_number(tok, path, k + 1) for k in range(first, len(lines)) for tok in lines[k].split()]
         if len(values) != npts:
             raise RecordError(f"{path}: the header says NPTS = {npts}, the file has {len(values)} values")

@@ -9,7 +9,7 @@ import numpy as np
 from pydantic import Field, model_validator
 
 from .errors import FieldError
-from .fields import Floor, NonNegative, Positive, Real, _Model
+from .fields import MAX_FLOORS, Floor, NonNegative, Positive, Real, _Model
 
 class Rayleigh(_Model):
     """Rayleigh damping ``C = alpha M + beta K`` with damping ``ratio`` at two ``modes`` of the
@@ -29,7 +29,7 @@ class Primary(_Model):
     mass: Positive | None = None
     stiffness: NonNegative | None = None
     damping: NonNegative | None = None
-    masses: Annotated[list[Positive], Field(min_length=1)] | None = None
+    masses: Annotated[list[Positive], Field(min_length=1, max_length=MAX_FLOORS)] | None = None
     stiffnesses: list[NonNegative] | None = None
     dampings: list[NonNegative] | None = None
     rayleigh: Rayleigh | None = None

@@ -11,6 +11,11 @@ from pydantic import Field, model_validator
 from .errors import FieldError
 from .fields import Positive, Real, _Model
 
+#: Standard deviations of a normal variable that its draws reach in practice (beyond them the
+#: probability is below 1e-300).
+REACH = 40.0
+
+
 class NormalDistribution(_Model):
     """``mean + std Z``."""
 
@@ -20,6 +25,10 @@ class NormalDistribution(_Model):
 
     def support(self) -> tuple[float, float]:
         return -math.inf, math.inf
+
+    def reach(self) -> tuple[float, float]:
+        """The range of the draws in practice: ``REACH`` standard deviations."""
+        return self.mean - REACH * self.std, self.mean + REACH * self.std
 
     def draw(self, gen: np.random.Generator) -> float:
         return self.mean + self.std * gen.standard_normal()
@@ -34,6 +43,11 @@ class LognormalDistribution(_Model):
 
     def support(self) -> tuple[float, float]:
         return 0.0, math.inf
+
+    def reach(self) -> tuple[float, float]:
+        """The range of the draws in practice: ``ln X`` within ``REACH`` standard deviations."""
+        s = math.sqrt(math.log1p(self.cov ** 2))
+        return self.median * math.exp(-REACH * s), self.median * math.exp(min(REACH * s, 700.0))
 
     def draw(self, gen: np.random.Generator) -> float:
         return self.median * math.exp(math.sqrt(math.log1p(self.cov ** 2)) * gen.standard_normal())
@@ -50,6 +64,9 @@ class _Bounded(_Model):
         return self
 
     def support(self) -> tuple[float, float]:
+        return self.low, self.high
+
+    def reach(self) -> tuple[float, float]:
         return self.low, self.high
 
 

@@ -11,10 +11,13 @@ from typing import Any, TypeVar
 from annotated_types import Ge, Gt, Le, Lt
 from pydantic import BaseModel, ValidationError
 
+from .fields import LARGEST
+
 ModelT = TypeVar("ModelT", bound=BaseModel)
 
-#: Marks a key absent from the file.
+#: Marks a key absent from the file, and a value too large to quote (its size is the message).
 MISSING = object()
+_SIZED = object()
 
 
 class ScenarioError(ValueError):
@@ -29,7 +32,8 @@ class FieldError(ValueError):
         self.key, self.value, self.rule = key, value, rule
 
 
-def _interval(metadata: list[Any]) -> str | None:
+def _interval(metadata: list[Any], value: Any) -> str | None:
+    """The rule of a bounded field; the magnitude limit ``LARGEST`` is named only to a value past it."""
     lo = hi = None
     lo_open = hi_open = True
     for m in metadata:
@@ -41,8 +45,17 @@ def _interval(metadata: list[Any]) -> str | None:
             hi, hi_open = m.le, False
         elif isinstance(m, Lt):
             hi, hi_open = m.lt, True
+    number = isinstance(value, (int, float)) and not isinstance(value, bool)
+    if hi == LARGEST and lo == -LARGEST and number and abs(value) > LARGEST:
+        return f"its magnitude must be <= {LARGEST:g} (use other units)"
+    if hi == LARGEST and not (number and value > hi):
+        hi = None
+    if lo == -LARGEST and not (number and value < lo):
+        lo = None
     if lo is None and hi is None:
         return None
+    if hi == LARGEST and lo is not None:
+        return f"must be {'>' if lo_open else '>='} {lo:g} and <= {LARGEST:g} (use other units)"
     if hi is None:
         return f"must be {'>' if lo_open else '>='} {lo:g}"
     if lo is None:
@@ -153,9 +166,18 @@ def _describe(root: type[BaseModel], err: dict[str, Any], data: Any) -> tuple[st
             tags = ", ".join(repr(t) for t in members)
         return key, value, f"must be one of {tags}"
     if kind in ("greater_than", "greater_than_equal", "less_than", "less_than_equal") and info:
-        return key, value, _interval(_constraints(info)) or err["msg"]
+        return key, value, _interval(_constraints(info), value) or err["msg"]
     if kind in ("float_parsing", "float_type", "int_parsing", "int_type", "int_from_float"):
-        return key, value, "must be " + ("an integer" if kind.startswith("int") else "a number")
+        return key, value, ("must be " + ("an integer" if kind.startswith("int") else "a number") + _not(value))
+    if kind == "bool_type":
+        return key, value, "must be true or false" + _not(value)
+    if kind == "string_type":
+        return key, value, "must be a string (in quotes)"
+    if kind in ("too_long", "too_short"):
+        ctx = err.get("ctx", {})
+        limit = ctx.get("max_length") if kind == "too_long" else ctx.get("min_length")
+        return key, _SIZED, f"holds {ctx.get('actual_length')} entries; it may hold at " \
+                            f"{'most' if kind == 'too_long' else 'least'} {limit}"
     if kind == "finite_number":
         return key, value, "must be a finite number"
     if kind == "literal_error":
@@ -187,12 +209,36 @@ def _allowed_keys(root: type[BaseModel], loc: tuple[Any, ...], data: Any) -> lis
     return list(model.model_fields) if isinstance(model, type) else []
 
 
+def _not(value: Any) -> str:
+    """Why a value of the wrong type is not taken as it looks (types are never converted)."""
+    if isinstance(value, bool):
+        return ", not true or false"
+    if isinstance(value, str):
+        return ", not a string (no quotes)"
+    if isinstance(value, float):
+        return ", not a number with a decimal point or exponent"
+    if isinstance(value, (list, dict)):
+        return f", not {'a list' if isinstance(value, list) else 'a table'}"
+    return ""
+
+
+#: Longest value quoted in a message (longer ones are cut).
+QUOTE = 80
+
+
+def quote(value: Any) -> str:
+    """``repr(value)``, cut to ``QUOTE`` characters."""
+    text = repr(value)
+    return text if len(text) <= QUOTE else text[:QUOTE - 3] + "..."
+
+
 def format_error(source: str, key: str, value: Any, rule: str) -> str:
-    """One line: ``source: key = value: rule`` (without ``= value`` where it is missing)."""
+    """One line: ``source: key = value: rule`` (without ``= value`` where it is missing, the
+    value cut to ``QUOTE`` characters)."""
     where = f"{source}: {key}" if key else source
-    if value is MISSING:
+    if value is MISSING or value is _SIZED:
         return f"{where}: {rule}"
-    return f"{where} = {value!r}: {rule}"
+    return f"{where} = {quote(value)}: {rule}"
 
 
 def validate(root: type[ModelT], data: dict[str, Any], source: str) -> ModelT:

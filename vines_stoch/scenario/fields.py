@@ -7,12 +7,26 @@ from typing import Annotated
 from pydantic import BaseModel, ConfigDict, Field
 
 class _Model(BaseModel):
-    model_config = ConfigDict(extra="forbid", strict=False, frozen=False)
+    model_config = ConfigDict(extra="forbid", strict=True, frozen=False)
 
 
-Positive = Annotated[float, Field(gt=0, allow_inf_nan=False)]
-NonNegative = Annotated[float, Field(ge=0, allow_inf_nan=False)]
-Real = Annotated[float, Field(allow_inf_nan=False)]
+#: The largest magnitude of a number in a scenario: squares and products of two stay far from
+#: overflow in the energy sums (use other units past it).
+LARGEST = 1e15
+
+Positive = Annotated[float, Field(gt=0, le=LARGEST, allow_inf_nan=False)]
+NonNegative = Annotated[float, Field(ge=0, le=LARGEST, allow_inf_nan=False)]
+Real = Annotated[float, Field(ge=-LARGEST, le=LARGEST, allow_inf_nan=False)]
+
+#: Sizes that cannot be meant: nesting of tables and arrays, absorbers, loads, floors, sweep
+#: points, realisations a sweep point (a row each in the results) and steps a path.
+MAX_DEPTH = 12
+MAX_ABSORBERS = 100
+MAX_LOADS = 100
+MAX_FLOORS = 200
+MAX_POINTS = 10_000
+MAX_REALIZATIONS = 10_000_000
+MAX_STEPS = 1_000_000_000
 
 
 #: A floor number, 1 (lowest) to the roof; its range is checked against the primary's floors.

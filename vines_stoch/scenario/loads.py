@@ -158,7 +158,7 @@ class PulseTrainLoad(_Model):
     width: Positive
     period: Positive
     start: NonNegative = 0.0
-    count: Annotated[int, Field(ge=0)] = 0
+    count: Annotated[int, Field(ge=0, le=2**31 - 1)] = 0
     floor: Floor | None = None
 
     @model_validator(mode="after")

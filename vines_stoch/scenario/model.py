@@ -11,7 +11,7 @@ from .. import schemes
 from .bodies import Absorber, CubicAbsorber, HertzAbsorber, ImpactAbsorber, Primary, eigenfrequencies, shear_stiffness
 from .distributions import Distribution
 from .errors import FieldError
-from .fields import _Model
+from .fields import MAX_ABSORBERS, MAX_LOADS, MAX_STEPS, _Model
 from .loads import InitialLoad, Load, WhiteNoiseLoad, _FilteredLoad
 from .settings import Ensemble, Optimize, Output, Simulation, history_signals
 
@@ -21,8 +21,8 @@ class Scenario(_Model):
     name: Annotated[str, Field(min_length=1)]
     description: str = ""
     primary: Primary
-    absorbers: list[Absorber] = []
-    loads: list[Load] = []
+    absorbers: Annotated[list[Absorber], Field(max_length=MAX_ABSORBERS)] = []
+    loads: Annotated[list[Load], Field(max_length=MAX_LOADS)] = []
     simulation: Simulation
     ensemble: Ensemble = Ensemble()
     sweep: dict[str, Any] = {}
@@ -35,6 +35,9 @@ class Scenario(_Model):
         sim = self.simulation
         if sim.dt > sim.duration:
             raise FieldError("simulation.dt", sim.dt, f"must be <= simulation.duration ({sim.duration:g})")
+        if sim.duration / sim.dt > MAX_STEPS:
+            raise FieldError("simulation.dt", sim.dt, f"gives {sim.duration / sim.dt:.3g} steps a path (duration / dt); "
+                             f"at most {MAX_STEPS:.0e}")
         if sim.metrics_from >= sim.duration:
             raise FieldError(
                 "simulation.metrics_from", sim.metrics_from, f"must be in [0, {sim.duration:g})"
@@ -93,7 +96,7 @@ class Scenario(_Model):
             return self.simulation.scheme
         return schemes.choose(*self.contents)
 
-    def naturaleigenfrequencies(self) -> np.ndarray:
+    def natural_frequencies(self) -> np.ndarray:
         """Natural frequencies (rad/s, ascending) of the linear structure: the floors and every
         absorber on the linear part of its attachment to its host floor (cubic terms, impacts and
         contacts left out; an absorber without a linear spring is a free mass, frequency 0)."""
@@ -110,7 +113,7 @@ class Scenario(_Model):
 
     def highest_frequency(self) -> float:
         """The highest of ``natural_frequencies`` (the stability limit of ``dt``)."""
-        return float(self.naturaleigenfrequencies().max())
+        return float(self.natural_frequencies().max())
 
     @property
     def has_noise(self) -> bool:

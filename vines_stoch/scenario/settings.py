@@ -8,7 +8,7 @@ from typing import Annotated, Any, Literal
 from pydantic import Field, field_validator, model_validator
 
 from .errors import FieldError
-from .fields import NonNegative, Positive, Real, _Model
+from .fields import MAX_REALIZATIONS, NonNegative, Positive, Real, _Model
 
 class History(_Model):
     """Ensemble statistics of time histories on a decimated grid (history.parquet): by default
@@ -66,13 +66,16 @@ class Simulation(_Model):
 class Ensemble(_Model):
     """Monte Carlo ensemble size, master seed, chunk size (0 = automatic), the EDM standard
     error at which a sweep point stops early, and whether sweep points share their random
-    numbers (realisation ``r`` sees the same noise and parameter draws at every point)."""
+    numbers (realisation ``r`` sees the same noise and parameter draws at every point);
+    ``max_path_steps`` caps a run's work (sweep points x realisations x steps a path) against
+    runs that cannot be meant, and may be raised for a run that is."""
 
-    realizations: Annotated[int, Field(ge=1)] = 1
-    seed: Annotated[int, Field(ge=0)] = 0
-    chunk: Annotated[int, Field(ge=0)] = 0
+    realizations: Annotated[int, Field(ge=1, le=MAX_REALIZATIONS)] = 1
+    seed: Annotated[int, Field(ge=0, le=2**63 - 1)] = 0
+    chunk: Annotated[int, Field(ge=0, le=MAX_REALIZATIONS)] = 0
     target_sem: Positive | None = None
     common_random_numbers: bool = True
+    max_path_steps: Annotated[float, Field(gt=0, allow_inf_nan=False)] = 1e12
 
 
 class Bound(_Model):

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import copy
 import math
+import re
 import tomllib
 from pathlib import Path
 from typing import Any
@@ -13,11 +14,17 @@ import numpy as np
 
 from .. import schemes
 from ..records import RecordError, read_record
+from ..textfile import TextFileError, read_text
 from .distributions import LognormalDistribution
-from .errors import ScenarioError, format_error, validate
+from .errors import MISSING, ScenarioError, format_error, validate
+from .fields import LARGEST, MAX_DEPTH
 from .loads import _RecordLoad
 from .model import Scenario
 from .sweeps import _grid, _product, _zipped, get_path, set_path
+
+
+#: The largest scenario file read (bytes).
+SCENARIO_BYTES = 4 * 2**20
 
 
 def _validate(data: dict[str, Any], source: str) -> Scenario:
@@ -81,9 +88,15 @@ class Study:
         grids = {k: _grid(k, sweep[k], source) for k in self.sweep_keys}
         for key in self.sweep_keys:
             _require_numeric(data, key, f"sweep.{key}", sweep[key], source)
+            if self._integer(key):
+                grids[key] = _whole(grids[key], f"sweep.{key}", sweep[key], source)
         self.uncertain_keys = list(self.base.uncertain)
         for key, dist in self.base.uncertain.items():
             _require_numeric(data, key, f"uncertain.{key}", data["uncertain"][key], source)
+            if self._integer(key):
+                raise ScenarioError(format_error(source, f"uncertain.{key}", data["uncertain"][key],
+                                                 "names an integer field, and distributions draw real numbers: "
+                                                 "sweep it instead"))
             if key in self.sweep_keys:
                 raise ScenarioError(format_error(source, f"uncertain.{key}", data["uncertain"][key],
                                             "is also swept: a parameter is either swept or uncertain"))
@@ -101,16 +114,39 @@ class Study:
             where = f"{source} (sweep point {values})" if values else source
             self.points.append(self._read_records(_validate(variant, where), source))
             _check_stability(self.points[-1], where)
+        self._check_work(source)
+
+    def _integer(self, key: str) -> bool:
+        """True when the (numeric) field at dotted ``key`` holds integers."""
+        node: Any = self.base
+        for part in key.split("."):
+            node = node[int(part)] if isinstance(node, list) else getattr(node, part)
+        return isinstance(node, int)
+
+    def _check_work(self, source: str) -> None:
+        """Refuse a run past ``ensemble.max_path_steps`` (sweep points x realisations x steps)."""
+        ens = self.base.ensemble
+        steps = sum(p.simulation.duration / p.simulation.dt for p in self.points) * ens.realizations
+        if steps > ens.max_path_steps:
+            raise ScenarioError(format_error(
+                source, "ensemble.realizations", ens.realizations,
+                f"the run would take {steps:.3g} path-steps ({len(self.points)} sweep point(s) x {ens.realizations} "
+                f"realisation(s) x duration / dt), past ensemble.max_path_steps = {ens.max_path_steps:.3g}: raise "
+                "that if the run is meant"))
 
     def _check_support(self, data: dict[str, Any], key: str, dist: Any, source: str) -> None:
         """Every value ``dist`` can draw must be valid for ``key``: check both ends of its support."""
+        where, spec = f"uncertain.{key}", data["uncertain"][key]
         lo, hi = dist.support()
-        lo = lo if math.isfinite(lo) else -1e300
+        lo = lo if math.isfinite(lo) else -LARGEST
         lo = lo if lo != 0.0 or not isinstance(dist, LognormalDistribution) else 2.2e-308
-        _check_values(data, key, (lo, hi if math.isfinite(hi) else 1e300), f"uncertain.{key}",
-                      data["uncertain"][key], source,
+        _check_values(data, key, (lo, hi if math.isfinite(hi) else LARGEST), where, spec, source,
                       f"{dist.distribution} draws reach {{end:g}}, but the value {{rule}}; choose a distribution whose "
                       "support fits (lognormal for positive values, uniform or truncated-normal within bounds)")
+        for end in dist.reach():
+            if not abs(end) <= LARGEST:
+                raise ScenarioError(format_error(source, where, spec, f"{dist.distribution} draws reach {end:.3g} "
+                                                 f"(40 standard deviations), past the largest magnitude {LARGEST:g}"))
 
     def _check_optimize(self, data: dict[str, Any], source: str) -> None:
         """Optimised parameters: numeric fields, neither swept nor uncertain, valid at both bounds."""
@@ -118,6 +154,9 @@ class Study:
             where = f"optimize.parameters.{key}"
             spec = data["optimize"]["parameters"][key]
             _require_numeric(data, key, where, spec, source)
+            if self._integer(key):
+                raise ScenarioError(format_error(source, where, spec, "names an integer field, and the optimiser "
+                                                 "moves parameters continuously: sweep it instead"))
             if key in self.sweep_keys or key in self.uncertain_keys:
                 raise ScenarioError(format_error(source, where, spec, "is swept or uncertain: an optimised parameter "
                                                                  "must be neither"))
@@ -157,23 +196,70 @@ class Study:
         return self.base.name
 
 
+def _whole(values: list[float], where: str, spec: Any, source: str) -> list[int]:
+    """Sweep values of an integer field: whole numbers, as integers."""
+    if any(v != int(v) for v in values):
+        raise ScenarioError(format_error(source, where, spec, "names an integer field: the values must be whole "
+                                         "numbers"))
+    return [int(v) for v in values]
+
 
 def load_scenario(path: str | Path) -> Study:
     """Read and validate a scenario file; raise ScenarioError with a one-line reason per mistake."""
     path = Path(path)
-    source = str(path)
     try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise ScenarioError(f"{source}: cannot read file ({exc.strerror})") from None
-    return parse_scenario(text, source, path.parent)
+        text = read_text(path, SCENARIO_BYTES)
+    except TextFileError as exc:
+        raise ScenarioError(str(exc)) from None
+    return parse_scenario(text, str(path), path.parent)
 
 
 def parse_scenario(text: str, source: str = "<scenario>", directory: str | Path = ".") -> Study:
     """Validate scenario TOML text (``source`` names it in messages; record files are found
     relative to ``directory``)."""
+    _check_keys(text, source)
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise ScenarioError(f"{source}: TOML syntax error: {exc}") from None
+    except RecursionError:
+        raise ScenarioError(f"{source}: tables, arrays or keys nest too deep to read (a scenario nests at most "
+                            f"{MAX_DEPTH} levels)") from None
+    _check_depth(data, source)
     return Study(source, text, data, Path(directory))
+
+
+#: Quoted strings of a TOML line (their dots do not split keys).
+_QUOTED = re.compile(r'"(?:[^"\\]|\\.)*"|\'[^\']*\'')
+
+
+#: What is left of a key once its quoted parts are removed.
+_KEY = re.compile(r"[A-Za-z0-9_.\s-]*")
+
+
+def _check_keys(text: str, source: str) -> None:
+    """Refuse dotted keys of more than ``MAX_DEPTH`` parts before parsing (the TOML reader
+    takes time quadratic in their length)."""
+    for number, line in enumerate(text.splitlines(), start=1):
+        head = line.strip()
+        if head.startswith("["):
+            head = head.strip("[]")
+        elif "=" in head:
+            head = head.split("=", 1)[0]
+        key = _QUOTED.sub("", head)
+        if _KEY.fullmatch(key) and key.count(".") >= MAX_DEPTH:
+            raise ScenarioError(f"{source}: line {number}: a dotted key of more than {MAX_DEPTH} parts; a scenario "
+                                "nests fewer")
+
+
+def _check_depth(data: dict[str, Any], source: str) -> None:
+    """Refuse tables and arrays nested deeper than ``MAX_DEPTH`` (walked without recursion)."""
+    stack: list[tuple[Any, tuple[str, ...]]] = [(data, ())]
+    while stack:
+        node, path = stack.pop()
+        if len(path) > MAX_DEPTH:
+            key = ".".join(path[:4]) + "..."
+            raise ScenarioError(format_error(source, key, MISSING, f"nests more than {MAX_DEPTH} levels of tables "
+                                             "and arrays; a scenario needs fewer"))
+        items = node.items() if isinstance(node, dict) else enumerate(node) if isinstance(node, list) else ()
+        stack.extend((value, path + (str(key),)) for key, value in items)

@@ -8,7 +8,8 @@ from typing import Any
 
 import numpy as np
 
-from .errors import ScenarioError, format_error
+from .errors import MISSING, ScenarioError, format_error
+from .fields import MAX_POINTS
 
 def _grid(key: str, spec: Any, source: str) -> list[float]:
     """Values of one ``[sweep]`` entry: a list, ``{linspace = [a, b, n]}`` or ``{logspace = [a, b, n]}``."""
@@ -21,6 +22,9 @@ def _grid(key: str, spec: Any, source: str) -> list[float]:
                 and isinstance(args[2], int) and args[2] >= 1):
             raise ScenarioError(format_error(source, f"{where}.{kind}", args, "must be [first, last, count] with count an integer >= 1"))
         first, last, count = args
+        if count > MAX_POINTS:
+            raise ScenarioError(format_error(source, f"{where}.{kind}", args, f"count {count}: a sweep has at most "
+                                             f"{MAX_POINTS} points (split the study into several files)"))
         if kind == "logspace":
             if first <= 0 or last <= 0:
                 raise ScenarioError(format_error(source, f"{where}.logspace", args, "first and last must be > 0 (values, not exponents)"))
@@ -31,6 +35,9 @@ def _grid(key: str, spec: Any, source: str) -> list[float]:
         raise ScenarioError(format_error(source, where, spec, "must be a list of values, {linspace = [first, last, count]} or {logspace = [first, last, count]}"))
     if not values:
         raise ScenarioError(format_error(source, where, spec, "must hold at least one value"))
+    if len(values) > MAX_POINTS:
+        raise ScenarioError(format_error(source, where, spec, f"{len(values)} values: a sweep has at most "
+                                         f"{MAX_POINTS} points (split the study into several files)"))
     for v in values:
         if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
             raise ScenarioError(format_error(source, where, spec, "values must be finite numbers"))
@@ -76,6 +83,11 @@ def _product(grids: dict[str, list[float]], zipped: list[str], source: str) -> l
         if len(lengths) > 1:
             sizes = ", ".join(f"{k}: {len(grids[k])}" for k in zipped)
             raise ScenarioError(format_error(source, "sweep.zip", zipped, f"zipped keys need equally many values ({sizes})"))
+    size = math.prod([len(grids[zipped[0]])] if zipped else []) * math.prod(
+        len(g) for k, g in grids.items() if k not in zipped)
+    if size > MAX_POINTS:
+        raise ScenarioError(format_error(source, "sweep", MISSING, f"{size} points; a sweep has at most {MAX_POINTS} "
+                                         "points (split the study into several files)"))
     axes: list[list[dict[str, float]]] = []
     if zipped:
         axes.append([{k: grids[k][i] for k in zipped} for i in range(len(grids[zipped[0]]))])
