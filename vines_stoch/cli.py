@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 import sys
 from pathlib import Path
 from typing import Optional
@@ -72,10 +73,10 @@ def validate(scenario: Path = typer.Argument(..., help="Scenario TOML file.")) -
 def loads(
     scenario: Path = typer.Argument(..., help="Scenario TOML file."),
     out: Path = typer.Argument(..., help="File to write: .AT2 (ground acceleration in g) or .csv (t, force, ground)."),
-    seed: Optional[int] = typer.Option(None, "--seed", help="Seed (default: the scenario's [ensemble] seed)."),
-    realization: int = typer.Option(0, "--realization", min=0, help="Realisation whose loads to write."),
+    seed: Optional[int] = typer.Option(None, "--seed", min=0, max=2**63 - 1, help="Seed (default: the scenario's [ensemble] seed)."),
+    realization: int = typer.Option(0, "--realization", min=0, max=2**63 - 1, help="Realisation whose loads to write."),
     point: int = typer.Option(0, "--point", min=0, help="Sweep point."),
-    pga: Optional[float] = typer.Option(None, "--pga", min=0.0, help="Scale the ground acceleration to this peak (in g)."),
+    pga: Optional[float] = typer.Option(None, "--pga", min=0.0, max=100.0, help="Scale the ground acceleration to this peak (in g)."),
     every: int = typer.Option(1, "--every", min=1, help="Keep every N-th sample of the time grid."),
 ) -> None:
     """Write one sample path of a scenario's loads (e.g. a synthetic accelerogram): the path
@@ -93,21 +94,32 @@ def loads(
         _fail(str(exc))
     if point >= len(study.points):
         _fail(f"--point {point}: the scenario has {len(study.points)} sweep point(s)")
+    if not out.parent.is_dir():
+        _fail(f"{out}: the folder {out.parent} does not exist")
     ens = study.base.ensemble
     seed = ens.seed if seed is None else seed
     gens = streams(seed, point, realization, increments=False, bridge=False, common=ens.common_random_numbers)
-    t, force, ground = (a[::every] for a in load_history(build_scene(study.points[point]), gens))
+    scene = build_scene(study.points[point])
+    t, force, ground = load_history(scene, gens)
+    if every > len(t):
+        _fail(f"--every {every}: the time grid has {len(t)} samples")
+    t, force, ground = t[::every], force[::every], ground[::every]
     if pga is not None:
         peak = np.max(np.abs(ground))
         if peak == 0.0:
             _fail(f"--pga: {scenario} has no ground acceleration to scale")
         ground *= pga * G / peak
-    if out.suffix.lower() == ".at2":
-        write_at2(out, t[1] - t[0], ground / G, f"{study.name}, sweep point {point}, seed {seed}, realisation {realization}")
-    else:
-        floors = force.shape[1]
-        names = ["force"] if floors == 1 else [f"force_{k}" for k in range(1, floors + 1)]
-        np.savetxt(out, np.c_[t, force, ground], header=" ".join(["t", *names, "ground_acceleration"]), comments="# ")
+    try:
+        if out.suffix.lower() == ".at2":
+            write_at2(out, scene.dt * every, ground / G,
+                      f"{study.name}, sweep point {point}, seed {seed}, realisation {realization}")
+        else:
+            floors = force.shape[1]
+            names = ["force"] if floors == 1 else [f"force_{k}" for k in range(1, floors + 1)]
+            np.savetxt(out, np.c_[t, force, ground], header=" ".join(["t", *names, "ground_acceleration"]),
+                       comments="# ")
+    except OSError as exc:
+        _fail(f"{out}: cannot write ({exc.strerror})")
     typer.echo(f"wrote {out} ({len(t)} samples)")
 
 
@@ -212,8 +224,18 @@ def reproduce(
 
 
 def main() -> None:
-    """Console entry point."""
-    app()
+    """Console entry point.  Mistakes in the input end in ``error: ...`` and exit status 2; an
+    unexpected exception (a bug) in one line and exit status 3, with its traceback only where
+    the environment variable ``VINES_STOCH_TRACEBACK`` is set."""
+    try:
+        app()
+    except Exception as exc:  # the last line of defence: no traceback for users
+        if os.environ.get("VINES_STOCH_TRACEBACK"):
+            raise
+        detail = str(exc).splitlines()[0][:200] if str(exc) else ""
+        typer.echo(f"error: internal error {type(exc).__name__}: {detail} (a bug: please report it; set "
+                   "VINES_STOCH_TRACEBACK=1 to see where it happened)", err=True)
+        sys.exit(3)
 
 
 if __name__ == "__main__":

@@ -34,7 +34,7 @@ from .streams import PARAMETERS, generator, streams
 from .progress import Progress
 from .scenario import History, Study
 from .scene import Scene, build_scene
-from .store import part_path, provenance, read_results, run_key, write_table
+from .store import lock_folder, part_path, provenance, read_results, run_key, write_table
 
 #: Target work of one chunk, in path-steps (about 0.1-0.3 s of compute).
 CHUNK_STEPS = 5_000_000
@@ -230,9 +230,24 @@ def run(study: Study, directory: str | Path | None = None, *, workers: int | Non
     address of a running ``dask.distributed`` scheduler to use instead.  ``resume``: keep what
     a previous, interrupted run of the same scenario finished.  ``checkpoint_seconds``: how
     often the history statistics are saved for a resume.
+
+    The directory is owned by one run at a time (``store.lock_folder``): a run into a folder
+    another live run writes is refused with ``store.FolderInUse``.
     """
+    directory = Path(directory or study.base.output.directory or f"results/{study.base.name}")
+    try:
+        directory.mkdir(parents=True, exist_ok=True)
+    except FileExistsError:
+        raise NotADirectoryError(f"{directory}: exists and is not a folder") from None
+    with lock_folder(directory):
+        return _run(study, directory, workers, chunk, realizations, resume, scheduler, progress, checkpoint_seconds)
+
+
+def _run(study: Study, directory: Path, workers: int | None, chunk: int | None, realizations: int | None,
+         resume: bool, scheduler: str | None, progress: bool,
+         checkpoint_seconds: float) -> tuple[pd.DataFrame, pd.DataFrame]:
+    """``run`` in a directory it owns."""
     base = study.base
-    directory = Path(directory or base.output.directory or f"results/{base.name}")
     the_plan = plan(study, chunk, realizations)
     seed, target, spec = base.ensemble.seed, base.ensemble.target_sem, base.simulation.history
     grids = [hist.grid(scene.n_steps, spec.points) if spec else None for scene in the_plan.scenes]

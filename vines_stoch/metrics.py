@@ -109,8 +109,31 @@ def finish(raw: np.ndarray, scene: Scene, samples: np.ndarray | None = None) -> 
     return row
 
 
+def undefined_notes(ok: pd.DataFrame, metrics: list[str]) -> str:
+    """Why statistics of a sweep point are undefined (NaN), one reason per cause ("" if none):
+    no realisation ended ok, one did (no spread), or metrics undefined in some realisations
+    (``edm`` and ``energy_residual`` where the loads put no energy in)."""
+    notes = []
+    if len(ok) == 0:
+        notes.append("no realisation ended ok (see status in realizations.parquet): every statistic undefined")
+    elif len(ok) == 1:
+        notes.append("one realisation ended ok: std, sem and ci95 undefined")
+    if len(ok) and "input_energy" in ok:
+        idle = int((ok["input_energy"] <= 0).sum())
+        if idle:
+            notes.append(f"{idle} realisation(s) without input energy (the loads put none in): edm and "
+                         "energy_residual undefined there and in their statistics")
+    explained = {"edm", "energy_residual"} if any("input energy" in n for n in notes) else set()
+    for m in metrics:
+        bad = int(ok[m].isna().sum()) if m in ok else 0
+        if bad and m not in explained:
+            notes.append(f"{m} undefined in {bad} realisation(s)")
+    return "; ".join(notes)
+
+
 def summarise(realizations: pd.DataFrame, parameters: list[str]) -> pd.DataFrame:
-    """One row per sweep point: parameters, ``n_ok``, ``n_failed`` and ``M_<stat>`` per metric
+    """One row per sweep point: parameters, ``n_ok``, ``n_failed``, ``notes`` (why statistics
+    are undefined: ``undefined_notes``) and ``M_<stat>`` per metric
     (``STATISTICS``; ``sem`` is the standard error of the mean and ``ci95_lo``, ``ci95_hi`` its
     95 % Student-t confidence interval).
 
@@ -124,6 +147,7 @@ def summarise(realizations: pd.DataFrame, parameters: list[str]) -> pd.DataFrame
             row[p] = group[p].iloc[0]
         row["n_ok"] = len(ok)
         row["n_failed"] = len(group) - len(ok)
+        row["notes"] = undefined_notes(ok, metric_columns(realizations))
         for m in metric_columns(realizations):
             values = ok[m].to_numpy(dtype=float)
             n = values.size

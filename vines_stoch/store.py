@@ -6,6 +6,10 @@ import hashlib
 import json
 import os
 import platform
+import socket
+import time
+from collections.abc import Iterator
+from contextlib import contextmanager
 from functools import lru_cache
 from importlib import metadata as importlib_metadata
 from pathlib import Path
@@ -53,6 +57,91 @@ def write_table(frame: pd.DataFrame, path: Path, meta: dict[str, str] | None = N
     tmp = path.with_name(path.name + ".tmp")
     pq.write_table(table, tmp)
     os.replace(tmp, path)
+
+
+class FolderInUse(OSError):
+    """An output folder another live run is writing."""
+
+
+#: The lock file of an output folder.
+LOCK = ".lock"
+
+
+def _started(pid: int) -> str | None:
+    """Start time of process ``pid`` (clock ticks since boot, from ``/proc``), None where unknown:
+    tells a live run from a new process that reuses a dead run's id."""
+    try:
+        with open(f"/proc/{pid}/stat", "rb") as stream:
+            return stream.read().rsplit(b")", 1)[1].split()[19].decode()
+    except (OSError, IndexError):
+        return None
+
+
+def _alive(owner: dict) -> bool:
+    """True when the run described by a lock's content may still be running."""
+    if owner.get("host") != socket.gethostname():
+        return True  # another machine's run: it cannot be checked from here
+    try:
+        os.kill(int(owner["pid"]), 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        pass  # another user's live process
+    except (KeyError, TypeError, ValueError):
+        return False  # not a lock this program wrote
+    started = _started(int(owner["pid"]))
+    return owner.get("started") is None or started is None or started == owner["started"]
+
+
+@contextmanager
+def lock_folder(directory: Path) -> Iterator[None]:
+    """Own ``directory`` for one run: a second run into it while the first lives is refused
+    (``FolderInUse``, naming the process and host); a lock left by a killed run on this host
+    (its process gone) is taken over."""
+    path = directory / LOCK
+    me = {"pid": os.getpid(), "host": socket.gethostname(), "started": _started(os.getpid()),
+          "since": time.strftime("%Y-%m-%d %H:%M:%S")}
+    for _ in range(100):
+        try:
+            fd = os.open(path, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)
+        except FileExistsError:
+            try:
+                text = path.read_text()
+                owner = json.loads(text)
+            except FileNotFoundError:
+                continue  # released meanwhile
+            except (OSError, ValueError):
+                text, owner = None, {}
+            if isinstance(owner, dict) and _alive(owner):
+                raise FolderInUse(f"{directory}: in use by the run of process {owner.get('pid')} on host "
+                                  f"{owner.get('host')} (since {owner.get('since')}); wait for it, or use another "
+                                  f"--out folder (if that run is gone, remove {path})") from None
+            _take_over(path, text)
+            continue
+        with os.fdopen(fd, "w") as stream:
+            json.dump(me, stream)
+        break
+    else:
+        raise FolderInUse(f"{directory}: could not take the lock {path}")
+    try:
+        yield
+    finally:
+        path.unlink(missing_ok=True)
+
+
+def _take_over(path: Path, stale: str | None) -> None:
+    """Remove the lock of a dead run, unless another run took it over meanwhile."""
+    aside = path.with_name(f"{LOCK}.{os.getpid()}")
+    try:
+        os.rename(path, aside)
+    except FileNotFoundError:
+        return
+    if aside.read_text() != stale:  # a live run's fresh lock: put it back, unless a third took the path
+        try:
+            os.link(aside, path)
+        except FileExistsError:
+            pass
+    aside.unlink()
 
 
 def run_key(scenario_text: str, plan: list[tuple[int, int, int]]) -> str:
