@@ -32,6 +32,11 @@ class FieldError(ValueError):
         self.key, self.value, self.rule = key, value, rule
 
 
+def _num(x: float) -> str:
+    """A bound as written in a rule: integers in full, other numbers short."""
+    return str(x) if isinstance(x, int) else f"{x:g}"
+
+
 def _interval(metadata: list[Any], value: Any) -> str | None:
     """The rule of a bounded field; the magnitude limit ``LARGEST`` is named only to a value past it."""
     lo = hi = None
@@ -55,12 +60,12 @@ def _interval(metadata: list[Any], value: Any) -> str | None:
     if lo is None and hi is None:
         return None
     if hi == LARGEST and lo is not None:
-        return f"must be {'>' if lo_open else '>='} {lo:g} and <= {LARGEST:g} (use other units)"
+        return f"must be {'>' if lo_open else '>='} {_num(lo)} and <= {LARGEST:g} (use other units)"
     if hi is None:
-        return f"must be {'>' if lo_open else '>='} {lo:g}"
+        return f"must be {'>' if lo_open else '>='} {_num(lo)}"
     if lo is None:
-        return f"must be {'<' if hi_open else '<='} {hi:g}"
-    return f"must be in {'(' if lo_open else '['}{lo:g}, {hi:g}{')' if hi_open else ']'}"
+        return f"must be {'<' if hi_open else '<='} {_num(hi)}"
+    return f"must be in {'(' if lo_open else '['}{_num(lo)}, {_num(hi)}{')' if hi_open else ']'}"
 
 
 def _constraints(info: Any) -> list[Any]:

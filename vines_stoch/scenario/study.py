@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import copy
 import math
+import os
 import re
 import tomllib
 from pathlib import Path
@@ -182,7 +183,7 @@ class Study:
         for i, load in enumerate(scenario.loads):
             if isinstance(load, _RecordLoad):
                 path = self.directory / load.file
-                key = (path.resolve(), load.format, load.dt)
+                key = (os.path.abspath(path), load.format, load.dt)  # (no resolve: it fails on link loops)
                 if key not in self._records:
                     try:
                         self._records[key] = read_record(path, load.format, load.dt)

@@ -1,0 +1,287 @@
+"""Bad input ends in one clear line, never a traceback; output folders are owned by one run.
+
+Every case goes through the command line's entry point in-process (``cli.main``): the
+property is exit status 2 with a message that names the file (and the key, where there is
+one), or a clean result.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import json
+import os
+import signal
+import socket
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pandas as pd
+import pytest
+
+from vines_stoch import parse_scenario
+from vines_stoch.cli import main
+from vines_stoch.store import LOCK, FolderInUse, lock_folder
+
+from .conftest import two_dof
+
+ROOT = Path(__file__).resolve().parents[1]
+BASE = two_dof() + ('[[loads]]\ntype = "impulse"\nvelocity = 0.5\n'
+                    '[simulation]\nduration = 2.0\ndt = 0.01\n[ensemble]\nrealizations = 2\n')
+
+
+def cli(*args: str) -> tuple[int, str]:
+    """Exit status and standard error of ``vines-stoch ARGS`` run in-process."""
+    err, out = io.StringIO(), io.StringIO()
+    argv = sys.argv
+    sys.argv = ["vines-stoch", *map(str, args)]
+    code = 0
+    try:
+        with contextlib.redirect_stderr(err), contextlib.redirect_stdout(out):
+            main()
+    except SystemExit as exc:
+        code = exc.code if isinstance(exc.code, int) else 1
+    finally:
+        sys.argv = argv
+    return code, err.getvalue()
+
+
+def refused(path: Path, *fragments: str, command: str = "validate") -> str:
+    """Run ``command`` on ``path``; assert exit 2 with one ``error:`` message naming the file and
+    holding every fragment; return the message."""
+    code, err = cli(command, path)
+    assert code == 2, (code, err)
+    assert err.startswith("error: ") and "Traceback" not in err, err
+    assert str(path) in err, err
+    for fragment in fragments:
+        assert fragment in err, (fragment, err)
+    return err
+
+
+def scenario(text: str) -> str:
+    return 'name = "hardening"\n' + text
+
+
+# ------------------------------------------------------------------------------------ types
+
+@pytest.mark.parametrize("line, replacement, fragments", [
+    ("mass = 1.0", 'mass = "1.0"', ("primary.mass = '1.0': must be a number, not a string",)),
+    ("stiffness = 1.0\ndamping = 0.02", "stiffness = true\ndamping = 0.02",
+     ("primary.stiffness = True: must be a number, not true or false",)),
+    ("realizations = 2", "realizations = 2.0", ("ensemble.realizations = 2.0: must be an integer",)),
+    ("realizations = 2", "realizations = 100000000000", ("ensemble.realizations", "must be in [1, 10000000]")),
+    ("duration = 2.0", "duration = 1e12", ("simulation.dt = 0.01", "steps a path", "at most")),
+    ("mass = 1.0", "mass = 1e308", ("primary.mass = 1e+308", "<= 1e+15 (use other units)")),
+    ("velocity = 0.5", "velocity = nan", ("loads.0.velocity = nan: must be a finite number",)),
+    ("realizations = 2", "realizations = 2\nseed = 1.5", ("ensemble.seed = 1.5: must be an integer",)),
+    ("realizations = 2", "realizations = 2\nmax_path_steps = 10.0",
+     ("ensemble.realizations = 2", "path-steps", "raise that if the run is meant")),
+])
+def test_types_and_magnitudes_are_strict(write, line, replacement, fragments):
+    assert line in BASE
+    refused(write(scenario(BASE.replace(line, replacement, 1))), *fragments)
+
+
+def test_values_are_never_converted():
+    """What validation accepts is what runs: a float field given an integer holds a float, and
+    nothing else changes type."""
+    study = parse_scenario(scenario(BASE.replace("mass = 1.0", "mass = 1")))
+    assert type(study.base.primary.mass) is float and study.base.primary.mass == 1.0
+    assert type(study.base.ensemble.realizations) is int
+
+
+@pytest.mark.parametrize("extra, fragments", [
+    ('[uncertain]\n"ensemble.realizations" = { distribution = "uniform", low = 1.0, high = 3.0 }\n',
+     ("uncertain.ensemble.realizations", "integer field")),
+    ('[uncertain]\n"absorbers.0.damping" = { distribution = "normal", mean = 1e15, std = 1e15 }\n',
+     ("uncertain.absorbers.0.damping",)),
+    ('[uncertain]\n"loads.0.velocity" = { distribution = "normal", mean = 1e14, std = 1e14 }\n',
+     ("uncertain.loads.0.velocity", "40 standard deviations", "largest magnitude")),
+    ('[sweep]\n"ensemble.realizations" = [1.0, 2.5]\n', ("sweep.ensemble.realizations", "whole numbers")),
+    ('[sweep]\n"absorbers.0.damping" = { linspace = [0.0, 1.0, 100000000] }\n',
+     ("sweep.absorbers.0.damping.linspace", "at most 10000 points")),
+    ('[sweep]\n"absorbers.0.damping" = { linspace = [0.0, 1.0, 1000] }\n'
+     '"absorbers.0.stiffness" = { linspace = [0.1, 1.0, 1000] }\n', ("sweep", "1000000 points")),
+])
+def test_sweeps_and_distributions_are_checked_before_computing(write, extra, fragments):
+    refused(write(scenario(BASE + extra)), *fragments)
+
+
+def test_integer_fields_sweep_whole_numbers():
+    study = parse_scenario(scenario(BASE + '[sweep]\n"ensemble.realizations" = [1.0, 3.0]\n'))
+    assert [p.ensemble.realizations for p in study.points] == [1, 3]
+
+
+# ------------------------------------------------------------------------------------ sizes
+
+@pytest.mark.parametrize("text, fragments", [
+    ("a = " + "[" * 1000 + "]" * 1000 + "\n", ("nest too deep",)),
+    ("a = " + "{b = " * 1000 + "1" + "}" * 1000 + "\n", ("nest too deep",)),
+    (".".join(["a"] * 100_000) + " = 1\n", ("line 2", "dotted key of more than 12 parts")),
+    ("[" + ".".join(["a"] * 40) + "]\nb = 1\n", ("dotted key",)),
+    ("a = " + "[" * 20 + "]" * 20 + "\n", ("nests more than 12 levels",)),
+])
+def test_nesting_has_a_limit(write, text, fragments):
+    start = time.perf_counter()
+    refused(write(scenario(text)), *fragments)
+    assert time.perf_counter() - start < 10.0  # refused, not parsed for minutes
+
+
+def test_absorber_count_has_a_limit(write):
+    absorber = '[[absorbers]]\ntype = "cubic"\nmass = 0.05\nstiffness = 1.0\n'
+    refused(write(scenario(BASE + absorber * 20_000)), "absorbers: holds 20001 entries; it may hold at most 100")
+
+
+def test_long_values_are_cut_in_messages(write):
+    err = refused(write(scenario(BASE.replace("velocity = 0.5", "velocity = [" + "1.0, " * 5000 + "]"))),
+                  "loads.0.velocity")
+    assert len(err) < 400, err
+
+
+# ------------------------------------------------------------------------------------ files
+
+def test_encodings_and_binary_content(tmp_path):
+    text = scenario(BASE).replace('"hardening"', '"h\u00e9"')
+    cases = {"utf16.toml": (text.encode("utf-16"), "UTF-16 text; save it as UTF-8"),
+             "latin1.toml": (text.encode("latin-1"), "byte 0xE9 is not UTF-8"),
+             "binary.toml": (bytes(range(256)) * 4, "a NUL byte at line 1"),
+             "utf16le.toml": (text.encode("utf-16-le"), "a NUL byte")}
+    for name, (data, fragment) in cases.items():
+        path = tmp_path / name
+        path.write_bytes(data)
+        refused(path, fragment)
+    bom = tmp_path / "bom.toml"
+    bom.write_bytes(b"\xef\xbb\xbf" + text.encode())
+    assert cli("validate", bom)[0] == 0  # a UTF-8 byte-order mark is dropped
+
+
+def test_special_files_are_refused_without_reading(tmp_path):
+    pipe = tmp_path / "pipe.toml"
+    os.mkfifo(pipe)
+    refused(pipe, "is a named pipe, not a file")  # (reading it would block forever)
+    refused(Path("/dev/zero"), "is a device, not a file")
+    refused(tmp_path, "is a folder, not a file")
+    loop = tmp_path / "loop.toml"
+    loop.symlink_to(tmp_path / "loop2.toml")
+    (tmp_path / "loop2.toml").symlink_to(loop)
+    refused(loop, "a loop of symbolic links")
+    refused(tmp_path / "missing.toml", "no such file")
+
+
+RECORD = '[[loads]]\ntype = "force-record"\nfile = "{file}"\ndt = 0.01\n'
+
+
+@pytest.mark.parametrize("file, fragments", [
+    ("missing.txt", ("loads.1.file", "no such file")),
+    ("records", ("is a folder, not a file",)),
+    ("secret.txt", ("line 1", "a token of 39 characters is not a number")),
+    ("empty.AT2", ("NPTS = 0: must be >= 1",)),
+    ("loop.txt", ("a loop of symbolic links",)),
+    ("nul\\u0000.txt", ("holds a NUL byte",)),
+])
+def test_record_files_are_checked_and_never_echoed(tmp_path, file, fragments):
+    (tmp_path / "records").mkdir()
+    secret = "root:x:0:0:root:/root:/bin/bash-content"
+    (tmp_path / "secret.txt").write_text(secret + "\n" + secret + "\n")
+    (tmp_path / "empty.AT2").write_text("title\ndate\nunits\nNPTS=    0, DT=   .0100 SEC\n")
+    (tmp_path / "loop.txt").symlink_to(tmp_path / "loop.txt")
+    path = tmp_path / "s.toml"
+    path.write_text(scenario(BASE + RECORD.format(file=file)))
+    err = refused(path, *fragments)
+    assert "root:" not in err
+
+
+# ------------------------------------------------------------------------------------ runs
+
+def test_validate_imports_no_engine():
+    """``vines-stoch validate`` stays light: no numba, dask, pandas or scipy."""
+    code = ("import sys\nfrom vines_stoch.cli import main\n"
+            "sys.argv = ['vines-stoch', 'validate', 'scenarios/parallel_nes_impulse.toml']\n"
+            "try:\n    main()\nexcept SystemExit as exc:\n    assert not exc.code, exc.code\n"
+            "heavy = [m for m in ('numba', 'dask', 'pandas', 'scipy', 'pyarrow') if m in sys.modules]\n"
+            "assert not heavy, heavy\n")
+    subprocess.run([sys.executable, "-c", code], cwd=ROOT, check=True, capture_output=True)
+
+
+def test_undefined_statistics_say_why(write, tmp_path):
+    """A sweep point whose loads put no energy in: ``edm`` undefined, with the reason noted."""
+    path = write(scenario(BASE + '[sweep]\n"loads.0.velocity" = [0.0, 0.5]\n'))
+    code, err = cli("run", path, "--out", tmp_path / "out", "--quiet", "--workers", "1")
+    assert code == 0, err
+    summary = pd.read_parquet(tmp_path / "out" / "summary.parquet")
+    idle, moving = summary.iloc[0], summary.iloc[1]
+    assert pd.isna(idle["edm_mean"]) and "without input energy" in idle["notes"]
+    assert moving["edm_mean"] > 0 and "input energy" not in moving["notes"]
+
+
+def test_a_scenario_without_loads_is_refused(write):
+    text = scenario(BASE.replace('[[loads]]\ntype = "impulse"\nvelocity = 0.5\n', ""))
+    refused(write(text), "loads: none given")
+
+
+# ------------------------------------------------------------------------------------ locks
+
+def test_lock_refuses_a_live_owner_and_takes_over_a_dead_one(tmp_path):
+    with lock_folder(tmp_path):
+        owner = json.loads((tmp_path / LOCK).read_text())
+        assert owner["pid"] == os.getpid() and owner["host"] == socket.gethostname()
+        with pytest.raises(FolderInUse, match=f"in use by the run of process {os.getpid()}"):
+            with lock_folder(tmp_path):
+                pass
+    assert not (tmp_path / LOCK).exists()
+    dead = subprocess.Popen([sys.executable, "-c", "pass"])
+    dead.wait()
+    (tmp_path / LOCK).write_text(json.dumps({"pid": dead.pid, "host": socket.gethostname(), "started": None}))
+    with lock_folder(tmp_path):  # the dead run's lock is taken over
+        assert json.loads((tmp_path / LOCK).read_text())["pid"] == os.getpid()
+
+
+SLOW = scenario(two_dof() + '[[loads]]\ntype = "white-noise"\nintensity = 0.1\n'
+                '[simulation]\nduration = 1000.0\ndt = 0.001\n[ensemble]\nrealizations = {n}\nchunk = 1\n')
+
+
+def _start(path: Path, out: Path, *extra: str) -> subprocess.Popen:
+    return subprocess.Popen([sys.executable, "-m", "vines_stoch.cli", "run", str(path), "--out", str(out), "--quiet",
+                             "--workers", "1", *extra], cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            text=True)
+
+
+def _wait_for_parts(out: Path, count: int, process: subprocess.Popen) -> None:
+    deadline = time.monotonic() + 300
+    while len(list((out / "parts").glob("point*.parquet"))) < count:
+        assert process.poll() is None, process.communicate()
+        assert time.monotonic() < deadline
+        time.sleep(0.05)
+
+
+def test_two_runs_into_one_folder_and_a_killed_run_resumed(tmp_path):
+    """Two processes: the second run into a folder in use is refused and changes nothing; a run
+    killed with SIGKILL leaves its lock, which --resume takes over, and the resumed results
+    equal those of a run never interrupted."""
+    first, second = tmp_path / "first.toml", tmp_path / "second.toml"
+    first.write_text(SLOW.format(n=200))
+    second.write_text(SLOW.format(n=200).replace("intensity = 0.1", "intensity = 0.2"))
+    out = tmp_path / "out"
+    a = _start(first, out)
+    _wait_for_parts(out, 2, a)
+    b = _start(second, out)
+    _, err = b.communicate(timeout=120)
+    assert b.returncode == 2 and "in use by the run of process" in err and str(a.pid) in err, err
+    a.send_signal(signal.SIGKILL)
+    a.wait()
+    assert (out / LOCK).exists()  # left behind by the killed run
+    kept = len(list((out / "parts").glob("point*.parquet")))
+    assert 2 <= kept < 200
+    resumed = _start(first, out, "--resume")
+    _, err = resumed.communicate(timeout=300)
+    assert resumed.returncode == 0, err
+    assert not (out / LOCK).exists()
+    clean = _start(first, tmp_path / "clean")
+    _, err = clean.communicate(timeout=300)
+    assert clean.returncode == 0, err
+    got = pd.read_parquet(out / "realizations.parquet")
+    want = pd.read_parquet(tmp_path / "clean" / "realizations.parquet")
+    pd.testing.assert_frame_equal(got.drop(columns=["wall_time"], errors="ignore"),
+                                  want.drop(columns=["wall_time"], errors="ignore"))
