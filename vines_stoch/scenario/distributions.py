@@ -11,9 +11,9 @@ from pydantic import Field, model_validator
 from .errors import FieldError
 from .fields import Positive, Real, _Model
 
-#: Standard deviations of a normal variable that its draws reach in practice (beyond them the
-#: probability is below 1e-300).
-REACH = 40.0
+#: Standard deviations of a normal variable that its draws reach in practice: beyond them the
+#: probability is 1.5e-23 a draw (1e-12 in the largest run the limits allow, 1e11 draws).
+REACH = 10.0
 
 
 class NormalDistribution(_Model):

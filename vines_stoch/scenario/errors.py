@@ -240,6 +240,8 @@ def quote(value: Any) -> str:
 def format_error(source: str, key: str, value: Any, rule: str) -> str:
     """One line: ``source: key = value: rule`` (without ``= value`` where it is missing, the
     value cut to ``QUOTE`` characters)."""
+    if len(key) > QUOTE:
+        key = key[:QUOTE - 3] + "..."
     where = f"{source}: {key}" if key else source
     if value is MISSING or value is _SIZED:
         return f"{where}: {rule}"

@@ -35,9 +35,6 @@ class Scenario(_Model):
         sim = self.simulation
         if sim.dt > sim.duration:
             raise FieldError("simulation.dt", sim.dt, f"must be <= simulation.duration ({sim.duration:g})")
-        if not self.loads:
-            raise FieldError("loads", None, "none given: nothing would move the structure (no input energy); "
-                             "add a load (SCENARIOS.md)")
         if sim.duration / sim.dt > MAX_STEPS:
             raise FieldError("simulation.dt", sim.dt, f"gives {sim.duration / sim.dt:.3g} steps a path (duration / dt); "
                              f"at most {MAX_STEPS:.0e}")

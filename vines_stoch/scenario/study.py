@@ -16,7 +16,7 @@ import numpy as np
 from .. import schemes
 from ..records import RecordError, read_record
 from ..textfile import TextFileError, read_text
-from .distributions import LognormalDistribution
+from .distributions import REACH, LognormalDistribution
 from .errors import MISSING, ScenarioError, format_error, validate
 from .fields import LARGEST, MAX_DEPTH
 from .loads import _RecordLoad
@@ -147,7 +147,7 @@ class Study:
         for end in dist.reach():
             if not abs(end) <= LARGEST:
                 raise ScenarioError(format_error(source, where, spec, f"{dist.distribution} draws reach {end:.3g} "
-                                                 f"(40 standard deviations), past the largest magnitude {LARGEST:g}"))
+                                                 f"({REACH:g} standard deviations), past the largest magnitude {LARGEST:g}"))
 
     def _check_optimize(self, data: dict[str, Any], source: str) -> None:
         """Optimised parameters: numeric fields, neither swept nor uncertain, valid at both bounds."""

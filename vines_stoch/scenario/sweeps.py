@@ -19,7 +19,7 @@ def _grid(key: str, spec: Any, source: str) -> list[float]:
     elif isinstance(spec, dict) and len(spec) == 1 and next(iter(spec)) in ("linspace", "logspace"):
         kind, args = next(iter(spec.items()))
         if not (isinstance(args, list) and len(args) == 3 and all(isinstance(a, (int, float)) for a in args)
-                and isinstance(args[2], int) and args[2] >= 1):
+                and isinstance(args[2], int) and not isinstance(args[2], bool) and args[2] >= 1):
             raise ScenarioError(format_error(source, f"{where}.{kind}", args, "must be [first, last, count] with count an integer >= 1"))
         first, last, count = args
         if count > MAX_POINTS:
@@ -49,10 +49,10 @@ def set_path(data: dict[str, Any], key: str, value: Any) -> None:
     parts = key.split(".")
     node: Any = data
     for part in parts[:-1]:
-        node = node[int(part)] if isinstance(node, list) else node[part]
+        node = node[_index(part)] if isinstance(node, list) else node[part]
     last = parts[-1]
     if isinstance(node, list):
-        node[int(last)] = value
+        node[_index(last)] = value
     else:
         node[last] = value
 
@@ -61,8 +61,15 @@ def get_path(data: dict[str, Any], key: str) -> Any:
     """The value addressed by a dotted path, or raise KeyError/IndexError/ValueError."""
     node: Any = data
     for part in key.split("."):
-        node = node[int(part)] if isinstance(node, list) else node[part]
+        node = node[_index(part)] if isinstance(node, list) else node[part]
     return node
+
+
+def _index(part: str) -> int:
+    """A list index of a dotted path: digits only (``-1`` names nothing)."""
+    if not part.isdigit():
+        raise ValueError(f"{part!r} is not a list index")
+    return int(part)
 
 
 
