@@ -81,7 +81,8 @@ def bundles(scene, x: np.ndarray, v: np.ndarray, fl: tuple, normals: np.ndarray,
             samples: np.ndarray, history: np.ndarray, stride: int, gens: tuple) -> tuple:
     """The kernels' arguments as named bundles: bodies (masses, storey stiffnesses and dashpots,
     mass-proportional dashpots, state), absorbers (kinds, hosts, rows), loads, filters, noise
-    (intensity per floor, replayed normals), grid, outputs, streams."""
+    (intensity per floor, replayed normals), grid, outputs; then the three generators of
+    ``gens`` (increments, bridge, filter) as arguments of their own (see ``kdk.kdk_kernel``)."""
     return (
         (scene.mass, scene.storey_k, scene.storey_c, scene.floor_c, x, v),
         (scene.kind, scene.host, scene.rows),
@@ -90,7 +91,7 @@ def bundles(scene, x: np.ndarray, v: np.ndarray, fl: tuple, normals: np.ndarray,
         (scene.sigma, normals),
         (scene.dt, scene.n_steps, scene.i0, scene.period, scene.sample_from, stride),
         (out, samples, history),
-        gens,
+        *gens,
     )
 
 

@@ -149,8 +149,9 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
     host floors, parameter rows: ``physics.LAWS``), ``ex`` and ``fl`` (loads and filters,
     ``kernels/loads.py``), ``noise`` (white-noise intensity per floor, replayed normals),
     ``grid`` (time grid, metrics window, Poincare and history grids), ``outputs`` (metric
-    vector, Poincare samples, history rows) and ``streams`` (generators of the step
-    increments, the Brownian-bridge draws and the filter noise; ``None`` where unused).
+    vector, Poincare samples, history rows), then the generators of the step increments, of
+    the Brownian-bridge draws and of the filter noise (``None`` where unused; three arguments,
+    not a bundle: numba types a tuple holding a Generator in Python, about 20 us a call).
 
     With ``replay``, the step increments are ``sigma_k sqrt(dt) normals[...]`` (a given Brownian
     path, one normal per noisy floor and step, for convergence studies) instead of draws.
@@ -172,7 +173,7 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
     ROOT3 = np.sqrt(3.0)
 
     @njit(**KERNEL)
-    def kernel(bodies, absorbers, ex, fl, noise, grid, outputs, streams):
+    def kernel(bodies, absorbers, ex, fl, noise, grid, outputs, gen, gen_bridge, gen_filter):
         nb = NB
         nf = NF
         mass, storey_k, storey_c, floor_c, state_x, state_v = bodies
@@ -182,7 +183,6 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
         sigma, normals = noise
         dt, n_steps, i0, period, sample_from, stride = grid
         out, samples, history = outputs
-        gen, gen_bridge, gen_filter = streams
         na = kind.shape[0]
         nz = z.shape[0]
         # the state (copied back at the end) and the scratch, on the stack (see ``common.scratch``)

@@ -219,13 +219,13 @@ def contact_step(x, v, nf, mass, host, rows, touching) -> float:
 def rk4_kernel(n_bodies: int, n_floors: int, has_impact: bool, has_hertz: bool, sampling: bool, piecewise: bool):
     """The RK4 loop specialised to a scene's structure (number of bodies and of floors, impact
     absorbers, Hertz absorbers, Poincare sampling for the regime, loads with kinks or jumps:
-    ``Scene.kernel_flags``).  It takes the bundles of ``kdk.kdk_kernel`` (no noise, no
-    streams)."""
+    ``Scene.kernel_flags``).  It takes the arguments of ``kdk.kdk_kernel`` (no noise, no
+    generators)."""
     NB = n_bodies
     NF = n_floors
 
     @njit(**KERNEL)
-    def kernel(bodies, absorbers, ex, fl, noise, grid, outputs, streams):
+    def kernel(bodies, absorbers, ex, fl, noise, grid, outputs, gen, gen_bridge, gen_filter):
         nb = NB
         nf = NF
         mass, storey_k, storey_c, floor_c, state_x, state_v = bodies
