@@ -2,9 +2,14 @@
 
 from __future__ import annotations
 
+import contextlib
+import io
+import sys
+
 import pytest
 
 from vines_stoch import parse_scenario
+from vines_stoch.cli import main
 from vines_stoch.kernels import SLOTS, simulate
 from vines_stoch.scene import build_scene
 
@@ -36,3 +41,19 @@ def write(tmp_path):
         return path
 
     return _write
+
+
+def cli(*args: str) -> tuple[int, str]:
+    """Exit status and standard error of ``vines-stoch ARGS`` run in-process."""
+    err, out = io.StringIO(), io.StringIO()
+    argv = sys.argv
+    sys.argv = ["vines-stoch", *map(str, args)]
+    code = 0
+    try:
+        with contextlib.redirect_stderr(err), contextlib.redirect_stdout(out):
+            main()
+    except SystemExit as exc:
+        code = exc.code if isinstance(exc.code, int) else 1
+    finally:
+        sys.argv = argv
+    return code, err.getvalue()

@@ -14,7 +14,7 @@ from pathlib import Path
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from .test_hardening import cli
+from .conftest import cli
 
 SCENARIOS = Path(__file__).resolve().parents[1] / "scenarios"
 EXAMPLES = sorted(p for p in SCENARIOS.glob("*.toml") if p.name != "elcentro.toml")

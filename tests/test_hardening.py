@@ -7,8 +7,6 @@ one), or a clean result.
 
 from __future__ import annotations
 
-import contextlib
-import io
 import json
 import os
 import signal
@@ -22,30 +20,13 @@ import pandas as pd
 import pytest
 
 from vines_stoch import parse_scenario
-from vines_stoch.cli import main
 from vines_stoch.store import LOCK, FolderInUse, lock_folder
 
-from .conftest import two_dof
+from .conftest import cli, two_dof
 
 ROOT = Path(__file__).resolve().parents[1]
 BASE = two_dof() + ('[[loads]]\ntype = "impulse"\nvelocity = 0.5\n'
                     '[simulation]\nduration = 2.0\ndt = 0.01\n[ensemble]\nrealizations = 2\n')
-
-
-def cli(*args: str) -> tuple[int, str]:
-    """Exit status and standard error of ``vines-stoch ARGS`` run in-process."""
-    err, out = io.StringIO(), io.StringIO()
-    argv = sys.argv
-    sys.argv = ["vines-stoch", *map(str, args)]
-    code = 0
-    try:
-        with contextlib.redirect_stderr(err), contextlib.redirect_stdout(out):
-            main()
-    except SystemExit as exc:
-        code = exc.code if isinstance(exc.code, int) else 1
-    finally:
-        sys.argv = argv
-    return code, err.getvalue()
 
 
 def refused(path: Path, *fragments: str, command: str = "validate") -> str:

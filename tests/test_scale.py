@@ -20,7 +20,7 @@ from vines_stoch.kernels import simulate
 from vines_stoch.scene import build_scene
 from vines_stoch.store import read_metadata
 
-from .conftest import two_dof
+from .conftest import cli, two_dof
 
 TEXT = """
 name = "scale"
@@ -165,7 +165,8 @@ def test_interrupted_run_resumes_history_from_its_checkpoint(tmp_path, monkeypat
                                   check_exact=True)
 
 
-def cli(*args: str) -> subprocess.Popen:
+def spawn(*args: str) -> subprocess.Popen:
+    """``vines-stoch ARGS`` as a process of its own."""
     return subprocess.Popen([sys.executable, "-m", "vines_stoch.cli", *args], stdout=subprocess.DEVNULL,
                             stderr=subprocess.PIPE, text=True)
 
@@ -176,10 +177,10 @@ def test_sigkill_midway_then_resume_is_bitwise_identical(tmp_path):
     path = tmp_path / "kill.toml"
     path.write_text(scenario(n=240, chunk=3, duration=60.0, dt=1e-3).replace(
         "history = { points = 51, quantiles = [0.05, 0.5, 0.95] }", ""))
-    reference = cli("run", str(path), "--out", str(tmp_path / "ref"), "--workers", "1", "--quiet")
+    reference = spawn("run", str(path), "--out", str(tmp_path / "ref"), "--workers", "1", "--quiet")
     assert reference.wait(timeout=600) == 0, reference.stderr.read()
 
-    victim = cli("run", str(path), "--out", str(tmp_path / "cut"), "--workers", "1", "--quiet")
+    victim = spawn("run", str(path), "--out", str(tmp_path / "cut"), "--workers", "1", "--quiet")
     parts = tmp_path / "cut" / "parts"
     deadline = time.monotonic() + 300
     while len(list(parts.glob("point*.parquet"))) < 5 and victim.poll() is None and time.monotonic() < deadline:
@@ -190,7 +191,7 @@ def test_sigkill_midway_then_resume_is_bitwise_identical(tmp_path):
     assert victim.returncode == -signal.SIGKILL
     assert 5 <= finished < 80 and not (tmp_path / "cut" / "realizations.parquet").exists()
 
-    resumed = cli("run", str(path), "--out", str(tmp_path / "cut"), "--workers", "1", "--quiet", "--resume")
+    resumed = spawn("run", str(path), "--out", str(tmp_path / "cut"), "--workers", "1", "--quiet", "--resume")
     assert resumed.wait(timeout=600) == 0, resumed.stderr.read()
     assert (tmp_path / "cut" / "realizations.parquet").read_bytes() == (tmp_path / "ref" / "realizations.parquet").read_bytes()
 
@@ -226,3 +227,30 @@ def test_distributed_cluster_survives_a_killed_worker(tmp_path):
     meta = read_metadata(tmp_path / "distributed" / "realizations.parquet")
     assert meta["vines_stoch.scheduler"] == f"dask.distributed at {cluster.scheduler_address}"
     assert read_metadata(tmp_path / "embedded" / "realizations.parquet")["vines_stoch.scheduler"] == "embedded"
+
+
+def test_scheduler_file(tmp_path):
+    """``--scheduler-file``: the JSON a ``dask scheduler --scheduler-file`` writes names the
+    scheduler; the run is the embedded run's, its metadata and standard error name the
+    cluster (and its dashboard)."""
+    import json
+
+    from dask.distributed import LocalCluster
+
+    path = tmp_path / "s.toml"
+    path.write_text(scenario(n=8, chunk=2))
+    code, err = cli("run", path, "--out", tmp_path / "embedded", "--quiet", "--workers", "1")
+    assert code == 0, err
+    with LocalCluster(n_workers=1, threads_per_worker=1, processes=True, dashboard_address=":0",
+                      host="127.0.0.1") as cluster:
+        file = tmp_path / "scheduler.json"
+        file.write_text(json.dumps({"address": cluster.scheduler_address}))
+        code, err = cli("run", path, "--out", tmp_path / "cluster", "--scheduler-file", file)
+        assert code == 0, err
+        assert f"dask.distributed at {cluster.scheduler_address}, dashboard http" in err
+    meta = read_metadata(tmp_path / "cluster" / "realizations.parquet")
+    assert meta["vines_stoch.scheduler"] == f"dask.distributed at {cluster.scheduler_address}"
+    pd.testing.assert_frame_equal(pd.read_parquet(tmp_path / "embedded" / "realizations.parquet"),
+                                  pd.read_parquet(tmp_path / "cluster" / "realizations.parquet"), check_exact=True)
+    code, err = cli("run", path, "--scheduler-file", tmp_path / "missing.json")
+    assert code == 2 and "no such file" in err

@@ -28,6 +28,7 @@ def run(
     chunk: Optional[int] = typer.Option(None, "--chunk", min=0, help="Realisations per task (overrides [ensemble] chunk; 0 = automatic)."),
     resume: bool = typer.Option(False, "--resume", help="Keep the chunks an interrupted run of the same scenario finished."),
     scheduler: Optional[str] = typer.Option(None, "--scheduler", help="Address of a running dask.distributed scheduler (e.g. tcp://10.0.0.5:8786)."),
+    scheduler_file: Optional[Path] = typer.Option(None, "--scheduler-file", help="Scheduler file of a running dask.distributed scheduler (dask scheduler --scheduler-file FILE)."),
     quiet: bool = typer.Option(False, "--quiet", help="No progress or summary output."),
 ) -> None:
     """Run a scenario and write realizations.parquet and summary.parquet."""
@@ -37,6 +38,13 @@ def run(
         study = load_scenario(scenario)
     except ScenarioError as exc:
         _fail(str(exc))
+    if scheduler_file is not None:
+        if scheduler is not None:
+            _fail("give --scheduler or --scheduler-file, not both")
+        if not scheduler_file.is_file():
+            _fail(f"--scheduler-file {scheduler_file}: no such file (start the scheduler with "
+                  "dask scheduler --scheduler-file FILE first)")
+        scheduler = str(scheduler_file)
     directory = out or study.base.output.directory or f"results/{study.name}"
     try:
         realizations, summary = run_study(study, out, workers=workers, chunk=chunk, resume=resume,

@@ -17,6 +17,7 @@ import json
 import math
 import os
 import pickle
+import sys
 import time
 from contextlib import ExitStack, contextmanager
 from dataclasses import dataclass, field
@@ -181,15 +182,21 @@ def _stopping_count(edm: np.ndarray, start: int, target: float) -> int | None:
 
 
 @contextmanager
-def _client(scheduler: str) -> Iterator[object]:
-    """A ``dask.distributed`` client connected to ``scheduler``."""
+def _client(scheduler: str, announce: bool = False) -> Iterator[object]:
+    """A ``dask.distributed`` client connected to ``scheduler``: an address, or the path of a
+    scheduler file (the JSON ``dask scheduler --scheduler-file`` writes); with ``announce``,
+    the dashboard's address goes to standard error."""
     from dask.distributed import Client
 
+    by_file = "://" not in scheduler and Path(scheduler).is_file()
     try:
-        client = Client(scheduler, timeout="30s")
-    except (OSError, TimeoutError) as exc:
-        raise ValueError(f"--scheduler {scheduler}: {exc}") from None
+        client = Client(scheduler_file=scheduler, timeout="30s") if by_file else Client(scheduler, timeout="30s")
+    except (OSError, TimeoutError, ValueError, KeyError) as exc:
+        raise ValueError(f"{'--scheduler-file' if by_file else '--scheduler'} {scheduler}: {exc}") from None
     with client:
+        if announce:
+            print(f"dask.distributed at {client.scheduler.address}, dashboard {client.dashboard_link}",
+                  file=sys.stderr)
         yield client
 
 
@@ -227,7 +234,8 @@ def run(study: Study, directory: str | Path | None = None, *, workers: int | Non
     the scenario's output directory) and return realisations and summary as DataFrames.
 
     ``workers``: threads of the embedded scheduler (default: all cores).  ``scheduler``: the
-    address of a running ``dask.distributed`` scheduler to use instead.  ``resume``: keep what
+    address of a running ``dask.distributed`` scheduler to use instead, or the path of its
+    scheduler file.  ``resume``: keep what
     a previous, interrupted run of the same scenario finished.  ``checkpoint_seconds``: how
     often the history statistics are saved for a resume.
 
@@ -301,8 +309,9 @@ def _run(study: Study, directory: Path, workers: int | None, chunk: int | None, 
     with ExitStack() as stack:
         bar = stack.enter_context(Progress(total, done, enabled=progress))
         if scheduler:
-            client = stack.enter_context(_client(scheduler))
-            where, results = f"dask.distributed at {scheduler}", schedulers.distributed(client, todo, call, skip)
+            client = stack.enter_context(_client(scheduler, progress))
+            where = f"dask.distributed at {client.scheduler.address}"
+            results = schedulers.distributed(client, todo, call, skip)
         else:
             where, results = "embedded", schedulers.embedded(todo, call, skip, workers or os.cpu_count() or 1)
         folding = False
