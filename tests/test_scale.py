@@ -254,3 +254,42 @@ def test_scheduler_file(tmp_path):
                                   pd.read_parquet(tmp_path / "cluster" / "realizations.parquet"), check_exact=True)
     code, err = cli("run", path, "--scheduler-file", tmp_path / "missing.json")
     assert code == 2 and "no such file" in err
+
+
+def test_shards_then_resume_give_the_one_run(tmp_path):
+    """A study split with ``--shard 0/2`` and ``--shard 1/2`` (each runs every other chunk into
+    the same folder, no results) and then ``--resume`` gives byte for byte the results of one
+    run; shards share the folder with each other but not with a whole run; history studies
+    are refused."""
+    path = tmp_path / "s.toml"
+    path.write_text(scenario(n=24, chunk=2).replace(
+        "history = { points = 51, quantiles = [0.05, 0.5, 0.95] }", ""))
+    one, split = tmp_path / "one", tmp_path / "split"
+    assert cli("run", path, "--out", one, "--quiet", "--workers", "1")[0] == 0
+    code, err = cli("run", path, "--out", split, "--workers", "1", "--shard", "0/2")
+    assert code == 0 and "once every shard has finished" in err, err
+    assert not (split / "realizations.parquet").exists()
+    assert len(list((split / "parts").glob("point*.parquet"))) == 6  # 12 chunks, every other one
+    assert cli("run", path, "--out", split, "--quiet", "--workers", "1", "--shard", "1/2")[0] == 0
+    assert len(list((split / "parts").glob("point*.parquet"))) == 12
+    assert cli("run", path, "--out", split, "--quiet", "--workers", "1", "--resume")[0] == 0
+    for name in ("realizations.parquet", "summary.parquet"):
+        assert (split / name).read_bytes() == (one / name).read_bytes()
+    assert cli("run", path, "--out", split, "--shard", "2/2")[0] == 2
+    with_history = tmp_path / "h.toml"
+    with_history.write_text(scenario(n=4))
+    code, err = cli("run", with_history, "--out", tmp_path / "h", "--shard", "0/2")
+    assert code == 2 and "history statistics" in err
+
+
+def test_shard_locks_share_a_folder_with_each_other_only(tmp_path):
+    from vines_stoch.store import FolderInUse, lock_folder
+
+    with lock_folder(tmp_path, "shard-0-of-2"), lock_folder(tmp_path, "shard-1-of-2"):
+        with pytest.raises(FolderInUse, match="in use by the shard-0-of-2 run"):
+            with lock_folder(tmp_path):
+                pass
+    with lock_folder(tmp_path):
+        with pytest.raises(FolderInUse, match="in use by the run of process"):
+            with lock_folder(tmp_path, "shard-0-of-2"):
+                pass

@@ -29,6 +29,7 @@ def run(
     resume: bool = typer.Option(False, "--resume", help="Keep the chunks an interrupted run of the same scenario finished."),
     scheduler: Optional[str] = typer.Option(None, "--scheduler", help="Address of a running dask.distributed scheduler (e.g. tcp://10.0.0.5:8786)."),
     scheduler_file: Optional[Path] = typer.Option(None, "--scheduler-file", help="Scheduler file of a running dask.distributed scheduler (dask scheduler --scheduler-file FILE)."),
+    shard: Optional[str] = typer.Option(None, "--shard", help="I/N: run only the I-th of N shares of the chunks (job arrays); then --resume writes the results."),
     quiet: bool = typer.Option(False, "--quiet", help="No progress or summary output."),
 ) -> None:
     """Run a scenario and write realizations.parquet and summary.parquet."""
@@ -45,18 +46,30 @@ def run(
             _fail(f"--scheduler-file {scheduler_file}: no such file (start the scheduler with "
                   "dask scheduler --scheduler-file FILE first)")
         scheduler = str(scheduler_file)
+    share = None
+    if shard is not None:
+        i, _, n = shard.partition("/")
+        if not (i.isdigit() and n.isdigit() and int(i) < int(n)):
+            _fail(f"--shard {shard}: give I/N with 0 <= I < N (e.g. --shard 0/4)")
+        share = (int(i), int(n))
     directory = out or study.base.output.directory or f"results/{study.name}"
     try:
-        realizations, summary = run_study(study, out, workers=workers, chunk=chunk, resume=resume,
-                                          scheduler=scheduler, progress=not quiet)
+        result = run_study(study, out, workers=workers, chunk=chunk, resume=resume,
+                                          scheduler=scheduler, progress=not quiet, shard=share)
     except KeyboardInterrupt:
         typer.echo(f"\ninterrupted: finished chunks are kept in {directory}/parts; "
                    f"run again with --resume to complete", err=True)
         raise typer.Exit(130)
     except (OSError, ValueError, TimeoutError) as exc:
         _fail(str(exc))
+    if share is not None:
+        if not quiet:
+            typer.echo(f"shard {shard}: its chunks are in {directory}/parts; once every shard has finished, run "
+                       "again with --resume (no --shard) to write the results", err=True)
+        return
     if quiet:
         return
+    realizations, summary = result
     typer.echo(f"results: {directory}/realizations.parquet ({len(realizations)} rows), "
                f"{directory}/summary.parquet ({len(summary)} rows)"
                + (f", {directory}/history.parquet" if study.base.simulation.history else ""))

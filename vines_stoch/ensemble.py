@@ -227,8 +227,8 @@ class _Checkpoint:
 
 def run(study: Study, directory: str | Path | None = None, *, workers: int | None = None,
         chunk: int | None = None, realizations: int | None = None, resume: bool = False,
-        scheduler: str | None = None, progress: bool = False,
-        checkpoint_seconds: float = 30.0) -> tuple[pd.DataFrame, pd.DataFrame]:
+        scheduler: str | None = None, progress: bool = False, checkpoint_seconds: float = 30.0,
+        shard: tuple[int, int] | None = None) -> tuple[pd.DataFrame, pd.DataFrame] | None:
     """Run a validated study; write ``realizations.parquet``, ``summary.parquet`` (and
     ``history.parquet`` when ``simulation.history`` asks for it) into ``directory`` (default:
     the scenario's output directory) and return realisations and summary as DataFrames.
@@ -237,7 +237,10 @@ def run(study: Study, directory: str | Path | None = None, *, workers: int | Non
     address of a running ``dask.distributed`` scheduler to use instead, or the path of its
     scheduler file.  ``resume``: keep what
     a previous, interrupted run of the same scenario finished.  ``checkpoint_seconds``: how
-    often the history statistics are saved for a resume.
+    often the history statistics are saved for a resume.  ``shard = (i, n)``: run only the
+    chunks whose index in the plan is ``i`` modulo ``n`` into the folder, write no results and
+    return None (for job arrays: shards run side by side, then a ``resume`` run writes the
+    results from their parts; not with history statistics, which need the paths).
 
     The directory is owned by one run at a time (``store.lock_folder``): a run into a folder
     another live run writes is refused with ``store.FolderInUse``.
@@ -247,13 +250,20 @@ def run(study: Study, directory: str | Path | None = None, *, workers: int | Non
         directory.mkdir(parents=True, exist_ok=True)
     except FileExistsError:
         raise NotADirectoryError(f"{directory}: exists and is not a folder") from None
-    with lock_folder(directory):
-        return _run(study, directory, workers, chunk, realizations, resume, scheduler, progress, checkpoint_seconds)
+    if shard is not None:
+        if not 0 <= shard[0] < shard[1]:
+            raise ValueError(f"--shard {shard[0]}/{shard[1]}: give I/N with 0 <= I < N")
+        if study.base.simulation.history:
+            raise ValueError(f"--shard: {study.source} asks for history statistics, which are folded from the "
+                             "paths of every realisation in order and cannot be split into shards; run it in one job")
+    with lock_folder(directory, None if shard is None else f"shard-{shard[0]}-of-{shard[1]}"):
+        return _run(study, directory, workers, chunk, realizations, resume, scheduler, progress, checkpoint_seconds,
+                    shard)
 
 
 def _run(study: Study, directory: Path, workers: int | None, chunk: int | None, realizations: int | None,
-         resume: bool, scheduler: str | None, progress: bool,
-         checkpoint_seconds: float) -> tuple[pd.DataFrame, pd.DataFrame]:
+         resume: bool, scheduler: str | None, progress: bool, checkpoint_seconds: float,
+         shard: tuple[int, int] | None) -> tuple[pd.DataFrame, pd.DataFrame] | None:
     """``run`` in a directory it owns."""
     base = study.base
     the_plan = plan(study, chunk, realizations)
@@ -263,13 +273,16 @@ def _run(study: Study, directory: Path, workers: int | None, chunk: int | None, 
     parts = directory / "parts"
     parts.mkdir(parents=True, exist_ok=True)
     manifest = parts / "manifest.json"
-    if resume and manifest.exists() and json.loads(manifest.read_text()).get("key") != key:
-        raise ValueError(f"{directory}: --resume found parts of a different scenario or chunk plan; "
-                         "use another --out directory or run without --resume")
-    if not resume:
+    keep = resume or shard is not None  # the parts already there are this study's
+    if keep and manifest.exists() and json.loads(manifest.read_text()).get("key") != key:
+        raise ValueError(f"{directory}: --{'resume' if resume else 'shard'} found parts of a different scenario or "
+                         f"chunk plan; use another --out directory{'' if shard else ' or run without --resume'}")
+    if not keep:
         for old in parts.glob("*"):
             old.unlink()
-    manifest.write_text(json.dumps({"key": key, "chunks": len(the_plan.chunks)}))
+    tmp = manifest.with_name(f"manifest.json.{os.getpid()}")  # (shards write it side by side)
+    tmp.write_text(json.dumps({"key": key, "chunks": len(the_plan.chunks)}))
+    os.replace(tmp, manifest)
     checkpoint = _Checkpoint(parts / "history.pickle", key, checkpoint_seconds)
 
     states = checkpoint.load() if (resume and spec) else None
@@ -296,8 +309,9 @@ def _run(study: Study, directory: Path, workers: int | None, chunk: int | None, 
                 state.fold(frame, paths, target)
 
     fold_ready()
-    todo = [c for c in the_plan.chunks if c not in reusable]
-    total = sum(c[2] - c[1] for c in the_plan.chunks)
+    mine = the_plan.chunks if shard is None else the_plan.chunks[shard[0]::shard[1]]
+    todo = [c for c in mine if c not in reusable]
+    total = sum(c[2] - c[1] for c in mine)
     done = total - sum(c[2] - c[1] for c in todo)
     def call(c: tuple[int, int, int]) -> tuple:
         return run_chunk, (the_plan.scenes[c[0]], seed, *c, grids[c[0]], study if base.uncertain else None,
@@ -332,6 +346,8 @@ def _run(study: Study, directory: Path, workers: int | None, chunk: int | None, 
             if spec and not folding:  # keep what was folded, unless interrupted mid-fold
                 checkpoint.save(states, force=True)
             raise
+    if shard is not None:
+        return None
     meta = provenance(study.text, study.source, seed, where)
     return _consolidate(study, the_plan, states, directory, meta, grids, spec)
 

@@ -79,6 +79,8 @@ def _started(pid: int) -> str | None:
 
 def _alive(owner: dict) -> bool:
     """True when the run described by a lock's content may still be running."""
+    if "pid" not in owner or "host" not in owner:
+        return False  # not a lock this program wrote (empty, cut short)
     if owner.get("host") != socket.gethostname():
         return True  # another machine's run: it cannot be checked from here
     try:
@@ -93,37 +95,64 @@ def _alive(owner: dict) -> bool:
     return owner.get("started") is None or started is None or started == owner["started"]
 
 
-@contextmanager
-def lock_folder(directory: Path) -> Iterator[None]:
-    """Own ``directory`` for one run: a second run into it while the first lives is refused
-    (``FolderInUse``, naming the process and host); a lock left by a killed run on this host
-    (its process gone) is taken over."""
-    path = directory / LOCK
+def _owner(path: Path) -> tuple[str | None, dict] | None:
+    """``(text, owner)`` of a lock file, None where there is none."""
+    try:
+        text = path.read_text()
+    except FileNotFoundError:
+        return None
+    except OSError:
+        return None, {}
+    try:
+        owner = json.loads(text)
+    except ValueError:
+        owner = {}
+    return text, owner if isinstance(owner, dict) else {}
+
+
+def _in_use(directory: Path, path: Path, owner: dict) -> FolderInUse:
+    what = "the run" if path.name == LOCK else f"the {path.name.removeprefix(LOCK + '.')} run"
+    return FolderInUse(f"{directory}: in use by {what} of process {owner.get('pid')} on host {owner.get('host')} "
+                       f"(since {owner.get('since')}); wait for it, or use another --out folder (if that run is "
+                       f"gone, remove {path})")
+
+
+def _acquire(directory: Path, path: Path) -> None:
+    """Create the lock file ``path``, taking over a dead run's; FolderInUse if a live run holds it."""
     me = {"pid": os.getpid(), "host": socket.gethostname(), "started": _started(os.getpid()),
           "since": time.strftime("%Y-%m-%d %H:%M:%S")}
     for _ in range(100):
         try:
             fd = os.open(path, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)
         except FileExistsError:
-            try:
-                text = path.read_text()
-                owner = json.loads(text)
-            except FileNotFoundError:
+            found = _owner(path)
+            if found is None:
                 continue  # released meanwhile
-            except (OSError, ValueError):
-                text, owner = None, {}
-            if isinstance(owner, dict) and _alive(owner):
-                raise FolderInUse(f"{directory}: in use by the run of process {owner.get('pid')} on host "
-                                  f"{owner.get('host')} (since {owner.get('since')}); wait for it, or use another "
-                                  f"--out folder (if that run is gone, remove {path})") from None
+            text, owner = found
+            if _alive(owner):
+                raise _in_use(directory, path, owner) from None
             _take_over(path, text)
             continue
         with os.fdopen(fd, "w") as stream:
             json.dump(me, stream)
-        break
-    else:
-        raise FolderInUse(f"{directory}: could not take the lock {path}")
+        return
+    raise FolderInUse(f"{directory}: could not take the lock {path}")
+
+
+@contextmanager
+def lock_folder(directory: Path, shard: str | None = None) -> Iterator[None]:
+    """Own ``directory`` for one run: a second run into it while the first lives is refused
+    (``FolderInUse``, naming the process and host); a lock left by a killed run on this host
+    (its process gone) is taken over.  Shards of one study (``shard``, e.g. ``"shard-0-of-2"``)
+    share the folder with each other, each with a lock of its own, but not with a whole run."""
+    path = directory / (LOCK if shard is None else f"{LOCK}.{shard}")
+    _acquire(directory, path)
     try:
+        others = [directory / LOCK] if shard is not None else sorted(directory.glob(f"{LOCK}.shard-*"))
+        for other in others:
+            found = _owner(other)
+            if found is not None and _alive(found[1]):
+                raise _in_use(directory, other, found[1])
         yield
     finally:
         path.unlink(missing_ok=True)
@@ -131,7 +160,7 @@ def lock_folder(directory: Path) -> Iterator[None]:
 
 def _take_over(path: Path, stale: str | None) -> None:
     """Remove the lock of a dead run, unless another run took it over meanwhile."""
-    aside = path.with_name(f"{LOCK}.{os.getpid()}")
+    aside = path.with_name(f"{path.name}-stale.{os.getpid()}")
     try:
         os.rename(path, aside)
     except FileNotFoundError:
