@@ -33,7 +33,7 @@ def run(
     quiet: bool = typer.Option(False, "--quiet", help="No progress or summary output."),
 ) -> None:
     """Run a scenario and write realizations.parquet and summary.parquet."""
-    from .ensemble import run as run_study
+    from .ensemble import output_directory, run as run_study
 
     try:
         study = load_scenario(scenario)
@@ -49,13 +49,13 @@ def run(
     share = None
     if shard is not None:
         i, _, n = shard.partition("/")
-        if not (i.isdigit() and n.isdigit() and int(i) < int(n)):
+        if not (i.isdigit() and n.isdigit()):
             _fail(f"--shard {shard}: give I/N with 0 <= I < N (e.g. --shard 0/4)")
-        share = (int(i), int(n))
-    directory = out or study.base.output.directory or f"results/{study.name}"
+        share = (int(i), int(n))  # (the range is checked by run_study)
+    directory = output_directory(study, out)
     try:
-        result = run_study(study, out, workers=workers, chunk=chunk, resume=resume,
-                                          scheduler=scheduler, progress=not quiet, shard=share)
+        result = run_study(study, directory, workers=workers, chunk=chunk, resume=resume, scheduler=scheduler,
+                           progress=not quiet, shard=share)
     except KeyboardInterrupt:
         typer.echo(f"\ninterrupted: finished chunks are kept in {directory}/parts; "
                    f"run again with --resume to complete", err=True)
@@ -198,13 +198,14 @@ def optimize(
 ) -> None:
     """Tune absorber parameters for the best mean EDM (or other metric); write the optimum,
     the objective history, a report and the results at the optimum."""
+    from .ensemble import output_directory
     from .optimize import optimize_scenario
 
     try:
         study = load_scenario(scenario)
     except ScenarioError as exc:
         _fail(str(exc))
-    directory = out or Path(f"{study.base.output.directory or f'results/{study.name}'}-optimum")
+    directory = out or Path(f"{output_directory(study)}-optimum")
     echo = (lambda line: None) if quiet else typer.echo
     try:
         best, path = optimize_scenario(study, directory, workers, progress=not quiet, echo=echo)

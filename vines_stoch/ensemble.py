@@ -225,6 +225,12 @@ class _Checkpoint:
         self.saved = time.monotonic()
 
 
+def output_directory(study: Study, directory: str | Path | None = None) -> Path:
+    """Where a run writes: ``directory``, else the scenario's ``[output] directory``, else
+    ``results/<name>``."""
+    return Path(directory or study.base.output.directory or f"results/{study.base.name}")
+
+
 def run(study: Study, directory: str | Path | None = None, *, workers: int | None = None,
         chunk: int | None = None, realizations: int | None = None, resume: bool = False,
         scheduler: str | None = None, progress: bool = False, checkpoint_seconds: float = 30.0,
@@ -245,17 +251,17 @@ def run(study: Study, directory: str | Path | None = None, *, workers: int | Non
     The directory is owned by one run at a time (``store.lock_folder``): a run into a folder
     another live run writes is refused with ``store.FolderInUse``.
     """
-    directory = Path(directory or study.base.output.directory or f"results/{study.base.name}")
+    if shard is not None:
+        if not 0 <= shard[0] < shard[1]:
+            raise ValueError(f"--shard {shard[0]}/{shard[1]}: give I/N with 0 <= I < N (e.g. --shard 0/4)")
+        if study.base.simulation.history:
+            raise ValueError(f"--shard: {study.source} asks for history statistics, which are folded from the "
+                             "paths of every realisation in order and cannot be split into shards; run it in one job")
+    directory = output_directory(study, directory)
     try:
         directory.mkdir(parents=True, exist_ok=True)
     except FileExistsError:
         raise NotADirectoryError(f"{directory}: exists and is not a folder") from None
-    if shard is not None:
-        if not 0 <= shard[0] < shard[1]:
-            raise ValueError(f"--shard {shard[0]}/{shard[1]}: give I/N with 0 <= I < N")
-        if study.base.simulation.history:
-            raise ValueError(f"--shard: {study.source} asks for history statistics, which are folded from the "
-                             "paths of every realisation in order and cannot be split into shards; run it in one job")
     with lock_folder(directory, None if shard is None else f"shard-{shard[0]}-of-{shard[1]}"):
         return _run(study, directory, workers, chunk, realizations, resume, scheduler, progress, checkpoint_seconds,
                     shard)

@@ -118,12 +118,11 @@ def undefined_notes(ok: pd.DataFrame, metrics: list[str]) -> str:
         notes.append("no realisation ended ok (see status in realizations.parquet): every statistic undefined")
     elif len(ok) == 1:
         notes.append("one realisation ended ok: std, sem and ci95 undefined")
-    if len(ok) and "input_energy" in ok:
-        idle = int((ok["input_energy"] <= 0).sum())
-        if idle:
-            notes.append(f"{idle} realisation(s) without input energy (the loads put none in): edm and "
-                         "energy_residual undefined there and in their statistics")
-    explained = {"edm", "energy_residual"} if any("input energy" in n for n in notes) else set()
+    idle = int((ok["input_energy"] <= 0).sum()) if "input_energy" in ok else 0
+    if idle:
+        notes.append(f"{idle} realisation(s) without input energy (the loads put none in): edm and "
+                     "energy_residual undefined there and in their statistics")
+    explained = {"edm", "energy_residual"} if idle else set()
     for m in metrics:
         bad = int(ok[m].isna().sum()) if m in ok else 0
         if bad and m not in explained:

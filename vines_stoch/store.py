@@ -79,19 +79,19 @@ def _started(pid: int) -> str | None:
 
 def _alive(owner: dict) -> bool:
     """True when the run described by a lock's content may still be running."""
-    if "pid" not in owner or "host" not in owner:
+    try:
+        pid, host = int(owner["pid"]), owner["host"]
+    except (KeyError, TypeError, ValueError):
         return False  # not a lock this program wrote (empty, cut short)
-    if owner.get("host") != socket.gethostname():
+    if host != socket.gethostname():
         return True  # another machine's run: it cannot be checked from here
     try:
-        os.kill(int(owner["pid"]), 0)
+        os.kill(pid, 0)
     except ProcessLookupError:
         return False
     except PermissionError:
         pass  # another user's live process
-    except (KeyError, TypeError, ValueError):
-        return False  # not a lock this program wrote
-    started = _started(int(owner["pid"]))
+    started = _started(pid)
     return owner.get("started") is None or started is None or started == owner["started"]
 
 
