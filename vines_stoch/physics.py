@@ -17,6 +17,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from .inlining import share_scope_copies
+
 #: Options of every compiled loop: cached on disk, GIL released, IEEE division (no Python
 #: ZeroDivisionError checks in hot loops), and fused multiply-adds (``contract``: one rounding
 #: instead of two, half the latency on a step's critical path; no other fast-math licence, so
@@ -29,6 +31,7 @@ KERNEL = dict(cache=True, nogil=True, error_model="numpy", fastmath={"contract"}
 #: inlined copy also costs compile time: a large inlined function gets one call site, and rare
 #: work calls it through an out-of-line wrapper (``rk4.rk4_step``, ``rk4.wall_accelerations``).
 INLINE = dict(KERNEL, inline="always")
+share_scope_copies()  # about half of a kernel's cold compile time (see ``inlining``)
 
 #: Kind codes of absorber rows (MODEL.md section 2), by the ``type`` of a scenario's absorber.
 LINEAR, CUBIC, IMPACT, HERTZ = 0, 1, 2, 3
