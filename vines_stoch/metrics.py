@@ -8,7 +8,7 @@ import numpy as np
 import pandas as pd
 from scipy.special import stdtrit
 
-from .kernels.common import ACC_MAX_K, DRIFT_MAX_K, SLOTS, STATUS_DIVERGED, X_MAX_K, X_SQ_INT_K
+from .kernels.common import ACC_MAX_K, DRIFT_MAX_K, FLOOR_SLOTS, SLOTS, STATUS_DIVERGED, X_MAX_K, X_SQ_INT_K
 from .scene import Scene
 
 #: Metric columns of realizations.parquet, in order (then the per-floor columns of
@@ -102,7 +102,11 @@ def finish(raw: np.ndarray, scene: Scene, samples: np.ndarray | None = None) -> 
         row[f"x_rms_{k + 1}"] = math.sqrt(max(g(slot + X_SQ_INT_K * nf), 0.0) / scene.window)
         row[f"drift_max_{k + 1}"] = g(slot + DRIFT_MAX_K * nf)
         row[f"acc_max_{k + 1}"] = g(slot + ACC_MAX_K * nf)
-    finite = all(math.isfinite(v) for k, v in row.items() if k not in ("edm", "energy_residual"))
+    passages = len(SLOTS) + len(FLOOR_SLOTS) * nf  # (``kernels.common.first_passages``)
+    for l, name in enumerate(scene.limit_names):
+        row[f"first_passage_{name}"] = g(passages + l)
+    finite = all(math.isfinite(v) for k, v in row.items()
+                 if k not in ("edm", "energy_residual") and not k.startswith("first_passage_"))
     row["status"] = "diverged" if g(_S["status"]) == STATUS_DIVERGED or not finite else "ok"
     row["regime"] = (regime(samples, 2.0 * np.pi / scene.period)
                      if samples is not None and samples.size and row["status"] == "ok" else None)
@@ -130,11 +134,31 @@ def undefined_notes(ok: pd.DataFrame, metrics: list[str]) -> str:
     return "; ".join(notes)
 
 
+def limit_names(frame: pd.DataFrame) -> list[str]:
+    """The limits of a realisations table (its ``first_passage_NAME`` columns), in order."""
+    return [c[len("first_passage_"):] for c in frame.columns if c.startswith("first_passage_")]
+
+
+def exceedance(passed: int, n: int) -> tuple[float, float, float]:
+    """Fraction ``passed / n`` of realisations whose peak exceeded a limit, with its 95 % Wilson
+    score interval (``scipy.stats.binomtest``; Wilson, J. Am. Stat. Assoc. 22 (1927) 209,
+    DOI 10.1080/01621459.1927.10502953): its coverage stays close to 95 % for small ``n`` and
+    fractions near 0 or 1, where the normal approximation fails.  NaN for ``n = 0``."""
+    from scipy.stats import binomtest  # (scipy.stats takes about 0.5 s to import)
+
+    if n == 0:
+        return math.nan, math.nan, math.nan
+    ci = binomtest(passed, n).proportion_ci(confidence_level=0.95, method="wilson")
+    return passed / n, float(ci.low), float(ci.high)
+
+
 def summarise(realizations: pd.DataFrame, parameters: list[str]) -> pd.DataFrame:
     """One row per sweep point: parameters, ``n_ok``, ``n_failed``, ``notes`` (why statistics
     are undefined: ``undefined_notes``) and ``M_<stat>`` per metric
     (``STATISTICS``; ``sem`` is the standard error of the mean and ``ci95_lo``, ``ci95_hi`` its
-    95 % Student-t confidence interval).
+    95 % Student-t confidence interval); per limit (``first_passage_NAME`` columns) ``p_NAME``,
+    ``p_NAME_lo``, ``p_NAME_hi``: the fraction of the realisations ended ok whose peak exceeded
+    it, with its 95 % interval (``exceedance``).
 
     Failed realisations are counted, never averaged in.
     """
@@ -159,5 +183,8 @@ def summarise(realizations: pd.DataFrame, parameters: list[str]) -> pd.DataFrame
             row[f"{m}_sem"] = sem
             row[f"{m}_ci95_lo"], row[f"{m}_ci95_hi"] = row[f"{m}_mean"] - half, row[f"{m}_mean"] + half
             row[f"{m}_q05"], row[f"{m}_q50"], row[f"{m}_q95"] = (float(v) for v in q)
+        for name in limit_names(realizations):
+            passed = int(ok[f"first_passage_{name}"].notna().sum())
+            row[f"p_{name}"], row[f"p_{name}_lo"], row[f"p_{name}_hi"] = exceedance(passed, len(ok))
         rows.append(row)
     return pd.DataFrame(rows)

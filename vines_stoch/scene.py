@@ -3,13 +3,13 @@
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import cached_property
 
 import numpy as np
 
 from . import filters
-from .kernels.common import POINCARE_SAMPLES
+from .kernels.common import ACC_MAX_K, DRIFT_MAX_K, LIMIT_E1, POINCARE_SAMPLES, X_MAX_K
 from .kernels.loads import (CHIRP, FORCE_ROW, GROUND, HALF_SINE, HARMONIC, JENNINGS, PULSE_TRAIN, SARAGONI_HART,
                             STATIONARY, has_breaks)
 from .physics import (CLEARANCE, DAMPING, HERTZ, IMPACT, K_CUBIC, K_LEFT, K_LIN, K_RIGHT, LAWS, REST, RESTITUTION, ROW,
@@ -48,6 +48,8 @@ class Scene:
     scheme: str               # a name of schemes.SCHEMES
     period: float = 0.0       # forcing period of Poincare samples (0: no regime)
     sample_from: float = 0.0  # time of the first Poincare sample
+    limits: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))  # (n_limits, 3) rows: limit_row
+    limit_names: tuple[str, ...] = ()      # the limits' names, in the rows' order
 
     @property
     def n_floors(self) -> int:
@@ -113,6 +115,19 @@ def absorber_row(a) -> np.ndarray:
         row[K_LEFT], row[K_RIGHT] = a.contact_left.constant, a.contact_right.constant
         row[WALL_LO], row[WALL_HI] = a.walls
     return row
+
+
+def limit_row(metric: str, value: float, n_floors: int) -> tuple[float, float, float]:
+    """A limit's row for the kernels' first-passage check: the running peak it watches
+    (``kernels.common.first_passages``: a per-floor block's code or ``LIMIT_E1``), the floor
+    (body index) and the value."""
+    if metric == "e1_max":
+        return LIMIT_E1, 0, value
+    if metric == "x1_max":
+        return X_MAX_K, n_floors - 1, value
+    name, floor = metric.rsplit("_", 1)
+    codes = {"x_max": X_MAX_K, "drift_max": DRIFT_MAX_K, "acc_max": ACC_MAX_K}
+    return codes[name], int(floor) - 1, value
 
 
 def build_scene(scenario: Scenario) -> Scene:
@@ -184,6 +199,8 @@ def build_scene(scenario: Scenario) -> Scene:
         sigma=np.sqrt(variance), x0=x0, v0=v0, dt=float(sim.dt), n_steps=n_steps,
         i0=min(n_steps - 1, int(round(sim.metrics_from / sim.dt))), scheme=scheme,
         period=period, sample_from=sample_from,
+        limits=np.array([limit_row(l.metric, l.value, nf) for l in scenario.limits.values()], dtype=float).reshape(-1, 3),
+        limit_names=tuple(scenario.limits),
     )
 
 

@@ -81,7 +81,8 @@ def bundles(scene, x: np.ndarray, v: np.ndarray, fl: tuple, normals: np.ndarray,
             samples: np.ndarray, history: np.ndarray, stride: int, gens: tuple) -> tuple:
     """The kernels' arguments as named bundles: bodies (masses, storey stiffnesses and dashpots,
     mass-proportional dashpots, state), absorbers (kinds, hosts, rows), loads, filters, noise
-    (intensity per floor, replayed normals), grid, outputs; then the three generators of
+    (intensity per floor, replayed normals), grid, outputs (with the limits whose first passages
+    the metric vector records); then the three generators of
     ``gens`` (increments, bridge, filter) as arguments of their own (see ``kdk.kdk_kernel``)."""
     return (
         (scene.mass, scene.storey_k, scene.storey_c, scene.floor_c, x, v),
@@ -90,7 +91,7 @@ def bundles(scene, x: np.ndarray, v: np.ndarray, fl: tuple, normals: np.ndarray,
         fl,
         (scene.sigma, normals),
         (scene.dt, scene.n_steps, scene.i0, scene.period, scene.sample_from, stride),
-        (out, samples, history),
+        (out, samples, history, scene.limits),
         *gens,
     )
 
@@ -110,7 +111,7 @@ def simulate(scene, streams: Streams | np.random.Generator | None = None, *, nor
     receives the roof's ``x``, ``E1`` (and every floor's ``x``) at ``t = j stride dt``,
     ``j < G`` (rows after a divergence keep their previous content).
     """
-    out = new_metrics(scene.n_floors)
+    out = new_metrics(scene.n_floors, scene.limits.shape[0])
     x, v = scene.x0.copy(), scene.v0.copy()
     if samples is None:
         samples = sample_buffer(scene)

@@ -38,6 +38,10 @@ SLOTS = (
 #: displacement, peak drift, peak absolute acceleration, integral of ``x_k^2``.
 FLOOR_SLOTS = ("x_max", "drift_max", "acc_max", "x_square_integral")
 X_MAX_K, DRIFT_MAX_K, ACC_MAX_K, X_SQ_INT_K = range(len(FLOOR_SLOTS))
+#: A limit's code for the peak of the structure's energy ``E1`` (the others use the floor
+#: blocks' codes ``X_MAX_K .. ACC_MAX_K``).  After the floor blocks, one slot per limit holds
+#: its first-passage time (NaN until it passes: ``first_passages``).
+LIMIT_E1 = len(FLOOR_SLOTS)
 
 #: Status codes written into the ``status`` slot.
 STATUS_OK, STATUS_DIVERGED = 0, 1
@@ -362,9 +366,42 @@ def sticks(side: int, w_in: float, w_gain: float) -> bool:
     return side * w_gain > 0.0 and abs(w_in) <= side * w_gain
 
 
-def new_metrics(n_floors: int = 1) -> np.ndarray:
-    """A zeroed raw metric vector of a primary with ``n_floors`` floors."""
-    return np.zeros(len(SLOTS) + len(FLOOR_SLOTS) * n_floors)
+def new_metrics(n_floors: int = 1, n_limits: int = 0) -> np.ndarray:
+    """A raw metric vector of a primary with ``n_floors`` floors: zeros, then NaN in the
+    first-passage slots of ``n_limits`` limits."""
+    out = np.zeros(len(SLOTS) + len(FLOOR_SLOTS) * n_floors + n_limits)
+    out[out.shape[0] - n_limits:] = np.nan
+    return out
+
+
+@njit(**INLINE)
+def first_passages(limits, t, nf: int, x_max, drift_max, acc_max, inv_mass, acc_force: bool, e1_max, out) -> int:
+    """Record ``t`` as the first passage of each limit (rows of ``scene.limit_row``: code,
+    floor, value) whose running peak exceeds its value for the first time, in the slots after
+    the floor blocks; returns how many limits have not passed yet (the loops stop calling at
+    zero).  The peaks are those the metrics report (``write_floor_metrics``: the first storey's
+    drift is the first floor's displacement; ``acc_force``: ``acc_max`` holds peak floor forces,
+    the acceleration being the force times ``inv_mass``), so a limit has a first passage exactly
+    when its metric exceeds the value."""
+    base = len(SLOTS) + len(FLOOR_SLOTS) * nf
+    left = 0
+    for l in range(limits.shape[0]):
+        if out[base + l] != out[base + l]:  # NaN: not passed yet
+            code = limits[l, 0]
+            k = int(limits[l, 1])
+            if code == X_MAX_K or (code == DRIFT_MAX_K and k == 0):
+                peak = x_max[k]
+            elif code == DRIFT_MAX_K:
+                peak = drift_max[k]
+            elif code == ACC_MAX_K:
+                peak = acc_max[k] * inv_mass[k] if acc_force else acc_max[k]
+            else:
+                peak = e1_max
+            if peak > limits[l, 2]:
+                out[base + l] = t
+            else:
+                left += 1
+    return left
 
 
 @njit(**INLINE)

@@ -41,8 +41,8 @@ from ..physics import CLEARANCE, IMPACT, KERNEL, RESTITUTION, primary_energy
 from .common import (ABSORBER_DISS, CAPPED, CHECK_EVERY, E1_MAX, ENERGY_INT, FINAL_ENERGY,
                      IMPACT_LOSS, IMPACTS, IMPACTS_LEFT, IMPACTS_RIGHT, INLINE, INPUT, MAX_EVENTS,
                      PRIMARY_DISS, STATUS, STATUS_DIVERGED, absorber_dissipation,
-                     attachment_forces, block_end, diverged, floor_peaks, host_of, keep_in_cavities, momentum,
-                     pin_to_walls, record_history, resolve_impact, scratch, start_history,
+                     attachment_forces, block_end, diverged, first_passages, floor_peaks, host_of,
+                     keep_in_cavities, momentum, pin_to_walls, record_history, resolve_impact, scratch, start_history,
                      stick_together, stored_energy, structure_dissipation, write_floor_metrics)
 from .loads import advance_filters, excitation, phasors, rotations, turn
 from .sra3 import sra3_step
@@ -149,7 +149,8 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
     host floors, parameter rows: ``physics.LAWS``), ``ex`` and ``fl`` (loads and filters,
     ``kernels/loads.py``), ``noise`` (white-noise intensity per floor, replayed normals),
     ``grid`` (time grid, metrics window, Poincare and history grids), ``outputs`` (metric
-    vector, Poincare samples, history rows), then the generators of the step increments, of
+    vector, Poincare samples, history rows, the limits whose first passages the metric vector
+    records: ``common.first_passages``), then the generators of the step increments, of
     the Brownian-bridge draws and of the filter noise (``None`` where unused; three arguments,
     not a bundle: numba types a tuple holding a Generator in Python, about 20 us a call).
 
@@ -182,7 +183,7 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
         phi, chol, envelopes, c_force, c_ground, z = fl
         sigma, normals = noise
         dt, n_steps, i0, period, sample_from, stride = grid
-        out, samples, history = outputs
+        out, samples, history, limits = outputs
         na = kind.shape[0]
         nz = z.shape[0]
         # the state (copied back at the end) and the scratch, on the stack (see ``common.scratch``)
@@ -224,6 +225,7 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
         work = d_primary = d_absorber = e_sum = e1_max = 0.0
         loss_sum = n_left = n_right = 0.0
         replayed = 0
+        pending = limits.shape[0]  # limits not passed yet
         i = 0
         inside = i0 == 0
         while i < n_steps:
@@ -244,6 +246,9 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
                     if sra:
                         acc[k] *= inv_mass[k]
                 floor_peaks(x, nf, acc, x_max, drift_max, acc_max)
+                if pending > 0:
+                    pending = first_passages(limits, i * dt, nf, x_max, drift_max, acc_max, inv_mass, not sra, e1_max,
+                                             out)
             if i % CHECK_EVERY == 0:
                 if diverged(x):
                     out[STATUS] = STATUS_DIVERGED
@@ -408,6 +413,9 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
                         if not sra:  # the forces on the floor at the step's end
                             acc[k] = force[k] + load_end[k]
                     floor_peaks(x, nf, acc, x_max, drift_max, acc_max)
+                    if pending > 0:
+                        pending = first_passages(limits, t_step + dt, nf, x_max, drift_max, acc_max, inv_mass, not sra,
+                                                 e1_max, out)
                 e1_prev = e1
             i = end
             if i == h_next:

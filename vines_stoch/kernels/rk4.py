@@ -27,7 +27,7 @@ from ..physics import (CLEARANCE, DAMPING, HERTZ, IMPACT, K_LEFT, K_RIGHT, KERNE
 from .common import (ABSORBER_DISS, CAPPED, CHECK_EVERY, CONTACT_TIME, E1_MAX, ENERGY_INT,
                      FINAL_ENERGY, IMPACT_LOSS, IMPACTS, IMPACTS_LEFT, IMPACTS_RIGHT, INLINE,
                      INPUT, MAX_EVENTS, PEAK_FORCE, PRIMARY_DISS, STATUS, STATUS_DIVERGED,
-                     accelerate, attachment_forces, block_end, contact_force, contact_forces, diverged,
+                     accelerate, attachment_forces, block_end, contact_force, contact_forces, diverged, first_passages,
                      floor_peaks, host_of, keep_in_cavities, pick, pin_to_walls, put, record_history,
                      record_sample, resolve_impact, scratch, start_history, stick_together, stored_energy,
                      structure_power, write_floor_metrics)
@@ -232,7 +232,7 @@ def rk4_kernel(n_bodies: int, n_floors: int, has_impact: bool, has_hertz: bool, 
         kind, host, rows = absorbers
         forces, series_t, series_v, series_ptr, series_target = ex
         dt, n_steps, i0, period, sample_from, stride = grid
-        out, samples, history = outputs
+        out, samples, history, limits = outputs
         na = kind.shape[0]
         # the state and the stages' scratch on the stack (see ``common.scratch``)
         x, v, xn, vn, xp, vp = scratch(NB), scratch(NB), scratch(NB), scratch(NB), scratch(NB), scratch(NB)
@@ -251,6 +251,7 @@ def rk4_kernel(n_bodies: int, n_floors: int, has_impact: bool, has_hertz: bool, 
         touching = np.zeros(na, np.int64)
         next_sample = 0
         h_next = start_history(history, stride, x, nf, primary_energy(mass, storey_k, x, v, nf))
+        pending = limits.shape[0]  # limits not passed yet
         i = 0
         inside = i0 == 0
         while i < n_steps:
@@ -262,6 +263,9 @@ def rk4_kernel(n_bodies: int, n_floors: int, has_impact: bool, has_hertz: bool, 
                 for k in range(nf):  # (the accelerations from the window's first sub-step on)
                     x_max[k] = abs(x[k])
                     drift_max[k] = abs(x[k] - x[k - 1] if k > 0 else x[k])
+                if pending > 0:
+                    pending = first_passages(limits, i * dt, nf, x_max, drift_max, acc_max, inv_mass, False,
+                                             out[E1_MAX], out)
             if i % CHECK_EVERY == 0 and diverged(x):
                 out[STATUS] = STATUS_DIVERGED
                 break
@@ -327,6 +331,9 @@ def rk4_kernel(n_bodies: int, n_floors: int, has_impact: bool, has_hertz: bool, 
                         # peaks: the state at the sub-step's end, the accelerations at its start
                         floor_peaks(xn, nf, a0, x_max, drift_max, acc_max)
                         out[E1_MAX] = max(out[E1_MAX], primary_energy(mass, storey_k, xn, vn, nf))
+                        if pending > 0:
+                            pending = first_passages(limits, t + h, nf, x_max, drift_max, acc_max, inv_mass, False,
+                                                     out[E1_MAX], out)
                     for b in range(nb):
                         x[b] = xn[b]
                         v[b] = vn[b]

@@ -18,11 +18,12 @@ Positive = Annotated[float, Field(gt=0, le=LARGEST, allow_inf_nan=False)]
 NonNegative = Annotated[float, Field(ge=0, le=LARGEST, allow_inf_nan=False)]
 Real = Annotated[float, Field(ge=-LARGEST, le=LARGEST, allow_inf_nan=False)]
 
-#: Sizes that cannot be meant: nesting of tables and arrays, absorbers, loads, floors, sweep
+#: Sizes that cannot be meant: nesting of tables and arrays, absorbers, loads, limits, floors, sweep
 #: points, realisations a sweep point (a row each in the results) and steps a path.
 MAX_DEPTH = 12
 MAX_ABSORBERS = 100
 MAX_LOADS = 100
+MAX_LIMITS = 100
 MAX_FLOORS = 200
 MAX_POINTS = 10_000
 MAX_REALIZATIONS = 10_000_000

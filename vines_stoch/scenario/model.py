@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 from typing import Annotated, Any
 
 import numpy as np
@@ -11,9 +12,13 @@ from .. import schemes
 from .bodies import Absorber, CubicAbsorber, HertzAbsorber, ImpactAbsorber, Primary, eigenfrequencies, shear_stiffness
 from .distributions import Distribution
 from .errors import FieldError
-from .fields import MAX_ABSORBERS, MAX_LOADS, MAX_STEPS, _Model
+from .fields import MAX_ABSORBERS, MAX_LIMITS, MAX_LOADS, MAX_STEPS, _Model
 from .loads import InitialLoad, Load, WhiteNoiseLoad, _FilteredLoad
-from .settings import Ensemble, Optimize, Output, Simulation, history_signals
+from .settings import Ensemble, Limit, Optimize, Output, Simulation, history_signals, limit_metrics
+
+#: A limit's name (it becomes part of column names).
+LIMIT_NAME = re.compile(r"[A-Za-z][A-Za-z0-9_]{0,39}")
+
 
 class Scenario(_Model):
     """A complete scenario file (SCENARIOS.md)."""
@@ -28,6 +33,7 @@ class Scenario(_Model):
     sweep: dict[str, Any] = {}
     uncertain: dict[str, Distribution] = {}
     optimize: Optimize | None = None
+    limits: Annotated[dict[str, Limit], Field(max_length=MAX_LIMITS)] = {}
     output: Output = Output()
 
     @model_validator(mode="after")
@@ -65,6 +71,15 @@ class Scenario(_Model):
                 if signal not in allowed:
                     raise FieldError("simulation.history.signals", sim.history.signals,
                                     f"{signal!r} is not a signal: give x1, e1, x_k or drift_k with k in [1, {n}]")
+        metrics = limit_metrics(n)
+        for name, limit in self.limits.items():
+            if not LIMIT_NAME.fullmatch(name):
+                raise FieldError("limits", name, "a limit's name must start with a letter and hold letters, digits "
+                                 "and '_' only (at most 40 characters): it names the columns first_passage_NAME, p_NAME")
+            if limit.metric not in metrics:
+                raise FieldError(f"limits.{name}.metric", limit.metric,
+                                 f"must be a peak metric: x1_max, e1_max, or x_max_k, drift_max_k, acc_max_k with k "
+                                 f"in [1, {n}]")
         contents = self.contents
         if sim.scheme != "auto":
             why = schemes.refusal(schemes.SCHEMES[sim.scheme], *contents)

@@ -126,6 +126,23 @@ class Optimize(_Model):
         return -1.0 if (self.goal or OBJECTIVES[self.objective]) == "maximize" else 1.0
 
 
+def limit_metrics(n_floors: int) -> list[str]:
+    """Peak metrics a limit can name on a primary with ``n_floors`` floors: the roof's peak
+    displacement ``x1_max``, the structure's peak energy ``e1_max`` and each floor's
+    ``x_max_k``, ``drift_max_k``, ``acc_max_k`` (MODEL.md section 4)."""
+    floors = range(1, n_floors + 1)
+    return ["x1_max", "e1_max", *(f"{m}_{k}" for m in ("x_max", "drift_max", "acc_max") for k in floors)]
+
+
+class Limit(_Model):
+    """A named threshold on a peak metric (``limit_metrics``): each realisation records the first
+    time its running peak exceeds ``value`` (``first_passage_NAME``), each sweep point the
+    fraction that did with its 95 % interval (``p_NAME``)."""
+
+    metric: str
+    value: Positive
+
+
 class Output(_Model):
     """Where results go (default ``results/<name>``)."""
 

@@ -121,7 +121,8 @@ class Study:
         """True when the (numeric) field at dotted ``key`` holds integers."""
         node: Any = self.base
         for part in key.split("."):
-            node = node[int(part)] if isinstance(node, list) else getattr(node, part)
+            node = node[int(part)] if isinstance(node, list) else (node[part] if isinstance(node, dict)
+                                                                  else getattr(node, part))
         return isinstance(node, int)
 
     def _check_work(self, source: str) -> None:
