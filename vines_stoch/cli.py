@@ -1,4 +1,4 @@
-"""Command line: ``vines-stoch run | validate | loads | report | compare | optimize | bench | reproduce``."""
+"""Command line: ``vines-stoch run | validate | loads | report | fragility | compare | optimize | bench | reproduce``."""
 
 from __future__ import annotations
 
@@ -161,6 +161,30 @@ def report(
     except (OSError, ValueError, KeyError) as exc:
         _fail(str(exc))
     typer.echo(f"wrote {path}")
+
+
+@app.command()
+def fragility(
+    directory: Path = typer.Argument(..., help="Result directory of a run with [limits] and a sweep over intensity."),
+    limit: str = typer.Option(..., "--limit", help="Name of the limit (a key of [limits])."),
+    im: str = typer.Option(..., "--im", help="Intensity measure: a column constant at each sweep point (a swept key)."),
+    diverged: str = typer.Option("exclude", "--diverged", help="Realisations that did not end ok: 'exclude' or 'exceed' (count them as exceedances)."),
+    samples: int = typer.Option(1000, "--samples", min=0, help="Bootstrap replicates of the confidence bounds (0: none)."),
+    seed: int = typer.Option(0, "--seed", min=0, help="Seed of the bootstrap."),
+) -> None:
+    """Fit a lognormal fragility curve to the exceedances of a limit over the sweep points."""
+    from .fragility import fragility as fit_fragility
+
+    try:
+        rows = fit_fragility(directory, limit, im, diverged, samples, seed)
+    except (OSError, ValueError, KeyError) as exc:
+        _fail(str(exc).strip("'\""))
+    first = rows.iloc[0]
+    typer.echo(f"{limit} against {im}: median {first['median']:.5g} [{first['median_lo']:.5g}, {first['median_hi']:.5g}], "
+               f"beta {first['beta']:.4g} [{first['beta_lo']:.4g}, {first['beta_hi']:.4g}] (95 % bootstrap bounds, "
+               f"{first['bootstrap_fitted']} of {first['bootstrap']} replicates); did not end ok: {first['diverged']}"
+               + (f"\nnotes: {first['notes']}" if first["notes"] else ""))
+    typer.echo(f"wrote {directory / 'fragility.parquet'}, {directory / f'fragility_{limit}.png'}")
 
 
 @app.command()
