@@ -94,8 +94,22 @@ def test_no_fit_is_said_not_faked():
     assert math.isnan(result["beta"]) and "no fit" in result["notes"]
     with pytest.raises(KeyError, match="not a limit of this run"):
         stripes(frame, "roof", "loads.0.intensity")
-    with pytest.raises(ValueError, match="varies within sweep point"):
-        stripes(frame, "drift", "realization")
+    with pytest.raises(KeyError, match="not a numeric column"):
+        stripes(frame, "drift", "status")
+
+
+def test_points_at_one_intensity_make_one_stripe():
+    """Sweep points sharing an intensity (the records of a suite scaled to one Sa) are pooled;
+    an intensity of each realisation's own (a cloud) makes a stripe of one each."""
+    frame = synthetic(np.random.default_rng(5))
+    doubled = pd.concat([frame, frame.assign(point=frame["point"] + len(IM))], ignore_index=True)
+    one, two = stripes(frame, "drift", "loads.0.intensity"), stripes(doubled, "drift", "loads.0.intensity")
+    assert len(two) == len(IM) and (two["n"] == 2 * one["n"]).all() and (two["exceeded"] == 2 * one["exceeded"]).all()
+    cloud = frame.assign(sa=frame["loads.0.intensity"] * np.exp(0.01 * np.arange(len(frame))))
+    table = stripes(cloud, "drift", "sa")
+    assert len(table) == len(frame) and (table["n"] == 1).all()
+    result = fit(table, samples=200)
+    assert result["median_lo"] < result["median"] < result["median_hi"]
 
 
 def test_fragility_command_on_a_run(tmp_path):

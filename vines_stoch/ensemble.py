@@ -30,7 +30,7 @@ import pandas as pd
 from . import history as hist
 from . import schedulers
 from .kernels import needed_streams, sample_buffer, simulate
-from .metrics import METRICS, finish, summarise
+from .metrics import METRICS, finish, ground_intensity, summarise
 from .streams import PARAMETERS, generator, streams
 from .progress import Progress
 from .scenario import History, Study
@@ -78,7 +78,11 @@ def run_chunk(scene: Scene, seed: int, point: int, start: int, stop: int,
         raw = simulate(scene, gens, samples=samples, history=path, stride=grid[0] if grid else 1)
         if paths is not None:
             paths[:, :, r - start] = hist.select(path, signals)
-        rows.append({"point": point, "realization": r, **drawn, **finish(raw, scene, samples)})
+        row = {"point": point, "realization": r, **drawn, **finish(raw, scene, samples)}
+        if scene.im_period > 0:  # (the filter stream afresh: the ground path the realisation saw)
+            row.update(ground_intensity(scene, streams(seed, point, r, increments=False, bridge=False,
+                                                       filters=filters, common=common)))
+        rows.append(row)
     frame = pd.DataFrame(rows)
     frame["regime"] = frame["regime"].astype("string")
     return frame, paths

@@ -10,8 +10,9 @@ solved by Fisher scoring (iteratively reweighted least squares, McCullagh and Ne
 *Generalized Linear Models*, 2nd ed., section 4.4), for all bootstrap replicates at once.
 
 Confidence bounds come from the bootstrap over realisations: each replicate resamples every
-stripe's realisations with replacement (its count is then ``Binomial(n_j, z_j / n_j)``) and is
-refitted; the bounds are the 2.5 and 97.5 % percentiles of the replicates' ``median`` and
+stripe's realisations with replacement (its count is then ``Binomial(n_j, z_j / n_j)``; with
+stripes of single realisations, as for intensities of each realisation's own, all
+realisations are resampled together) and is refitted; the bounds are the 2.5 and 97.5 % percentiles of the replicates' ``median`` and
 ``beta`` (Efron and Tibshirani, *An Introduction to the Bootstrap*, 13.3).
 """
 
@@ -30,6 +31,8 @@ from .store import read_results
 ITERATIONS = 60
 #: ``beta`` below this (stripes all 0 below an intensity and all 1 above it) is no fit.
 BETA_MIN = 1e-3
+#: Intensities past this many are pooled into this many bins in the plot (the fit uses them all).
+PLOT_BINS = 20
 #: How realisations that did not end ok are treated.
 DIVERGED = ("exclude", "exceed")
 
@@ -75,25 +78,23 @@ def log_likelihood(u: np.ndarray, n: np.ndarray, z: np.ndarray, a: float, b: flo
 
 
 def stripes(realizations: pd.DataFrame, limit: str, im: str, diverged: str = "exclude") -> pd.DataFrame:
-    """One row per sweep point: the intensity ``im`` (a column constant within each point,
-    e.g. a swept key), ``n`` realisations counted, ``exceeded``, the ``fraction`` with its 95 %
-    Wilson interval (``fraction_lo``, ``fraction_hi``) and ``n_diverged`` (realisations that
-    did not end ok: left out, or counted as exceedances with ``diverged = "exceed"``)."""
+    """One row per intensity: the realisations whose column ``im`` holds it (a swept key: the
+    sweep points at that value, e.g. every record of a suite scaled to one ``Sa``; or a
+    realisation's own intensity, such as the ``sa`` column of generated ground motions), ``n``
+    counted, ``exceeded``, the ``fraction`` with its 95 % Wilson interval (``fraction_lo``,
+    ``fraction_hi``) and ``n_diverged`` (realisations that did not end ok: left out, or counted
+    as exceedances with ``diverged = "exceed"``)."""
     column = f"first_passage_{limit}"
     if column not in realizations:
         known = ", ".join(limit_names(realizations)) or "none: the scenario has no [limits]"
         raise KeyError(f"--limit {limit}: not a limit of this run (its limits: {known})")
-    if im not in realizations:
-        raise KeyError(f"--im {im}: not a column of realizations.parquet (give a swept key, e.g. "
-                       f"{next((c for c in realizations.columns if '.' in c), 'loads.0.intensity')})")
+    if im not in realizations or not pd.api.types.is_numeric_dtype(realizations[im]):
+        raise KeyError(f"--im {im}: not a numeric column of realizations.parquet (give a swept key, e.g. "
+                       f"{next((c for c in realizations.columns if '.' in c), 'loads.0.intensity')}, or sa)")
     if diverged not in DIVERGED:
         raise ValueError(f"--diverged {diverged}: must be one of {', '.join(DIVERGED)}")
     rows = []
-    for point, group in realizations.groupby("point", sort=True):
-        values = group[im].unique()
-        if len(values) != 1:
-            raise ValueError(f"--im {im}: varies within sweep point {point}; a stripe needs one intensity a point "
-                             "(give a swept key)")
+    for value, group in realizations.groupby(im, sort=True):
         ok = group["status"] == "ok"
         failed = int((~ok).sum())
         exceeded = int(group.loc[ok, column].notna().sum())
@@ -101,9 +102,28 @@ def stripes(realizations: pd.DataFrame, limit: str, im: str, diverged: str = "ex
         if diverged == "exceed":
             exceeded, n = exceeded + failed, n + failed
         fraction, lo, hi = exceedance(exceeded, n)
-        rows.append({"point": int(point), "im": float(values[0]), "n": n, "exceeded": exceeded,
-                     "fraction": fraction, "fraction_lo": lo, "fraction_hi": hi, "n_diverged": failed})
+        rows.append({"im": float(value), "n": n, "exceeded": exceeded, "fraction": fraction, "fraction_lo": lo,
+                     "fraction_hi": hi, "n_diverged": failed})
     return pd.DataFrame(rows)
+
+
+def _replicates(n: np.ndarray, z: np.ndarray, samples: int, gen: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
+    """Bootstrap counts ``(n*, z*)``, shape ``(samples, stripes)``: each stripe's realisations
+    resampled within the stripe (``z* ~ Binomial(n, z / n)``) where every stripe has two or
+    more; otherwise (intensities of single realisations, a cloud) all realisations resampled
+    together, each stripe then getting a random count."""
+    if n.min() >= 2:
+        return np.broadcast_to(n, (samples, n.size)), gen.binomial(n.astype(np.int64), z / n,
+                                                                   size=(samples, n.size)).astype(float)
+    stripe = np.repeat(np.arange(n.size), n.astype(np.int64))
+    exceeded = np.concatenate([np.arange(k) < e for k, e in zip(n.astype(np.int64), z.astype(np.int64))])
+    nb, zb = np.empty((samples, n.size)), np.empty((samples, n.size))
+    for start in range(0, samples, 100):  # (the draws of 100 replicates at a time)
+        counts = gen.multinomial(stripe.size, np.full(stripe.size, 1.0 / stripe.size), size=min(100, samples - start))
+        for r, c in enumerate(counts, start=start):
+            nb[r] = np.bincount(stripe, weights=c, minlength=n.size)
+            zb[r] = np.bincount(stripe, weights=c * exceeded, minlength=n.size)
+    return nb, zb
 
 
 def fit(table: pd.DataFrame, samples: int = 1000, seed: int = 0) -> dict[str, object]:
@@ -129,10 +149,9 @@ def fit(table: pd.DataFrame, samples: int = 1000, seed: int = 0) -> dict[str, ob
         return result
     result.update(median=float(np.exp(-a / b)), beta=float(1.0 / b), log_likelihood=log_likelihood(u, n, z, a, b))
     if samples > 0:
-        gen = np.random.default_rng(seed)
-        zb = gen.binomial(n.astype(np.int64), z / n, size=(samples, n.size)).astype(float)
-        ab, bb, cb = probit_fit(u, n, zb)
-        cb &= (zb.sum(-1) > 0) & (zb.sum(-1) < n.sum())
+        nb, zb = _replicates(n, z, samples, np.random.default_rng(seed))
+        ab, bb, cb = probit_fit(u, nb, zb)
+        cb &= (zb.sum(-1) > 0) & (zb.sum(-1) < nb.sum(-1))
         result["bootstrap_fitted"] = int(cb.sum())
         if cb.sum() < samples:
             notes.append(f"{samples - int(cb.sum())} of {samples} bootstrap replicates had no fit (left out)")
@@ -180,9 +199,19 @@ def _plot(table: pd.DataFrame, result: dict, limit: str, im: str, policy: str, p
     import matplotlib.pyplot as plt
 
     fig, ax = plt.subplots(figsize=(6.4, 4.2))
-    err = np.vstack([table["fraction"] - table["fraction_lo"], table["fraction_hi"] - table["fraction"]])
-    ax.errorbar(table["im"], table["fraction"], yerr=err, fmt="o", capsize=3,
-                label=f"stripes (95 % Wilson intervals; did not end ok: {policy})")
+    shown, what = table, "stripes"
+    if len(table) > PLOT_BINS:  # intensities of their own (a cloud): pooled into bins for the eye
+        bins = np.array_split(np.arange(len(table)), PLOT_BINS)
+        shown = pd.DataFrame([{"im": float(np.exp(np.average(np.log(table["im"].iloc[b]), weights=table["n"].iloc[b]
+                                                              + 1e-300))),
+                               "n": int(table["n"].iloc[b].sum()), "exceeded": int(table["exceeded"].iloc[b].sum())}
+                              for b in bins])
+        shown[["fraction", "fraction_lo", "fraction_hi"]] = [exceedance(z, n) for z, n in
+                                                              zip(shown["exceeded"], shown["n"])]
+        what = f"{len(table)} intensities in {PLOT_BINS} bins"
+    err = np.vstack([shown["fraction"] - shown["fraction_lo"], shown["fraction_hi"] - shown["fraction"]])
+    ax.errorbar(shown["im"], shown["fraction"], yerr=err, fmt="o", capsize=3,
+                label=f"{what} (95 % Wilson intervals; did not end ok: {policy})")
     if np.isfinite(result["median"]):
         x = np.geomspace(table["im"][table["im"] > 0].min() / 2, table["im"].max() * 2, 200)
         ax.plot(x, ndtr(np.log(x / result["median"]) / result["beta"]),

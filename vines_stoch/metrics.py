@@ -113,6 +113,17 @@ def finish(raw: np.ndarray, scene: Scene, samples: np.ndarray | None = None) -> 
     return row
 
 
+def ground_intensity(scene: Scene, streams) -> dict[str, float]:
+    """``sa`` (pseudo-spectral acceleration at ``scene.im_period``, ``im_damping``) and ``pga``
+    of the ground acceleration of a realisation on the scene's time grid, from its streams (a
+    fresh copy of those it ran with: ``kernels.load_history`` gives the same path)."""
+    from .kernels import load_history
+    from .spectra import peak, pseudo_acceleration
+
+    _, _, ground = load_history(scene, streams)
+    return {"sa": pseudo_acceleration(ground, scene.dt, scene.im_period, scene.im_damping), "pga": peak(ground)}
+
+
 def undefined_notes(ok: pd.DataFrame, metrics: list[str]) -> str:
     """Why statistics of a sweep point are undefined (NaN), one reason per cause ("" if none):
     no realisation ended ok, one did (no spread), or metrics undefined in some realisations

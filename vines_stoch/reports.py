@@ -50,6 +50,11 @@ class Run:
         return [k for k in self.scenario.get("sweep", {}) if k != "zip" and k in self.summary.columns]
 
     @property
+    def axes(self) -> list[str]:
+        """Swept keys with numeric values (a suite of record files sweeps texts)."""
+        return [k for k in self.swept if pd.api.types.is_numeric_dtype(self.summary[k])]
+
+    @property
     def common(self) -> bool:
         return bool(self.scenario.get("ensemble", {}).get("common_random_numbers", True))
 
@@ -112,7 +117,7 @@ def effective_range(run: Run, level: float = EDM_LEVEL) -> dict[str, object]:
     """The swept values (and mean input energies) where the mean EDM is at least ``level``,
     and where even the lower 95 % confidence bound is."""
     s = run.summary
-    key = run.swept[0] if run.swept else None
+    key = run.axes[0] if run.axes else None
     out: dict[str, object] = {"run": run.label}
     for name, mask in (("mean EDM", s["edm_mean"] >= level), ("95 % lower bound", s["edm_ci95_lo"] >= level)):
         hit = s[mask.fillna(False)]
@@ -124,6 +129,11 @@ def effective_range(run: Run, level: float = EDM_LEVEL) -> dict[str, object]:
         if name == "mean EDM":
             out["input energy there"] = f"{hit['input_energy_mean'].min():.4g} to {hit['input_energy_mean'].max():.4g}"
     return out
+
+
+def _value(v: object) -> str:
+    """A swept value as written in titles: numbers to 4 significant digits, texts as they are."""
+    return f"{v:.4g}" if isinstance(v, (int, float, np.number)) else str(v)
 
 
 def _percent(column: str) -> str:
@@ -162,9 +172,9 @@ def _plots(runs: list[Run], out: Path, point: int | None) -> list[str]:
     ax.legend()
     save(fig, "edm_vs_input_energy.png")
 
-    keyed = [run for run in runs if len(run.swept) == 1]
+    keyed = [run for run in runs if len(run.swept) == 1 and run.axes]
     if keyed:
-        key = keyed[0].swept[0]
+        key = keyed[0].axes[0]
         fig, ax = plt.subplots(figsize=(6.4, 4.2))
         for run in keyed:
             s = run.summary.sort_values(key)
@@ -204,7 +214,7 @@ def _plots(runs: list[Run], out: Path, point: int | None) -> list[str]:
     for run in runs:
         p = _point(run, point)
         ok = run.realizations[(run.realizations["point"] == p) & (run.realizations["status"] == "ok")]
-        where = ", ".join(f"{k} = {run.summary[k].iloc[p]:.4g}" for k in run.swept) or f"point {p}"
+        where = ", ".join(f"{k} = {_value(run.summary[k].iloc[p])}" for k in run.swept) or f"point {p}"
         samples[f"{run.label} ({where})"] = ok["edm"].to_numpy(dtype=float)
     pooled = np.concatenate(list(samples.values()))
     edges = np.histogram_bin_edges(pooled[np.isfinite(pooled)], bins=min(40, max(5, pooled.size // 8)))

@@ -50,6 +50,8 @@ class Scene:
     sample_from: float = 0.0  # time of the first Poincare sample
     limits: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))  # (n_limits, 3) rows: limit_row
     limit_names: tuple[str, ...] = ()      # the limits' names, in the rows' order
+    im_period: float = 0.0    # period (s) and damping of the sa column ([intensity_measures]; 0: none)
+    im_damping: float = 0.05
 
     @property
     def n_floors(self) -> int:
@@ -201,6 +203,8 @@ def build_scene(scenario: Scenario) -> Scene:
         period=period, sample_from=sample_from,
         limits=np.array([limit_row(l.metric, l.value, nf) for l in scenario.limits.values()], dtype=float).reshape(-1, 3),
         limit_names=tuple(scenario.limits),
+        **({"im_period": scenario.intensity_measures.period, "im_damping": scenario.intensity_measures.damping}
+           if scenario.intensity_measures else {}),
     )
 
 

@@ -19,7 +19,7 @@ from .loads import (ChirpLoad, FilteredNoiseLoad, ForceRecordLoad, GroundMotionL
                     ImpulseLoad, InitialLoad, JenningsEnvelope, Load, PulseTrainLoad, RecordLoad,
                     SaragoniHartEnvelope, WhiteNoiseLoad)
 from .model import Scenario
-from .settings import (OBJECTIVES, Bound, Ensemble, History, Limit, Optimize, Output, Simulation, history_signals,
+from .settings import (OBJECTIVES, Bound, Ensemble, History, IntensityMeasures, Limit, Optimize, Output, Simulation, history_signals,
                        limit_metrics, quantile_name)
 from .study import Study, load_scenario, parse_scenario
 from .sweeps import get_path, set_path
@@ -27,7 +27,7 @@ from .sweeps import get_path, set_path
 __all__ = [
     "OBJECTIVES", "Absorber", "Bound", "ChirpLoad", "Contact", "CubicAbsorber", "Distribution", "Ensemble",
     "FilteredNoiseLoad", "ForceRecordLoad", "GroundMotionLoad", "HalfSineLoad", "HarmonicLoad", "HertzAbsorber",
-    "History", "ImpactAbsorber", "ImpulseLoad", "InitialLoad", "JenningsEnvelope", "Limit", "LinearAbsorber", "Load",
+    "History", "ImpactAbsorber", "IntensityMeasures", "ImpulseLoad", "InitialLoad", "JenningsEnvelope", "Limit", "LinearAbsorber", "Load",
     "LognormalDistribution", "NormalDistribution", "Optimize", "Output", "Primary", "PulseTrainLoad", "Rayleigh",
     "RecordLoad", "SaragoniHartEnvelope", "Scenario", "ScenarioError", "Simulation", "Study",
     "TruncatedNormalDistribution", "UniformDistribution", "WhiteNoiseLoad", "get_path", "history_signals",

@@ -189,19 +189,57 @@ class _RecordLoad(_Model):
     _times: np.ndarray | None = PrivateAttr(default=None)
     _values: np.ndarray | None = PrivateAttr(default=None)
 
+    @property
+    def factor(self) -> float:
+        """The record's scale."""
+        return self.scale
+
     def samples(self) -> tuple[np.ndarray, np.ndarray]:
         """Times and values in scenario units (scale and units applied)."""
         if self._times is None:
             raise RuntimeError(f"record {self.file!r} was not read (use load_scenario)")
-        factor = G if getattr(self, "units", "m/s2") == "g" else 1.0
-        return self._times, self._values * (self.scale * factor)
+        units = G if getattr(self, "units", "m/s2") == "g" else 1.0
+        return self._times, self._values * (self.factor * units)
+
+
+class SpectralTarget(_Model):
+    """Scale a record so that its pseudo-spectral acceleration ``Sa(period, damping)`` is
+    ``value`` (in the record's units; ``vines_stoch.spectra``)."""
+
+    period: Positive
+    damping: Annotated[float, Field(ge=0, lt=1, allow_inf_nan=False)] = 0.05
+    value: Positive
 
 
 class RecordLoad(_RecordLoad):
-    """Ground acceleration record (base excitation: every mass gets ``-m a_g``)."""
+    """Ground acceleration record (base excitation: every mass gets ``-m a_g``); ``sa`` scales
+    it to a spectral acceleration instead of by ``scale``."""
 
     type: Literal["record"]
     units: Literal["g", "m/s2"]
+    sa: SpectralTarget | None = None
+
+    @model_validator(mode="after")
+    def _one_scale(self) -> "RecordLoad":
+        if self.sa is not None and self.scale != 1.0:
+            raise FieldError("scale", self.scale, "give scale or sa, not both (sa sets the scale)")
+        return self
+
+    @property
+    def factor(self) -> float:
+        """The record's scale: ``scale``, or ``sa.value / Sa`` of the record as read."""
+        if self.sa is None:
+            return self.scale
+        from ..spectra import pseudo_acceleration, uniform
+
+        if self._times is None:
+            raise RuntimeError(f"record {self.file!r} was not read (use load_scenario)")
+        values, dt = uniform(self._times, self._values)
+        sa = pseudo_acceleration(values, dt, self.sa.period, self.sa.damping)
+        if sa <= 0.0:
+            raise ValueError(f"record {self.file!r}: Sa({self.sa.period:g} s) is 0; it cannot be scaled to a "
+                             "spectral acceleration")
+        return self.sa.value / sa
 
 
 class ForceRecordLoad(_RecordLoad):

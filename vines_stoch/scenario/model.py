@@ -14,7 +14,8 @@ from .distributions import Distribution
 from .errors import FieldError
 from .fields import MAX_ABSORBERS, MAX_LIMITS, MAX_LOADS, MAX_STEPS, _Model
 from .loads import InitialLoad, Load, WhiteNoiseLoad, _FilteredLoad
-from .settings import Ensemble, Limit, Optimize, Output, Simulation, history_signals, limit_metrics
+from .settings import (Ensemble, IntensityMeasures, Limit, Optimize, Output, Simulation, history_signals,
+                       limit_metrics)
 
 #: A limit's name (it becomes part of column names).
 LIMIT_NAME = re.compile(r"[A-Za-z][A-Za-z0-9_]{0,39}")
@@ -34,6 +35,7 @@ class Scenario(_Model):
     uncertain: dict[str, Distribution] = {}
     optimize: Optimize | None = None
     limits: Annotated[dict[str, Limit], Field(max_length=MAX_LIMITS)] = {}
+    intensity_measures: IntensityMeasures | None = None
     output: Output = Output()
 
     @model_validator(mode="after")

@@ -143,6 +143,16 @@ class Limit(_Model):
     value: Positive
 
 
+class IntensityMeasures(_Model):
+    """Intensity measures of the ground acceleration each realisation saw (records and
+    generated ground motion, over the whole duration), as columns of realizations.parquet:
+    ``sa``, the pseudo-spectral acceleration at ``period`` (s) and ``damping``
+    (``vines_stoch.spectra``), and ``pga``, the peak ground acceleration."""
+
+    period: Positive
+    damping: Annotated[float, Field(ge=0, lt=1, allow_inf_nan=False)] = 0.05
+
+
 class Output(_Model):
     """Where results go (default ``results/<name>``)."""
 

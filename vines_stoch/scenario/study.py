@@ -33,13 +33,16 @@ def _validate(data: dict[str, Any], source: str) -> Scenario:
     return validate(Scenario, data, source)
 
 
-def _require_numeric(data: dict[str, Any], key: str, where: str, spec: Any, source: str) -> None:
-    """``key`` must address an existing numeric field of the file."""
+def _require_numeric(data: dict[str, Any], key: str, where: str, spec: Any, source: str, text: bool = False) -> None:
+    """``key`` must address an existing numeric field of the file (``text``: a text field)."""
     try:
         current = get_path(data, key)
     except (KeyError, IndexError, ValueError, TypeError):
         current = None
-    if isinstance(current, bool) or not isinstance(current, (int, float)):
+    if text and not isinstance(current, str):
+        raise ScenarioError(format_error(source, where, spec, "texts sweep an existing text field of the file (e.g. "
+                                         "loads.0.file for a suite of records)"))
+    if not text and (isinstance(current, bool) or not isinstance(current, (int, float))):
         raise ScenarioError(format_error(source, where, spec,
                                     "must name an existing numeric field of the file (e.g. loads.0.velocity)"))
 
@@ -88,8 +91,9 @@ class Study:
         self.sweep_keys = list(sweep)
         grids = {k: _grid(k, sweep[k], source) for k in self.sweep_keys}
         for key in self.sweep_keys:
-            _require_numeric(data, key, f"sweep.{key}", sweep[key], source)
-            if self._integer(key):
+            text = isinstance(grids[key][0], str)
+            _require_numeric(data, key, f"sweep.{key}", sweep[key], source, text)
+            if not text and self._integer(key):
                 grids[key] = _whole(grids[key], f"sweep.{key}", sweep[key], source)
         self.uncertain_keys = list(self.base.uncertain)
         for key, dist in self.base.uncertain.items():

@@ -11,9 +11,15 @@ import numpy as np
 from .errors import MISSING, ScenarioError, format_error
 from .fields import MAX_POINTS
 
-def _grid(key: str, spec: Any, source: str) -> list[float]:
-    """Values of one ``[sweep]`` entry: a list, ``{linspace = [a, b, n]}`` or ``{logspace = [a, b, n]}``."""
+def _grid(key: str, spec: Any, source: str) -> list[float] | list[str]:
+    """Values of one ``[sweep]`` entry: a list of numbers or of texts, ``{linspace = [a, b, n]}`` or
+    ``{logspace = [a, b, n]}``."""
     where = f"sweep.{key}"
+    if isinstance(spec, list) and spec and all(isinstance(v, str) for v in spec):
+        if len(spec) > MAX_POINTS:
+            raise ScenarioError(format_error(source, where, spec, f"{len(spec)} values: a sweep has at most "
+                                             f"{MAX_POINTS} points (split the study into several files)"))
+        return list(spec)  # a text field's values (e.g. the record files of a suite)
     if isinstance(spec, list):
         values = spec
     elif isinstance(spec, dict) and len(spec) == 1 and next(iter(spec)) in ("linspace", "logspace"):
@@ -40,7 +46,8 @@ def _grid(key: str, spec: Any, source: str) -> list[float]:
                                          f"{MAX_POINTS} points (split the study into several files)"))
     for v in values:
         if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
-            raise ScenarioError(format_error(source, where, spec, "values must be finite numbers"))
+            raise ScenarioError(format_error(source, where, spec, "values must be finite numbers (or all texts, for a "
+                                             "text field such as a record's file)"))
     return [float(v) for v in values]
 
 
@@ -83,7 +90,7 @@ def _zipped(spec: Any, sweep: dict[str, Any], source: str) -> list[str]:
     return list(dict.fromkeys(spec))
 
 
-def _product(grids: dict[str, list[float]], zipped: list[str], source: str) -> list[dict[str, float]]:
+def _product(grids: dict[str, list], zipped: list[str], source: str) -> list[dict[str, float | str]]:
     """Sweep points: the cartesian product of the axes, zipped keys forming one axis."""
     if zipped:
         lengths = {len(grids[k]) for k in zipped}
