@@ -152,3 +152,10 @@ roof = { metric = "x1_max", value = 0.25 }
     assert 0.2 < first["median"] < 2.0
     code, err = cli("fragility", out, "--limit", "nope", "--im", "loads.0.intensity")
     assert code == 2 and "not a limit of this run" in err
+    # the report shows the exceedances against intensity with the fitted curve
+    code, err = cli("report", out, "--out", tmp_path / "reports")
+    assert code == 0, err
+    text = (tmp_path / "reports" / "sdof-fragility" / "report.md").read_text()
+    assert "## Exceedance probabilities" in text and "p_roof_lo" in text and "## Fragility" in text
+    assert f"{first['median']:.4g}" in text
+    assert (tmp_path / "reports" / "sdof-fragility" / "exceedance.png").stat().st_size > 0

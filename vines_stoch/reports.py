@@ -10,7 +10,10 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+from scipy.special import ndtr
 
+from .fragility import stripes
+from .metrics import limit_names
 from .store import read_metadata, read_results
 
 #: Metrics compared by default.
@@ -48,6 +51,27 @@ class Run:
     def swept(self) -> list[str]:
         """Swept keys (columns of the summary)."""
         return [k for k in self.scenario.get("sweep", {}) if k != "zip" and k in self.summary.columns]
+
+    @property
+    def limits(self) -> list[str]:
+        """Names of the run's limits (its ``first_passage_NAME`` columns)."""
+        return limit_names(self.realizations)
+
+    def fragility(self) -> pd.DataFrame | None:
+        """The fits of ``vines-stoch fragility`` in the directory (one row per limit and
+        intensity), or None."""
+        path = self.directory / "fragility.parquet"
+        if not path.is_file():
+            return None
+        return pd.read_parquet(path).drop_duplicates(["limit", "im_key"]).reset_index(drop=True)
+
+    def intensity(self, limit: str) -> str | None:
+        """The intensity the exceedances of ``limit`` are shown against: that of its fragility
+        fit, else the first numeric swept key."""
+        fits = self.fragility()
+        if fits is not None and (fits["limit"] == limit).any():
+            return str(fits.loc[fits["limit"] == limit, "im_key"].iloc[0])
+        return self.axes[0] if self.axes else None
 
     @property
     def axes(self) -> list[str]:
@@ -224,6 +248,29 @@ def _plots(runs: list[Run], out: Path, point: int | None) -> list[str]:
     ax.legend(fontsize=8)
     save(fig, "edm_histogram.png")
 
+    shown = [(run, limit, run.intensity(limit)) for run in runs for limit in run.limits]
+    shown = [(run, limit, key) for run, limit, key in shown if key is not None]
+    if shown:  # exceedance against intensity, with the fragility curves fitted
+        fig, ax = plt.subplots(figsize=(6.4, 4.2))
+        for run, limit, key in shown:
+            table = stripes(run.realizations, limit, key)
+            err = np.vstack([table["fraction"] - table["fraction_lo"], table["fraction_hi"] - table["fraction"]])
+            bars = ax.errorbar(table["im"], table["fraction"], yerr=err, fmt="o", ms=4, capsize=3,
+                               label=f"{run.label}: {limit} against {key} (95 % intervals)")
+            fits = run.fragility()
+            fit = None if fits is None else fits[(fits["limit"] == limit) & (fits["im_key"] == key)]
+            if fit is not None and len(fit) and np.isfinite(fit["median"].iloc[0]):
+                median, beta = fit["median"].iloc[0], fit["beta"].iloc[0]
+                x = np.geomspace(table["im"][table["im"] > 0].min() / 2, table["im"].max() * 2, 200)
+                ax.plot(x, ndtr(np.log(x / median) / beta), color=bars[0].get_color(),
+                        label=f"fragility: median {median:.4g}, beta {beta:.3g}")
+        if all((stripes(run.realizations, limit, key)["im"] > 0).all() for run, limit, key in shown):
+            ax.set_xscale("log")
+        ax.set(xlabel=", ".join(dict.fromkeys(key for _, _, key in shown)), ylabel="P(exceed)", ylim=(-0.02, 1.02),
+               title="Exceedance probability against intensity")
+        ax.legend(fontsize=7)
+        save(fig, "exceedance.png")
+
     histories = [run for run in runs if run.history is not None and "e1_mean" in run.history.columns]
     if histories:
         fig, ax = plt.subplots(figsize=(6.4, 4.2))
@@ -263,6 +310,18 @@ def report(directories: list[str | Path], out: str | Path = "reports", labels: l
         parts += [f"## {run.label}", "", f"Directory `{run.directory}`, seed {run.seed}, "
                   f"{int(s['n_ok'].sum() + s['n_failed'].sum())} realisations.", "", markdown(table), ""]
     parts += [f"## Where mean EDM >= {EDM_LEVEL}", "", markdown(pd.DataFrame([effective_range(r) for r in runs])), ""]
+    for run in runs:
+        if run.limits:
+            columns = [c for name in run.limits for c in (f"p_{name}", f"p_{name}_lo", f"p_{name}_hi")]
+            parts += [f"## Exceedance probabilities: {run.label}", "", "Fraction of the ok realisations whose peak "
+                      "exceeded each limit, with its 95 % Wilson interval.", "",
+                      markdown(run.summary[["point", *run.swept, "n_ok", *columns]]), ""]
+        fits = run.fragility()
+        if fits is not None:
+            parts += [f"## Fragility: {run.label}", "", "Lognormal fragility `Phi(ln(IM / median) / beta)` by "
+                      "maximum likelihood over the stripes, 95 % bootstrap bounds (`vines-stoch fragility`).", "",
+                      markdown(fits[["limit", "im_key", "median", "median_lo", "median_hi", "beta", "beta_lo",
+                                     "beta_hi", "bootstrap_fitted", "diverged", "notes"]]), ""]
     if len(runs) > 1:
         try:
             table = markdown(compare(runs))
