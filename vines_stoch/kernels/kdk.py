@@ -358,7 +358,7 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
                     # written out like the first kick's: an inlined helper for both measured 40 %
                     # slower)
                     ag_end = ag_next
-                    if hit >= 0:
+                    if has_impact and hit >= 0:
                         ag_end = excitation(t + s, tm, (t + s - t_step) / dt, forces, series_t, series_v, series_ptr,
                                             series_target, filtered, c_force, c_ground, z, zn, pc, False, GROUND,
                                             load_end)
@@ -377,7 +377,7 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
                         d_absorber += absorber_dissipation(v, vn, nf, host, rows, s)
                     for b in range(nb):
                         v[b] = vn[b]
-                    if hit < 0:
+                    if not has_impact or hit < 0:
                         break
                     # the impact, at t + s; the rest of the step keeps the rest of the increments
                     h = host_of(host, hit, nf)

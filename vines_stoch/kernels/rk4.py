@@ -311,7 +311,7 @@ def rk4_kernel(n_bodies: int, n_floors: int, has_impact: bool, has_hertz: bool, 
                             j, hf, sign, wall = event_geometry(event_kind, q, side, nf, host, rows)
                             phase = 1
                             continue
-                    elif phase > 0:
+                    elif (has_impact or has_hertz) and phase > 0:
                         approach = sign * (pick(vn, j) - vn[hf])
                         if approach > 0.0:
                             correction = sign * (pick(xn, j) - xn[hf] - wall) / approach
@@ -337,7 +337,7 @@ def rk4_kernel(n_bodies: int, n_floors: int, has_impact: bool, has_hertz: bool, 
                     for b in range(nb):
                         x[b] = xn[b]
                         v[b] = vn[b]
-                    if inside and contact:
+                    if has_hertz and inside and contact:
                         for c in range(na):
                             if touching[c] != 0:
                                 out[CONTACT_TIME] += h
@@ -348,7 +348,7 @@ def rk4_kernel(n_bodies: int, n_floors: int, has_impact: bool, has_hertz: bool, 
                         if capped:
                             keep_in_cavities(x, nf, kind, host, rows)
                         break
-                    if event_kind == IMPACT_EVENT:
+                    if has_impact and event_kind == IMPACT_EVENT:
                         n_impacts += 1
                         put(x, j, x[hf] + side * rows[q, CLEARANCE])
                         wall_accelerations(x, v, t, nf, mass, inv_mass, storey_k, storey_c, floor_c, kind, host, rows,
@@ -361,9 +361,9 @@ def rk4_kernel(n_bodies: int, n_floors: int, has_impact: bool, has_hertz: bool, 
                         if inside:
                             out[IMPACT_LOSS] += loss
                             out[E1_MAX] = max(out[E1_MAX], primary_energy(mass, storey_k, x, v, nf))
-                    elif event_kind == ONSET:
+                    elif has_hertz and event_kind == ONSET:
                         touching[q] = side
-                    elif event_kind == EXIT:
+                    elif has_hertz and event_kind == EXIT:
                         touching[q] = 0
                     if inside and (event_kind == IMPACT_EVENT or event_kind == ONSET):
                         out[IMPACTS] += 1
