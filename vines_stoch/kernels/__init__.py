@@ -27,10 +27,11 @@ def kernel_for(scene, replay: bool = False):
     """The compiled loop for a scene's scheme (``schemes.SCHEMES``) and structure."""
     piecewise, ground = scene.kernel_flags
     nb, nf = scene.mass.shape[0], scene.n_floors
+    watch = scene.limits.shape[0] > 0
     if SCHEMES[scene.scheme].kernel == "rk4":
-        return rk4_kernel(nb, nf, scene.has_impact, scene.has_hertz, scene.period > 0, piecewise)
+        return rk4_kernel(nb, nf, scene.has_impact, scene.has_hertz, scene.period > 0, piecewise, watch)
     return kdk_kernel(nb, nf, scene.forces.shape[0], scene.has_white_noise, scene.has_impact, scene.has_filters,
-                      piecewise, ground, replay, scene.scheme == "sra")
+                      piecewise, ground, replay, scene.scheme == "sra", watch)
 
 
 def sample_buffer(scene) -> np.ndarray:

@@ -137,10 +137,11 @@ def crossing(x, v, length, total, z, load, ag, force, mass, inv_mass, nf, stuck,
 
 @lru_cache(maxsize=None)
 def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_impact: bool, filtered: bool,
-               piecewise: bool, ground: bool, replay: bool = False, sra: bool = False):
+               piecewise: bool, ground: bool, replay: bool = False, sra: bool = False, watch: bool = False):
     """The kick-drift-kick Euler-Maruyama loop specialised to a scene's structure (number of
     bodies, of floors and of closed-form force rows, white noise, impact absorbers, filtered
-    loads, loads with kinks or jumps, ground acceleration: ``Scene.kernel_flags``).
+    loads, loads with kinks or jumps, ground acceleration: ``Scene.kernel_flags``; limits whose
+    first passages to watch: ``watch``, so that a scene without limits has no check in its step).
     Harmonic loads on the step grid come from phasors (``loads.turn``), set exactly every
     ``CHECK_EVERY`` steps.
 
@@ -246,7 +247,7 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
                     if sra:
                         acc[k] *= inv_mass[k]
                 floor_peaks(x, nf, acc, x_max, drift_max, acc_max)
-                if pending > 0:
+                if watch and pending > 0:
                     pending = first_passages(limits, i * dt, nf, x_max, drift_max, acc_max, inv_mass, not sra, e1_max,
                                              out)
             if i % CHECK_EVERY == 0:
@@ -413,7 +414,7 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
                         if not sra:  # the forces on the floor at the step's end
                             acc[k] = force[k] + load_end[k]
                     floor_peaks(x, nf, acc, x_max, drift_max, acc_max)
-                    if pending > 0:
+                    if watch and pending > 0:
                         pending = first_passages(limits, t_step + dt, nf, x_max, drift_max, acc_max, inv_mass, not sra,
                                                  e1_max, out)
                 e1_prev = e1

@@ -216,10 +216,11 @@ def contact_step(x, v, nf, mass, host, rows, touching) -> float:
 
 
 @lru_cache(maxsize=None)
-def rk4_kernel(n_bodies: int, n_floors: int, has_impact: bool, has_hertz: bool, sampling: bool, piecewise: bool):
+def rk4_kernel(n_bodies: int, n_floors: int, has_impact: bool, has_hertz: bool, sampling: bool, piecewise: bool,
+               watch: bool = False):
     """The RK4 loop specialised to a scene's structure (number of bodies and of floors, impact
     absorbers, Hertz absorbers, Poincare sampling for the regime, loads with kinks or jumps:
-    ``Scene.kernel_flags``).  It takes the arguments of ``kdk.kdk_kernel`` (no noise, no
+    ``Scene.kernel_flags``; limits to watch).  It takes the arguments of ``kdk.kdk_kernel`` (no noise, no
     generators)."""
     NB = n_bodies
     NF = n_floors
@@ -263,7 +264,7 @@ def rk4_kernel(n_bodies: int, n_floors: int, has_impact: bool, has_hertz: bool, 
                 for k in range(nf):  # (the accelerations from the window's first sub-step on)
                     x_max[k] = abs(x[k])
                     drift_max[k] = abs(x[k] - x[k - 1] if k > 0 else x[k])
-                if pending > 0:
+                if watch and pending > 0:
                     pending = first_passages(limits, i * dt, nf, x_max, drift_max, acc_max, inv_mass, False,
                                              out[E1_MAX], out)
             if i % CHECK_EVERY == 0 and diverged(x):
@@ -331,7 +332,7 @@ def rk4_kernel(n_bodies: int, n_floors: int, has_impact: bool, has_hertz: bool, 
                         # peaks: the state at the sub-step's end, the accelerations at its start
                         floor_peaks(xn, nf, a0, x_max, drift_max, acc_max)
                         out[E1_MAX] = max(out[E1_MAX], primary_energy(mass, storey_k, xn, vn, nf))
-                        if pending > 0:
+                        if watch and pending > 0:
                             pending = first_passages(limits, t + h, nf, x_max, drift_max, acc_max, inv_mass, False,
                                                      out[E1_MAX], out)
                     for b in range(nb):
