@@ -33,9 +33,10 @@ elcentro: $(STAMP)
 	$(BIN)/python -c "import sys; from vines_stoch.records import extract_elcentro; print('wrote', extract_elcentro(*sys.argv[1:]))" \
 		$(VENV)/quakeio/quakeio-0.1.21-py3-none-any.whl scenarios/records/elcentro_1940_ns.txt
 
-# numba's on-disk cache is keyed on each kernel's own file: clear it after editing the
-# formula modules the kernels inline (physics.py, kernels/common.py).
+# numba's on-disk cache of the kernels lives in folders named by a hash of the physics and
+# kernel sources (vines_stoch/cache.py): edits compile afresh; this removes every such folder.
 clean-cache:
+	find vines_stoch -depth -type d -name 'vines-stoch-*' -exec rm -rf {} +
 	find vines_stoch -name '*.nbi' -delete -o -name '*.nbc' -delete
 
 clean: clean-cache

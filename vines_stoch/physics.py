@@ -17,6 +17,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from .cache import key_by_sources
 from .inlining import share_scope_copies
 
 #: Options of every compiled loop: cached on disk, GIL released, IEEE division (no Python
@@ -32,6 +33,7 @@ KERNEL = dict(cache=True, nogil=True, error_model="numpy", fastmath={"contract"}
 #: work calls it through an out-of-line wrapper (``rk4.rk4_step``, ``rk4.wall_accelerations``).
 INLINE = dict(KERNEL, inline="always")
 share_scope_copies()  # about half of a kernel's cold compile time (see ``inlining``)
+key_by_sources()  # an edited formula never runs from a stale cache (see ``cache``)
 
 #: Kind codes of absorber rows (MODEL.md section 2), by the ``type`` of a scenario's absorber.
 LINEAR, CUBIC, IMPACT, HERTZ = 0, 1, 2, 3

@@ -1,0 +1,74 @@
+"""numba's on-disk cache of the kernels, keyed by the sources of the physics and the kernels.
+
+numba checks a cached function against its own source file only: a kernel that inlines a
+formula of ``physics.py`` or ``kernels/common.py`` would load its stale machine code after that
+formula was edited.  ``key_by_sources`` puts the cache of every compiled function of this
+package in a folder named by a hash of all those sources (``vines-stoch-<hash>`` under the
+package's ``__pycache__`` folders, or under ``NUMBA_CACHE_DIR`` where that is set), so an edit
+anywhere in them compiles afresh, and going back to earlier sources finds their cache again.
+Functions outside the package keep numba's own locations.  ``make clean-cache`` removes the
+folders of earlier sources.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+from pathlib import Path
+
+#: The package's folder.
+PACKAGE = Path(__file__).resolve().parent
+#: The sources compiled functions are built from: the formulas, the step loops and what they
+#: inline, and the compiler settings.
+SOURCES = ("physics.py", "inlining.py", "cache.py", "kernels")
+
+
+def digest(package: Path = PACKAGE) -> str:
+    """A hash of the sources named by ``SOURCES`` (their paths and bytes), 16 hex digits."""
+    h = hashlib.sha256()
+    for name in SOURCES:
+        path = package / name
+        files = sorted(path.glob("*.py")) if path.is_dir() else [path]
+        for f in files:
+            h.update(str(f.relative_to(package)).encode())
+            h.update(f.read_bytes())
+    return h.hexdigest()[:16]
+
+
+def key_by_sources() -> str:
+    """Make numba cache this package's compiled functions in a folder named by ``digest``
+    (once); returns that folder's name."""
+    from numba.core import caching, config
+
+    name = f"vines-stoch-{digest()}"
+    locators = getattr(getattr(caching, "CacheImpl", None), "_locator_classes", None)
+    mixin = getattr(caching, "_SourceFileBackedLocatorMixin", None)
+    if locators is None or mixin is None:  # another numba's cache internals: its own locations
+        return name
+    if any(getattr(k, "keyed_by_sources", False) for k in locators):
+        return name
+
+    class SourceKeyedLocator(caching.UserProvidedCacheLocator):
+        """The cache of a function of this package: ``name`` under ``NUMBA_CACHE_DIR`` (with
+        numba's own sub-path of the file's folder) or under the file's ``__pycache__``."""
+
+        keyed_by_sources = True
+
+        def __init__(self, py_func, py_file):
+            self._py_file = py_file
+            self._lineno = py_func.__code__.co_firstlineno
+            if config.CACHE_DIR:
+                root = os.path.join(config.CACHE_DIR, self.get_suitable_cache_subpath(py_file))
+            else:
+                root = os.path.join(os.path.dirname(py_file), "__pycache__")
+            self._cache_path = os.path.join(root, name)
+
+        @classmethod
+        def from_function(cls, py_func, py_file):
+            if not Path(py_file).resolve().is_relative_to(PACKAGE):
+                return None
+            # (a folder that cannot be written: numba's next locators, a user-wide cache)
+            return mixin.from_function.__func__(cls, py_func, py_file)
+
+    locators.insert(0, SourceKeyedLocator)
+    return name
