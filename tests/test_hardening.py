@@ -274,3 +274,15 @@ def test_two_runs_into_one_folder_and_a_killed_run_resumed(tmp_path):
     want = pd.read_parquet(tmp_path / "clean" / "realizations.parquet")
     pd.testing.assert_frame_equal(got.drop(columns=["wall_time"], errors="ignore"),
                                   want.drop(columns=["wall_time"], errors="ignore"))
+
+
+def test_one_version_string_from_the_package_metadata():
+    """``__version__`` is the installed distribution's version (pyproject.toml's), and the
+    results' metadata carry it."""
+    import tomllib
+    from pathlib import Path
+
+    import vines_stoch
+
+    project = tomllib.loads((Path(__file__).resolve().parents[1] / "pyproject.toml").read_text())["project"]
+    assert vines_stoch.__version__ == project["version"]

@@ -14,7 +14,17 @@ from __future__ import annotations
 
 from typing import Any
 
-__version__ = "0.1.0"
+def _version() -> str:
+    """The version of the installed distribution (pyproject.toml is its one source)."""
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version("vines-stoch")
+    except PackageNotFoundError:  # a source tree that was never installed
+        return "0+unknown"
+
+
+__version__ = _version()
 
 from .scenario import ScenarioError, load_scenario, parse_scenario  # noqa: E402
 
