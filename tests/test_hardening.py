@@ -284,5 +284,8 @@ def test_one_version_string_from_the_package_metadata():
 
     import vines_stoch
 
+    from vines_stoch.store import provenance
+
     project = tomllib.loads((Path(__file__).resolve().parents[1] / "pyproject.toml").read_text())["project"]
     assert vines_stoch.__version__ == project["version"]
+    assert provenance("", "", 0, "embedded")["vines_stoch.version"] == project["version"]
