@@ -73,6 +73,16 @@ def test_fisher_scoring_reaches_the_likelihood_maximum():
     assert ok and b == pytest.approx(1 / result["beta"])
 
 
+def test_separating_replicates_widen_the_bounds_to_a_step():
+    """Few realisations a stripe: some bootstrap replicates separate; they count as beta = 0
+    (the lower bound), not dropped."""
+    table = pd.DataFrame({"im": [0.2, 0.25, 0.3, 0.35, 0.4], "n": [3] * 5, "exceeded": [0, 1, 2, 1, 3]})
+    result = fit(table, samples=500)
+    assert np.isfinite(result["beta"]) and result["beta_lo"] == 0.0 < result["beta"] < result["beta_hi"]
+    assert "separate" in result["notes"] and result["bootstrap_fitted"] == 500
+    assert result["median_lo"] < result["median"] < result["median_hi"]
+
+
 def test_stripes_count_realisations_that_did_not_end_ok_only_when_asked():
     frame = synthetic(np.random.default_rng(3), failed=5)
     kept = stripes(frame, "drift", "loads.0.intensity")
@@ -89,6 +99,14 @@ def test_no_fit_is_said_not_faked():
     frame["first_passage_drift"] = np.where(frame["loads.0.intensity"] > MEDIAN, 1.0, np.nan)  # separated
     result = fit(stripes(frame, "drift", "loads.0.intensity"), samples=50)
     assert math.isnan(result["median"]) and "separate" in result["notes"]
+    # quasi-separation (one mixed stripe between all-below and all-above) has no maximum either,
+    # and stripes far apart must not pass for a fit once the weights underflow
+    for exceeded in ([0, 0, 1, 20, 20], [0, 0, 20, 20, 20]):
+        table = pd.DataFrame({"im": [0.01, 0.1, 1.0, 10.0, 100.0], "n": [20] * 5, "exceeded": exceeded})
+        result = fit(table, samples=50)
+        assert math.isnan(result["beta"]) and "separate" in result["notes"], exceeded
+    falling = pd.DataFrame({"im": [0.1, 0.2, 0.4, 0.8], "n": [20] * 4, "exceeded": [15, 10, 5, 2]})
+    assert "do not grow" in fit(falling, samples=0)["notes"]
     frame["first_passage_drift"] = np.nan
     result = fit(stripes(frame, "drift", "loads.0.intensity"), samples=50)
     assert math.isnan(result["beta"]) and "no fit" in result["notes"]

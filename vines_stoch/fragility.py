@@ -29,8 +29,6 @@ from .store import read_results
 
 #: Fisher-scoring iterations (a fit converges in well under 20; separated stripes never do).
 ITERATIONS = 60
-#: ``beta`` below this (stripes all 0 below an intensity and all 1 above it) is no fit.
-BETA_MIN = 1e-3
 #: Intensities past this many are pooled into this many bins in the plot (the fit uses them all).
 PLOT_BINS = 20
 #: How realisations that did not end ok are treated.
@@ -40,7 +38,8 @@ DIVERGED = ("exclude", "exceed")
 def probit_fit(u: np.ndarray, n: np.ndarray, z: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Maximum-likelihood ``(a, b)`` of ``z ~ Binomial(n, Phi(a + b u))`` over the last axis
     (the stripes; leading axes are independent fits), and whether each fit converged with
-    ``b > 0`` and ``1 / b >= BETA_MIN`` (stripes that separate perfectly have no maximum)."""
+    ``b > 0``.  The weights use the ratios ``phi / Phi`` in logarithms, so no term underflows;
+    stripes that separate (``separation``) have no maximum and are not to be given here."""
     y = z / np.maximum(n, 1)
     # start: least squares of the probits of the (clipped) fractions
     eta0 = ndtri(np.clip(y, 0.02, 0.98))
@@ -48,26 +47,40 @@ def probit_fit(u: np.ndarray, n: np.ndarray, z: np.ndarray) -> tuple[np.ndarray,
     b = ((u - um) * eta0).sum(axis=-1) / max(float(((u - um) ** 2).sum()), 1e-300)
     b = np.where(b > 0, b, 1.0)
     a = eta0.mean(axis=-1) - b * um[..., 0]
+    log_dens0 = -0.5 * np.log(2 * np.pi)
+    step = np.full(np.shape(a), np.inf)
     for _ in range(ITERATIONS):
         eta = a[..., None] + b[..., None] * u
-        mu = np.clip(ndtr(eta), 1e-12, 1 - 1e-12)
-        dens = np.exp(-0.5 * eta**2) / np.sqrt(2 * np.pi)
-        w = n * dens**2 / (mu * (1 - mu))
-        r = n * dens * (y - mu) / (mu * (1 - mu))  # the score's terms
+        log_dens = log_dens0 - 0.5 * eta**2
+        up, down = np.exp(log_dens - log_ndtr(eta)), np.exp(log_dens - log_ndtr(-eta))  # phi/Phi, phi/(1-Phi)
+        w = n * up * down
+        r = n * (y * up - (1 - y) * down)  # the score's terms
         # Newton step with the Fisher information [[sum w, sum w u], [sum w u, sum w u^2]]
         s0, s1, s2 = w.sum(-1), (w * u).sum(-1), (w * u * u).sum(-1)
         g0, g1 = r.sum(-1), (r * u).sum(-1)
         det = s0 * s2 - s1 * s1
-        ok = det > 1e-300
-        da = np.where(ok, (s2 * g0 - s1 * g1) / np.where(ok, det, 1.0), 0.0)
-        db = np.where(ok, (s0 * g1 - s1 * g0) / np.where(ok, det, 1.0), 0.0)
+        ok = det > 0
+        safe = np.where(ok, det, 1.0)
+        da = np.where(ok, (s2 * g0 - s1 * g1) / safe, np.nan)
+        db = np.where(ok, (s0 * g1 - s1 * g0) / safe, np.nan)
         a, b = a + da, b + db
-        if np.all(np.abs(db) <= 1e-12 * np.maximum(np.abs(b), 1.0)) and np.all(
-                np.abs(da) <= 1e-12 * np.maximum(np.abs(a), 1.0)):
+        step = np.maximum(np.abs(da) / np.maximum(np.abs(a), 1.0), np.abs(db) / np.maximum(np.abs(b), 1.0))
+        if not np.any(step > 1e-12):  # (NaN steps, a singular information, end the loop too)
             break
-    converged = ((np.abs(db) <= 1e-8 * np.maximum(np.abs(b), 1.0)) & (b > 0)
-                 & (1.0 / np.where(b > 0, b, 1.0) >= BETA_MIN))
+    converged = (step <= 1e-8) & (b > 0)
     return a, b, converged
+
+
+def separation(u: np.ndarray, n: np.ndarray, z: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Whether stripes separate, over the last axis: no non-exceedance at an intensity above
+    an exceedance (all exceedances at or above ``hi``, all non-exceedances at or below ``lo``;
+    ``lo = -inf`` without non-exceedances, ``hi = inf`` without exceedances).  Then the
+    likelihood has no maximum: it grows as ``beta -> 0`` with the median in ``[lo, hi]``
+    (Albert and Anderson, Biometrika 71 (1984) 1, DOI 10.1093/biomet/71.1.1).  Returns
+    ``(separated, lo, hi)`` in ``ln`` intensity."""
+    lo = np.where((z < n) & (n > 0), u, -np.inf).max(axis=-1)
+    hi = np.where(z > 0, u, np.inf).min(axis=-1)
+    return lo <= hi, lo, hi
 
 
 def log_likelihood(u: np.ndarray, n: np.ndarray, z: np.ndarray, a: float, b: float) -> float:
@@ -94,7 +107,7 @@ def stripes(realizations: pd.DataFrame, limit: str, im: str, diverged: str = "ex
     if diverged not in DIVERGED:
         raise ValueError(f"--diverged {diverged}: must be one of {', '.join(DIVERGED)}")
     rows = []
-    for value, group in realizations.groupby(im, sort=True):
+    for value, group in realizations.groupby(im, sort=True, dropna=False):  # (NaN: a stripe that fit leaves out)
         ok = group["status"] == "ok"
         failed = int((~ok).sum())
         exceeded = int(group.loc[ok, column].notna().sum())
@@ -104,7 +117,7 @@ def stripes(realizations: pd.DataFrame, limit: str, im: str, diverged: str = "ex
         fraction, lo, hi = exceedance(exceeded, n)
         rows.append({"im": float(value), "n": n, "exceeded": exceeded, "fraction": fraction, "fraction_lo": lo,
                      "fraction_hi": hi, "n_diverged": failed})
-    return pd.DataFrame(rows)
+    return pd.DataFrame(rows, columns=["im", "n", "exceeded", "fraction", "fraction_lo", "fraction_hi", "n_diverged"])
 
 
 def _replicates(n: np.ndarray, z: np.ndarray, samples: int, gen: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
@@ -128,37 +141,59 @@ def _replicates(n: np.ndarray, z: np.ndarray, samples: int, gen: np.random.Gener
 
 def fit(table: pd.DataFrame, samples: int = 1000, seed: int = 0) -> dict[str, object]:
     """The lognormal fragility of ``stripes`` rows: ``median``, ``beta``, their 95 % bootstrap
-    bounds, the log-likelihood, the replicates that had a fit, and notes."""
-    use = table[(table["n"] > 0) & (table["im"] > 0)]
+    bounds, the log-likelihood, the replicates used for the bounds, and notes.
+
+    Stripes that separate (``separation``) have no fit: NaN, and the notes give the gap.  A
+    bootstrap replicate that separates counts as ``beta = 0`` with its median in the middle of
+    its gap (``0`` or ``inf`` where it has no exceedance or only exceedances), so the bounds are
+    not narrowed by leaving out the replicates that say the curve may be a step."""
+    use = table[(table["n"] > 0) & (table["im"] > 0) & np.isfinite(table["im"])]
     notes = []
     if len(use) < len(table):
-        notes.append(f"{len(table) - len(use)} stripe(s) without realisations or with intensity <= 0 left out")
+        notes.append(f"{len(table) - len(use)} stripe(s) without realisations or with an intensity not > 0 left out")
     u, n, z = (np.log(use["im"].to_numpy(float)), use["n"].to_numpy(float), use["exceeded"].to_numpy(float))
     nan = float("nan")
     result: dict[str, object] = {"median": nan, "beta": nan, "median_lo": nan, "median_hi": nan, "beta_lo": nan,
                                  "beta_hi": nan, "log_likelihood": nan, "bootstrap": samples, "bootstrap_fitted": 0}
+    separated, lo, hi = separation(u, n, z)
     if len(use) < 2 or z.sum() == 0 or z.sum() == n.sum():
         notes.append("no fit: need two stripes or more and both exceedances and non-exceedances")
+    elif separated:
+        notes.append(f"no fit: the stripes separate (no exceedance below {np.exp(hi):.4g}, none short of the limit "
+                     f"above {np.exp(lo):.4g}: the likelihood grows as beta -> 0); add stripes or realisations between")
+    else:
+        a, b, converged = probit_fit(u, n, z)
+        if not converged:
+            notes.append("no fit: the exceedances do not grow with the intensity" if b <= 0 else
+                         "no fit: Fisher scoring did not converge")
+        else:
+            result.update(median=float(np.exp(-a / b)), beta=float(1.0 / b),
+                          log_likelihood=log_likelihood(u, n, z, a, b))
+    if samples == 0 or not np.isfinite(result["median"]):
         result["notes"] = "; ".join(notes)
         return result
-    a, b, converged = probit_fit(u, n, z)
-    if not converged:
-        notes.append(f"no fit: the stripes separate (all below an intensity and none above it: beta < {BETA_MIN:g}); "
-                     "add stripes between them")
-        result["notes"] = "; ".join(notes)
-        return result
-    result.update(median=float(np.exp(-a / b)), beta=float(1.0 / b), log_likelihood=log_likelihood(u, n, z, a, b))
-    if samples > 0:
-        nb, zb = _replicates(n, z, samples, np.random.default_rng(seed))
-        ab, bb, cb = probit_fit(u, nb, zb)
-        cb &= (zb.sum(-1) > 0) & (zb.sum(-1) < nb.sum(-1))
-        result["bootstrap_fitted"] = int(cb.sum())
-        if cb.sum() < samples:
-            notes.append(f"{samples - int(cb.sum())} of {samples} bootstrap replicates had no fit (left out)")
-        if cb.sum() >= 20:
-            medians, betas = np.exp(-ab[cb] / bb[cb]), 1.0 / bb[cb]
-            result["median_lo"], result["median_hi"] = (float(v) for v in np.percentile(medians, [2.5, 97.5]))
-            result["beta_lo"], result["beta_hi"] = (float(v) for v in np.percentile(betas, [2.5, 97.5]))
+    nb, zb = _replicates(n, z, samples, np.random.default_rng(seed))
+    sep, lo_b, hi_b = separation(u, nb, zb)
+    medians, betas = np.full(samples, np.nan), np.full(samples, np.nan)
+    if (~sep).any():
+        ab, bb, cb = probit_fit(u, nb[~sep], zb[~sep])
+        medians[~sep] = np.where(cb, np.exp(-ab / np.where(cb, bb, 1.0)), np.nan)
+        betas[~sep] = np.where(cb, 1.0 / np.where(cb, bb, 1.0), np.nan)
+    gap = np.where(np.isfinite(lo_b) & np.isfinite(hi_b), 0.5 * (lo_b + hi_b), np.where(np.isfinite(hi_b), -np.inf, np.inf))
+    medians[sep], betas[sep] = np.exp(gap[sep]), 0.0
+    used = np.isfinite(betas)
+    result["bootstrap_fitted"] = int(used.sum())
+    if sep.any():
+        notes.append(f"{int(sep.sum())} of {samples} bootstrap replicates separate (counted as beta = 0, median in "
+                     "their gap)")
+    if (~used).any():
+        notes.append(f"{int((~used).sum())} of {samples} bootstrap replicates did not converge (left out)")
+    if used.sum() >= 20:
+        # (order statistics, not interpolation: medians of replicates without exceedances are inf)
+        result["median_lo"] = float(np.percentile(medians[used], 2.5, method="lower"))
+        result["median_hi"] = float(np.percentile(medians[used], 97.5, method="higher"))
+        result["beta_lo"] = float(np.percentile(betas[used], 2.5, method="lower"))
+        result["beta_hi"] = float(np.percentile(betas[used], 97.5, method="higher"))
     result["notes"] = "; ".join(notes)
     return result
 
