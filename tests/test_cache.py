@@ -58,3 +58,18 @@ def test_the_digest_follows_every_source(tmp_path):
         path.write_text(path.read_text() + "\n# edited\n")
         assert cache.digest(root) != first, name
         first = cache.digest(root)
+
+
+def test_a_package_in_a_zip_archive_keeps_numba_s_own_locations(tmp_path):
+    """Sources that are not files (a zip archive: nothing to edit) are not hashed."""
+    import zipfile
+
+    archive = tmp_path / "vs.zip"
+    with zipfile.ZipFile(archive, "w") as z:
+        for f in cache.PACKAGE.rglob("*.py"):
+            z.write(f, f.relative_to(cache.PACKAGE.parent))
+    env = {**os.environ, "PYTHONPATH": str(archive)}
+    done = subprocess.run([sys.executable, "-c", "import vines_stoch.physics, vines_stoch.cache as c; "
+                           "print(repr(c.key_by_sources()), c.PACKAGE)"], cwd=tmp_path, env=env, capture_output=True,
+                          text=True, check=True)
+    assert done.stdout.startswith("'' ") and "vs.zip" in done.stdout

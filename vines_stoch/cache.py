@@ -23,28 +23,36 @@ PACKAGE = Path(__file__).resolve().parent
 SOURCES = ("physics.py", "inlining.py", "cache.py", "kernels")
 
 
-def digest(package: Path = PACKAGE) -> str:
-    """A hash of the sources named by ``SOURCES`` (their paths and bytes), 16 hex digits."""
+def digest(package: Path = PACKAGE) -> str | None:
+    """A hash of the sources named by ``SOURCES`` (their paths and bytes), 16 hex digits; None
+    where they are not files (a package imported from a zip archive)."""
     h = hashlib.sha256()
-    for name in SOURCES:
-        path = package / name
-        files = sorted(path.glob("*.py")) if path.is_dir() else [path]
-        for f in files:
-            h.update(str(f.relative_to(package)).encode())
-            h.update(f.read_bytes())
+    try:
+        for name in SOURCES:
+            path = package / name
+            files = sorted(path.glob("*.py")) if path.is_dir() else [path]
+            for f in files:
+                h.update(str(f.relative_to(package)).encode())
+                h.update(f.read_bytes())
+    except OSError:
+        return None
     return h.hexdigest()[:16]
 
 
 def key_by_sources() -> str:
     """Make numba cache this package's compiled functions in a folder named by ``digest``
-    (once); returns that folder's name."""
+    (once); returns that folder's name ("" where the sources cannot be read: numba's own
+    locations, and a zip archive cannot be edited anyway)."""
     from numba.core import caching, config
 
-    name = f"vines-stoch-{digest()}"
+    key = digest()
+    if key is None:
+        return ""
+    name = f"vines-stoch-{key}"
     locators = getattr(getattr(caching, "CacheImpl", None), "_locator_classes", None)
     mixin = getattr(caching, "_SourceFileBackedLocatorMixin", None)
     if locators is None or mixin is None:  # another numba's cache internals: its own locations
-        return name
+        return ""
     if any(getattr(k, "keyed_by_sources", False) for k in locators):
         return name
 
