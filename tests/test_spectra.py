@@ -141,3 +141,29 @@ def test_bad_spectral_scaling_and_text_sweeps_are_named(tmp_path):
         _suite(tmp_path, "", '"loads.0.file" = ["synthetic_cp_medium.AT2", "missing.AT2"]')
     with pytest.raises(ScenarioError, match="intensity_measures.period"):
         parse_scenario(SUITE.format(k=1.0, c=0.1, scaling="", sweep="").replace("period = 1.0", "period = -1.0"))
+
+
+def test_optimize_a_record_suite_into_another_folder(tmp_path):
+    """The optimum's file names its records (and the suite swept) relative to its own folder,
+    and the final run reads them."""
+    from vines_stoch.optimize import optimize_scenario
+
+    scenario = tmp_path / "study"
+    scenario.mkdir()
+    study = _suite(scenario, "scale = 1.0", '"loads.0.file" = ["synthetic_cp_medium.AT2", '
+                   '"synthetic_cp_medium_1941.AT2"]')
+    text = study.text.replace("duration = 30.0", "duration = 3.0") + """
+[optimize]
+objective = "x1_max"
+max_evaluations = 3
+[optimize.parameters]
+"primary.damping" = { low = 0.2, high = 0.8 }
+"""
+    (scenario / "suite.toml").write_text(text)
+    out = tmp_path / "elsewhere" / "optimum"
+    out.mkdir(parents=True)
+    best, report = optimize_scenario(load_scenario(scenario / "suite.toml"), out)
+    final = load_scenario(out / "optimum.toml")
+    assert [p.loads[0].file for p in final.points] == ["../../study/synthetic_cp_medium.AT2",
+                                                       "../../study/synthetic_cp_medium_1941.AT2"]
+    assert report.is_file() and (out / "realizations.parquet").is_file()

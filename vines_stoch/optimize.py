@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import math
 import os
+import re
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
@@ -125,9 +126,15 @@ def optimum_text(study: Study, values: dict[str, float], directory: Path) -> str
     for key, value in values.items():
         set_path(doc, key, value)
     doc.remove("optimize")
+    def moved(file: str) -> str:  # record files: found relative to the new file's folder
+        return os.path.relpath(study.directory / file, directory)
+
     for load in doc.get("loads", []):
-        if "file" in load:  # record files: found relative to the new file's folder
-            load["file"] = os.path.relpath(study.directory / load["file"], directory)
+        if "file" in load:
+            load["file"] = moved(load["file"])
+    for key, values in doc.get("sweep", {}).items():
+        if re.fullmatch(r"loads\.\d+\.file", key) and isinstance(values, list):  # a suite of records
+            doc["sweep"][key] = [moved(v) for v in values]
     if "output" not in doc:
         doc["output"] = tomlkit.table()
     doc["output"]["directory"] = str(directory)
@@ -189,6 +196,6 @@ def optimize_scenario(study: Study, directory: Path, workers: int | None = None,
     best = optimize(study, directory, workers, echo)
     text = optimum_text(study, best.values, directory)
     (directory / "optimum.toml").write_text(text)
-    final = parse_scenario(text, str(directory / "optimum.toml"), study.directory)
+    final = parse_scenario(text, str(directory / "optimum.toml"), directory)
     _, summary = run(final, directory, workers=workers, progress=progress)
     return best, write_report(study, best, summary, directory)
