@@ -30,7 +30,7 @@ seeds: $(STAMP)
 # quakeio 0.1.21 wheel from the package index and extracts the samples, checking both checksums.
 elcentro: $(STAMP)
 	rm -rf $(VENV)/quakeio && $(BIN)/python -m pip download --quiet --no-deps --dest $(VENV)/quakeio quakeio==0.1.21
-	$(BIN)/python -c "import sys; from vines_stoch.records import extract_elcentro; print('wrote', extract_elcentro(*sys.argv[1:]))" \
+	$(BIN)/python tools/extract_elcentro.py \
 		$(VENV)/quakeio/quakeio-0.1.21-py3-none-any.whl scenarios/records/elcentro_1940_ns.txt
 
 # numba's on-disk cache of the kernels lives in folders named by a hash of the physics and

@@ -127,30 +127,3 @@ def write_at2(path: str | Path, dt: float, values: np.ndarray, title: str, units
               f"NPTS={len(values):8d}, DT={dt:10.4f} SEC"]
     path.write_text("\n".join(header + rows) + "\n")
     return path
-
-
-#: The El Centro 1940 N-S record inside the ``quakeio`` 0.1.21 wheel, and checksums of the
-#: wheel and of the extracted one-column file (README, "Seismic records").
-QUAKEIO_WHEEL_SHA256 = "efad0389f0ebf649e47d27296672571bb5a13806bde922e9582524032f3b5fe6"
-ELCENTRO_SHA256 = "5a2830bc63875343df63618762503f976a2d243f978c0cf20b16a5fa66a7b37e"
-
-
-def extract_elcentro(wheel: str | Path, out: str | Path) -> Path:
-    """Write the El Centro samples of the ``quakeio`` wheel as one value per line (in g),
-    checking the wheel's and the result's SHA-256."""
-    import hashlib
-    import zipfile
-
-    wheel, out = Path(wheel), Path(out)
-    if hashlib.sha256(wheel.read_bytes()).hexdigest() != QUAKEIO_WHEEL_SHA256:
-        raise RecordError(f"{wheel}: not the quakeio 0.1.21 wheel (SHA-256 differs)")
-    with zipfile.ZipFile(wheel) as archive:
-        source = archive.read("quakeio/elcentro.py").decode()
-    body = source[source.index("[") + 1:source.index("]")]
-    text = "\n".join(v.strip() for v in body.split(",") if v.strip()) + "\n"
-    if hashlib.sha256(text.encode()).hexdigest() != ELCENTRO_SHA256:
-        raise RecordError(f"{wheel}: the extracted record differs from the expected one")
-    out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(text)
-    return out
-
