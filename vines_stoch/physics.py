@@ -49,7 +49,8 @@ ROW = 10
 def spring_damper_force(u: float, w: float, k_lin: float, k_cubic: float, c: float) -> float:
     """Force on an absorber from its attachment (MODEL.md section 2).
 
-    ``linear``: ``f = -k u - c w``; ``cubic`` (Wei et al. eq. 1): ``f = -k u^3 - k_lin u - c w``.
+    ``linear``: ``f = -k u - c w``; ``cubic`` (Wei et al., Appl. Math. Mech. (Engl. Ed.) 40(5)
+    2019, eq. 1): ``f = -k u^3 - k_lin u - c w``.
     """
     return -(k_lin + k_cubic * u * u) * u - c * w
 
@@ -63,7 +64,9 @@ def spring_damper_energy(u: float, k_lin: float, k_cubic: float) -> float:
 
 @njit(**INLINE)
 def restitution_impact(m1: float, ma: float, v1: float, va: float, r: float):
-    """Newton impact between primary and absorber (MODEL.md section 2, Wei et al. eqs. 2-3).
+    """Newton impact between primary and absorber (MODEL.md section 2; Wei et al., "Targeted
+    energy transfer of a parallel nonlinear energy sink", Appl. Math. Mech. (Engl. Ed.) 40(5)
+    2019, eqs. 2-3).
 
     Momentum is conserved and the relative velocity reversed and scaled by ``r``.  Returns the
     post-impact velocities and the energy lost,
@@ -99,7 +102,9 @@ def hertz_constant(young, poisson, radius: float, q: float = 0.318) -> float:
 
 @njit(**INLINE)
 def hertz_force(z: float, k: float) -> float:
-    """Quasi-static Hertz contact force ``K z^1.5`` for an approach ``z > 0``, else 0."""
+    """Quasi-static Hertz contact force ``K z^1.5`` for an approach ``z > 0``, else 0 (Johnson,
+    *Contact Mechanics*, Cambridge 1985, section 4.2; Lizunov, Pogorelova and Postnikova, "Choice
+    of the model for vibro-impact nonlinear sink", eq. 3)."""
     return k * z * np.sqrt(z) if z > 0.0 else 0.0
 
 

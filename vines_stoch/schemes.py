@@ -39,14 +39,19 @@ SCHEMES: dict[str, Scheme] = {
     s.name: s for s in (
         Scheme("euler-maruyama", order=2, strong_order=1.0, weak_order=1.0, stability=2.0, noise=True,
                impacts=True, hertz=False, filters=True, normals=1, kernel="kdk",
-               source="kick-drift-kick (velocity Verlet) Euler-Maruyama for additive noise; impacts located "
-                      "on the Brownian path (kernels/kdk.py)"),
+               source="Euler-Maruyama for additive noise (Kloeden and Platen, Numerical Solution of Stochastic "
+                      "Differential Equations, Springer 1992, section 10.2) in kick-drift-kick form (velocity "
+                      "Verlet: Swope, Andersen, Berens and Wilson, J. Chem. Phys. 76 (1982) 637, "
+                      "doi:10.1063/1.442716); impacts located on the Brownian path by the Brownian bridge "
+                      "(kernels/kdk.py)"),
         Scheme("sra", order=3, strong_order=1.5, weak_order=2.0, stability=math.sqrt(3.0), noise=True,
                impacts=False, hertz=False, filters=False, normals=2, kernel="kdk",
                source="SRA3, Roessler (2010), SIAM J. Numer. Anal. 48(3) 922-952, doi:10.1137/09076636X"),
         Scheme("rk4", order=4, strong_order=None, weak_order=None, stability=2.0 * math.sqrt(2.0), noise=False,
                impacts=True, hertz=True, filters=False, normals=0, kernel="rk4",
-               source="classical Runge-Kutta with located impacts and sub-stepped Hertz contact (kernels/rk4.py)"),
+               source="classical Runge-Kutta (Kutta 1901; Hairer, Norsett and Wanner, Solving Ordinary "
+                      "Differential Equations I, 2nd ed., Springer 1993, section II.1) with located impacts and "
+                      "sub-stepped Hertz contact (kernels/rk4.py)"),
     )
 }
 
