@@ -27,19 +27,20 @@ OMEGA, ZETA, SIGMA, T, DT, LIMIT = 2.0 * math.pi, 0.05, 1.0, 5.0, 0.005, 0.25
 N, GROUP = 8000, 40
 
 
-def sdof(limits: str, realizations: int = N) -> str:
+def sdof(limits: str, realizations: int = N, omega: float = OMEGA, zeta: float = ZETA,
+         load: str = f'type = "white-noise"\nintensity = {SIGMA}', duration: float = T, dt: float = DT) -> str:
+    """A unit-mass oscillator of ``omega`` and ``zeta`` under ``load`` with ``limits``."""
     return f"""
 name = "sdof-limits"
 [primary]
 mass = 1.0
-stiffness = {OMEGA**2!r}
-damping = {2 * ZETA * OMEGA!r}
+stiffness = {omega**2!r}
+damping = {2 * zeta * omega!r}
 [[loads]]
-type = "white-noise"
-intensity = {SIGMA}
+{load}
 [simulation]
-duration = {T}
-dt = {DT}
+duration = {duration}
+dt = {dt}
 [ensemble]
 realizations = {realizations}
 seed = 11
@@ -191,22 +192,9 @@ def test_first_passage_time_of_free_vibration():
     peak_time = math.atan(wd / (zeta * omega)) / wd
     b = 0.8 * x(peak_time)
     exact = brentq(lambda t: x(t) - b, 0.0, peak_time, xtol=1e-14)
-    text = f"""
-name = "free-vibration"
-[primary]
-mass = 1.0
-stiffness = {omega**2!r}
-damping = {2 * zeta * omega!r}
-[[loads]]
-type = "impulse"
-velocity = {v0}
-[simulation]
-duration = 3.0
-dt = {dt}
-[limits]
-b = {{ metric = "x1_max", value = {b!r} }}
-never = {{ metric = "x1_max", value = {1.01 * x(peak_time)!r} }}
-"""
+    limits = (f'b = {{ metric = "x1_max", value = {b!r} }}\n'
+              f'never = {{ metric = "x1_max", value = {1.01 * x(peak_time)!r} }}')
+    text = sdof(limits, 1, omega, zeta, f"type = \"impulse\"\nvelocity = {v0}", 3.0, dt)
     frame = sample(parse_scenario(text))
     first = float(frame["first_passage_b"].iloc[0])
     assert exact <= first < exact + dt + 1e-12, (first, exact)

@@ -8,7 +8,8 @@ import numpy as np
 import pandas as pd
 from scipy.special import stdtrit
 
-from .kernels.common import ACC_MAX_K, DRIFT_MAX_K, FLOOR_SLOTS, SLOTS, STATUS_DIVERGED, X_MAX_K, X_SQ_INT_K
+from .kernels.common import (ACC_MAX_K, DRIFT_MAX_K, SLOTS, STATUS_DIVERGED, X_MAX_K, X_SQ_INT_K,
+                             passage_slots)
 from .scene import Scene
 
 #: Metric columns of realizations.parquet, in order (then the per-floor columns of
@@ -102,11 +103,10 @@ def finish(raw: np.ndarray, scene: Scene, samples: np.ndarray | None = None) -> 
         row[f"x_rms_{k + 1}"] = math.sqrt(max(g(slot + X_SQ_INT_K * nf), 0.0) / scene.window)
         row[f"drift_max_{k + 1}"] = g(slot + DRIFT_MAX_K * nf)
         row[f"acc_max_{k + 1}"] = g(slot + ACC_MAX_K * nf)
-    passages = len(SLOTS) + len(FLOOR_SLOTS) * nf  # (``kernels.common.first_passages``)
-    for l, name in enumerate(scene.limit_names):
+    finite = all(math.isfinite(v) for k, v in row.items() if k not in ("edm", "energy_residual"))
+    passages = passage_slots(nf)
+    for l, name in enumerate(scene.limit_names):  # (NaN where a limit never passed)
         row[f"first_passage_{name}"] = g(passages + l)
-    finite = all(math.isfinite(v) for k, v in row.items()
-                 if k not in ("edm", "energy_residual") and not k.startswith("first_passage_"))
     row["status"] = "diverged" if g(_S["status"]) == STATUS_DIVERGED or not finite else "ok"
     row["regime"] = (regime(samples, 2.0 * np.pi / scene.period)
                      if samples is not None and samples.size and row["status"] == "ok" else None)

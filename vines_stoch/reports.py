@@ -249,11 +249,10 @@ def _plots(runs: list[Run], out: Path, point: int | None) -> list[str]:
     save(fig, "edm_histogram.png")
 
     shown = [(run, limit, run.intensity(limit)) for run in runs for limit in run.limits]
-    shown = [(run, limit, key) for run, limit, key in shown if key is not None]
+    shown = [(run, limit, key, stripes(run.realizations, limit, key)) for run, limit, key in shown if key is not None]
     if shown:  # exceedance against intensity, with the fragility curves fitted
         fig, ax = plt.subplots(figsize=(6.4, 4.2))
-        for run, limit, key in shown:
-            table = stripes(run.realizations, limit, key)
+        for run, limit, key, table in shown:
             err = np.vstack([table["fraction"] - table["fraction_lo"], table["fraction_hi"] - table["fraction"]])
             bars = ax.errorbar(table["im"], table["fraction"], yerr=err, fmt="o", ms=4, capsize=3,
                                label=f"{run.label}: {limit} against {key} (95 % intervals)")
@@ -264,9 +263,9 @@ def _plots(runs: list[Run], out: Path, point: int | None) -> list[str]:
                 x = np.geomspace(table["im"][table["im"] > 0].min() / 2, table["im"].max() * 2, 200)
                 ax.plot(x, ndtr(np.log(x / median) / beta), color=bars[0].get_color(),
                         label=f"fragility: median {median:.4g}, beta {beta:.3g}")
-        if all((stripes(run.realizations, limit, key)["im"] > 0).all() for run, limit, key in shown):
+        if all((table["im"] > 0).all() for *_, table in shown):
             ax.set_xscale("log")
-        ax.set(xlabel=", ".join(dict.fromkeys(key for _, _, key in shown)), ylabel="P(exceed)", ylim=(-0.02, 1.02),
+        ax.set(xlabel=", ".join(dict.fromkeys(key for _, _, key, _ in shown)), ylabel="P(exceed)", ylim=(-0.02, 1.02),
                title="Exceedance probability against intensity")
         ax.legend(fontsize=7)
         save(fig, "exceedance.png")

@@ -366,11 +366,17 @@ def sticks(side: int, w_in: float, w_gain: float) -> bool:
     return side * w_gain > 0.0 and abs(w_in) <= side * w_gain
 
 
+@njit(**INLINE)
+def passage_slots(nf: int) -> int:
+    """Index of the first limit's first-passage slot (after the per-floor blocks of ``nf`` floors)."""
+    return len(SLOTS) + len(FLOOR_SLOTS) * nf
+
+
 def new_metrics(n_floors: int = 1, n_limits: int = 0) -> np.ndarray:
     """A raw metric vector of a primary with ``n_floors`` floors: zeros, then NaN in the
     first-passage slots of ``n_limits`` limits."""
-    out = np.zeros(len(SLOTS) + len(FLOOR_SLOTS) * n_floors + n_limits)
-    out[out.shape[0] - n_limits:] = np.nan
+    out = np.zeros(passage_slots(n_floors) + n_limits)
+    out[passage_slots(n_floors):] = np.nan
     return out
 
 
@@ -383,7 +389,7 @@ def first_passages(limits, t, nf: int, x_max, drift_max, acc_max, inv_mass, acc_
     drift is the first floor's displacement; ``acc_force``: ``acc_max`` holds peak floor forces,
     the acceleration being the force times ``inv_mass``), so a limit has a first passage exactly
     when its metric exceeds the value."""
-    base = len(SLOTS) + len(FLOOR_SLOTS) * nf
+    base = passage_slots(nf)
     left = 0
     for l in range(limits.shape[0]):
         if out[base + l] != out[base + l]:  # NaN: not passed yet
