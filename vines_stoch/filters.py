@@ -20,7 +20,8 @@ from scipy.linalg import expm, solve_continuous_lyapunov
 
 @dataclass(frozen=True)
 class Filter:
-    """One filtered load: ``dz = A z dt + b e(t) dW``, load ``= c . z``."""
+    """One filtered load: ``dz = A z dt + b e(t) dW``, load ``= c . z`` (on the floor ``floor``,
+    or ``profile[k] c . z`` on every floor ``k`` with a ``profile``)."""
 
     a: np.ndarray          # (n, n) drift matrix
     b: np.ndarray          # (n,) noise input
@@ -29,6 +30,7 @@ class Filter:
     envelope: tuple        # (kind, p1, p2, p3), kinds of kernels/loads.py
     stationary: bool       # start from the stationary law
     floor: int = 0         # the floor (index) a force read-out acts on
+    profile: np.ndarray | None = None  # (n_floors,) force read-out on every floor k: profile[k] c (wind)
 
 
 def oscillator(frequency: float, damping: float) -> np.ndarray:
@@ -89,8 +91,9 @@ def _sqrt_psd(cov: np.ndarray) -> np.ndarray:
 def block_diagonal(filters: list[Filter], dt: float, n_floors: int = 1) -> dict[str, np.ndarray]:
     """Kernel arrays of all filtered loads, stacked block-diagonally: ``phi``, ``chol``
     (step transition and noise root), ``envelope`` (one row per state), ``c_force`` (one
-    read-out row per floor) and ``c_ground`` (one row), ``p0`` (root of the stationary
-    covariance, zero for filters that start from rest)."""
+    read-out row per floor; a filter with a ``profile`` reads out on every floor) and
+    ``c_ground`` (one row), ``p0`` (root of the stationary covariance, zero for filters that
+    start from rest)."""
     n = sum(f.a.shape[0] for f in filters)
     arrays = {name: np.zeros((n, n)) for name in ("phi", "chol", "p0")}
     arrays.update(envelope=np.zeros((n, 4)), c_force=np.zeros((n_floors, n)), c_ground=np.zeros((1, n)))
@@ -102,6 +105,13 @@ def block_diagonal(filters: list[Filter], dt: float, n_floors: int = 1) -> dict[
         if f.stationary:
             arrays["p0"][s, s] = _sqrt_psd(stationary_covariance(f.a, f.b))
         arrays["envelope"][s] = f.envelope
-        (arrays["c_ground"][0] if f.ground else arrays["c_force"][f.floor])[s] = f.c
+        if f.ground:
+            arrays["c_ground"][0, s] = f.c
+        elif f.profile is not None:
+            if np.shape(f.profile) != (n_floors,):
+                raise ValueError(f"filter profile: {np.shape(f.profile)} values for {n_floors} floors")
+            arrays["c_force"][:, s] = np.outer(f.profile, f.c)
+        else:
+            arrays["c_force"][f.floor, s] = f.c
         k += m
     return arrays

@@ -8,7 +8,7 @@ from functools import cached_property
 
 import numpy as np
 
-from . import filters
+from . import filters, wind
 from .kernels.common import ACC_MAX_K, DRIFT_MAX_K, LIMIT_E1, POINCARE_SAMPLES, X_MAX_K
 from .kernels.loads import (CHIRP, FORCE_ROW, GROUND, HALF_SINE, HARMONIC, JENNINGS, PULSE_TRAIN, SARAGONI_HART,
                             STATIONARY, has_breaks)
@@ -16,7 +16,7 @@ from .physics import (CLEARANCE, DAMPING, HERTZ, IMPACT, K_CUBIC, K_LEFT, K_LIN,
                       WALL_HI, WALL_LO)
 from .scenario import (ChirpLoad, CubicAbsorber, FilteredNoiseLoad, ForceRecordLoad, GroundMotionLoad,
                        HalfSineLoad, HarmonicLoad, HertzAbsorber, ImpactAbsorber, ImpulseLoad, InitialLoad,
-                       JenningsEnvelope, PulseTrainLoad, RecordLoad, Scenario, WhiteNoiseLoad)
+                       JenningsEnvelope, PulseTrainLoad, RecordLoad, Scenario, WhiteNoiseLoad, WindLoad)
 
 
 @dataclass(frozen=True)
@@ -176,6 +176,11 @@ def build_scene(scenario: Scenario) -> Scene:
             variance[k] += load.intensity**2
         elif isinstance(load, (FilteredNoiseLoad, GroundMotionLoad)) and load.intensity > 0:
             filter_list.append(_filter(load, k))
+        elif isinstance(load, WindLoad):
+            mean, turbulence = wind_load(load, nf)
+            # the mean force: a harmonic row of frequency 0 on each loaded floor
+            forces += [(HARMONIC, f, 0.0, 0.0, 0.0, 0.0, j) for j, f in enumerate(mean) if f != 0.0]
+            filter_list.append(turbulence)
     sim = scenario.simulation
     n_steps = max(1, math.ceil(sim.duration / sim.dt - 1e-9))
     scheme = scenario.scheme
@@ -208,6 +213,27 @@ def build_scene(scenario: Scenario) -> Scene:
     )
 
 
+def wind_load(load: WindLoad, n_floors: int) -> tuple[np.ndarray, filters.Filter]:
+    """The mean force on each floor, ``0.5 rho Cd A_k U(z_k)^2``, and the turbulence filter
+    whose read-out on floor ``k`` is ``rho Cd A_k U(z_k) u(t)`` (``vines_stoch.wind``)."""
+    speeds = load.speeds(load.floor_heights(n_floors))
+    weight = load.density * load.drag * load.floor_areas(n_floors) * speeds
+    variance, time_scale = load.turbulence()
+    a, b, c, _ = wind.turbulence_filter(load.spectrum, variance, time_scale, load.fit_band(), load.order)
+    turbulence = filters.Filter(a=a, b=b, c=c, ground=False, envelope=_envelope_row(load.envelope),
+                                stationary=load.start == "stationary", profile=weight)
+    return 0.5 * weight * speeds, turbulence
+
+
+def _envelope_row(env) -> tuple:
+    """A filter's envelope row (``kernels/loads.py``): stationary, Jennings or Saragoni-Hart."""
+    if env is None:
+        return (STATIONARY, 0.0, 0.0, 0.0)
+    if isinstance(env, JenningsEnvelope):
+        return (JENNINGS, env.rise, env.hold, env.decay)
+    return (SARAGONI_HART, env.peak, env.shape, 0.0)
+
+
 def _filter(load: FilteredNoiseLoad | GroundMotionLoad, floor: int) -> filters.Filter:
     """The linear filter of a filtered-noise or ground-motion load."""
     if isinstance(load, FilteredNoiseLoad):
@@ -217,12 +243,6 @@ def _filter(load: FilteredNoiseLoad | GroundMotionLoad, floor: int) -> filters.F
     else:
         a, b, c = filters.clough_penzien(load.intensity, load.ground_frequency, load.ground_damping,
                                          load.filter_frequency, load.filter_damping)
-    env = load.envelope
-    if env is None:
-        row = (STATIONARY, 0.0, 0.0, 0.0)
-    elif isinstance(env, JenningsEnvelope):
-        row = (JENNINGS, env.rise, env.hold, env.decay)
-    else:
-        row = (SARAGONI_HART, env.peak, env.shape, 0.0)
+    row = _envelope_row(load.envelope)
     return filters.Filter(a=a, b=b, c=c, ground=isinstance(load, GroundMotionLoad), envelope=row,
                           stationary=load.start == "stationary", floor=floor)

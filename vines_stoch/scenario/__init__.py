@@ -17,7 +17,7 @@ from .distributions import (Distribution, LognormalDistribution, NormalDistribut
 from .errors import ScenarioError
 from .loads import (ChirpLoad, FilteredNoiseLoad, ForceRecordLoad, GroundMotionLoad, HalfSineLoad, HarmonicLoad,
                     ImpulseLoad, InitialLoad, JenningsEnvelope, Load, PulseTrainLoad, RecordLoad,
-                    SaragoniHartEnvelope, WhiteNoiseLoad)
+                    SaragoniHartEnvelope, WhiteNoiseLoad, WindLoad)
 from .model import Scenario
 from .settings import (OBJECTIVES, Bound, Ensemble, History, IntensityMeasures, Limit, Optimize, Output, Simulation, history_signals,
                        limit_metrics, quantile_name)
@@ -30,6 +30,6 @@ __all__ = [
     "History", "ImpactAbsorber", "IntensityMeasures", "ImpulseLoad", "InitialLoad", "JenningsEnvelope", "Limit", "LinearAbsorber", "Load",
     "LognormalDistribution", "NormalDistribution", "Optimize", "Output", "Primary", "PulseTrainLoad", "Rayleigh",
     "RecordLoad", "SaragoniHartEnvelope", "Scenario", "ScenarioError", "Simulation", "Study",
-    "TruncatedNormalDistribution", "UniformDistribution", "WhiteNoiseLoad", "get_path", "history_signals",
-    "limit_metrics", "load_scenario", "parse_scenario", "quantile_name", "set_path",
+    "TruncatedNormalDistribution", "UniformDistribution", "WhiteNoiseLoad", "WindLoad", "get_path",
+    "history_signals", "limit_metrics", "load_scenario", "parse_scenario", "quantile_name", "set_path",
 ]

@@ -1,5 +1,5 @@
 """The loads: initial conditions, deterministic forces, white and filtered noise, stochastic
-ground motion and records (MODEL.md section 3)."""
+ground motion, wind and records (MODEL.md section 3)."""
 
 from __future__ import annotations
 
@@ -9,6 +9,7 @@ import numpy as np
 from pydantic import Field, PrivateAttr, model_validator
 
 from ..records import G
+from ..wind import BANDS, DAVENPORT_LENGTH, OPEN_COUNTRY_DRAG, VON_KARMAN, mean_speed
 from .errors import FieldError
 from .fields import Floor, NonNegative, Positive, Real, _Model
 
@@ -139,6 +140,103 @@ class GroundMotionLoad(_FilteredLoad):
         return self
 
 
+class WindLoad(_Model):
+    """Along-wind load on every floor (seed 001 section 3.7; ``vines_stoch.wind``): mean force
+    ``0.5 density drag A_k U(z_k)^2`` and turbulent force ``density drag A_k U(z_k) u(t)``, the
+    turbulence ``u(t)`` fully correlated over the height with a Davenport or Kaimal spectrum,
+    realised by a rational filter of white noise; the envelope scales the turbulence only."""
+
+    type: Literal["wind"]
+    speed: Positive
+    reference_height: Positive = 10.0
+    profile: Literal["power", "log"] = "power"
+    exponent: Annotated[float, Field(ge=0, le=1, allow_inf_nan=False)] = 0.16
+    roughness: Positive = 0.05
+    height: Positive | None = None
+    heights: list[Positive] | None = None
+    area: NonNegative | None = None
+    areas: list[NonNegative] | None = None
+    drag: Positive
+    density: Positive = 1.25
+    spectrum: Literal["davenport", "kaimal"] = "davenport"
+    surface_drag: Positive | None = None
+    friction_velocity: Positive | None = None
+    band: Annotated[list[Positive], Field(min_length=2, max_length=2)] | None = None
+    order: Literal[2, 3] = 3
+    envelope: Envelope | None = None
+    start: Literal["rest", "stationary"] = "rest"
+
+    @model_validator(mode="after")
+    def _choices(self) -> "WindLoad":
+        pairs = (("height", "heights", "storey heights (m)"), ("area", "areas", "tributary areas"))
+        for one, many, what in pairs:
+            if (getattr(self, one) is None) == (getattr(self, many) is None):
+                raise FieldError(one, getattr(self, one), f"give either {one} (every floor) or {many} = "
+                                 f"[...] (the {what}, floors from the lowest), one of the two")
+        if self.roughness >= self.reference_height:
+            raise FieldError("roughness", self.roughness,
+                             f"must be < reference_height ({self.reference_height:g})")
+        if self.spectrum == "davenport" and self.profile == "log" and self.roughness >= 10.0:
+            raise FieldError("roughness", self.roughness,
+                             "must be < 10 m (Davenport's spectrum takes the speed at 10 m)")
+        if self.surface_drag is not None and self.spectrum != "davenport":
+            raise FieldError("surface_drag", self.surface_drag,
+                             "is Davenport's kappa: only with spectrum = 'davenport'")
+        if self.friction_velocity is not None and self.spectrum != "kaimal":
+            raise FieldError("friction_velocity", self.friction_velocity, "only with spectrum = 'kaimal'")
+        if self.band is not None and not self.band[0] < self.band[1]:
+            raise FieldError("band", self.band, "must be [low, high] in Hz with low < high")
+        if self.start == "stationary" and self.envelope is not None:
+            raise FieldError("start", self.start, "a stationary start needs a load without envelope")
+        return self
+
+    def floors_error(self, n: int) -> tuple[str, object, str] | None:
+        """``(key, value, rule)`` when the lists do not fit a primary of ``n`` floors (or a
+        floor lies below the log profile's roughness), else None."""
+        for name in ("heights", "areas"):
+            values = getattr(self, name)
+            if values is not None and len(values) != n:
+                return name, values, f"must list {n} values (one per floor, from the lowest)"
+        lowest = self.floor_heights(n)[0]
+        if self.profile == "log" and lowest <= self.roughness:
+            return "roughness", self.roughness, f"must be below the lowest floor ({lowest:g} m)"
+        return None
+
+    def floor_heights(self, n: int) -> np.ndarray:
+        """Heights ``z_k`` of the ``n`` floors above the ground (sums of the storey heights)."""
+        return np.cumsum(self.heights if self.heights is not None else [self.height] * n, dtype=float)
+
+    def floor_areas(self, n: int) -> np.ndarray:
+        """Tributary areas ``A_k`` of the ``n`` floors."""
+        return np.array(self.areas if self.areas is not None else [self.area] * n, dtype=float)
+
+    def speeds(self, z: np.ndarray) -> np.ndarray:
+        """Mean speed ``U(z)`` of the profile (``wind.mean_speed``)."""
+        return mean_speed(z, self.speed, self.reference_height, self.profile, self.exponent, self.roughness)
+
+    def turbulence(self) -> tuple[float, float]:
+        """``(sigma_u^2, T)``: the target variance of ``u`` and the spectrum's time scale:
+        Davenport ``6 kappa U10^2`` and ``1200 / U10``; Kaimal ``6 u*^2`` and ``z_ref / U_ref``
+        (``u* = 0.4 U_ref / ln(z_ref / z0)`` unless given)."""
+        if self.spectrum == "davenport":
+            u10 = float(self.speeds(np.array([10.0]))[0])
+            kappa = OPEN_COUNTRY_DRAG if self.surface_drag is None else self.surface_drag
+            return 6.0 * kappa * u10**2, DAVENPORT_LENGTH / u10
+        ustar = self.friction_velocity
+        if ustar is None:
+            ustar = VON_KARMAN * self.speed / np.log(self.reference_height / self.roughness)
+        return 6.0 * float(ustar) ** 2, self.reference_height / self.speed
+
+    def fit_band(self) -> tuple[float, float]:
+        """The band (Hz) the rational spectrum is fitted over: ``band``, or the spectrum's
+        default band of reduced frequency (``wind.BANDS``) over ``T``."""
+        if self.band is not None:
+            return float(self.band[0]), float(self.band[1])
+        time_scale = self.turbulence()[1]
+        lo, hi = BANDS[self.spectrum]
+        return lo / time_scale, hi / time_scale
+
+
 class HalfSineLoad(_Model):
     """``F = amplitude sin(pi (t - start) / duration)`` for ``start <= t <= start + duration``."""
 
@@ -251,6 +349,12 @@ class ForceRecordLoad(_RecordLoad):
 
 Load = Annotated[
     Union[ImpulseLoad, InitialLoad, HarmonicLoad, WhiteNoiseLoad, FilteredNoiseLoad, GroundMotionLoad,
-          HalfSineLoad, PulseTrainLoad, ChirpLoad, RecordLoad, ForceRecordLoad],
+          WindLoad, HalfSineLoad, PulseTrainLoad, ChirpLoad, RecordLoad, ForceRecordLoad],
     Field(discriminator="type"),
 ]
+
+
+def draws_filter_noise(load: object) -> bool:
+    """True for a load realised by a filter of white noise that draws random numbers: filtered
+    noise and ground motion of intensity > 0, wind."""
+    return (isinstance(load, _FilteredLoad) and load.intensity > 0) or isinstance(load, WindLoad)
