@@ -11,6 +11,7 @@ import pytest
 from vines_stoch import parse_scenario
 from vines_stoch.cli import main
 from vines_stoch.kernels import SLOTS, simulate
+from vines_stoch.scenario.study import Study
 from vines_stoch.scene import build_scene
 
 
@@ -24,6 +25,11 @@ def two_dof(primary_damping: float = 0.02, stiffness: str = "1.0", damping: str 
 def scene_of(text: str, point: int = 0):
     """The Scene of one sweep point of scenario text."""
     return build_scene(parse_scenario(text).points[point])
+
+
+def scene_from(data: dict, point: int = 0):
+    """The Scene of one sweep point of a scenario given as a dict (the tables of a scenario file)."""
+    return build_scene(Study("<test scenario>", "", data).points[point])
 
 
 def raw_metrics(scene, generator=None) -> dict[str, float]:

@@ -2,10 +2,8 @@
 
 from __future__ import annotations
 
-import numpy as np
 import pytest
 
-from vines_stoch.kernels import simulate
 from vines_stoch.physics import restitution_impact
 
 from .conftest import raw_metrics, scene_of
@@ -84,49 +82,3 @@ def test_free_primary_geometric_impact_sequence(scheme, r):
     assert count >= 4
     assert m["impacts"] == count
     assert m["impact_loss"] / m["input_energy"] == pytest.approx(edm, rel=1e-12)
-
-
-def test_strong_error_of_a_stochastic_impact_scene_decreases_with_dt():
-    """Coarse solutions on the Brownian path of a fine one (dt = 2^-14): the mean error of x1(T)
-    decreases with dt.  Measured order about 0.2-0.4 (bridge values at impacts are drawn
-    independently of the fine path, which alone limits the order to 1/2)."""
-    text = """
-name = "strong"
-[primary]
-mass = 1.0
-stiffness = 1.0
-damping = 0.02
-[[absorbers]]
-type = "impact"
-mass = 0.1
-clearance = 0.1
-restitution = 0.9
-[[loads]]
-type = "initial"
-velocity = [0.0, 1.0]
-[[loads]]
-type = "white-noise"
-intensity = 0.1
-[simulation]
-duration = 2.0
-dt = {dt}
-"""
-    levels, fine, paths = [6, 8, 10], 14, 40
-    rng = np.random.default_rng(5)
-    errors = np.zeros((paths, len(levels)))
-    for m in range(paths):
-        z = rng.standard_normal(2 * 2**fine)
-
-        def x1_end(level):
-            k = 2 ** (fine - level)
-            scene = scene_of(text.format(dt=2.0**-level))
-            final = np.zeros((2, 2))
-            simulate(scene, np.random.default_rng(m), normals=z.reshape(-1, k).sum(axis=1) / np.sqrt(k), final=final)
-            return final[0, 0]
-
-        reference = x1_end(fine)
-        errors[m] = [abs(x1_end(level) - reference) for level in levels]
-    mean = errors.mean(axis=0)
-    assert mean[0] > mean[1] > mean[2]
-    order = np.polyfit(np.log(2.0 ** -np.array(levels)), np.log(mean), 1)[0]
-    assert order > 0.15

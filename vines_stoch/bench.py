@@ -5,6 +5,9 @@
   through a minimal semi-implicit Euler-Maruyama loop in the same process.
 - The impact-rich stochastic scene: the same plus an impact NES (clearance 0.2, r = 0.6), the
   parallel NES of seed 000.
+- Contact under noise: the SSVI design SS-1(20) of seed 003 under stochastic ground motion and
+  the steel-on-steel chatter scene (example scenarios) as ratios to the smooth scene, and the
+  work-precision of Hertz contact and impacts under noise on one Brownian path.
 - The SSVI design SS-1(60) of seed 003 (12 s from rest): vines_stoch against scipy DOP853
   with event location at the loosest tolerance that reaches the same ``e1_max`` error.
 - A seismic scene (1 Hz primary with a cubic NES) under a synthetic accelerogram against the
@@ -219,6 +222,42 @@ def _api_rate(n_paths: int, workers: int, directory: Path, impacts: bool = False
     realizations, _ = run(study, directory, workers=workers)
     elapsed = time.perf_counter() - start
     return n_paths * n_steps / elapsed, float(realizations["energy_residual"].abs().max())
+
+
+#: Steps ``2^-level`` of the same-path work-precision study of contact and impacts under noise.
+SAME_PATH_LEVELS = [6, 7, 8, 9, 10, 11]
+#: Contact under noise: the SSVI design SS-1(20) of seed 003 under Clough-Penzien ground motion
+#: (intensity 0.3) and the steel-on-steel double-sided NES beside a plastic impact NES under
+#: harmonic + white noise (the example scenarios), run at one sweep point with ``n`` paths.
+CONTACT_SCENES = {"SSVI SS-1(20) under ground motion": ("scenarios/seed003_ss_ground_motion.toml", 1),
+                  "steel-on-steel DSVI + plastic impact NES, harmonic + white noise":
+                      ("scenarios/contact_noise_parallel.toml", 0)}
+
+
+def _contact_rates(n_paths: int, directory: Path) -> list[tuple[str, float, float, float]]:
+    """``(scene, path-steps/s, max abs energy residual, contacts a path)`` of ``vines_stoch.run``
+    with one thread on the ``CONTACT_SCENES``."""
+    import copy
+
+    from .scenario import load_scenario
+    from .scenario.study import Study, set_path
+
+    rows = []
+    for k, (name, (path, point)) in enumerate(CONTACT_SCENES.items()):
+        study = load_scenario(Path(__file__).resolve().parents[1] / path)
+        data = copy.deepcopy(study.data)
+        data.pop("sweep", None)
+        for key, value in study.grid[point].items():
+            set_path(data, key, value)
+        one = Study(study.source, study.text, data, study.directory)
+        run(one, directory / f"warm{k}", workers=1, realizations=2)  # compile or load outside the timing
+        start = time.perf_counter()
+        realizations, _ = run(one, directory / f"contact{k}", workers=1, realizations=n_paths)
+        elapsed = time.perf_counter() - start
+        sim = one.points[0].simulation
+        rows.append((name, n_paths * sim.duration / sim.dt / elapsed,
+                     float(realizations["energy_residual"].abs().max()), float(realizations["impacts"].mean())))
+    return rows
 
 
 def _ssvi() -> dict[str, float]:
@@ -436,12 +475,14 @@ def main(out: Path = Path("reports/benchmarks.md"), n_paths: int = 200) -> str:
             rounds.append((near, near_rec, api1, res1, api2, res2))
         near, near_rec, api1, res1, api2, res2 = max(rounds, key=lambda r: r[2] / r[0])
         impact1, res_impact = _api_rate(n_paths, 1, Path(tmp) / "impact", impacts=True)
+        contact = _contact_rates(n_paths, Path(tmp))
         seismic = _seismic(Path(tmp))
         memory = {n: _peak_memory(n, Path(tmp) / f"history{n}") for n in (10_000, 100_000)}
         overhead = _distributed_overhead(Path(tmp))
         startup = _startup(Path(tmp))
     floors = _floors()
     ssvi = _ssvi()
+    same_path = {kind: precision.same_path_errors(kind, SAME_PATH_LEVELS, paths=20) for kind in ("hertz", "impact")}
     out.parent.mkdir(parents=True, exist_ok=True)
     work_precision = precision.section(out.parent)
     from . import stability  # it takes its Hertz scene from this module
@@ -482,11 +523,33 @@ three rounds, the better 1-thread ratio kept).
 ## Impact-rich stochastic scene
 
 The smooth scene plus an impact NES (m = 0.05, clearance 0.2, r = 0.6): the parallel NES of
-seed 000 under harmonic + white noise, impacts split on the Brownian bridge.
+seed 000 under harmonic + white noise, impacts split on the Brownian tree of the step.
 
 | runner | threads | M path-steps/s | ratio to the smooth scene (1 thread) | max abs energy residual |
 | --- | ---: | ---: | ---: | ---: |
 | `vines_stoch.run` | 1 | {impact1 / 1e6:.1f} | {impact1 / api1:.2f} | {res_impact:.1e} |
+
+## Contact under noise
+
+`vines_stoch.run` with one thread on the example scenarios (one sweep point, {n_paths} paths;
+kick-drift-kick, contacts sub-stepped, every sub-step on the Brownian tree of its step), as
+ratios to the smooth scene's 1-thread `run` above.
+
+| scene | M path-steps/s | ratio to the smooth scene | contacts and impacts a path | max abs energy residual |
+| --- | ---: | ---: | ---: | ---: |
+{chr(10).join(f"| {name} | {rate / 1e6:.2f} | {rate / api1:.2f} | {hits:.0f} | {res:.1e} |" for name, rate, res, hits in contact)}
+
+Work-precision on one Brownian path (`precision.same_path_errors`): LPO m = k = 1, c = 0.02 with
+a double-sided Hertz absorber (K = 7e5 N/m^1.5) or an impact absorber (r = 0.9), white noise 0.1,
+T = 0.5; mean over 20 paths of the error of x1(T) against dt = 2^-14 on the same path (every
+run replays the same fine normals and tree seed); time per path of the kernel.
+
+| dt | Hertz: error | Hertz: ms per path | impact: error | impact: ms per path |
+| ---: | ---: | ---: | ---: | ---: |
+{chr(10).join(f"| 2^-{lv} | {same_path['hertz'][0][i]:.2e} | {same_path['hertz'][1][i] * 1e3:.3f} | {same_path['impact'][0][i]:.2e} | {same_path['impact'][1][i] * 1e3:.3f} |" for i, lv in enumerate(SAME_PATH_LEVELS))}
+
+Measured strong order: Hertz contact {precision.strong_order(SAME_PATH_LEVELS, same_path['hertz'][0]):.2f},
+impacts {precision.strong_order(SAME_PATH_LEVELS, same_path['impact'][0]):.2f} (README, "Schemes": 1 and 1/2 expected).
 
 ## SSVI design SS-1(60) of seed 003
 

@@ -259,6 +259,65 @@ def weak_metrics(paths: int = 200, duration: float = 100.0, fine_dt: float = 1e-
     return rows
 
 
+#: The absorbers of the same-path studies of contact and impacts under noise: a double-sided
+#: Hertz absorber (K = 7e5 N/m^1.5, both obstacles 0.1 away) and an impact absorber (r = 0.9),
+#: on the LPO m = k = 1, c = 0.02, both started towards a wall.
+SAME_PATH = {
+    "hertz": ({"type": "hertz", "geometry": "double-sided", "mass": 0.1, "offset": 0.0, "gap": 0.1,
+               "contact_left": {"young": [1e5, 1e5], "poisson": [0.3, 0.3], "radius": 1.0},
+               "contact_right": {"young": [1e5, 1e5], "poisson": [0.3, 0.3], "radius": 1.0}},
+              {"type": "initial", "displacement": [0.0, 0.1], "velocity": [0.0, 1.0]}),
+    "impact": ({"type": "impact", "mass": 0.1, "clearance": 0.1, "restitution": 0.9},
+               {"type": "initial", "velocity": [0.0, 1.0]}),
+}
+
+
+def same_path_errors(kind: str, levels: list[int], fine: int = 14, paths: int = 20, duration: float = 0.5,
+                     sigma: float = 0.1) -> tuple[np.ndarray, np.ndarray]:
+    """Strong errors on one Brownian path of the ``SAME_PATH`` scene ``kind`` under white noise
+    ``sigma``: the mean over ``paths`` of ``|x1(T) - x1_fine(T)|`` at ``dt = 2^-level`` against
+    ``dt = 2^-fine``, and the seconds a path takes at each level.  Every run replays the same
+    fine normals (``simulate(..., refine=...)``) with the same tree seed, so all integrate one
+    path, inside the steps too (``kernels/brownian.py``)."""
+    from .scenario.study import Study
+
+    absorber, initial = SAME_PATH[kind]
+
+    def scene(level: int):
+        return build_scene(Study(f"same-path {kind}", "", {
+            "name": f"same-path-{kind}",
+            "primary": {"mass": 1.0, "stiffness": 1.0, "damping": 0.02},
+            "absorbers": [absorber],
+            "loads": [initial, {"type": "white-noise", "intensity": sigma}],
+            "simulation": {"duration": duration, "dt": 2.0**-level},
+        }).points[0])
+
+    scenes = {level: scene(level) for level in [*levels, fine]}
+    rng = np.random.default_rng(5)
+    errors = np.zeros((paths, len(levels)))
+    seconds = np.zeros(len(levels))
+    final = np.zeros((2, 2))
+    for m in range(paths):
+        normals = rng.standard_normal(math.ceil(duration * 2**fine))
+
+        def x1_end(level: int) -> float:
+            simulate(scenes[level], np.random.default_rng(m), normals=normals, refine=2 ** (fine - level),
+                     final=final)
+            return final[0, 0]
+
+        reference = x1_end(fine)
+        for i, level in enumerate(levels):
+            start = time.perf_counter()
+            errors[m, i] = abs(x1_end(level) - reference)
+            seconds[i] += time.perf_counter() - start
+    return errors.mean(axis=0), seconds / paths
+
+
+def strong_order(levels: list[int], errors: np.ndarray) -> float:
+    """Least-squares slope of ``log error`` against ``log dt`` (``dt = 2^-level``)."""
+    return float(np.polyfit(np.log(2.0 ** -np.array(levels)), np.log(errors), 1)[0])
+
+
 def ratio_at_equal_error(ours: Curve, peer: Curve) -> list[tuple[str, str, float]]:
     """For each peer point, the cheapest of ours with equal or smaller error: ``(peer setting,
     our setting, peer time / our time)``."""

@@ -38,12 +38,12 @@ class Scheme:
 SCHEMES: dict[str, Scheme] = {
     s.name: s for s in (
         Scheme("euler-maruyama", order=2, strong_order=1.0, weak_order=1.0, stability=2.0, noise=True,
-               impacts=True, hertz=False, filters=True, normals=1, kernel="kdk",
+               impacts=True, hertz=True, filters=True, normals=1, kernel="kdk",
                source="Euler-Maruyama for additive noise (Kloeden and Platen, Numerical Solution of Stochastic "
                       "Differential Equations, Springer 1992, section 10.2) in kick-drift-kick form (velocity "
                       "Verlet: Swope, Andersen, Berens and Wilson, J. Chem. Phys. 76 (1982) 637, "
-                      "doi:10.1063/1.442716); impacts located on the Brownian path by the Brownian bridge "
-                      "(kernels/kdk.py)"),
+                      "doi:10.1063/1.442716); impacts and contact onsets located on the Brownian path, Hertz "
+                      "contact sub-stepped, both on a virtual Brownian tree (kernels/kdk.py, kernels/brownian.py)"),
         Scheme("sra", order=3, strong_order=1.5, weak_order=2.0, stability=math.sqrt(3.0), noise=True,
                impacts=False, hertz=False, filters=False, normals=2, kernel="kdk",
                source="SRA3, Roessler (2010), SIAM J. Numer. Anal. 48(3) 922-952, doi:10.1137/09076636X"),
@@ -68,7 +68,7 @@ def refusal(scheme: Scheme, noise: bool, filters: bool, impacts: bool, hertz: bo
     if impacts and not scheme.impacts:
         return "has no impact or contact events; use 'auto', 'euler-maruyama' or 'rk4'"
     if hertz and not scheme.hertz:
-        return "has no Hertz contact; Hertz contact is solved by the rk4 scheme only (no noise loads)"
+        return "has no Hertz contact; use 'auto', 'euler-maruyama' or 'rk4'"
     return None
 
 

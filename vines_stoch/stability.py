@@ -76,6 +76,9 @@ CASES = (
          realizations=4, order=1),
     Case("steel-on-steel Hertz contact (E = 210 GPa both, R = 5 cm)",
          STEEL_HERTZ, 120.0),
+    Case("steel-on-steel Hertz contact under harmonic + white noise (4 paths)",
+         STEEL_HERTZ.replace("[simulation]", '[[loads]]\ntype = "white-noise"\nintensity = 200.0\n[simulation]')
+         + "[ensemble]\nrealizations = 4\n", 120.0, tolerance=1e-5, realizations=4),
     Case("impulse 1e3 times the design level (X = 1000, cubic NES)",
          _scene("x1000", PRIMARY.format(c1=0.0), CUBIC, IMPULSE.format(x=1000.0), SIMULATION.format(T=100.0, dt=1e-3)),
          120.0, tolerance=1e-4, order=4),

@@ -1,9 +1,10 @@
 """Random streams: one per purpose, each derived from (seed, purpose, realisation).
 
-Realisation ``r`` draws the Wiener increments of its steps, the Brownian-bridge values at its
-impacts, its filter noise (and the stationary start of its filters) and its uncertain
+Realisation ``r`` draws the Wiener increments of its steps, the seed of the Brownian trees
+inside its steps (``kernels/brownian.py``: impacts and Hertz contact under white noise), its
+filter noise (and the stationary start of its filters) and its uncertain
 parameters from four independent streams, ``PCG64(SeedSequence(seed, spawn_key=(purpose,
-r)))``.  How many bridge draws the impacts take therefore never moves the increments: with
+r)))``.  How the impacts and contacts cut the steps therefore never moves the increments: with
 common random numbers (the default) realisation ``r`` sees the same noise at every sweep
 point, whatever the impacts.  The sweep point enters the key (``(purpose, point, r)``) only
 when a scenario turns common random numbers off.  The increment stream is the one earlier

@@ -20,18 +20,20 @@ from .loads import load_path
 from .rk4 import rk4_kernel
 
 _NO_NORMALS = np.zeros(0)
+#: The generator in the increments' place of a replayed path: never drawn from.
+_UNDRAWN = np.random.default_rng(0)
 _NO_HISTORY = np.zeros((0, 2))
 
 
-def kernel_for(scene, replay: bool = False):
+def kernel_for(scene):
     """The compiled loop for a scene's scheme (``schemes.SCHEMES``) and structure."""
     piecewise, ground = scene.kernel_flags
     nb, nf = scene.mass.shape[0], scene.n_floors
     watch = scene.limits.shape[0] > 0
     if SCHEMES[scene.scheme].kernel == "rk4":
         return rk4_kernel(nb, nf, scene.has_impact, scene.has_hertz, scene.period > 0, piecewise, watch)
-    return kdk_kernel(nb, nf, scene.forces.shape[0], scene.has_white_noise, scene.has_impact, scene.has_filters,
-                      piecewise, ground, replay, scene.scheme == "sra", watch)
+    return kdk_kernel(nb, nf, scene.forces.shape[0], scene.has_white_noise, scene.has_impact, scene.has_hertz,
+                      scene.has_filters, piecewise, ground, scene.scheme == "sra", watch)
 
 
 def sample_buffer(scene) -> np.ndarray:
@@ -54,20 +56,24 @@ def filter_tuple(scene, generator: np.random.Generator | None) -> tuple:
 
 def needed_streams(scene, replay: bool = False) -> tuple[bool, bool, bool]:
     """Which streams a scene's kernel draws from: step increments (white noise not replayed),
-    Brownian-bridge values (white noise with impacts), filter noise (filtered loads)."""
+    the seed of the Brownian trees inside the steps (white noise with impact or Hertz
+    absorbers: ``brownian``), filter noise (filtered loads)."""
     white = scene.has_white_noise
-    return white and not replay, white and scene.has_impact, scene.has_filters
+    return white and not replay, white and (scene.has_impact or scene.has_hertz), scene.has_filters
 
 
 def _streams_for(scene, replay: bool, streams: Streams | np.random.Generator | None) -> tuple:
     """The kernel's generators, ``None`` where it draws nothing (numba's unboxing of a
-    Generator costs about 6 us a call, half the set-up of a short run)."""
+    Generator costs about 6 us a call, half the set-up of a short run).  A replayed path keeps
+    a generator (``_UNDRAWN``) in the increments' place, so that it runs the kernel a drawn path
+    runs (the same argument types) and not a specialisation of its own."""
     wanted = needed_streams(scene, replay)
+    increments = _UNDRAWN if replay and scene.has_white_noise else None
     if not any(wanted):
-        return None, None, None
+        return increments, None, None
     if streams is None:
         raise ValueError("streams: this scene draws random numbers (white or filtered noise, or the "
-                         "Brownian-bridge draws of impacts under replayed noise); pass a numpy generator (one for every "
+                         "Brownian trees' seed of impacts and contact under white noise); pass a numpy generator (one for every "
                          "purpose) or vines_stoch.streams.Streams")
     if isinstance(streams, np.random.Generator):
         streams = Streams.shared(streams)
@@ -75,14 +81,15 @@ def _streams_for(scene, replay: bool, streams: Streams | np.random.Generator | N
     for name, want, gen in zip(("increments", "bridge", "filter"), wanted, chosen):
         if want and gen is None:
             raise ValueError(f"streams: this scene draws from the {name} stream; it is None")
-    return tuple(gen if want else None for want, gen in zip(wanted, chosen))
+    gens = tuple(gen if want else None for want, gen in zip(wanted, chosen))
+    return gens if increments is None else (increments, *gens[1:])
 
 
 def bundles(scene, x: np.ndarray, v: np.ndarray, fl: tuple, normals: np.ndarray, out: np.ndarray,
-            samples: np.ndarray, history: np.ndarray, stride: int, gens: tuple) -> tuple:
+            samples: np.ndarray, history: np.ndarray, stride: int, gens: tuple, refine: int = 1) -> tuple:
     """The kernels' arguments as named bundles: bodies (masses, storey stiffnesses and dashpots,
     mass-proportional dashpots, state), absorbers (kinds, hosts, rows), loads, filters, noise
-    (intensity per floor, replayed normals), grid, outputs (with the limits whose first passages
+    (intensity per floor, replayed normals, replayed fine steps a step), grid, outputs (with the limits whose first passages
     the metric vector records); then the three generators of
     ``gens`` (increments, bridge, filter) as arguments of their own (see ``kdk.kdk_kernel``)."""
     return (
@@ -90,7 +97,7 @@ def bundles(scene, x: np.ndarray, v: np.ndarray, fl: tuple, normals: np.ndarray,
         (scene.kind, scene.host, scene.rows),
         scene.excitation,
         fl,
-        (scene.sigma, normals),
+        (scene.sigma, normals, refine),
         (scene.dt, scene.n_steps, scene.i0, scene.period, scene.sample_from, stride),
         (out, samples, history, scene.limits),
         *gens,
@@ -99,14 +106,17 @@ def bundles(scene, x: np.ndarray, v: np.ndarray, fl: tuple, normals: np.ndarray,
 
 def simulate(scene, streams: Streams | np.random.Generator | None = None, *, normals: np.ndarray | None = None,
              final: np.ndarray | None = None, samples: np.ndarray | None = None,
-             history: np.ndarray | None = None, stride: int = 1) -> np.ndarray:
+             history: np.ndarray | None = None, stride: int = 1, refine: int = 1) -> np.ndarray:
     """Run one realisation of ``scene``; returns the raw metric vector (see ``SLOTS``).
 
     ``streams`` (``vines_stoch.streams.Streams``: increments, bridge draws, filter noise; or
     one numpy Generator for every purpose) is required where the scene draws random numbers
     (a ``ValueError`` says so); ``normals`` replays a given Brownian path (one standard normal
     per noisy floor and step, two with the ``sra`` scheme: see ``kdk_kernel``) instead of
-    drawing the increments; ``final`` (shape ``(2, n_bodies)``) receives the final
+    drawing the increments; with ``refine`` (kick-drift-kick only) it holds ``refine`` fine
+    normals a step and noisy floor, fine step by fine step, and the run sees the path of the
+    fine steps, inside a step too (``brownian``): a coarse run and the run of the fine steps
+    (``refine = 1``, ``dt / refine``) on the same normals and streams integrate the same path; ``final`` (shape ``(2, n_bodies)``) receives the final
     positions and velocities; ``samples`` (from ``sample_buffer``) receives the Poincare
     samples of periodic scenes; ``history`` (shape ``(G, 2)`` or ``(G, 2 + n_floors)``)
     receives the roof's ``x``, ``E1`` (and every floor's ``x``) at ``t = j stride dt``,
@@ -117,15 +127,17 @@ def simulate(scene, streams: Streams | np.random.Generator | None = None, *, nor
     if samples is None:
         samples = sample_buffer(scene)
     replay = normals is not None
-    needed = scene.n_steps * SCHEMES[scene.scheme].normals * max(scene.noisy_floors, 1)
+    needed = scene.n_steps * SCHEMES[scene.scheme].normals * max(scene.noisy_floors, 1) * refine
+    if refine < 1 or (refine > 1 and SCHEMES[scene.scheme].normals != 1):
+        raise ValueError(f"refine: {refine} fine steps a step; must be >= 1, and 1 with the sra scheme")
     if replay and normals.shape[0] < needed:
         raise ValueError(f"normals: need {needed} values, got {normals.shape[0]}")
     if replay and scene.has_filters:
         raise ValueError("normals: a replayed Brownian path drives white noise only, not filtered loads")
     gens = _streams_for(scene, replay, streams)
     fl = filter_tuple(scene, gens[2])
-    kernel_for(scene, replay)(*bundles(scene, x, v, fl, normals if replay else _NO_NORMALS, out, samples,
-                                       _NO_HISTORY if history is None else history, stride, gens))
+    kernel_for(scene)(*bundles(scene, x, v, fl, normals if replay else _NO_NORMALS, out, samples,
+                                       _NO_HISTORY if history is None else history, stride, gens, refine))
     if final is not None:
         final[0], final[1] = x, v
     return out

@@ -14,13 +14,18 @@ mass depends on ``dW``: an absorber stuck to its wall and released by the noise.
 
 When the drift would carry an impact absorber through its wall, the step is split at the
 impact: the sub-step of length ``s`` that lands exactly on the wall is found by a bracketed
-root search, with its Wiener increment drawn from the Brownian bridge pinned to the step's
-increment (the bridge draws come from their own stream, so the step increments are the same
-whatever the impacts) (``dW_s = dW s / h + sqrt(s (h - s) / h) Z``), so the sub-stepped path is the same
-Brownian path.  The Newton map (``common.resolve_impact``) acts at the end of that sub-step, and the rest of the step
-continues from the post-impact state with the rest of the increment.  (Applying the impact
-at a grid state of a symmetric map matters: with a kick-drift map the energy balance drifts
-by ``O(dt)`` per impact.)
+root search (``crossing``).  The Newton map (``common.resolve_impact``) acts at the end of that
+sub-step, and the rest of the step continues from the post-impact state.  (Applying the
+impact at a grid state of a symmetric map matters: with a kick-drift map the energy balance
+drifts by ``O(dt)`` per impact.)  Hertz contact is sub-stepped as in ``rk4.py``: its onset and
+its end are located by the same root search, and in between the sub-steps are sized from the
+contact's stiffness, masses and approach speed (``common.contact_step``); the contact forces
+join the kicks' forces.
+
+Every sub-step takes its Wiener increments from one Brownian path inside the step, the
+virtual Brownian tree of ``brownian.py`` pinned to the step's increments (its seed from the
+bridge stream; the step increments are the same whatever the sub-steps), so the sub-stepped
+path is the same path whatever the sub-steps and root-search iterates query.
 
 The same step loop (``kdk_kernel``: the time grid, the noise draws, the loads, the metrics)
 runs the SRA3 step of ``sra3.py`` for the ``sra`` scheme in place of the kick-drift-kick step.
@@ -37,13 +42,15 @@ from functools import lru_cache
 import numpy as np
 from numba import njit
 
-from ..physics import CLEARANCE, IMPACT, KERNEL, RESTITUTION, primary_energy
-from .common import (ABSORBER_DISS, CAPPED, CHECK_EVERY, E1_MAX, ENERGY_INT, FINAL_ENERGY,
+from ..physics import CLEARANCE, HERTZ, IMPACT, KERNEL, RESTITUTION, WALL_HI, WALL_LO, primary_energy
+from .brownian import MEMO, path_value
+from .common import (ABSORBER_DISS, CAPPED, CHECK_EVERY, CONTACT_TIME, E1_MAX, ENERGY_INT, FINAL_ENERGY,
                      IMPACT_LOSS, IMPACTS, IMPACTS_LEFT, IMPACTS_RIGHT, INLINE, INPUT, MAX_EVENTS,
-                     PRIMARY_DISS, STATUS, STATUS_DIVERGED, absorber_dissipation,
-                     attachment_forces, block_end, diverged, first_passages, floor_peaks, host_of,
-                     keep_in_cavities, momentum, pin_to_walls, record_history, resolve_impact, scratch, start_history,
-                     stick_together, stored_energy, structure_dissipation, write_floor_metrics)
+                     MAX_SUBSTEPS, PEAK_FORCE, PRIMARY_DISS, STATUS, STATUS_DIVERGED, absorber_dissipation,
+                     attachment_forces, block_end, contact_force, contact_forces, contact_step, diverged,
+                     first_passages, floor_peaks, host_of, keep_in_cavities, momentum, pin_to_walls,
+                     record_history, resolve_impact, scratch, start_history, stick_together, stored_energy,
+                     structure_dissipation, write_floor_metrics)
 from .loads import advance_filters, excitation, phasors, rotations, turn
 from .sra3 import sra3_step
 
@@ -78,33 +85,39 @@ def impulse_work(load, s, dws, v, vn) -> float:
 
 
 @njit(**INLINE)
-def bridge(total, length, s, z):
-    """Increment over ``[0, s]`` of ``sigma W`` given its increment ``total`` over ``[0, length]``
-    (Brownian bridge; ``z`` is ``sigma`` times a standard normal)."""
-    if length <= 0.0:
-        return total
-    return total * (s / length) + np.sqrt(max(s * (length - s) / length, 0.0)) * z
-
-
-@njit(**INLINE)
-def bridges(total, length, s, z, out):
-    """``bridge`` for every floor's increment."""
+def increments(path, dw, off, s, left, w_at, sigma, normals, slot, memo, out):
+    """Each floor's Wiener increment ``sigma W`` over ``[off, off + s]`` of the step into ``out``
+    (``w_at``: the path at ``off``; ``dw``: the step's increments, the path at its end, which
+    ``s >= left`` reaches).  ``path``:
+    the step's tree (seed, step, dt, replayed fine normals a step, normals a fine step, replay);
+    ``slot``: each floor's place among the noisy floors; ``memo``: the tree's descent memo
+    (``brownian.path_value``)."""
+    seed, step, dt, refine, stride, replay = path
+    end = off + s
     for k in range(out.shape[0]):
-        out[k] = bridge(total[k], length, s, z[k])
+        if s >= left:
+            out[k] = dw[k] - w_at[k]
+        elif sigma[k] == 0.0:
+            out[k] = 0.0
+        else:
+            out[k] = path_value(seed, step, k, dw[k], dt, end, sigma[k], normals, refine, stride, int(slot[k]),
+                                replay, memo) - w_at[k]
 
 
 @njit(**INLINE)
-def crossing(x, v, length, total, z, load, ag, force, mass, inv_mass, nf, stuck, host, a, side, wall, vt, dws,
-             group_mass, group_sum, ground):
+def crossing(x, v, length, left, path, dw, off, w_at, sigma, normals, slot, memo, load, ag, force, mass, inv_mass,
+             nf, stuck, host, a, side, wall, vt, dws, group_mass, group_sum, ground):
     """Sub-step length in ``(0, length]`` after which absorber ``a`` is exactly at ``wall``
-    (side ``side``) of its host floor's cavity, by the Illinois method on the bracket
-    ``[0, length]``."""
+    (side ``side``: the gap ``side (x_a - x_host) - wall`` crosses zero upwards) of its host
+    floor, by the Illinois method on the bracket ``[0, length]``; the trial kicks take the
+    Wiener increments of the step's Brownian tree (``increments``)."""
     h = host_of(host, a, nf)
     j = nf + a
     lo, hi = 0.0, length
     g_lo = min(side * (x[j] - x[h]) - wall, 0.0)  # on the wall counts as inside
+    increments(path, dw, off, length, left, w_at, sigma, normals, slot, memo, dws)
     for k in range(nf):
-        dws[k] = 0.5 * total[k]
+        dws[k] *= 0.5
     kick(v, 0.5 * length, dws, load, ag, force, inv_mass, vt, ground)
     stick_together(mass, vt, nf, stuck, host, group_mass, group_sum, False)
     g_hi = side * (x[j] - x[h] + length * (vt[j] - vt[h])) - wall
@@ -114,7 +127,7 @@ def crossing(x, v, length, total, z, load, ag, force, mass, inv_mass, nf, stuck,
         s = hi - g_hi * (hi - lo) / (g_hi - g_lo)
         if not (lo < s < hi):
             s = 0.5 * (lo + hi)
-        bridges(total, length, s, z, dws)
+        increments(path, dw, off, s, left, w_at, sigma, normals, slot, memo, dws)
         for k in range(nf):
             dws[k] *= 0.5
         kick(v, 0.5 * s, dws, load, ag, force, inv_mass, vt, ground)
@@ -135,9 +148,23 @@ def crossing(x, v, length, total, z, load, ag, force, mass, inv_mass, nf, stuck,
     return hi
 
 
+@njit(**INLINE)
+def contact_sides(x, nf, kind, host, rows, touching):
+    """``touching[a]``: the side (-1 left, +1 right) on which Hertz absorber ``a`` touches or
+    presses into a contact surface, 0 when it touches none (the start of a run; events keep it
+    from there on)."""
+    for a in range(x.shape[0] - nf):
+        u = x[nf + a] - x[host_of(host, a, nf)]
+        touching[a] = 0
+        if kind[a] == HERTZ and u <= rows[a, WALL_LO]:
+            touching[a] = -1
+        elif kind[a] == HERTZ and u >= rows[a, WALL_HI]:
+            touching[a] = 1
+
+
 @lru_cache(maxsize=None)
-def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_impact: bool, filtered: bool,
-               piecewise: bool, ground: bool, replay: bool = False, sra: bool = False, watch: bool = False):
+def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_impact: bool, has_hertz: bool,
+               filtered: bool, piecewise: bool, ground: bool, sra: bool = False, watch: bool = False):
     """The kick-drift-kick Euler-Maruyama loop specialised to a scene's structure (number of
     bodies, of floors and of closed-form force rows, white noise, impact absorbers, filtered
     loads, loads with kinks or jumps, ground acceleration: ``Scene.kernel_flags``; limits whose
@@ -152,11 +179,13 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
     ``grid`` (time grid, metrics window, Poincare and history grids), ``outputs`` (metric
     vector, Poincare samples, history rows, the limits whose first passages the metric vector
     records: ``common.first_passages``), then the generators of the step increments, of
-    the Brownian-bridge draws and of the filter noise (``None`` where unused; three arguments,
+    the Brownian trees' seed and of the filter noise (``None`` where unused; three arguments,
     not a bundle: numba types a tuple holding a Generator in Python, about 20 us a call).
 
-    With ``replay``, the step increments are ``sigma_k sqrt(dt) normals[...]`` (a given Brownian
-    path, one normal per noisy floor and step, for convergence studies) instead of draws.
+    Given ``normals`` (the noise bundle's replayed path: ``refine`` fine normals a step and
+    noisy floor, for convergence studies), the step increments are sums of them instead of
+    draws.  Replaying is a run-time choice, not a specialisation: a path drawn from the stream
+    and the same path replayed run the same machine code, so they agree bitwise.
 
     With ``sra`` (scenes without impact absorbers and filtered loads), each step is the
     stochastic Runge-Kutta step of ``sra3.sra3_step`` instead of the kick-drift-kick one; it
@@ -164,9 +193,11 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
     second).
     """
 
-    # passes of a step's event loop: one without impact absorbers (nothing to split at), none
-    # with the Runge-Kutta step
-    EVENTS = 0 if sra else (MAX_EVENTS + 1 if has_impact else 1)
+    # passes of a step's event loop: one without impact or Hertz absorbers (nothing to split
+    # at), none with the Runge-Kutta step
+    EVENTS = 0 if sra else (MAX_SUBSTEPS if has_hertz else (MAX_EVENTS + 1 if has_impact else 1))
+    TREE = has_noise and (has_impact or has_hertz)  # sub-steps take increments from the Brownian tree
+    MEMO_SIZE = n_floors * MEMO if TREE else 0
     NB = n_bodies
     NF = n_floors
     NR = n_rows
@@ -182,7 +213,8 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
         kind, host, rows = absorbers
         forces, series_t, series_v, series_ptr, series_target = ex
         phi, chol, envelopes, c_force, c_ground, z = fl
-        sigma, normals = noise
+        sigma, normals, refine = noise
+        replay = normals.shape[0] > 0
         dt, n_steps, i0, period, sample_from, stride = grid
         out, samples, history, limits = outputs
         na = kind.shape[0]
@@ -198,12 +230,23 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
         # increments (the step's, a sub-step's, the bridge draws), the sticking groups, the
         # metrics' accumulators
         load, load_next, load_end, load3 = scratch(NF), scratch(NF), scratch(NF), scratch(NF)
-        dw, dws, dwh, zb, noise_scale = scratch(NF), scratch(NF), scratch(NF), scratch(NF), scratch(NF)
+        dw, dws, dwh, dwc, noise_scale = scratch(NF), scratch(NF), scratch(NF), scratch(NF), scratch(NF)
+        w_at, slot = scratch(NF), scratch(NF)  # the path at a sub-step's start; place among noisy floors
+        memo = scratch(MEMO_SIZE)  # the Brownian trees' descent memo (``brownian.tree_value``)
         u1, u2, dz = scratch(NF), scratch(NF), scratch(NF)
         group_mass, group_sum, acc = scratch(NF), scratch(NF), scratch(NF)
         x_max, drift_max, acc_max, x2_integral = scratch(NF), scratch(NF), scratch(NF), scratch(NF)
+        noisy = 0  # noisy floors (normals a step)
         for k in range(nf):
             noise_scale[k] = sigma[k] * np.sqrt(dt)
+            slot[k] = noisy
+            if nf == 1 or noise_scale[k] > 0.0:
+                noisy += 1
+        # the seed of the Brownian trees inside the steps (``brownian``)
+        seed = np.uint64(0)
+        if TREE:
+            high, low = gen_bridge.random(), gen_bridge.random()
+            seed = (np.uint64(high * 2.0**32) << np.uint64(32)) | np.uint64(low * 2.0**32)
         # the Runge-Kutta stages' scratch, only where they run
         a1, a2, a3, xs, v2, v3 = scratch(NS), scratch(NS), scratch(NS), scratch(NS), scratch(NS), scratch(NS)
         zn = z.copy()
@@ -216,6 +259,9 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
         rotations(forces, dt, rc, rs)
         rotations(forces, 0.5 * dt, hc, hs)
         stuck = np.zeros(na, np.int64)
+        touching = np.zeros(na, np.int64)  # the side each Hertz absorber touches (``contact_sides``)
+        if has_hertz:
+            contact_sides(x, nf, kind, host, rows, touching)
         e1_prev = primary_energy(mass, storey_k, x, v, nf)
         h_next = start_history(history, stride, x, nf, e1_prev)
         ag_next = excitation(0.0, 0.5 * dt, 0.0, forces, series_t, series_v, series_ptr, series_target,
@@ -224,7 +270,7 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
         # (the trapezoid integrals of E1 and x_k^2 as plain sums of the step ends' values, the
         # window's ends at half weight: one add a step each)
         work = d_primary = d_absorber = e_sum = e1_max = 0.0
-        loss_sum = n_left = n_right = 0.0
+        loss_sum = n_left = n_right = contact_time = peak_force = 0.0
         replayed = 0
         pending = limits.shape[0]  # limits not passed yet
         i = 0
@@ -284,9 +330,14 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
                     for part in range(2 if sra else 1):
                         for k in range(nf):
                             if nf == 1 or noise_scale[k] > 0.0:
-                                if replay:  # (no counter carried through the loop otherwise)
+                                if replay and sra:  # (no counter carried through the loop otherwise)
                                     u = normals[replayed]
                                     replayed += 1
+                                elif replay:  # the sum of the step's fine normals
+                                    u = 0.0
+                                    for f in range(refine):
+                                        u += normals[(i * refine + f) * noisy + int(slot[k])]
+                                    u /= np.sqrt(refine)
                                 else:
                                     u = gen.standard_normal()
                                 if part == 0:
@@ -308,50 +359,74 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
                         acc[k] = a1[k] + ag  # the step start's absolute acceleration, for the peaks
                 left = dt
                 t = t_step
+                off = 0.0  # the sub-step's start in the step
+                path = (seed, i, dt, refine, noisy, replay)
+                for k in range(nf):
+                    w_at[k] = 0.0
+                n_impacts = 0
                 for event in range(EVENTS):
                     if event > 0 and left <= 0.0:
                         break
                     attachment_forces(x, v, nf, storey_k, storey_c, floor_c, host, rows, force)
-                    for k in range(nf):
-                        dws[k] = 0.5 * dw[k]
-                    kick(v, 0.5 * left, dws, load, ag, force, inv_mass, vn, GROUND)
-                    if has_impact:
-                        stick_together(mass, vn, nf, stuck, host, group_mass, group_sum, True)
+                    contact_forces(x, nf, kind, host, rows, force, has_hertz)
+                    # the sub-step: the rest of the step, or a Hertz contact's share of it
                     s = left
-                    hit, side = -1, 0
-                    if has_impact and event < MAX_EVENTS:
-                        for a in range(na):
-                            if kind[a] == IMPACT and stuck[a] == 0:
-                                h = host_of(host, a, nf)
-                                j = nf + a
-                                u_end = x[j] - x[h] + left * (vn[j] - vn[h])
-                                if abs(u_end) > rows[a, CLEARANCE]:
-                                    if has_noise and hit < 0:  # one bridge draw per floor and split step
-                                        for k in range(nf):
-                                            zb[k] = 0.0
-                                            if nf == 1 or sigma[k] > 0.0:
-                                                zb[k] = sigma[k] * gen_bridge.standard_normal()
-                                    sq = 1 if u_end > 0.0 else -1
-                                    sc = crossing(x, v, left, dw, zb, load, ag, force, mass, inv_mass, nf, stuck, host,
-                                                  a, sq, rows[a, CLEARANCE], vt, dws, group_mass, group_sum, GROUND)
-                                    if hit < 0 or sc < s:
-                                        hit, side, s = a, sq, sc
-                        if hit >= 0:
-                            bridges(dw, left, s, zb, dws)
-                            for k in range(nf):
-                                dws[k] *= 0.5
-                            kick(v, 0.5 * s, dws, load, ag, force, inv_mass, vn, GROUND)
-                            stick_together(mass, vn, nf, stuck, host, group_mass, group_sum, False)
-                    # the increments of the sub-step before an impact (all of the step without one)
-                    if has_impact:
-                        bridges(dw, left, s, zb, dws)
+                    if has_hertz and event == EVENTS - 1:  # take the rest of the step at once
+                        out[CAPPED] += 1
+                    elif has_hertz and touching.any():
+                        s = min(left, contact_step(x, v, nf, mass, host, rows, touching))
+                    if TREE:
+                        increments(path, dw, off, s, left, w_at, sigma, normals, slot, memo, dws)
                     else:
                         for k in range(nf):
                             dws[k] = dw[k]
+                    for k in range(nf):
+                        dwh[k] = 0.5 * dws[k]
+                    kick(v, 0.5 * s, dwh, load, ag, force, inv_mass, vn, GROUND)
+                    if has_impact:
+                        stick_together(mass, vn, nf, stuck, host, group_mass, group_sum, True)
+                    # the first impact, contact onset or contact end in the sub-step
+                    hit, side, s_hit, leaves = -1, 0, s, False
+                    if (has_impact and n_impacts < MAX_EVENTS) or (has_hertz and event < EVENTS - 1):
+                        for a in range(na):
+                            h = host_of(host, a, nf)
+                            j = nf + a
+                            u_end = x[j] - x[h] + s * (vn[j] - vn[h])
+                            sq, wall, exits = 0, 0.0, False
+                            if has_impact and kind[a] == IMPACT and stuck[a] == 0 and n_impacts < MAX_EVENTS:
+                                if abs(u_end) > rows[a, CLEARANCE]:
+                                    sq, wall = (1 if u_end > 0.0 else -1), rows[a, CLEARANCE]
+                            elif has_hertz and kind[a] == HERTZ:
+                                if touching[a] == 0 and u_end < rows[a, WALL_LO]:
+                                    sq, wall = -1, -rows[a, WALL_LO]
+                                elif touching[a] == 0 and u_end > rows[a, WALL_HI]:
+                                    sq, wall = 1, rows[a, WALL_HI]
+                                elif touching[a] < 0 and u_end > rows[a, WALL_LO]:  # the contact ends
+                                    sq, wall, exits = 1, rows[a, WALL_LO], True
+                                elif touching[a] > 0 and u_end < rows[a, WALL_HI]:
+                                    sq, wall, exits = -1, -rows[a, WALL_HI], True
+                            if sq != 0:
+                                sc = crossing(x, v, s, left, path, dw, off, w_at, sigma, normals, slot, memo, load, ag,
+                                              force, mass, inv_mass, nf, stuck, host, a, sq, wall, vt, dwc, group_mass,
+                                              group_sum, GROUND)
+                                if hit < 0 or sc < s_hit:
+                                    hit, side, s_hit, leaves = a, sq, sc, exits
+                        if hit >= 0:  # the first half kick again, to the event
+                            s = s_hit
+                            if TREE:
+                                increments(path, dw, off, s, left, w_at, sigma, normals, slot, memo, dws)
+                            for k in range(nf):
+                                dwh[k] = 0.5 * dws[k]
+                            kick(v, 0.5 * s, dwh, load, ag, force, inv_mass, vn, GROUND)
+                            stick_together(mass, vn, nf, stuck, host, group_mass, group_sum, False)
                     if inside:
                         work += 0.5 * impulse_work(load, s, dws, v, vn) - (0.5 * ag * s * momentum(mass, v, vn) if ag != 0.0 else 0.0)
                         d_primary += structure_dissipation(v, vn, nf, storey_c, floor_c, s)
                         d_absorber += absorber_dissipation(v, vn, nf, host, rows, s)
+                        if has_hertz:  # contact time: the sub-steps that start in contact
+                            for a in range(na):
+                                if touching[a] != 0:
+                                    contact_time += s
                     for b in range(nb):
                         x[b] += s * vn[b]
                         v[b] = vn[b]
@@ -359,7 +434,7 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
                     # written out like the first kick's: an inlined helper for both measured 40 %
                     # slower)
                     ag_end = ag_next
-                    if has_impact and hit >= 0:
+                    if s < left:
                         ag_end = excitation(t + s, tm, (t + s - t_step) / dt, forces, series_t, series_v, series_ptr,
                                             series_target, filtered, c_force, c_ground, z, zn, pc, False, GROUND,
                                             load_end)
@@ -367,8 +442,7 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
                         for k in range(nf):
                             load_end[k] = load_next[k]
                     attachment_forces(x, v, nf, storey_k, storey_c, floor_c, host, rows, force)
-                    for k in range(nf):
-                        dwh[k] = 0.5 * dws[k]
+                    contact_forces(x, nf, kind, host, rows, force, has_hertz)
                     kick(v, 0.5 * s, dwh, load_end, ag_end, force, inv_mass, vn, GROUND)
                     if has_impact:
                         stick_together(mass, vn, nf, stuck, host, group_mass, group_sum, False)
@@ -378,30 +452,44 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
                         d_absorber += absorber_dissipation(v, vn, nf, host, rows, s)
                     for b in range(nb):
                         v[b] = vn[b]
-                    if not has_impact or hit < 0:
+                    if has_hertz and inside:
+                        for a in range(na):
+                            if kind[a] == HERTZ:
+                                peak_force = max(peak_force, contact_force(x, nf, a, host, rows))
+                    if not (has_impact or has_hertz) or (hit < 0 and s >= left):
                         break
-                    # the impact, at t + s; the rest of the step keeps the rest of the increments
-                    h = host_of(host, hit, nf)
-                    j = nf + hit
-                    x[j] = x[h] + side * rows[hit, CLEARANCE]
+                    # the sub-step's end: an impact, a contact onset or a contact sub-step's end
                     t += s
                     left -= s
+                    off += s
                     ag = ag_end
-                    gain = (force[j] / mass[j] - (force[h] + load_end[h]) / mass[h]) * dt
                     for k in range(nf):
-                        dw[k] -= dws[k]
+                        w_at[k] += dws[k]
                         load[k] = load_end[k]
-                    # the last impact a step may resolve ends a chatter sequence: inelastic collapse
-                    loss = resolve_impact(mass, v, nf, hit, side, gain, rows[hit, RESTITUTION], event == MAX_EVENTS - 1,
-                                          stuck, host)
-                    if inside:
-                        loss_sum += loss
-                        if side < 0:
-                            n_left += 1.0
-                        else:
-                            n_right += 1.0
-                    if event == MAX_EVENTS - 1:
-                        out[CAPPED] += 1
+                    if hit >= 0 and not leaves:
+                        h = host_of(host, hit, nf)
+                        j = nf + hit
+                        if inside:
+                            if side < 0:
+                                n_left += 1.0
+                            else:
+                                n_right += 1.0
+                    if has_hertz and hit >= 0 and kind[hit] == HERTZ:  # onto or off the contact surface
+                        h = host_of(host, hit, nf)
+                        j = nf + hit
+                        x[j] = x[h] + (rows[hit, WALL_LO] if side * (-1 if leaves else 1) < 0 else rows[hit, WALL_HI])
+                        touching[hit] = 0 if leaves else side
+                    elif has_impact and hit >= 0:  # the impact, at t + s
+                        x[j] = x[h] + side * rows[hit, CLEARANCE]
+                        gain = (force[j] / mass[j] - (force[h] + load_end[h]) / mass[h]) * dt
+                        # the last impact a step may resolve ends a chatter sequence: inelastic collapse
+                        last = n_impacts == MAX_EVENTS - 1
+                        loss = resolve_impact(mass, v, nf, hit, side, gain, rows[hit, RESTITUTION], last, stuck, host)
+                        n_impacts += 1
+                        if inside:
+                            loss_sum += loss
+                        if last:
+                            out[CAPPED] += 1
                 if has_impact:
                     keep_in_cavities(x, nf, kind, host, rows)
                     pin_to_walls(x, nf, stuck, host, rows)
@@ -442,6 +530,9 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
         out[IMPACTS] = n_left + n_right
         out[IMPACTS_LEFT] = n_left
         out[IMPACTS_RIGHT] = n_right
+        if has_hertz:
+            out[CONTACT_TIME] = contact_time
+            out[PEAK_FORCE] = peak_force
         for b in range(nb):
             xt[b] = x[b]
             vt[b] = v[b]

@@ -9,7 +9,7 @@ the start of the step (converged to round-off):
 
 - an impact absorber reaching its wall: the Newton map is applied at that instant;
 - a Hertz absorber touching a contact surface: from there the step is cut into sub-steps
-  sized from the contact's stiffness, masses and approach speed (about ``CONTACT_STEPS`` per
+  sized from the contact's stiffness, masses and approach speed (about ``common.CONTACT_STEPS`` per
   contact duration), until the contact ends, which is located the same way.
 
 The outer step ``dt`` never has to be shrunk by the user for contact.
@@ -24,21 +24,16 @@ from numba import njit
 
 from ..physics import (CLEARANCE, DAMPING, HERTZ, IMPACT, K_LEFT, K_RIGHT, KERNEL, RESTITUTION, WALL_HI, WALL_LO,
                        primary_energy)
-from .common import (ABSORBER_DISS, CAPPED, CHECK_EVERY, CONTACT_TIME, E1_MAX, ENERGY_INT,
-                     FINAL_ENERGY, IMPACT_LOSS, IMPACTS, IMPACTS_LEFT, IMPACTS_RIGHT, INLINE,
-                     INPUT, MAX_EVENTS, PEAK_FORCE, PRIMARY_DISS, STATUS, STATUS_DIVERGED,
-                     accelerate, attachment_forces, block_end, contact_force, contact_forces, diverged, first_passages,
-                     floor_peaks, host_of, keep_in_cavities, pick, pin_to_walls, put, record_history,
-                     record_sample, resolve_impact, scratch, start_history, stick_together, stored_energy,
-                     structure_power, write_floor_metrics)
+from .common import (ABSORBER_DISS, CAPPED, CHECK_EVERY, CONTACT_TIME, E1_MAX, ENERGY_INT, FINAL_ENERGY,
+                     IMPACT_LOSS, IMPACTS, IMPACTS_LEFT, IMPACTS_RIGHT, INLINE, INPUT, MAX_EVENTS,
+                     MAX_SUBSTEPS, PEAK_FORCE, PRIMARY_DISS, STATUS, STATUS_DIVERGED, accelerate,
+                     attachment_forces, block_end, contact_force, contact_forces, contact_step, diverged,
+                     first_passages, floor_peaks, host_of, keep_in_cavities, pick, pin_to_walls, put,
+                     record_history, record_sample, resolve_impact, scratch, start_history, stick_together,
+                     stored_energy, structure_power, write_floor_metrics)
 from .loads import applied, next_break
 
 NEWTON_ITERATIONS = 12
-#: Sub-steps per Hertz contact duration.
-CONTACT_STEPS = 80
-#: Sub-steps (contact phases, impacts) allowed in one outer step; past it the rest of the
-#: step is taken at once and counted in ``capped_steps``.
-MAX_SUBSTEPS = 100_000
 #: Event kinds.
 NONE, IMPACT_EVENT, ONSET, EXIT = 0, 1, 2, 3
 
@@ -187,32 +182,6 @@ def next_event(x, xn, h, nf, kind, host, rows, stuck, touching):
                         if tau < first or event_kind == NONE:
                             event_kind, hit, hit_side, first = event, a, s, tau
     return event_kind, hit, hit_side, first
-
-
-@njit(**KERNEL)
-def contact_step(x, v, nf, mass, host, rows, touching) -> float:
-    """Sub-step for the Hertz contacts in progress: about ``CONTACT_STEPS`` per contact.
-
-    A Hertz contact with relative energy ``E`` compresses to ``z_max = (E / (0.4 K))^0.4`` and
-    lasts about ``4 / omega`` with ``omega = sqrt(1.5 K z_max^0.5 / m_eff)``.
-    """
-    h = np.inf
-    for a in range(touching.shape[0]):
-        side = touching[a]
-        if side != 0:
-            hf = host_of(host, a, nf)
-            j = nf + a
-            m_eff = mass[hf] * mass[j] / (mass[hf] + mass[j])
-            u = x[j] - x[hf]
-            w = v[j] - v[hf]
-            k = rows[a, K_LEFT] if side < 0 else rows[a, K_RIGHT]
-            z = max(rows[a, WALL_LO] - u if side < 0 else u - rows[a, WALL_HI], 0.0)
-            energy = 0.5 * m_eff * w * w + 0.4 * k * z * z * np.sqrt(z)
-            z_ref = max(z, (energy / (0.4 * k)) ** 0.4)
-            if z_ref > 0.0:
-                omega = np.sqrt(1.5 * k * np.sqrt(z_ref) / m_eff)
-                h = min(h, 4.0 / (CONTACT_STEPS * omega))
-    return h
 
 
 @lru_cache(maxsize=None)

@@ -13,7 +13,7 @@ from .bodies import Absorber, CubicAbsorber, HertzAbsorber, ImpactAbsorber, Prim
 from .distributions import Distribution
 from .errors import FieldError
 from .fields import MAX_ABSORBERS, MAX_LIMITS, MAX_LOADS, MAX_STEPS, _Model
-from .loads import InitialLoad, Load, WhiteNoiseLoad, _FilteredLoad
+from .loads import InitialLoad, Load, WhiteNoiseLoad, WindLoad, draws_filter_noise
 from .settings import (Ensemble, IntensityMeasures, Limit, Optimize, Output, Simulation, history_signals,
                        limit_metrics)
 
@@ -58,6 +58,8 @@ class Scenario(_Model):
             if floor is not None and not 1 <= floor <= n:
                 raise FieldError(f"{i}.floor", floor, f"must be in [1, {n}] (the primary has {n} floor{'s' * (n > 1)})")
         for i, load in enumerate(self.loads):
+            if isinstance(load, WindLoad) and (bad := load.floors_error(n)) is not None:
+                raise FieldError(f"loads.{i}.{bad[0]}", bad[1], bad[2])
             if isinstance(load, InitialLoad):
                 for field in ("displacement", "velocity"):
                     values = getattr(load, field)
@@ -87,17 +89,12 @@ class Scenario(_Model):
             why = schemes.refusal(schemes.SCHEMES[sim.scheme], *contents)
             if why is not None:
                 raise FieldError("simulation.scheme", sim.scheme, why)
-        elif schemes.refusal(schemes.SCHEMES[self.scheme], *contents) is not None:
-            i = next(i for i, a in enumerate(self.absorbers) if isinstance(a, HertzAbsorber))
-            raise FieldError(f"absorbers.{i}.type", "hertz",
-                            "Hertz contact is solved by the rk4 scheme only: remove noise loads "
-                            "and use scheme = 'auto' or 'rk4'")
         return self
 
     @property
     def contents(self) -> tuple[bool, bool, bool, bool]:
         """What the schemes must accept: noise, filtered loads, impact absorbers, Hertz absorbers."""
-        return (self.has_noise, any(isinstance(l, _FilteredLoad) and l.intensity > 0 for l in self.loads),
+        return (self.has_noise, any(draws_filter_noise(l) for l in self.loads),
                 any(isinstance(a, ImpactAbsorber) for a in self.absorbers),
                 any(isinstance(a, HertzAbsorber) for a in self.absorbers))
 
@@ -134,5 +131,6 @@ class Scenario(_Model):
 
     @property
     def has_noise(self) -> bool:
-        """True when any random load acts (white, filtered noise, stochastic ground motion)."""
-        return any(isinstance(l, (WhiteNoiseLoad, _FilteredLoad)) and l.intensity > 0 for l in self.loads)
+        """True when any random load acts (white, filtered noise, stochastic ground motion, wind)."""
+        return any((isinstance(l, WhiteNoiseLoad) and l.intensity > 0) or draws_filter_noise(l)
+                   for l in self.loads)
