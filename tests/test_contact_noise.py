@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from vines_stoch.kernels.brownian import TREE_DEPTH, new_memo, path_value, tree_value
+from vines_stoch.kernels.brownian import MEMO, new_memo, path_value, tree_value
 
 from vines_stoch.precision import same_path_errors, strong_order
 
@@ -29,15 +29,16 @@ def _hertz(geometry: str, offset: float, gap: float, contact: dict, mass: float 
 
 
 def test_tree_values_follow_the_brownian_bridge_law():
-    """Over 20,000 trees, ``W(t)`` at three points of ``[0, 1]`` pinned at ``W(1) = 0.7`` has the
-    bridge's mean ``0.7 t`` and covariance ``min(s, t) - s t``: every entry within 4 standard
-    errors (the points are not dyadic, so they lie below the tree's leaves)."""
+    """Over 20,000 trees of ``2 W`` (scale 2), the values at three points of ``[0, 1]`` pinned at
+    ``0.7`` at 1 have the bridge's mean ``0.7 t`` and covariance ``4 (min(s, t) - s t)``: every
+    entry within 4 standard errors (the points are not dyadic, so they lie below the tree's
+    leaves)."""
     seeds = np.arange(20_000, dtype=np.uint64) * np.uint64(2654435761) + np.uint64(12345)
-    times = np.array([0.1234567, 0.5, 0.87654321])
-    w = np.array([[tree_value(0.7, 1.0, t, 1.0, s, 0, new_memo(1), 0) for t in times] for s in seeds])
+    times = np.array([0.1234567, 0.4999, 0.87654321])
+    w = np.array([[tree_value(0.7, 1.0, t, 2.0, s, 0, new_memo(1), 0) for t in times] for s in seeds])
     n = w.shape[0]
     mean, cov = w.mean(axis=0), np.cov(w.T)
-    exact_cov = np.minimum.outer(times, times) - np.outer(times, times)
+    exact_cov = 4.0 * (np.minimum.outer(times, times) - np.outer(times, times))
     assert np.all(np.abs(mean - 0.7 * times) < 4 * np.sqrt(np.diag(exact_cov) / n))
     # standard error of a sample covariance of jointly normal variables
     se = np.sqrt((exact_cov**2 + np.outer(np.diag(exact_cov), np.diag(exact_cov))) / n)
@@ -61,37 +62,49 @@ def test_tree_is_one_path_for_a_coarse_step_and_its_fine_steps():
                                                        normals, 1, 2, k, False, new_memo(2))
                 got = path_value(seed, step, k, fine.sum(), dt, tau, sigma, normals, refine, 2, k, True, new_memo(2))
                 assert got == pytest.approx(expected, rel=1e-10, abs=1e-13)  # (summation order)
-    assert TREE_DEPTH >= 14
 
 
 def test_tree_values_do_not_depend_on_the_queries_before_them():
     """A memo shared by a run's queries (``tree_value`` resumes its descent from the last one)
     gives bitwise the values of fresh descents, whatever the order of the queries: nearby
-    instants as a contact's sub-steps ask, dyadic points, the ends, random instants."""
+    instants as a contact's sub-steps ask, dyadic points (early returns), the ends, random
+    instants, on two floors' memos, each switching between two steps' trees."""
     rng = np.random.default_rng(11)
-    times = np.concatenate([0.3 + 1e-6 * np.arange(40), [0.5, 0.25, 0.75, 0.0, 1e-3], rng.uniform(0.0, 1e-3, 30),
-                            rng.uniform(0.0, 1e-3, 30)]) * 1e-3
-    for order in (np.arange(times.size), rng.permutation(times.size), rng.permutation(times.size)):
-        memo = new_memo(1)
-        shared = [tree_value(0.01, 1e-3, times[i], 0.5, np.uint64(77), 3, memo, 0) for i in order]
-        fresh = [tree_value(0.01, 1e-3, times[i], 0.5, np.uint64(77), 3, new_memo(1), 0) for i in order]
-        assert shared == fresh
+    length = 1e-3
+    times = np.concatenate([0.3e-3 + 1e-9 * np.arange(40), length * np.array([0.5, 0.25, 0.75, 0.0, 1.0, 0.625]),
+                            rng.uniform(0.0, length, 60)])
+    queries = [(tau, floor, step) for tau in times for floor in (0, 1) for step in (3, 4)]
+    for order in (np.arange(len(queries)), rng.permutation(len(queries)), rng.permutation(len(queries))):
+        memo = new_memo(2)
+        for i in order:
+            tau, floor, step = queries[i]
+            key = np.uint64(77 + 1000 * floor + step)
+            total = 0.01 * (1 + floor + step)
+            shared = tree_value(total, length, tau, 0.5, key, step, memo, floor * MEMO)
+            assert shared == tree_value(total, length, tau, 0.5, key, step, new_memo(1), 0)
 
 
 # -- statistics of contact under noise ------------------------------------------------------
 
 
-@pytest.mark.parametrize("absorber", [_hertz("single-sided", 0.2, 5.0, SOFT, stiffness=0.05),
-                                      _hertz("double-sided", 0.2, 0.2, SOFT)],
-                         ids=["single-sided", "double-sided"])
-def test_elastic_hertz_absorber_keeps_gibbs_equipartition(absorber):
+PRESSED = dict(_hertz("single-sided", 0.0, 5.0, SOFT, stiffness=1.0), rest=-1.0)
+
+
+@pytest.mark.parametrize("absorber, paths, duration",
+                         [(_hertz("single-sided", 0.2, 5.0, SOFT, stiffness=0.05), 100, 1100.0),
+                          (_hertz("double-sided", 0.2, 0.2, SOFT), 100, 1100.0),
+                          (PRESSED, 30, 600.0)],
+                         ids=["single-sided", "double-sided", "pressed into its barrier"])
+def test_elastic_hertz_absorber_keeps_gibbs_equipartition(absorber, paths, duration):
     """An elastic Hertz absorber (no absorber damping) on a primary with damping ``c1`` under white
     noise ``sigma`` on the primary: the Gibbs law makes ``<x1^2> = theta / k1`` and
     ``<v1^2> = theta / m1``, ``theta = sigma^2 / (2 c1)``, whatever the contact law.  Time
-    averages over ``[100, 1100]`` of 100 paths, each within 4 standard errors (from the spread
-    of the paths' averages: the paths are independent).  The absorber spends about 2 %
-    (single-sided) and 6 % (double-sided) of the time in contact, 150-600 contacts a path."""
-    c1, sigma, t0, duration = 0.1, 0.05, 100.0, 1100.0
+    averages over ``[100, duration]``, each within 4 standard errors (from the spread of the
+    paths' averages: the paths are independent).  The absorber spends about 2 % (single-sided)
+    and 6 % (double-sided) of the time in contact, 150-600 contacts a path; pressed into its
+    barrier by its spring (rest 1 m beyond it) about 80 %, so the noise must act inside the
+    contact sub-steps for the law to hold."""
+    c1, sigma, t0 = 0.1, 0.05, 100.0
     theta = sigma**2 / (2.0 * c1)
     scene = scene_from({
         "name": "gibbs",
@@ -102,7 +115,7 @@ def test_elastic_hertz_absorber_keeps_gibbs_equipartition(absorber):
     })
     window = duration - t0
     x2, v2, contacts = [], [], []
-    for path in range(100):
+    for path in range(paths):
         m = raw_metrics(scene, np.random.default_rng(path))
         x2.append(m["x1_square_integral"] / window)
         v2.append(2.0 * (m["energy_integral"] / window - 0.5 * x2[-1]))  # E1 = (v1^2 + x1^2) / 2
@@ -143,8 +156,9 @@ def test_strong_order_of_hertz_contact_under_noise_is_one():
     """A double-sided Hertz absorber (K = 7e5 N/m^1.5) hitting both walls under white noise
     (``precision.SAME_PATH``):
     strong order 1 on the same path (the contact force is continuous, so the scheme keeps the
-    order of kick-drift-kick for additive noise).  Measured 0.90 over dt = 2^-6 .. 2^-15
-    (1.0 over the last four levels); asserted above 0.75."""
+    order of kick-drift-kick for additive noise).  Measured 0.97 here (dt = 2^-6 .. 2^-11
+    against 2^-14, 20 paths) and 0.90 over 2^-6 .. 2^-15 against 2^-16 (30 paths); asserted
+    above 0.75, with the errors decreasing at every level."""
     levels = [6, 7, 8, 9, 10, 11]
     errors, _ = same_path_errors("hertz", levels, fine=14, paths=20)
     assert np.all(np.diff(errors) < 0)
@@ -156,7 +170,9 @@ def test_strong_order_of_impacts_under_noise_is_one_half():
     scheme's position error O(dt) moves each impact by O(dt), and the relative velocity the
     Newton map reverses carries the Brownian velocity of the primary, Hoelder 1/2 in time:
     O(sigma dt^1/2) per impact.  (Not the bridge: the earlier independent bridge draws and the
-    tree measure the same.)  Measured 0.50 over dt = 2^-6 .. 2^-15; asserted in [0.3, 0.8]."""
+    tree measure the same.)  Measured 0.62 here (dt = 2^-6 .. 2^-11 against 2^-14, 30 paths) and
+    0.51 over 2^-6 .. 2^-15 against 2^-16; asserted in [0.3, 0.8]: apart from 1 (the order
+    without impacts) and from 0."""
     levels = [6, 7, 8, 9, 10, 11]
     errors, _ = same_path_errors("impact", levels, fine=14, paths=30)
     assert errors[-1] < errors[0] / 4
@@ -189,8 +205,9 @@ LOADS = {
 def test_every_absorber_law_runs_under_every_load_type(absorber):
     """Every absorber law under every load type (records aside: they need files, and take the
     checks of the closed-form loads), alone and with white noise added, is accepted with
-    ``scheme = "auto"`` (the scheme that runs it accepts its contents); the schemes that
-    remain refusable name why (RK4 is deterministic; SRA3 has no events and no filters)."""
+    ``scheme = "auto"`` (the scheme that runs it accepts its contents), and by kick-drift-kick,
+    which takes every scene.  (What remains refusable: RK4 with noise, being deterministic, and
+    SRA3 with events or filters; ``schemes.refusal`` names why.)"""
     from vines_stoch import schemes
     from vines_stoch.scenario.study import Study
 
@@ -202,6 +219,25 @@ def test_every_absorber_law_runs_under_every_load_type(absorber):
                 "simulation": {"duration": 10.0, "dt": 1e-3}})
             point = study.points[0]
             assert schemes.refusal(schemes.SCHEMES[point.scheme], *point.contents) is None, (name, extra)
-            for scheme in schemes.SCHEMES.values():
-                why = schemes.refusal(scheme, *point.contents)
-                assert why is None or "use 'auto'" in why or "needs 'euler-maruyama'" in why
+            assert schemes.refusal(schemes.SCHEMES["euler-maruyama"], *point.contents) is None, (name, extra)
+
+
+@pytest.mark.parametrize("loads", [[LOADS["filtered-noise"]], [LOADS["half-sine"], LOADS["white-noise"]]],
+                         ids=["filtered noise", "half-sine + white noise"])
+def test_hertz_absorbers_run_under_filtered_and_piecewise_noisy_loads(loads):
+    """The two Hertz combinations no example scenario runs: a double-sided Hertz absorber beside a
+    single-sided one under filtered noise, and under a half-sine shock plus white noise (sub-steps
+    at the shock's ends and at contacts in one step): every path in contact, its energy balance
+    closed within 1e-3 of the input, the example scenarios' criterion (measured: up to 3e-5 and
+    1.1e-4, the scheme's potential-energy error at two contact sub-steps a step)."""
+    scene = scene_from({
+        "name": "hertz-loads", "primary": {"mass": 1.0, "stiffness": 1.0, "damping": 0.02},
+        "absorbers": [ABSORBERS["hertz double-sided"], ABSORBERS["hertz single-sided"]],
+        "loads": [{"type": "impulse", "velocity": 0.5}, *loads],
+        "simulation": {"duration": 50.0, "dt": 1e-3}})
+    for path in range(3):
+        m = raw_metrics(scene, np.random.default_rng(path))
+        assert m["status"] == 0 and m["impacts"] > 0 and m["contact_time"] > 0
+        residual = (m["input_energy"] - m["final_energy"] - m["primary_dissipation"] - m["absorber_dissipation"]
+                    - m["impact_loss"])
+        assert abs(residual) < 1e-3 * m["input_energy"]

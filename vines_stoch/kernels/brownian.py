@@ -40,8 +40,9 @@ _TWO_PI = 2.0 * np.pi
 
 @njit(**INLINE)
 def mix(z):
-    """splitmix64's output function of ``z + golden``: a bijective 64-bit hash."""
-    z = z + _GOLDEN
+    """splitmix64's output function of ``z + golden``: a bijective 64-bit hash (of ``z`` as an
+    unsigned 64-bit integer: a signed one would shift arithmetically)."""
+    z = np.uint64(z) + _GOLDEN
     z = (z ^ (z >> _S30)) * _MIX1
     z = (z ^ (z >> _S27)) * _MIX2
     return z ^ (z >> _S31)
@@ -50,7 +51,7 @@ def mix(z):
 @njit(**INLINE)
 def interval_key(seed, interval: int, floor: int):
     """Key of the tree below (fine) step ``interval`` of floor ``floor``'s Wiener process."""
-    return mix(mix(seed ^ np.uint64(interval)) ^ np.uint64(floor))
+    return mix(mix(np.uint64(seed) ^ np.uint64(interval)) ^ np.uint64(floor))
 
 
 @njit(**INLINE)

@@ -106,11 +106,12 @@ def increments(path, dw, off, s, left, w_at, sigma, normals, slot, memo, out):
 
 @njit(**INLINE)
 def crossing(x, v, length, left, path, dw, off, w_at, sigma, normals, slot, memo, load, ag, force, mass, inv_mass,
-             nf, stuck, host, a, side, wall, vt, dws, group_mass, group_sum, ground):
+             nf, stuck, host, a, side, wall, vt, dws, group_mass, group_sum, ground, sticking):
     """Sub-step length in ``(0, length]`` after which absorber ``a`` is exactly at ``wall``
     (side ``side``: the gap ``side (x_a - x_host) - wall`` crosses zero upwards) of its host
     floor, by the Illinois method on the bracket ``[0, length]``; the trial kicks take the
-    Wiener increments of the step's Brownian tree (``increments``)."""
+    Wiener increments of the step's Brownian tree (``increments``); ``sticking``: the scene has
+    impact absorbers that may stick (a compile-time flag)."""
     h = host_of(host, a, nf)
     j = nf + a
     lo, hi = 0.0, length
@@ -119,7 +120,7 @@ def crossing(x, v, length, left, path, dw, off, w_at, sigma, normals, slot, memo
     for k in range(nf):
         dws[k] *= 0.5
     kick(v, 0.5 * length, dws, load, ag, force, inv_mass, vt, ground)
-    stick_together(mass, vt, nf, stuck, host, group_mass, group_sum, False)
+    stick_together(mass, vt, nf, stuck, host, group_mass, group_sum, False, sticking)
     g_hi = side * (x[j] - x[h] + length * (vt[j] - vt[h])) - wall
     s = hi
     last = 0
@@ -131,7 +132,7 @@ def crossing(x, v, length, left, path, dw, off, w_at, sigma, normals, slot, memo
         for k in range(nf):
             dws[k] *= 0.5
         kick(v, 0.5 * s, dws, load, ag, force, inv_mass, vt, ground)
-        stick_together(mass, vt, nf, stuck, host, group_mass, group_sum, False)
+        stick_together(mass, vt, nf, stuck, host, group_mass, group_sum, False, sticking)
         g = side * (x[j] - x[h] + s * (vt[j] - vt[h])) - wall
         if g > 0.0:
             hi, g_hi = s, g
@@ -364,15 +365,18 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
                 for k in range(nf):
                     w_at[k] = 0.0
                 n_impacts = 0
+                capped = False
                 for event in range(EVENTS):
                     if event > 0 and left <= 0.0:
                         break
                     attachment_forces(x, v, nf, storey_k, storey_c, floor_c, host, rows, force)
                     contact_forces(x, nf, kind, host, rows, force, has_hertz)
-                    # the sub-step: the rest of the step, or a Hertz contact's share of it
+                    # the sub-step: the rest of the step, or a Hertz contact's share of it; the
+                    # last pass a step allows takes the rest at once, with no events
+                    search = event < EVENTS - 1
                     s = left
-                    if has_hertz and event == EVENTS - 1:  # take the rest of the step at once
-                        out[CAPPED] += 1
+                    if has_hertz and not search:
+                        capped = True
                     elif has_hertz and touching.any():
                         s = min(left, contact_step(x, v, nf, mass, host, rows, touching))
                     if TREE:
@@ -387,7 +391,7 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
                         stick_together(mass, vn, nf, stuck, host, group_mass, group_sum, True)
                     # the first impact, contact onset or contact end in the sub-step
                     hit, side, s_hit, leaves = -1, 0, s, False
-                    if (has_impact and n_impacts < MAX_EVENTS) or (has_hertz and event < EVENTS - 1):
+                    if search and ((has_impact and n_impacts < MAX_EVENTS) or has_hertz):
                         for a in range(na):
                             h = host_of(host, a, nf)
                             j = nf + a
@@ -408,7 +412,7 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
                             if sq != 0:
                                 sc = crossing(x, v, s, left, path, dw, off, w_at, sigma, normals, slot, memo, load, ag,
                                               force, mass, inv_mass, nf, stuck, host, a, sq, wall, vt, dwc, group_mass,
-                                              group_sum, GROUND)
+                                              group_sum, GROUND, has_impact)
                                 if hit < 0 or sc < s_hit:
                                     hit, side, s_hit, leaves = a, sq, sc, exits
                         if hit >= 0:  # the first half kick again, to the event
@@ -418,7 +422,7 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
                             for k in range(nf):
                                 dwh[k] = 0.5 * dws[k]
                             kick(v, 0.5 * s, dwh, load, ag, force, inv_mass, vn, GROUND)
-                            stick_together(mass, vn, nf, stuck, host, group_mass, group_sum, False)
+                            stick_together(mass, vn, nf, stuck, host, group_mass, group_sum, False, has_impact)
                     if inside:
                         work += 0.5 * impulse_work(load, s, dws, v, vn) - (0.5 * ag * s * momentum(mass, v, vn) if ag != 0.0 else 0.0)
                         d_primary += structure_dissipation(v, vn, nf, storey_c, floor_c, s)
@@ -488,8 +492,11 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
                         n_impacts += 1
                         if inside:
                             loss_sum += loss
-                        if last:
-                            out[CAPPED] += 1
+                        capped = capped or last
+                if capped:
+                    out[CAPPED] += 1
+                if has_hertz and capped:  # the last pass took no events: the contacts as they are
+                    contact_sides(x, nf, kind, host, rows, touching)
                 if has_impact:
                     keep_in_cavities(x, nf, kind, host, rows)
                     pin_to_walls(x, nf, stuck, host, rows)
