@@ -362,8 +362,9 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
                 t = t_step
                 off = 0.0  # the sub-step's start in the step
                 path = (seed, i, dt, refine, noisy, replay)
-                for k in range(nf):
-                    w_at[k] = 0.0
+                if TREE:
+                    for k in range(nf):
+                        w_at[k] = 0.0
                 n_impacts = 0
                 capped = False
                 for event in range(EVENTS):
@@ -438,7 +439,7 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
                     # written out like the first kick's: an inlined helper for both measured 40 %
                     # slower)
                     ag_end = ag_next
-                    if s < left:
+                    if (has_impact or has_hertz) and s < left:
                         ag_end = excitation(t + s, tm, (t + s - t_step) / dt, forces, series_t, series_v, series_ptr,
                                             series_target, filtered, c_force, c_ground, z, zn, pc, False, GROUND,
                                             load_end)
@@ -493,7 +494,7 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
                         if inside:
                             loss_sum += loss
                         capped = capped or last
-                if capped:
+                if (has_impact or has_hertz) and capped:
                     out[CAPPED] += 1
                 if has_hertz and capped:  # the last pass took no events: the contacts as they are
                     contact_sides(x, nf, kind, host, rows, touching)
