@@ -128,7 +128,7 @@ def simulate(scene, streams: Streams | np.random.Generator | None = None, *, nor
         samples = sample_buffer(scene)
     replay = normals is not None
     needed = scene.n_steps * SCHEMES[scene.scheme].normals * max(scene.noisy_floors, 1) * refine
-    if refine < 1 or (refine > 1 and (not replay or SCHEMES[scene.scheme].kernel != "kdk" or scene.scheme == "sra")):
+    if refine < 1 or (refine > 1 and (not replay or scene.scheme != "euler-maruyama")):
         raise ValueError(f"refine: {refine} fine steps a step; must be >= 1, and more than 1 only with replayed "
                          "normals and the euler-maruyama scheme")
     if replay and normals.shape[0] < needed:

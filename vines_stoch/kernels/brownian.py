@@ -108,7 +108,7 @@ def tree_value(total: float, length: float, tau: float, scale: float, key, inter
             lo, w_lo, node = mid, w_mid, 2 * node + 1
         row = base + 5 * (depth + 1)
         memo[row], memo[row + 1], memo[row + 2], memo[row + 3], memo[row + 4] = lo, hi, w_lo, w_hi, node
-    memo[levels] = TREE_DEPTH + 1.0 if level < TREE_DEPTH else memo[levels]
+    memo[levels] = TREE_DEPTH + 1.0  # every level down to the leaf is kept
     return w_lo + (w_hi - w_lo) * ((tau - lo) / (hi - lo))
 
 
