@@ -12,11 +12,11 @@ from vines_stoch import load_scenario
 from vines_stoch.kernels import SLOTS, simulate
 from vines_stoch.metrics import finish, regime
 from vines_stoch.physics import hertz_constant
-from vines_stoch.reproduce import PRIMARY_E1MAX, TABLES
+from vines_stoch.validation.reproduce import PRIMARY_E1MAX, TABLES
 from vines_stoch.scene import build_scene
 
 from .conftest import raw_metrics, scene_of
-from vines_stoch.reference import hertz_reference
+from vines_stoch.validation.reference import hertz_reference
 
 SEED_ABSORBER = """
 [[absorbers]]

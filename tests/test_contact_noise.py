@@ -10,7 +10,7 @@ import pytest
 
 from vines_stoch.kernels.brownian import MEMO, new_memo, path_value, tree_value
 
-from vines_stoch.precision import same_path_errors, strong_order
+from vines_stoch.validation.precision import same_path_errors, strong_order
 
 from .conftest import raw_metrics, scene_from, scene_of
 

@@ -10,7 +10,7 @@ import pytest
 
 from vines_stoch import load_scenario, parse_scenario, run
 
-from vines_stoch.reference import parallel_nes_reference
+from vines_stoch.validation.reference import parallel_nes_reference
 
 DURATION = 100.0
 

@@ -25,12 +25,11 @@ import math
 import numpy as np
 import pytest
 
-from vines_stoch import ScenarioError, parse_scenario
+from vines_stoch import ScenarioError
 from vines_stoch.kernels import simulate
 from vines_stoch.kernels.common import X1_SQ_INT
-from vines_stoch.precision import IMPULSE, LINEAR, WEAK_LOADS, _noisy_scene, coarse_increments, weak_metrics
-
-from .conftest import scene_of
+from vines_stoch.validation import scenes
+from vines_stoch.validation.precision import WEAK_LOADS, coarse_increments, noisy_scene, weak_metrics
 
 FINE = 2.5e-5
 
@@ -45,18 +44,18 @@ def _replay(scene, u1: np.ndarray, u2: np.ndarray) -> np.ndarray:
 def test_strong_order_and_agreement_with_kick_drift_kick():
     rng = np.random.default_rng(11)
     paths = [rng.standard_normal(round(20.0 / FINE)) for _ in range(3)]
-    fine_sra = _noisy_scene(FINE, scheme="sra")
+    fine_sra = noisy_scene(FINE, scheme="sra")
     errors = {"sra": {}, "euler-maruyama": {}}
     gaps = []
     for n in paths:
         reference = _replay(fine_sra, *coarse_increments(n, 1))
         # kick-drift-kick converges to the same solution (order 1 in the noise, 2 in the drift)
-        gaps.append([np.linalg.norm(_replay(_noisy_scene(FINE * m), *coarse_increments(n, m)) - reference)
+        gaps.append([np.linalg.norm(_replay(noisy_scene(FINE * m), *coarse_increments(n, m)) - reference)
                      for m in (4, 2, 1)])
         for dt in (4e-2, 2e-2, 1e-2):
             increments = coarse_increments(n, round(dt / FINE))
             for scheme in errors:
-                final = _replay(_noisy_scene(dt, scheme=scheme), *increments)
+                final = _replay(noisy_scene(dt, scheme=scheme), *increments)
                 errors[scheme].setdefault(dt, []).append(np.linalg.norm(final - reference))
     gaps = np.mean(gaps, axis=0)
     # each halving shrinks the gap; the order fitted over both lies between the noise's 1 and
@@ -73,19 +72,17 @@ def test_strong_order_and_agreement_with_kick_drift_kick():
 @pytest.mark.parametrize("scheme", ["sra", "euler-maruyama"])
 def test_weak_error_of_the_stationary_variance(scheme):
     paths, dt = 512, 0.4
-    text = LINEAR.format(duration=1100.0, dt=dt).replace("metrics_from", f'scheme = "{scheme}"\nmetrics_from')
-    scene = scene_of(text)
+    scene = scenes.scene("linear", {"simulation.duration": 1100.0, "simulation.dt": dt, "simulation.scheme": scheme})
     values = np.array([simulate(scene, np.random.default_rng(r))[X1_SQ_INT] / 1000.0 for r in range(paths)])
     se = values.std(ddof=1) / math.sqrt(paths)
     assert abs(values.mean() - 5.0) < 3.5 * se, (values.mean(), se)
 
 
 def test_third_order_without_noise_and_energy_balance():
-    reference = simulate(scene_of(IMPULSE.format(dt=1e-3, impact="")))
+    reference = simulate(scenes.scene("impulse", {"simulation.dt": 1e-3}))
     errors, residuals = [], []
     for dt in (0.02, 0.01):
-        text = IMPULSE.format(dt=dt, impact="").replace("dt = ", 'scheme = "sra"\ndt = ')
-        raw = simulate(scene_of(text))
+        raw = simulate(scenes.scene("impulse", {"simulation.dt": dt, "simulation.scheme": "sra"}))
         errors.append(abs(raw[4] - reference[4]))  # energy integral
         # input - dissipation - final energy: the bookkeeping's own error, at least second order
         residuals.append(abs(raw[0] - raw[1] - raw[2] - raw[3] - raw[9]))
@@ -93,14 +90,14 @@ def test_third_order_without_noise_and_energy_balance():
     assert residuals[0] / residuals[1] > 4.0 and residuals[1] < 1e-4, residuals  # measured 5.6, 2.1e-5
 
 
-@pytest.mark.parametrize("extra, rule", [
-    ('[[absorbers]]\ntype = "impact"\nmass = 0.05\nclearance = 0.2\nrestitution = 0.6\n', "no impact or contact"),
-    ('[[loads]]\ntype = "filtered-noise"\nintensity = 0.1\nfrequency = 2.0\ndamping = 0.3\n', "white noise only"),
+@pytest.mark.parametrize("scene, changes, rule", [
+    ("impulse_parallel", {}, "no impact or contact"),
+    ("impulse", {"loads": [{"type": "filtered-noise", "intensity": 0.1, "frequency": 2.0, "damping": 0.3},
+                           {"type": "impulse", "velocity": 1.0}]}, "white noise only"),
 ])
-def test_refused_where_it_does_not_apply(extra, rule):
-    text = IMPULSE.format(dt=0.01, impact=extra).replace("dt = ", 'scheme = "sra"\ndt = ')
+def test_refused_where_it_does_not_apply(scene, changes, rule):
     with pytest.raises(ScenarioError, match=rule) as error:
-        parse_scenario(text, source="scene.toml")
+        scenes.study(scene, {**changes, "simulation.dt": 0.01, "simulation.scheme": "sra"}, source="scene.toml")
     assert "simulation.scheme" in str(error.value) and "scene.toml" in str(error.value)
 
 
@@ -120,7 +117,7 @@ def test_weak_order_of_the_energy_integral():
 def test_noisy_scene_needs_a_generator():
     """A noisy scene run without a generator is refused rather than drawn from a shared stream;
     a replayed path without impacts needs none."""
-    scene = _noisy_scene(0.05, 1.0)
+    scene = noisy_scene(0.05, 1.0)
     with pytest.raises(ValueError, match="generator"):
         simulate(scene)
     raw = simulate(scene, normals=np.zeros(scene.n_steps))

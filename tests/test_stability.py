@@ -1,5 +1,5 @@
-"""The numerical stability suite (vines_stoch/stability.py): every case ends within its time
-bound with a result whose energy balance closes, or with a clear error; a diverging
+"""The numerical stability suite (vines_stoch/validation/stability.py): every case ends within
+its time bound with a result whose energy balance closes, or with a clear error; a diverging
 realisation is counted, not averaged."""
 
 from __future__ import annotations
@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from vines_stoch import ScenarioError, parse_scenario, run
-from vines_stoch.stability import CASES, run_case
+from vines_stoch.validation.stability import CASES, run_case
 
 
 @pytest.mark.parametrize("case", CASES, ids=[c.name for c in CASES])
@@ -32,7 +32,7 @@ def test_case_ends_in_time_with_a_result_or_a_clear_error(case):
 def test_step_past_the_stability_limit_names_the_limit():
     case = next(c for c in CASES if c.expect == "error")
     with pytest.raises(ScenarioError) as err:
-        parse_scenario(case.text, "coarse.toml")
+        case.study("coarse.toml")
     message = str(err.value)
     # absorber m = 0.05 on k = 1e6 over a primary m = k = 1: omega^2 = k (1/m1 + 1/m2) + ...
     omega = math.sqrt(np.linalg.eigvalsh(np.array([[1.0 + 1e6, -1e6 / math.sqrt(0.05)],

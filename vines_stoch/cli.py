@@ -184,7 +184,10 @@ def fragility(
                f"beta {first['beta']:.4g} [{first['beta_lo']:.4g}, {first['beta_hi']:.4g}] (95 % bootstrap bounds, "
                f"{first['bootstrap_fitted']} of {first['bootstrap']} replicates); did not end ok: {first['diverged']}"
                + (f"\nnotes: {first['notes']}" if first["notes"] else ""))
-    typer.echo(f"wrote {directory / 'fragility.parquet'}, {directory / f'fragility_{limit}.png'}")
+    from .plotting import available
+
+    plot = f", {directory / f'fragility_{limit}.png'}" if available() else ""
+    typer.echo(f"wrote {directory / 'fragility.parquet'}{plot}")
 
 
 @app.command()
@@ -249,7 +252,11 @@ def bench(
     out: Path = typer.Option(Path("reports/benchmarks.md"), "--out", help="Markdown report to write."),
 ) -> None:
     """Measure throughput and error side by side; write the figures to reports/."""
-    from .bench import main as bench_main
+    import importlib.util
+
+    if importlib.util.find_spec("sdeint") is None:
+        _fail('vines-stoch bench compares against sdeint, which is not installed: pip install "vines-stoch[bench]"')
+    from .validation.bench import main as bench_main
 
     bench_main(out)
 
@@ -260,7 +267,7 @@ def reproduce(
     scenarios: Path = typer.Option(Path("scenarios"), "--scenarios", help="Folder holding the seed003_*.toml files."),
 ) -> None:
     """Reproduce seed 003 Tables 2 and 4 (E1max at 6.3 rad/s, both obstacle conventions)."""
-    from .reproduce import reproduce as reproduce_tables
+    from .validation.reproduce import reproduce as reproduce_tables
 
     try:
         path = reproduce_tables(scenarios, out)

@@ -25,6 +25,7 @@ import pandas as pd
 from scipy.special import log_ndtr, ndtr, ndtri
 
 from .metrics import exceedance, limit_names
+from .plotting import pyplot
 from .store import read_results
 
 #: Fisher-scoring iterations (a fit converges in well under 20; separated stripes never do).
@@ -202,8 +203,8 @@ def fragility(directory: str | Path, limit: str, im: str, diverged: str = "exclu
               seed: int = 0, plot: bool = True) -> pd.DataFrame:
     """Fit the fragility of ``limit`` against ``im`` for the run in ``directory``; writes
     ``directory/fragility.parquet`` (one row per stripe with the fit's columns, replacing the
-    rows of an earlier fit of the same limit and intensity) and ``fragility_<limit>.png``;
-    returns the rows written."""
+    rows of an earlier fit of the same limit and intensity) and ``fragility_<limit>.png`` (where
+    matplotlib is installed); returns the rows written."""
     directory = Path(directory)
     realizations, _ = read_results(directory)
     table = stripes(realizations, limit, im, diverged)
@@ -227,12 +228,11 @@ def fragility(directory: str | Path, limit: str, im: str, diverged: str = "exclu
 
 
 def _plot(table: pd.DataFrame, result: dict, limit: str, im: str, policy: str, path: Path) -> None:
-    """The stripes' fractions with their intervals and the fitted curve."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
+    """The stripes' fractions with their intervals and the fitted curve (where matplotlib is
+    installed)."""
+    plt = pyplot(str(path))
+    if plt is None:
+        return
     fig, ax = plt.subplots(figsize=(6.4, 4.2))
     shown, what = table, "stripes"
     if len(table) > PLOT_BINS:  # intensities of their own (a cloud): pooled into bins for the eye

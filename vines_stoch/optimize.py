@@ -22,6 +22,7 @@ import numpy as np
 import pandas as pd
 
 from .ensemble import run, sample
+from .plotting import REPORT_EXTRA, pyplot
 from .reports import markdown
 from .scenario import Bound, Optimize, Study, parse_scenario, set_path
 from .store import write_table
@@ -143,27 +144,26 @@ def optimum_text(study: Study, values: dict[str, float], directory: Path) -> str
 
 
 def write_report(study: Study, best: Optimum, summary: pd.DataFrame, directory: Path) -> Path:
-    """``directory/report.md`` and ``objective_history.png``."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
+    """``directory/report.md`` and ``objective_history.png`` (where matplotlib is installed)."""
     spec = study.base.optimize
     metric = spec.objective
     history = best.history
-    fig, ax = plt.subplots(figsize=(6.4, 3.6))
-    ok = history["n_failed"] == 0
-    ax.errorbar(history["evaluation"][ok], history[metric][ok], yerr=1.96 * history["sem"][ok], fmt=".",
-                color="0.6", ecolor="0.8", label="candidate (95 % interval)")
-    running = (spec.sign * history[metric].where(ok, math.inf)).cummin() * spec.sign
-    ax.plot(history["evaluation"], running, color="C0", label="best so far")
-    ax.set_xlabel("evaluation")
-    ax.set_ylabel(f"mean {metric}")
-    ax.legend()
-    fig.tight_layout()
-    fig.savefig(directory / "objective_history.png", dpi=120)
-    plt.close(fig)
+    plt = pyplot(str(directory / "objective_history.png"))
+    if plt is not None:
+        fig, ax = plt.subplots(figsize=(6.4, 3.6))
+        ok = history["n_failed"] == 0
+        ax.errorbar(history["evaluation"][ok], history[metric][ok], yerr=1.96 * history["sem"][ok], fmt=".",
+                    color="0.6", ecolor="0.8", label="candidate (95 % interval)")
+        running = (spec.sign * history[metric].where(ok, math.inf)).cummin() * spec.sign
+        ax.plot(history["evaluation"], running, color="C0", label="best so far")
+        ax.set_xlabel("evaluation")
+        ax.set_ylabel(f"mean {metric}")
+        ax.legend()
+        fig.tight_layout()
+        fig.savefig(directory / "objective_history.png", dpi=120)
+        plt.close(fig)
+    figure = ("![objective history](objective_history.png)" if plt is not None else
+              f"(The plot is not drawn: matplotlib is not installed; `{REPORT_EXTRA}` adds it.)")
 
     table = pd.DataFrame([{"parameter": k, "low": b.low, "high": b.high, "start": b.initial, "scale": b.scale,
                            "optimum": best.values[k]} for k, b in spec.parameters.items()])
@@ -179,7 +179,7 @@ def write_report(study: Study, best: Optimum, summary: pd.DataFrame, directory: 
         f"Objective at the optimum: {best.objective:.6g} (standard error {best.sem:.2g}). Candidates share "
         "their random numbers, so differences between them are far more precise than this error.", "",
         "## Summary at the optimum", "", markdown(summary[columns]), "",
-        "## Objective history", "", "![objective history](objective_history.png)", "",
+        "## Objective history", "", figure, "",
         markdown(history), "",
     ])
     path = directory / "report.md"

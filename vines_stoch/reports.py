@@ -1,5 +1,5 @@
-"""Reports of finished runs: Markdown tables (pandas) and PNG plots (matplotlib), and the
-side-by-side comparison of several result directories."""
+"""Reports of finished runs: Markdown tables (pandas) and PNG plots (matplotlib, where
+installed), and the side-by-side comparison of several result directories."""
 
 from __future__ import annotations
 
@@ -14,6 +14,7 @@ from scipy.special import ndtr
 
 from .fragility import stripes
 from .metrics import limit_names
+from .plotting import REPORT_EXTRA, pyplot
 from .store import read_metadata, read_results
 
 #: Metrics compared by default.
@@ -171,12 +172,10 @@ def _point(run: Run, point: int | None) -> int:
 
 
 def _plots(runs: list[Run], out: Path, point: int | None) -> list[str]:
-    """Write the PNG plots; returns their file names."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
+    """Write the PNG plots (where matplotlib is installed); returns their file names."""
+    plt = pyplot(f"the plots of {out / 'report.md'}")
+    if plt is None:
+        return []
     files = []
 
     def save(fig, name: str) -> None:
@@ -327,7 +326,8 @@ def report(directories: list[str | Path], out: str | Path = "reports", labels: l
         except ValueError as exc:
             table = f"Not compared: {exc}."
         parts += ["## Comparison (later runs minus the first)", "", table, ""]
-    parts += ["## Plots", ""] + [f"![{f}]({f})" for f in files] + [""]
+    parts += ["## Plots", ""] + ([f"![{f}]({f})" for f in files] if files else
+                                 [f"Not drawn: matplotlib is not installed; `{REPORT_EXTRA}` adds them."]) + [""]
     path = folder / "report.md"
     path.write_text("\n".join(parts))
     return path

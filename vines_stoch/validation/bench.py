@@ -12,12 +12,15 @@
   with event location at the loosest tolerance that reaches the same ``e1_max`` error.
 - A seismic scene (1 Hz primary with a cubic NES) under a synthetic accelerogram against the
   same scene under a harmonic force: the cost of record interpolation and break points.
-- Work-precision diagrams against scipy and sdeint (``precision.py``), the stability suite
-  (``stability.py``) and compile and start-up times of the CLI.
+- Work-precision diagrams against scipy and sdeint (``vines_stoch.validation.precision``), the
+  stability suite (``vines_stoch.validation.stability``) and compile and start-up times of the CLI.
 - Scale: 10^4 realisations of the smooth scene (T = 20) on the embedded scheduler and on a local
   ``dask.distributed`` cluster of worker processes (the overhead of the distributed
   scheduler), and the peak memory of 10^4 and 10^5 realisations with history statistics on a
   1000-point grid (each in a fresh process).
+
+The scenes are the files of ``vines_stoch.validation.scenes``; the example scenarios it times
+(``scenarios/``) are read from the repository, so ``make bench`` runs from its root.
 """
 
 from __future__ import annotations
@@ -32,87 +35,17 @@ from pathlib import Path
 import numpy as np
 from numba import njit
 
-from . import parse_scenario, precision, run
-from .kernels import load_history, simulate
-from .kernels.common import (ABSORBER_DISS, E1_MAX, FINAL_ENERGY, IMPACT_LOSS, INPUT,
-                             PRIMARY_DISS)
-from .records import G, write_at2
-from .physics import KERNEL, hertz_constant
-from .precision import BODIES
+from ..ensemble import run
+from ..kernels import load_history, simulate
+from ..kernels.common import (ABSORBER_DISS, E1_MAX, FINAL_ENERGY, IMPACT_LOSS, INPUT,
+                              PRIMARY_DISS)
+from ..physics import KERNEL, hertz_constant
+from ..records import G, write_at2
+from . import precision, scenes, stability
 from .reference import hertz_reference
-from .scene import build_scene
 
-SMOOTH = """
-name = "bench-smooth"
-""" + BODIES.format(c1=0.0) + """[[loads]]
-type = "harmonic"
-amplitude = 0.1
-frequency = 1.0
-[[loads]]
-type = "white-noise"
-intensity = 0.05
-[simulation]
-duration = 200.0
-dt = 1e-3
-[ensemble]
-realizations = {n}
-seed = 1
-"""
-
-
-IMPACT_ABSORBER = """
-[[absorbers]]
-type = "impact"
-mass = 0.05
-clearance = 0.2
-restitution = 0.6
-"""
-
-SSVI = """
-name = "bench-ssvi"
-[primary]
-mass = 1000.0
-stiffness = 3.95e4
-damping = 452.0
-[[absorbers]]
-type = "hertz"
-geometry = "single-sided"
-mass = 60.0
-stiffness = 215.0
-damping = 232.0
-offset = 0.06
-gap = 0.3
-contact_left = { young = [2.1e11, 2.21e7], poisson = [0.3, 0.3], radius = 1.0 }
-contact_right = { young = [2.1e11, 2.05e7], poisson = [0.3, 0.3], radius = 1.0 }
-[[loads]]
-type = "harmonic"
-amplitude = 800.0
-frequency = 6.3
-[simulation]
-duration = 12.0
-dt = 1e-3
-"""
-
-
-SEISMIC = """
-name = "bench-seismic"
-[primary]
-mass = 1000.0
-stiffness = 39478.4
-damping = 251.3
-[[absorbers]]
-type = "cubic"
-mass = 50.0
-stiffness = 2.0e6
-damping = 20.0
-[[loads]]
-{load}
-[simulation]
-duration = 40.0
-dt = {dt}
-"""
-
-GROUND_MOTION = 'type = "ground-motion"\nsoil = "medium"\nintensity = 0.3\nenvelope = { type = "jennings", rise = 2.0, hold = 10.0, decay = 0.25 }'
+#: The repository this module sits in (its ``scenarios/`` folder holds the example scenarios).
+REPOSITORY = Path(__file__).resolve().parents[2]
 
 
 @njit(**KERNEL)
@@ -191,7 +124,7 @@ def _step_loop_rates(n_paths: int, n_steps: int = 200_000, dt: float = 1e-3,
     and of the minimal loops (or of the runners named in ``only``), one path of each in turn,
     so that every runner sees the same machine (its speed drifts by up to 1.5x on a shared
     host)."""
-    scene = build_scene(parse_scenario(SMOOTH.format(n=1)).points[0])
+    scene = scenes.scene("smooth", {"ensemble.realizations": 1})
     assert scene.n_steps == n_steps and scene.dt == dt
     runners = {
         "roofline": lambda gen: minimal_kdk(n_steps, dt, gen, False),
@@ -213,10 +146,9 @@ def _step_loop_rates(n_paths: int, n_steps: int = 200_000, dt: float = 1e-3,
 
 
 def _api_rate(n_paths: int, workers: int, directory: Path, impacts: bool = False) -> tuple[float, float]:
-    text = SMOOTH.format(n=n_paths)
-    if impacts:
-        text = text.replace("[[loads]]", IMPACT_ABSORBER + "[[loads]]", 1)
-    study = parse_scenario(text)
+    """Path-steps/s and the largest energy residual of ``vines_stoch.run`` on the smooth scene
+    (with ``impacts``: plus the impact NES) with ``n_paths`` realisations."""
+    study = scenes.study("smooth_impact" if impacts else "smooth", {"ensemble.realizations": n_paths})
     n_steps = 200_000
     start = time.perf_counter()
     realizations, _ = run(study, directory, workers=workers)
@@ -237,19 +169,13 @@ CONTACT_SCENES = {"SSVI SS-1(20) under ground motion": ("scenarios/seed003_ss_gr
 def _contact_rates(n_paths: int, directory: Path) -> list[tuple[str, float, float, float]]:
     """``(scene, path-steps/s, max abs energy residual, contacts a path)`` of ``vines_stoch.run``
     with one thread on the ``CONTACT_SCENES``."""
-    import copy
-
-    from .scenario import load_scenario
-    from .scenario.study import Study, set_path
+    from ..scenario import load_scenario
 
     rows = []
     for k, (name, (path, point)) in enumerate(CONTACT_SCENES.items()):
-        study = load_scenario(Path(__file__).resolve().parents[1] / path)
-        data = copy.deepcopy(study.data)
-        data.pop("sweep", None)
-        for key, value in study.grid[point].items():
-            set_path(data, key, value)
-        one = Study(study.source, study.text, data, study.directory)
+        study = load_scenario(REPOSITORY / path)
+        data = {key: value for key, value in study.data.items() if key != "sweep"}
+        one = scenes.study(data, study.grid[point], source=study.source, directory=study.directory)
         run(one, directory / f"warm{k}", workers=1, realizations=2)  # compile or load outside the timing
         start = time.perf_counter()
         realizations, _ = run(one, directory / f"contact{k}", workers=1, realizations=n_paths)
@@ -263,7 +189,7 @@ def _contact_rates(n_paths: int, directory: Path) -> list[tuple[str, float, floa
 def _ssvi() -> dict[str, float]:
     """SS-1(60): vines_stoch at dt = 1e-3 and DOP853 at the loosest tolerance that matches its
     ``e1_max`` error (both against DOP853 at rtol 1e-11)."""
-    scene = build_scene(parse_scenario(SSVI).points[0])
+    scene = scenes.scene("ssvi")
     simulate(scene)
     start = time.perf_counter()
     repeats = 20
@@ -290,41 +216,27 @@ def _ssvi() -> dict[str, float]:
 def _seismic(directory: Path, repeats: int = 30) -> dict[str, tuple[float, float, float]]:
     """Path-steps/s, energy residual and ``e1_max`` change on halving dt, under a synthetic
     accelerogram (0.01 s samples, PGA 0.3 g) and under a harmonic force of the same peak."""
-    generator = build_scene(parse_scenario(SEISMIC.format(load=GROUND_MOTION, dt=0.01)).points[0])
+    generator = scenes.scene("seismic")
     _, _, ground = load_history(generator, np.random.default_rng(1940))
     ground *= 0.3 * G / np.max(np.abs(ground))
     write_at2(directory / "synthetic.AT2", 0.01, ground / G, "bench")
-    loads = {"record": 'type = "record"\nfile = "synthetic.AT2"\nunits = "g"',
-             "harmonic": f'type = "harmonic"\namplitude = {1000.0 * 0.3 * G}\nfrequency = 6.0'}
+    loads = {"record": {"type": "record", "file": "synthetic.AT2", "units": "g"},
+             "harmonic": {"type": "harmonic", "amplitude": 1000.0 * 0.3 * G, "frequency": 6.0}}
     figures = {}
     for name, load in loads.items():
-        scenes = [build_scene(parse_scenario(SEISMIC.format(load=load, dt=dt), directory=directory).points[0])
-                  for dt in (2e-3, 1e-3)]
-        fine = simulate(scenes[1])
-        raw = simulate(scenes[0])
+        coarse, fine = (scenes.scene("seismic", {"loads": [load], "simulation.dt": dt}, directory=directory)
+                        for dt in (2e-3, 1e-3))
+        raw_fine = simulate(fine)
+        raw = simulate(coarse)
         start = time.perf_counter()
         for _ in range(repeats):
-            simulate(scenes[0])
-        rate = repeats * scenes[0].n_steps / (time.perf_counter() - start)
+            simulate(coarse)
+        rate = repeats * coarse.n_steps / (time.perf_counter() - start)
         dissipated = raw[PRIMARY_DISS] + raw[ABSORBER_DISS] + raw[IMPACT_LOSS]
         residual = (raw[INPUT] - dissipated - raw[FINAL_ENERGY]) / raw[INPUT]
-        figures[name] = (rate, abs(residual), abs(raw[E1_MAX] / fine[E1_MAX] - 1.0))
+        figures[name] = (rate, abs(residual), abs(raw[E1_MAX] / raw_fine[E1_MAX] - 1.0))
     return figures
 
-
-HISTORY = """
-name = "bench-history"
-""" + BODIES.format(c1=0.02) + """[[loads]]
-type = "white-noise"
-intensity = 0.1
-[simulation]
-duration = 10.0
-dt = 1e-2
-history = {{ points = 1000 }}
-[ensemble]
-realizations = {n}
-seed = 5
-"""
 
 _PEAK_MEMORY = """
 import resource, sys, time
@@ -336,32 +248,6 @@ print(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024, time.perf_count
 """
 
 
-FLOORS = """
-name = "bench-floors"
-[primary]
-masses = {masses}
-stiffnesses = {stiffnesses}
-dampings = {dampings}
-[[absorbers]]
-type = "cubic"
-mass = 0.05
-stiffness = 1.0
-damping = 0.01
-[[absorbers]]
-type = "impact"
-floor = {impact_floor}
-mass = 0.05
-clearance = 0.2
-restitution = 0.6
-[[loads]]
-type = "white-noise"
-intensity = 0.05
-[simulation]
-duration = 200.0
-dt = 0.005
-"""
-
-
 def _floors(counts: tuple[int, ...] = (1, 3, 9, 20), repeats: int = 5) -> list[tuple[str, float, float, float]]:
     """Cost against size: rows ``(scene, M steps/s, ns a step, first call s)`` of ``n``-storey
     buildings (unit floor masses, storey stiffness ``4 n^2``: the first mode near 1 rad/s) with
@@ -370,13 +256,14 @@ def _floors(counts: tuple[int, ...] = (1, 3, 9, 20), repeats: int = 5) -> list[t
     (RK4, two Hertz NES)."""
     rows = []
     for n in counts:
-        text = FLOORS.format(masses=[1.0] * n, stiffnesses=[4.0 * n * n] * n, dampings=[0.05] * n,
-                             impact_floor=max(1, n - 1))
+        building = {"primary.masses": [1.0] * n, "primary.stiffnesses": [4.0 * n * n] * n,
+                    "primary.dampings": [0.05] * n, "absorbers.1.floor": max(1, n - 1)}
         rows.append((f"{n} floor{'s' * (n > 1)}, kick-drift-kick, white noise",
-                     *_path_rate(build_scene(parse_scenario(text).points[0]), repeats)))
-    nine = Path("scenarios/seed001_nine_storey_ssvi.toml")
+                     *_path_rate(scenes.scene("floors", building), repeats)))
+    nine = REPOSITORY / "scenarios/seed001_nine_storey_ssvi.toml"
     if nine.exists():
-        from .scenario import load_scenario
+        from ..scenario import load_scenario
+        from ..scene import build_scene
 
         rows.append(("seed 001 nine-storey frame, RK4, 2 Hertz NES (outer steps)",
                      *_path_rate(build_scene(load_scenario(nine).points[0]), 2)))
@@ -385,7 +272,7 @@ def _floors(counts: tuple[int, ...] = (1, 3, 9, 20), repeats: int = 5) -> list[t
 
 def _path_rate(scene, repeats: int) -> tuple[float, float, float]:
     """``(M steps/s, ns a step, s of the first call)`` of single paths of ``scene``."""
-    from .streams import streams
+    from ..streams import streams
 
     start = time.perf_counter()
     simulate(scene, streams(1, 0, 0))
@@ -401,16 +288,16 @@ def _path_rate(scene, repeats: int) -> tuple[float, float, float]:
 def _peak_memory(n: int, directory: Path) -> tuple[float, float]:
     """Peak RSS (MiB) and wall time (s) of a fresh process running ``n`` realisations of the
     2-DOF history scene (1001-point grid)."""
-    out = subprocess.run([sys.executable, "-c", _PEAK_MEMORY, HISTORY.format(n=n), str(directory)],
+    text = scenes.text(scenes.changed(scenes.scene_data("history"), {"ensemble.realizations": n}))
+    out = subprocess.run([sys.executable, "-c", _PEAK_MEMORY, text, str(directory)],
                          check=True, capture_output=True, text=True).stdout.split()
     assert int(out[2]) == n
     return float(out[0]), float(out[1])
 
 
-def _load_kernels(text: str) -> None:
-    """Compile or load the kernels of a scenario (in a worker process, before timing)."""
-    simulate(build_scene(parse_scenario(text.replace("duration = 200.0", "duration = 0.1")).points[0]),
-             np.random.default_rng(0))
+def _load_kernels(scene: str) -> None:
+    """Compile or load the kernels of a scene (in a worker process, before timing)."""
+    simulate(scenes.scene(scene, {"simulation.duration": 0.1}), np.random.default_rng(0))
 
 
 def _distributed_overhead(directory: Path, n: int = 10_000) -> tuple[float, float, int]:
@@ -418,14 +305,14 @@ def _distributed_overhead(directory: Path, n: int = 10_000) -> tuple[float, floa
     cores as threads) and on a local cluster of one single-threaded worker process per core."""
     from dask.distributed import Client, LocalCluster
 
-    study = parse_scenario(SMOOTH.format(n=n).replace("duration = 200.0", "duration = 20.0"))
+    study = scenes.study("smooth", {"ensemble.realizations": n, "simulation.duration": 20.0})
     cores = os.cpu_count() or 1
     start = time.perf_counter()
     embedded, _ = run(study, directory / "embedded", workers=cores)
     t_embedded = time.perf_counter() - start
     with LocalCluster(n_workers=cores, threads_per_worker=1, processes=True, dashboard_address=None,
                       host="127.0.0.1") as cluster, Client(cluster) as client:
-        client.run(_load_kernels, SMOOTH.format(n=2))
+        client.run(_load_kernels, "smooth")
         start = time.perf_counter()
         distributed, _ = run(study, directory / "distributed", scheduler=cluster.scheduler_address)
         t_distributed = time.perf_counter() - start
@@ -437,8 +324,9 @@ def _startup(directory: Path) -> list[tuple[str, float, float]]:
     """Wall time of ``vines-stoch run`` in a fresh process on a cold numba cache (first run:
     compilation) and again on the warm cache: rows ``(scenario, cold s, cached s)``."""
     smooth = directory / "smooth.toml"
-    smooth.write_text(SMOOTH.format(n=4).replace("duration = 200.0", "duration = 20.0"))
-    cases = [("scenarios/cubic_nes_impulse.toml (RK4, 15 runs)", Path("scenarios/cubic_nes_impulse.toml")),
+    smooth.write_text(scenes.text(scenes.changed(scenes.scene_data("smooth"),
+                                                 {"ensemble.realizations": 4, "simulation.duration": 20.0})))
+    cases = [("scenarios/cubic_nes_impulse.toml (RK4, 15 runs)", REPOSITORY / "scenarios/cubic_nes_impulse.toml"),
              ("smooth scene, 4 paths of 20 s (kick-drift-kick)", smooth)]
     env = {**os.environ, "NUMBA_CACHE_DIR": str(directory / "numba-cache")}
     rows = []
@@ -485,8 +373,6 @@ def main(out: Path = Path("reports/benchmarks.md"), n_paths: int = 200) -> str:
     same_path = {kind: precision.same_path_errors(kind, SAME_PATH_LEVELS, paths=20) for kind in ("hertz", "impact")}
     out.parent.mkdir(parents=True, exist_ok=True)
     work_precision = precision.section(out.parent)
-    from . import stability  # it takes its Hertz scene from this module
-
     stability_suite = stability.section()
     cores = os.cpu_count()
     scipy_row = (f"| scipy DOP853 + events, rtol {ssvi['scipy_rtol']:.0e} | {ssvi['scipy_s'] * 1e3:.1f} | "

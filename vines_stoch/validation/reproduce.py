@@ -6,9 +6,9 @@ from __future__ import annotations
 import time
 from pathlib import Path
 
-from .ensemble import run_chunk
-from .scenario import Scenario, load_scenario
-from .scene import build_scene
+from ..ensemble import run_chunk
+from ..scenario import Scenario, load_scenario
+from ..scene import build_scene
 
 #: Seed 003 tables as printed: scenario file, variant labels, E1max (J) at 6.3 rad/s.
 TABLES = {

@@ -19,65 +19,15 @@ from pathlib import Path
 
 import numpy as np
 
-from . import parse_scenario
-from .kernels import simulate
-from .kernels.common import X1_SQ_INT
-from .metrics import finish
+from ..kernels import simulate
+from ..kernels.common import X1_SQ_INT
+from ..metrics import finish
+from ..plotting import REPORT_EXTRA, pyplot
+from . import scenes
 from .reference import parallel_nes_reference
-from .scene import build_scene
 
-#: The bodies of the smooth scenes: LPO m = k = 1 (damping c1) with the cubic NES of seed 000.
-BODIES = """[primary]
-mass = 1.0
-stiffness = 1.0
-damping = {c1}
-[[absorbers]]
-type = "cubic"
-mass = 0.05
-stiffness = 1.0
-damping = 0.01
-"""
-
-#: The undamped LPO with the cubic NES (and the impact NES) under an impulse.
-IMPULSE = 'name = "wp-impulse"\n' + BODIES.format(c1=0.0) + """{impact}[[loads]]
-type = "impulse"
-velocity = 1.0
-[simulation]
-duration = 100.0
-dt = {dt}
-"""
-IMPACT = '[[absorbers]]\ntype = "impact"\nmass = 0.05\nclearance = 0.2\nrestitution = 0.6\n'
-
-#: The smooth stochastic scene of the throughput benchmark.
-NOISY = 'name = "wp-noise"\n' + BODIES.format(c1=0.0) + """[[loads]]
-type = "harmonic"
-amplitude = 0.1
-frequency = 1.0
-[[loads]]
-type = "white-noise"
-intensity = {sigma}
-[simulation]
-duration = {duration}
-dt = {dt}
-scheme = "{scheme}"
-"""
+#: White-noise intensity of the stochastic smooth scene (``scenes/noisy.toml``).
 SIGMA = 0.05
-
-#: Linear oscillator (m = k = 1, c = 0.1) under white noise: stationary variance sigma^2 / (2 c k).
-LINEAR = """
-name = "wp-linear"
-[primary]
-mass = 1.0
-stiffness = 1.0
-damping = 0.1
-[[loads]]
-type = "white-noise"
-intensity = 1.0
-[simulation]
-duration = {duration}
-dt = {dt}
-metrics_from = 100.0
-"""
 
 
 @dataclass
@@ -107,7 +57,7 @@ def deterministic(impact: bool) -> list[Curve]:
     ours = Curve("vines_stoch RK4" + (" + impact events" if impact else ""))
     for n in np.round(1562.5 * 2.0 ** (0.5 * np.arange(13))):  # dt = 0.064 to 0.001, steps of sqrt 2
         dt = 100.0 / n  # T = 100 in whole steps
-        scene = build_scene(parse_scenario(IMPULSE.format(dt=dt, impact=IMPACT if impact else "")).points[0])
+        scene = scenes.scene("impulse_parallel" if impact else "impulse", {"simulation.dt": float(dt)})
         simulate(scene)
         seconds, raw = _timed(lambda: simulate(scene), repeats=max(1, int(0.2 / (scene.n_steps * 2e-7))))
         edm = finish(raw, scene)["edm"]
@@ -119,10 +69,12 @@ def deterministic(impact: bool) -> list[Curve]:
     return [ours, peer]
 
 
-def _noisy_scene(dt: float, duration: float = 20.0, scheme: str = "euler-maruyama", sigma: float = SIGMA,
-                 amplitude: float = 0.1):
-    text = NOISY.format(sigma=sigma, duration=duration, dt=dt, scheme=scheme)
-    return build_scene(parse_scenario(text.replace("amplitude = 0.1", f"amplitude = {amplitude}")).points[0])
+def noisy_scene(dt: float, duration: float = 20.0, scheme: str = "euler-maruyama", sigma: float = SIGMA,
+                amplitude: float = 0.1):
+    """The Scene of the stochastic smooth scene (``scenes/noisy.toml``: 2-DOF cubic NES under
+    ``amplitude cos t`` plus white noise ``sigma``) at step ``dt`` over ``duration`` with ``scheme``."""
+    return scenes.scene("noisy", {"simulation.dt": dt, "simulation.duration": duration, "simulation.scheme": scheme,
+                                  "loads.0.amplitude": amplitude, "loads.1.intensity": sigma})
 
 
 def coarse_increments(normals: np.ndarray, m: int) -> tuple[np.ndarray, np.ndarray]:
@@ -150,7 +102,7 @@ def strong(paths: int = 8, fine_dt: float = 2.5e-5, duration: float = 20.0,
     solution on the same Brownian path, for both our schemes and sdeint's."""
     import sdeint
 
-    fine = _noisy_scene(fine_dt, duration, "sra")
+    fine = noisy_scene(fine_dt, duration, "sra")
     levels = (8e-2, 4e-2, 2e-2, 1e-2, 5e-3, 2.5e-3, 1.25e-3)
     kdk, sra = Curve("vines_stoch kick-drift-kick"), Curve("vines_stoch SRA3")
     euler, sri2 = Curve("sdeint itoEuler"), Curve("sdeint itoSRI2")
@@ -179,7 +131,7 @@ def strong(paths: int = 8, fine_dt: float = 2.5e-5, duration: float = 20.0,
         for curve, scheme in ((kdk, "euler-maruyama"), (sra, "sra")):
             if scheme == "sra" and dt < 5e-3:
                 continue  # finer SRA3 steps only extend its curve below every peer's error
-            scene = _noisy_scene(dt, duration, scheme)
+            scene = noisy_scene(dt, duration, scheme)
             replays = [_replay(scene, n, m) for n in normals]
             simulate(scene, normals=replays[0])
             finals = np.zeros((paths, 2, 2))
@@ -212,8 +164,8 @@ def weak(paths: int = 1024, duration: float = 1100.0) -> list[tuple[str, float, 
     rows = []
     for scheme in ("euler-maruyama", "sra"):
         for dt in (0.4, 0.2, 0.1, 0.05):
-            text = LINEAR.format(duration=duration, dt=dt).replace("metrics_from", f'scheme = "{scheme}"\nmetrics_from')
-            scene = build_scene(parse_scenario(text).points[0])
+            scene = scenes.scene("linear", {"simulation.duration": duration, "simulation.dt": dt,
+                                            "simulation.scheme": scheme})
             simulate(scene, np.random.default_rng(0))
             start = time.perf_counter()
             values = np.array([simulate(scene, np.random.default_rng(r))[X1_SQ_INT] / (duration - 100.0)
@@ -241,12 +193,12 @@ def weak_metrics(paths: int = 200, duration: float = 100.0, fine_dt: float = 1e-
     rows = []
     rng = np.random.default_rng(2027)
     for label, amplitude, sigma in loads:
-        fine = _noisy_scene(fine_dt, duration, "sra", sigma, amplitude)
+        fine = noisy_scene(fine_dt, duration, "sra", sigma, amplitude)
         normals = [rng.standard_normal(fine.n_steps) for _ in range(paths)]
         reference = metrics(fine, [simulate(fine, normals=_replay(fine, n, 1)) for n in normals])
         for scheme in ("euler-maruyama", "sra"):
             for dt in levels:
-                coarse = _noisy_scene(dt, duration, scheme, sigma, amplitude)
+                coarse = noisy_scene(dt, duration, scheme, sigma, amplitude)
                 replays = [_replay(coarse, n, round(dt / fine_dt)) for n in normals]
                 simulate(coarse, normals=replays[0])
                 start = time.perf_counter()
@@ -279,20 +231,11 @@ def same_path_errors(kind: str, levels: list[int], fine: int = 14, paths: int = 
     ``dt = 2^-fine``, and the seconds a path takes at each level.  Every run replays the same
     fine normals (``simulate(..., refine=...)``) with the same tree seed, so all integrate one
     path, inside the steps too (``kernels/brownian.py``)."""
-    from .scenario.study import Study
-
     absorber, initial = SAME_PATH[kind]
-
-    def scene(level: int):
-        return build_scene(Study(f"same-path {kind}", "", {
-            "name": f"same-path-{kind}",
-            "primary": {"mass": 1.0, "stiffness": 1.0, "damping": 0.02},
-            "absorbers": [absorber],
-            "loads": [initial, {"type": "white-noise", "intensity": sigma}],
-            "simulation": {"duration": duration, "dt": 2.0**-level},
-        }).points[0])
-
-    scenes = {level: scene(level) for level in [*levels, fine]}
+    data = {"name": f"same-path-{kind}", "primary": {"mass": 1.0, "stiffness": 1.0, "damping": 0.02},
+            "absorbers": [absorber], "loads": [initial, {"type": "white-noise", "intensity": sigma}],
+            "simulation": {"duration": duration}}
+    by_level = {level: scenes.scene(data, {"simulation.dt": 2.0**-level}) for level in [*levels, fine]}
     rng = np.random.default_rng(5)
     errors = np.zeros((paths, len(levels)))
     seconds = np.zeros(len(levels))
@@ -301,7 +244,7 @@ def same_path_errors(kind: str, levels: list[int], fine: int = 14, paths: int = 
         normals = rng.standard_normal(math.ceil(duration * 2**fine))
 
         def x1_end(level: int) -> float:
-            simulate(scenes[level], np.random.default_rng(m), normals=normals, refine=2 ** (fine - level),
+            simulate(by_level[level], np.random.default_rng(m), normals=normals, refine=2 ** (fine - level),
                      final=final)
             return final[0, 0]
 
@@ -330,13 +273,12 @@ def ratio_at_equal_error(ours: Curve, peer: Curve) -> list[tuple[str, str, float
     return rows
 
 
-def plot(panels: dict[str, list[Curve]], path: Path, xlabel: str = "seconds per path") -> None:
-    """Work-precision diagrams, one panel per scene: error against runtime on log axes."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
+def plot(panels: dict[str, list[Curve]], path: Path, xlabel: str = "seconds per path") -> bool:
+    """Work-precision diagrams, one panel per scene: error against runtime on log axes; False
+    (and nothing written) where matplotlib is not installed."""
+    plt = pyplot(str(path))
+    if plt is None:
+        return False
     fig, axes = plt.subplots(1, len(panels), figsize=(5.2 * len(panels), 4.2), squeeze=False)
     for ax, (title, curves) in zip(axes[0], panels.items()):
         for curve in curves:
@@ -349,6 +291,7 @@ def plot(panels: dict[str, list[Curve]], path: Path, xlabel: str = "seconds per 
     fig.tight_layout()
     fig.savefig(path, dpi=120)
     plt.close(fig)
+    return True
 
 
 def _table(curves: list[Curve]) -> str:
@@ -371,11 +314,14 @@ def _ratios(ours: Curve, peers: list[Curve]) -> str:
 
 
 def section(folder: Path) -> str:
-    """Run every study, write ``folder/work-precision.png`` and return the Markdown section."""
+    """Run every study, write ``folder/work-precision.png`` (where matplotlib is installed) and
+    return the Markdown section."""
     impulse, impact, noisy = deterministic(False), deterministic(True), strong()
     variance = weak()
-    plot({"impulse, cubic NES (EDM error)": impulse, "impulse, parallel NES (EDM error)": impact,
-          "noise, cubic NES (strong error at T)": noisy}, folder / "work-precision.png")
+    drawn = plot({"impulse, cubic NES (EDM error)": impulse, "impulse, parallel NES (EDM error)": impact,
+                  "noise, cubic NES (strong error at T)": noisy}, folder / "work-precision.png")
+    figure = ("![work-precision diagrams](work-precision.png)" if drawn else
+              f"(The diagrams are not drawn: matplotlib is not installed; `{REPORT_EXTRA}` adds them.)")
     metric_rows = "\n".join(f"| {label} | {scheme} | {dt:g} | {100 * e:+.3f} % | {100 * es:.3f} % | {100 * d:+.2f} % | "
                             f"{100 * ds:.2f} % | {sec * 1e3:.3f} |" for label, scheme, dt, e, es, d, ds, sec in weak_metrics())
     weak_rows = "\n".join(f"| {scheme} | {dt:g} | {bias:+.3f} | {se:.3f} | {100 * bias / 5.0:+.2f} % | {sec * 1e3:.1f} |"
@@ -383,7 +329,7 @@ def section(folder: Path) -> str:
     schemes = "\n".join(f"| {a} | {b} | {r:.1f}x |" for a, b, r in ratio_at_equal_error(noisy[1], noisy[0]))
     return f"""## Work-precision
 
-![work-precision diagrams](work-precision.png)
+{figure}
 
 ### Deterministic impulse scene
 

@@ -1,0 +1,175 @@
+"""The package's layout: no import circle; the validation floor (``vines_stoch.validation``)
+stands on the engine and the engine never imports it (but lazily in two CLI commands); a run
+needs neither sdeint nor matplotlib, which are extras (``[bench]``, ``[report]``)."""
+
+from __future__ import annotations
+
+import ast
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+import vines_stoch
+from vines_stoch import plotting
+from vines_stoch.scenario import load_scenario
+from vines_stoch.validation import scenes
+
+from .conftest import cli
+
+PACKAGE = Path(vines_stoch.__file__).resolve().parent
+ROOT = PACKAGE.parent
+VALIDATION = "vines_stoch.validation"
+
+
+def _modules() -> dict[str, Path]:
+    """Every module of the package by dotted name (packages by their ``__init__``)."""
+    modules = {}
+    for path in PACKAGE.rglob("*.py"):
+        parts = path.relative_to(ROOT).with_suffix("").parts
+        modules[".".join(parts[:-1] if parts[-1] == "__init__" else parts)] = path
+    return modules
+
+
+MODULES = _modules()
+
+
+def _targets(module: str, path: Path, node: ast.Import | ast.ImportFrom) -> list[str]:
+    """The package modules an import statement of ``module`` names (relative imports resolved;
+    ``from . import x`` names the module ``x`` where there is one, else the package)."""
+    if isinstance(node, ast.Import):
+        names = [alias.name for alias in node.names]
+    else:
+        if node.level:
+            package = module.split(".") if path.name == "__init__.py" else module.split(".")[:-1]
+            base = ".".join(package[:len(package) - node.level + 1] + ([node.module] if node.module else []))
+        else:
+            base = node.module or ""
+        names = [f"{base}.{alias.name}" if f"{base}.{alias.name}" in MODULES else base for alias in node.names]
+    targets = []
+    for name in names:
+        while name and name not in MODULES:  # an attribute or a module outside the package
+            name = name.rpartition(".")[0]
+        if name:
+            targets.append(name)
+    return targets
+
+
+def _imports() -> dict[str, list[tuple[str, bool]]]:
+    """``module -> [(imported module, at module level)]`` for every import in the package, those
+    inside functions included."""
+    graph: dict[str, list[tuple[str, bool]]] = {}
+    for module, path in MODULES.items():
+        tree = ast.parse(path.read_text(), str(path))
+        lazy = {id(node) for function in ast.walk(tree) if isinstance(function, (ast.FunctionDef, ast.AsyncFunctionDef))
+                for node in ast.walk(function)}
+        graph[module] = [(target, id(node) not in lazy) for node in ast.walk(tree)
+                         if isinstance(node, (ast.Import, ast.ImportFrom)) for target in _targets(module, path, node)]
+    return graph
+
+
+def _cycles(graph: dict[str, set[str]]) -> list[list[str]]:
+    """The strongly connected components of more than one module (Tarjan)."""
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    found = []
+
+    def visit(v: str) -> None:
+        index[v] = low[v] = len(index)
+        stack.append(v)
+        for w in graph[v] - {v}:
+            if w not in index:
+                visit(w)
+                low[v] = min(low[v], low[w])
+            elif w in stack:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            component = []
+            while True:
+                w = stack.pop()
+                component.append(w)
+                if w == v:
+                    break
+            if len(component) > 1:
+                found.append(sorted(component))
+
+    for v in graph:
+        if v not in index:
+            visit(v)
+    return found
+
+
+def test_the_import_graph_sees_the_package():
+    graph = _imports()
+    assert ("vines_stoch.validation.stability", True) in {(t, top) for t, top in graph["vines_stoch.validation.bench"]}
+    assert ("vines_stoch.scenario.study", True) in graph["vines_stoch.validation.scenes"]
+    assert ("vines_stoch.validation.bench", False) in graph["vines_stoch.cli"]
+
+
+def test_no_import_cycle():
+    """No circle among the package's modules, counting imports inside functions too."""
+    graph = {module: {target for target, _ in targets} for module, targets in _imports().items()}
+    assert _cycles(graph) == []
+
+
+def test_the_engine_does_not_import_the_validation_floor():
+    """Only the ``bench`` and ``reproduce`` commands of cli.py reach it, inside their functions."""
+    offending = [(module, target, "module level" if top else "in a function")
+                 for module, targets in _imports().items() if not (module + ".").startswith(VALIDATION + ".")
+                 for target, top in targets if (target + ".").startswith(VALIDATION + ".")
+                 and not (module == "vines_stoch.cli" and not top)]
+    assert offending == []
+
+
+RUN = """
+import sys
+from vines_stoch.cli import main
+sys.argv = ["vines-stoch", "run", sys.argv[1], "--quiet", "--out", sys.argv[2]]
+try:
+    main()
+except SystemExit as exc:
+    assert not exc.code, exc.code
+print(sorted(name for name in ("sdeint", "matplotlib", "vines_stoch.validation") if name in sys.modules))
+"""
+
+
+def test_a_run_imports_neither_sdeint_nor_matplotlib(tmp_path):
+    done = subprocess.run([sys.executable, "-c", RUN, str(ROOT / "scenarios/cubic_nes_impulse.toml"), str(tmp_path)],
+                          cwd=ROOT, capture_output=True, text=True, timeout=600)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.split("\n")[-2] == "[]"
+    assert (tmp_path / "summary.parquet").is_file()
+
+
+@pytest.mark.parametrize("name", scenes.names())
+def test_every_scene_file_is_a_valid_scenario(name):
+    study = load_scenario(scenes.FOLDER / f"{name}.toml")
+    assert study.name and len(study.points) == 1
+    assert scenes.scene_data(name) == study.data and scenes.scene_data(name) is not scenes.scene_data(name)
+
+
+def test_scene_changes_create_missing_tables_and_copy():
+    data = scenes.scene_data("impulse")
+    noise = scenes.scene_data("smooth")["loads"]
+    changed = scenes.changed(data, {"ensemble.realizations": 4, "loads": noise, "absorbers.0.damping": 0.02})
+    assert changed["ensemble"] == {"realizations": 4} and "ensemble" not in data
+    assert changed["loads"] == noise and changed["loads"] is not noise
+    assert changed["absorbers"][0]["damping"] == 0.02 and data["absorbers"][0]["damping"] == 0.01
+    assert scenes.study(changed).base.ensemble.realizations == 4
+
+
+def test_without_matplotlib_plots_are_skipped_with_one_line(monkeypatch, capsys):
+    monkeypatch.setitem(sys.modules, "matplotlib", None)  # import matplotlib raises ImportError
+    assert not plotting.available()
+    assert plotting.pyplot("x.png") is None
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "x.png" in err and 'pip install "vines-stoch[report]"' in err
+
+
+def test_bench_without_sdeint_names_the_extra(monkeypatch, tmp_path):
+    monkeypatch.setitem(sys.modules, "sdeint", None)
+    code, err = cli("bench", "--out", tmp_path / "bench.md")
+    assert code == 2 and err.count("\n") == 1 and 'pip install "vines-stoch[bench]"' in err
+    assert not (tmp_path / "bench.md").exists()
