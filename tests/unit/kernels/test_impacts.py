@@ -6,7 +6,7 @@ import pytest
 
 from vines_stoch.physics import restitution_impact
 
-from .conftest import raw_metrics, scene_of
+from tests.helpers import raw_metrics, scene_of
 
 
 def two_body(stiffness: float, r: float, clearance: float, v1: float, duration: float,

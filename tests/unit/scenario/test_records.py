@@ -11,6 +11,7 @@ from vines_stoch import ScenarioError, load_scenario
 from vines_stoch.kernels.loads import GROUND
 from vines_stoch.records import G, RecordError, read_record
 from vines_stoch.scene import build_scene
+from tests.helpers import ROOT
 
 AT2_NEW = """PEER NGA STRONG MOTION DATABASE RECORD
 IMPERIAL VALLEY 05/19/40, EL CENTRO ARRAY #9, 180
@@ -118,7 +119,7 @@ def test_scenario_record_errors(tmp_path, file, units, extra, message):
     assert message in str(err.value)
 
 
-ELCENTRO = Path(__file__).resolve().parents[2] / "shared" / "data" / "elcentro_1940_ns_quakeio.txt"
+ELCENTRO = ROOT.parent / "shared" / "data" / "elcentro_1940_ns_quakeio.txt"
 
 
 @pytest.mark.skipif(not ELCENTRO.is_file(), reason="El Centro data file not beside the checkout")

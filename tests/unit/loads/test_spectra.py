@@ -16,8 +16,9 @@ from vines_stoch.ensemble import sample
 from vines_stoch.records import G
 from vines_stoch.scenario import ScenarioError, load_scenario
 from vines_stoch.spectra import displacement, pseudo_acceleration, uniform
+from tests.helpers import ROOT
 
-RECORDS = Path(__file__).resolve().parents[1] / "scenarios" / "records"
+RECORDS = ROOT / "scenarios" / "records"
 
 
 def test_sa_of_a_harmonic_record_against_the_closed_form():

@@ -22,9 +22,8 @@ import pytest
 from vines_stoch import parse_scenario
 from vines_stoch.store import LOCK, FolderInUse, lock_folder
 
-from .conftest import cli, two_dof
+from tests.helpers import ROOT, cli, two_dof
 
-ROOT = Path(__file__).resolve().parents[1]
 BASE = two_dof() + ('[[loads]]\ntype = "impulse"\nvelocity = 0.5\n'
                     '[simulation]\nduration = 2.0\ndt = 0.01\n[ensemble]\nrealizations = 2\n')
 
@@ -286,6 +285,6 @@ def test_one_version_string_from_the_package_metadata():
 
     from vines_stoch.store import provenance
 
-    project = tomllib.loads((Path(__file__).resolve().parents[1] / "pyproject.toml").read_text())["project"]
+    project = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]
     assert vines_stoch.__version__ == project["version"]
     assert provenance("", "", 0, "embedded")["vines_stoch.version"] == project["version"]

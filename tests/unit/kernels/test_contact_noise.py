@@ -12,7 +12,7 @@ from vines_stoch.kernels.brownian import MEMO, new_memo, path_value, tree_value
 
 from vines_stoch.validation.precision import same_path_errors, strong_order
 
-from .conftest import raw_metrics, scene_from, scene_of
+from tests.helpers import raw_metrics, scene_from, scene_of
 
 #: Soft contact surfaces (K = 7.3e2 N/m^1.5: contacts last long enough to matter for the
 #: statistics) and steel on steel.
@@ -152,6 +152,7 @@ def test_noise_to_zero_reproduces_the_deterministic_contact_solution():
 # -- strong convergence on the same Brownian path -------------------------------------------
 
 
+@pytest.mark.slow
 def test_strong_order_of_hertz_contact_under_noise_is_one():
     """A double-sided Hertz absorber (K = 7e5 N/m^1.5) hitting both walls under white noise
     (``precision.SAME_PATH``):
@@ -165,6 +166,7 @@ def test_strong_order_of_hertz_contact_under_noise_is_one():
     assert strong_order(levels, errors) > 0.75
 
 
+@pytest.mark.slow
 def test_strong_order_of_impacts_under_noise_is_one_half():
     """An impact absorber (r = 0.9) under white noise: strong order 1/2 on the same path.  The
     scheme's position error O(dt) moves each impact by O(dt), and the relative velocity the

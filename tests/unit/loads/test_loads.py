@@ -26,7 +26,7 @@ from vines_stoch.kernels import load_history, simulate
 from vines_stoch.kernels.common import CHECK_EVERY
 from vines_stoch.kernels.loads import HARMONIC, phasors, rotations, turn
 
-from .conftest import raw_metrics, scene_of
+from tests.helpers import raw_metrics, scene_of
 
 M, K, C = 2.0, 50.0, 0.3
 
@@ -96,6 +96,7 @@ def test_shocks_match_the_duhamel_closed_form(kind):
 HARMONICS = ((1.5, 3.1, 0.4), (0.8, 11.0, -1.2))  # amplitude, frequency (rad/s), phase
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("scheme, order", [("euler-maruyama", 1), ("sra", 3)])
 def test_harmonic_loads_on_the_step_grid_converge_at_the_schemes_order(scheme, order):
     """On the step grid, harmonic rows come from turned phasors (kernels/loads.py): two rows of

@@ -14,7 +14,7 @@ from scipy.special import log_ndtr, ndtr
 
 from vines_stoch.fragility import fit, probit_fit, stripes
 
-from .conftest import cli
+from tests.helpers import cli
 
 MEDIAN, BETA = 0.4, 0.5
 IM = np.geomspace(0.1, 1.5, 8)

@@ -1,4 +1,5 @@
-"""Hertz contact, chatter, regimes and the seed 003 designs (MODEL.md sections 2 and 4)."""
+"""Hertz contact, chatter, regimes and the seed 003 SSVI design against scipy (MODEL.md sections 2 and
+4); the seed 003 tables themselves are reproduced in ``tests/papers``."""
 
 from __future__ import annotations
 
@@ -12,10 +13,9 @@ from vines_stoch import load_scenario
 from vines_stoch.kernels import SLOTS, simulate
 from vines_stoch.metrics import finish, regime
 from vines_stoch.physics import hertz_constant
-from vines_stoch.validation.reproduce import PRIMARY_E1MAX, TABLES
 from vines_stoch.scene import build_scene
 
-from .conftest import raw_metrics, scene_of
+from tests.helpers import raw_metrics, scene_of
 from vines_stoch.validation.reference import hertz_reference
 
 SEED_ABSORBER = """
@@ -116,28 +116,6 @@ def test_ssvi_seed_design_matches_a_tight_scipy_reference():
     amplitude = np.abs(ref_x1).max()
     assert np.abs(np.array(x1) - ref_x1).max() < 1e-4 * amplitude
     assert raw["e1_max"] == pytest.approx(ref_e1, rel=1e-4)
-
-
-def test_primary_alone_matches_seed_003():
-    study = load_scenario("scenarios/seed003_primary.toml")
-    scene = build_scene(study.points[0])
-    assert raw_metrics(scene)["e1_max"] == pytest.approx(PRIMARY_E1MAX, rel=0.01)
-
-
-# the printed designs that the paper's E1max confirms (reports/seed-tables.md lists all 18)
-MATCHING = {"SS-1(60)", "SS-2(60)", "SS-3(60)", "SS-5(60)", "SS-2(20)", "SS-3(20)",
-            "DS-1(60)", "DS-2(60)", "DS-3(60)", "DS-4(60)", "DS-5(60)",
-            "DS-1(20)", "DS-2(20)", "DS-3(20)", "DS-4(20)"}
-
-
-@pytest.mark.parametrize("name", list(TABLES))
-def test_seed_003_designs_within_ten_percent(name):
-    labels, paper = TABLES[name]
-    study = load_scenario(f"scenarios/{name}")
-    for label, e1_paper, point in zip(labels, paper, study.points):
-        if label in MATCHING:
-            e1 = raw_metrics(build_scene(point))["e1_max"]
-            assert e1 == pytest.approx(e1_paper, rel=0.10), label
 
 
 @pytest.mark.parametrize("restitution", [0.5, 0.0])

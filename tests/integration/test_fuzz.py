@@ -14,9 +14,9 @@ from pathlib import Path
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from .conftest import cli
+from tests.helpers import ROOT, cli
 
-SCENARIOS = Path(__file__).resolve().parents[1] / "scenarios"
+SCENARIOS = ROOT / "scenarios"
 EXAMPLES = sorted(p for p in SCENARIOS.glob("*.toml") if p.name != "elcentro.toml")
 NAMED = re.compile(r"( \(sweep point [^)]*\))?: [A-Za-z_][\w.]*( = |: )")
 ASSIGNMENT = re.compile(r"^(\s*)([A-Za-z_][A-Za-z0-9_]*)(\s*=\s*)(.+)$")

@@ -16,7 +16,7 @@ from vines_stoch import plotting
 from vines_stoch.scenario import load_scenario
 from vines_stoch.validation import scenes
 
-from .conftest import cli
+from tests.helpers import cli
 
 PACKAGE = Path(vines_stoch.__file__).resolve().parent
 ROOT = PACKAGE.parent

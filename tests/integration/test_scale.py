@@ -20,7 +20,7 @@ from vines_stoch.kernels import simulate
 from vines_stoch.scene import build_scene
 from vines_stoch.store import read_metadata
 
-from .conftest import cli, two_dof
+from tests.helpers import cli, two_dof
 
 TEXT = """
 name = "scale"

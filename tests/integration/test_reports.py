@@ -12,7 +12,7 @@ import pytest
 from vines_stoch import parse_scenario, run
 from vines_stoch.reports import Run, compare, effective_range, report
 
-from .conftest import two_dof
+from tests.helpers import two_dof
 
 TEXT = """
 name = "{name}"

@@ -13,7 +13,7 @@ from scipy import stats
 from vines_stoch import ScenarioError, parse_scenario, run
 from vines_stoch.ensemble import draw_parameters
 
-from .conftest import two_dof
+from tests.helpers import two_dof
 
 BASE = """
 name = "uncertain"
