@@ -4,7 +4,7 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: run test bench seeds elcentro env clean clean-cache
+.PHONY: run test lint bench seeds elcentro env clean clean-cache
 
 $(STAMP): pyproject.toml
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
@@ -17,8 +17,13 @@ env: $(STAMP)
 run: $(STAMP)
 	$(BIN)/vines-stoch run scenarios/parallel_nes_impulse.toml
 
-test: $(STAMP)
-	$(BIN)/python -m pytest -q
+# The linter, then every test (the slow convergence studies included) on one worker process per
+# core: the kernels they compile are shared through numba's on-disk cache.
+test: lint
+	$(BIN)/python -m pytest -q -n auto --dist worksteal
+
+lint: $(STAMP)
+	$(BIN)/ruff check .
 
 bench: $(STAMP)
 	$(BIN)/vines-stoch bench
