@@ -5,7 +5,6 @@ from __future__ import annotations
 import os
 import sys
 from pathlib import Path
-from typing import Optional
 
 import typer
 
@@ -23,17 +22,18 @@ def _fail(message: str) -> None:
 @app.command()
 def run(
     scenario: Path = typer.Argument(..., help="Scenario TOML file."),
-    out: Optional[Path] = typer.Option(None, "--out", help="Output directory (overrides [output] directory)."),
-    workers: Optional[int] = typer.Option(None, "--workers", min=1, help="Threads of the embedded scheduler (default: all cores)."),
-    chunk: Optional[int] = typer.Option(None, "--chunk", min=0, help="Realisations per task (overrides [ensemble] chunk; 0 = automatic)."),
+    out: Path | None = typer.Option(None, "--out", help="Output directory (overrides [output] directory)."),
+    workers: int | None = typer.Option(None, "--workers", min=1, help="Threads of the embedded scheduler (default: all cores)."),
+    chunk: int | None = typer.Option(None, "--chunk", min=0, help="Realisations per task (overrides [ensemble] chunk; 0 = automatic)."),
     resume: bool = typer.Option(False, "--resume", help="Keep the chunks an interrupted run of the same scenario finished."),
-    scheduler: Optional[str] = typer.Option(None, "--scheduler", help="Address of a running dask.distributed scheduler (e.g. tcp://10.0.0.5:8786)."),
-    scheduler_file: Optional[Path] = typer.Option(None, "--scheduler-file", help="Scheduler file of a running dask.distributed scheduler (dask scheduler --scheduler-file FILE)."),
-    shard: Optional[str] = typer.Option(None, "--shard", help="I/N: run only the I-th of N shares of the chunks (job arrays); then --resume writes the results."),
+    scheduler: str | None = typer.Option(None, "--scheduler", help="Address of a running dask.distributed scheduler (e.g. tcp://10.0.0.5:8786)."),
+    scheduler_file: Path | None = typer.Option(None, "--scheduler-file", help="Scheduler file of a running dask.distributed scheduler (dask scheduler --scheduler-file FILE)."),
+    shard: str | None = typer.Option(None, "--shard", help="I/N: run only the I-th of N shares of the chunks (job arrays); then --resume writes the results."),
     quiet: bool = typer.Option(False, "--quiet", help="No progress or summary output."),
 ) -> None:
     """Run a scenario and write realizations.parquet and summary.parquet."""
-    from .ensemble import output_directory, run as run_study
+    from .ensemble import output_directory
+    from .ensemble import run as run_study
 
     try:
         study = load_scenario(scenario)
@@ -94,10 +94,10 @@ def validate(scenario: Path = typer.Argument(..., help="Scenario TOML file.")) -
 def loads(
     scenario: Path = typer.Argument(..., help="Scenario TOML file."),
     out: Path = typer.Argument(..., help="File to write: .AT2 (ground acceleration in g) or .csv (t, force, ground)."),
-    seed: Optional[int] = typer.Option(None, "--seed", min=0, max=2**63 - 1, help="Seed (default: the scenario's [ensemble] seed)."),
+    seed: int | None = typer.Option(None, "--seed", min=0, max=2**63 - 1, help="Seed (default: the scenario's [ensemble] seed)."),
     realization: int = typer.Option(0, "--realization", min=0, max=2**63 - 1, help="Realisation whose loads to write."),
     point: int = typer.Option(0, "--point", min=0, help="Sweep point."),
-    pga: Optional[float] = typer.Option(None, "--pga", min=0.0, max=100.0, help="Scale the ground acceleration to this peak (in g)."),
+    pga: float | None = typer.Option(None, "--pga", min=0.0, max=100.0, help="Scale the ground acceleration to this peak (in g)."),
     every: int = typer.Option(1, "--every", min=1, help="Keep every N-th sample of the time grid."),
 ) -> None:
     """Write one sample path of a scenario's loads (e.g. a synthetic accelerogram): the path
@@ -148,8 +148,8 @@ def loads(
 def report(
     directories: list[Path] = typer.Argument(..., help="Result directories (several: on the same plots)."),
     out: Path = typer.Option(Path("reports"), "--out", help="Folder that receives <name>/report.md and the plots."),
-    label: Optional[list[str]] = typer.Option(None, "--label", help="Name of each run in tables and legends (in order)."),
-    point: Optional[int] = typer.Option(None, "--point", min=0, help="Sweep point of the EDM histogram and history plot (default: the middle one)."),
+    label: list[str] | None = typer.Option(None, "--label", help="Name of each run in tables and legends (in order)."),
+    point: int | None = typer.Option(None, "--point", min=0, help="Sweep point of the EDM histogram and history plot (default: the middle one)."),
 ) -> None:
     """Write a Markdown report with tables and PNG plots of finished runs."""
     from .reports import report as write_report
@@ -194,11 +194,12 @@ def fragility(
 def compare(
     directories: list[Path] = typer.Argument(..., help="Two or more result directories of the same sweep grid."),
     out: Path = typer.Option(Path("reports/compare.md"), "--out", help="Markdown file to write."),
-    metric: Optional[list[str]] = typer.Option(None, "--metric", help="Metric to compare (repeatable; default edm, e1_max, energy_integral, impacts)."),
+    metric: list[str] | None = typer.Option(None, "--metric", help="Metric to compare (repeatable; default edm, e1_max, energy_integral, impacts)."),
 ) -> None:
     """Side-by-side summary metrics of several runs, with differences and their standard errors."""
     from .metrics import METRICS
-    from .reports import COMPARED, Run, markdown, compare as compare_runs
+    from .reports import COMPARED, Run, markdown
+    from .reports import compare as compare_runs
 
     if len(directories) < 2:
         _fail("compare needs at least two result directories")
@@ -219,8 +220,8 @@ def compare(
 @app.command()
 def optimize(
     scenario: Path = typer.Argument(..., help="Scenario TOML file with an [optimize] table."),
-    out: Optional[Path] = typer.Option(None, "--out", help="Output directory (default: <output directory>-optimum)."),
-    workers: Optional[int] = typer.Option(None, "--workers", min=1, help="Threads of the embedded scheduler (default: all cores)."),
+    out: Path | None = typer.Option(None, "--out", help="Output directory (default: <output directory>-optimum)."),
+    workers: int | None = typer.Option(None, "--workers", min=1, help="Threads of the embedded scheduler (default: all cores)."),
     quiet: bool = typer.Option(False, "--quiet", help="No progress output."),
 ) -> None:
     """Tune absorber parameters for the best mean EDM (or other metric); write the optimum,

@@ -19,10 +19,10 @@ import os
 import pickle
 import sys
 import time
+from collections.abc import Iterator
 from contextlib import ExitStack, contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Iterator
 
 import numpy as np
 import pandas as pd
@@ -31,11 +31,11 @@ from . import history as hist
 from . import schedulers
 from .kernels import needed_streams, sample_buffer, simulate
 from .metrics import METRICS, finish, ground_intensity, summarise
-from .streams import PARAMETERS, generator, streams
 from .progress import Progress
 from .scenario import History, Study
 from .scene import Scene, build_scene
 from .store import lock_folder, part_path, provenance, read_results, run_key, write_table
+from .streams import PARAMETERS, generator, streams
 
 #: Target work of one chunk, in path-steps (about 0.1-0.3 s of compute).
 CHUNK_STEPS = 5_000_000

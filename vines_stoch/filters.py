@@ -18,6 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.linalg import expm, solve_continuous_lyapunov
 
+
 @dataclass(frozen=True)
 class Filter:
     """One filtered load: ``dz = A z dt + b e(t) dW``, load ``= c . z`` (on the floor ``floor``,

@@ -8,8 +8,7 @@ import numpy as np
 import pandas as pd
 from scipy.special import stdtrit
 
-from .kernels.common import (ACC_MAX_K, DRIFT_MAX_K, SLOTS, STATUS_DIVERGED, X_MAX_K, X_SQ_INT_K,
-                             passage_slots)
+from .kernels.common import ACC_MAX_K, DRIFT_MAX_K, SLOTS, STATUS_DIVERGED, X_MAX_K, X_SQ_INT_K, passage_slots
 from .scene import Scene
 
 #: Metric columns of realizations.parquet, in order (then the per-floor columns of

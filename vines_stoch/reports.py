@@ -36,7 +36,7 @@ class Run:
     seed: int
 
     @classmethod
-    def read(cls, directory: str | Path, label: str | None = None) -> "Run":
+    def read(cls, directory: str | Path, label: str | None = None) -> Run:
         directory = Path(directory)
         if not (directory / "summary.parquet").is_file():
             raise FileNotFoundError(f"{directory}: no summary.parquet (not a finished vines-stoch run)")

@@ -3,13 +3,14 @@
 
 from __future__ import annotations
 
-from typing import Annotated, Literal, Union
+from typing import Annotated, Literal
 
 import numpy as np
 from pydantic import Field, model_validator
 
 from .errors import FieldError
 from .fields import MAX_FLOORS, Floor, NonNegative, Positive, Real, _Model
+
 
 class Rayleigh(_Model):
     """Rayleigh damping ``C = alpha M + beta K`` with damping ``ratio`` at two ``modes`` of the
@@ -35,7 +36,7 @@ class Primary(_Model):
     rayleigh: Rayleigh | None = None
 
     @model_validator(mode="after")
-    def _layout(self) -> "Primary":
+    def _layout(self) -> Primary:
         scalars = {"mass": self.mass, "stiffness": self.stiffness, "damping": self.damping}
         lists = {"masses": self.masses, "stiffnesses": self.stiffnesses, "dampings": self.dampings}
         if self.masses is None:
@@ -169,7 +170,7 @@ class Contact(_Model):
     q: Positive = 0.318
 
     @model_validator(mode="after")
-    def _one_way(self) -> "Contact":
+    def _one_way(self) -> Contact:
         surfaces = (self.young, self.poisson, self.radius)
         if self.k is not None and any(s is not None for s in surfaces):
             raise FieldError("k", self.k, "give either k or young/poisson/radius, not both")
@@ -210,7 +211,7 @@ class HertzAbsorber(_Model):
     rest: Real | None = None
 
     @model_validator(mode="after")
-    def _geometry(self) -> "HertzAbsorber":
+    def _geometry(self) -> HertzAbsorber:
         if self.obstacle == "from-primary":
             if self.geometry != "single-sided":
                 raise FieldError("obstacle", self.obstacle, "'from-primary' (seed 002) is defined for single-sided geometry only")
@@ -241,5 +242,5 @@ class HertzAbsorber(_Model):
 
 
 Absorber = Annotated[
-    Union[LinearAbsorber, CubicAbsorber, ImpactAbsorber, HertzAbsorber], Field(discriminator="type")
+    LinearAbsorber | CubicAbsorber | ImpactAbsorber | HertzAbsorber, Field(discriminator="type")
 ]

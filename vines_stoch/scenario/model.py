@@ -9,13 +9,29 @@ import numpy as np
 from pydantic import Field, model_validator
 
 from .. import schemes
-from .bodies import Absorber, CubicAbsorber, HertzAbsorber, ImpactAbsorber, Primary, eigenfrequencies, shear_stiffness
+from .bodies import (
+    Absorber,
+    CubicAbsorber,
+    HertzAbsorber,
+    ImpactAbsorber,
+    Primary,
+    eigenfrequencies,
+    shear_stiffness,
+)
 from .distributions import Distribution
 from .errors import FieldError
 from .fields import MAX_ABSORBERS, MAX_LIMITS, MAX_LOADS, MAX_STEPS, _Model
 from .loads import InitialLoad, Load, WhiteNoiseLoad, WindLoad, draws_filter_noise
-from .settings import (Ensemble, IntensityMeasures, Limit, Optimize, Output, Simulation, history_signals,
-                       limit_metrics)
+from .settings import (
+    Ensemble,
+    IntensityMeasures,
+    Limit,
+    Optimize,
+    Output,
+    Simulation,
+    history_signals,
+    limit_metrics,
+)
 
 #: A limit's name (it becomes part of column names).
 LIMIT_NAME = re.compile(r"[A-Za-z][A-Za-z0-9_]{0,39}")
@@ -39,7 +55,7 @@ class Scenario(_Model):
     output: Output = Output()
 
     @model_validator(mode="after")
-    def _consistency(self) -> "Scenario":
+    def _consistency(self) -> Scenario:
         sim = self.simulation
         if sim.dt > sim.duration:
             raise FieldError("simulation.dt", sim.dt, f"must be <= simulation.duration ({sim.duration:g})")

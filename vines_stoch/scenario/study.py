@@ -23,7 +23,6 @@ from .loads import _RecordLoad
 from .model import Scenario
 from .sweeps import _grid, _product, _zipped, get_path, set_path
 
-
 #: The largest scenario file read (bytes).
 SCENARIO_BYTES = 4 * 2**20
 
@@ -176,7 +175,7 @@ class Study:
             set_path(variant, key, value)
         return self._read_records(_validate(variant, self.source), self.source)
 
-    def with_values(self, values: dict[str, float]) -> "Study":
+    def with_values(self, values: dict[str, float]) -> Study:
         """The study with the fields named by ``values`` set (e.g. an optimiser's candidate)."""
         data = copy.deepcopy(self.data)
         for key, value in values.items():

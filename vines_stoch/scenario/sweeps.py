@@ -11,6 +11,7 @@ import numpy as np
 from .errors import MISSING, ScenarioError, format_error
 from .fields import MAX_POINTS
 
+
 def _grid(key: str, spec: Any, source: str) -> list[float] | list[str]:
     """Values of one ``[sweep]`` entry: a list of numbers or of texts, ``{linspace = [a, b, n]}`` or
     ``{logspace = [a, b, n]}``."""

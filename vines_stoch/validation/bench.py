@@ -37,8 +37,7 @@ from numba import njit
 
 from ..ensemble import run
 from ..kernels import load_history, simulate
-from ..kernels.common import (ABSORBER_DISS, E1_MAX, FINAL_ENERGY, IMPACT_LOSS, INPUT,
-                              PRIMARY_DISS)
+from ..kernels.common import ABSORBER_DISS, E1_MAX, FINAL_ENERGY, IMPACT_LOSS, INPUT, PRIMARY_DISS
 from ..physics import KERNEL, hertz_constant
 from ..records import G, write_at2
 from . import precision, scenes, stability

@@ -39,7 +39,7 @@ class Case:
         names it in messages (default: the case's name)."""
         return scenes.study(self.data, source=source or self.name)
 
-    def halved(self) -> "Case":
+    def halved(self) -> Case:
         """The case at half the step (the same Brownian paths are not implied: new grid)."""
         return replace(self, data=scenes.changed(self.data, {"simulation.dt": self.data["simulation"]["dt"] / 2}))
 
