@@ -59,7 +59,7 @@ def run(
     except KeyboardInterrupt:
         typer.echo(f"\ninterrupted: finished chunks are kept in {directory}/parts; "
                    f"run again with --resume to complete", err=True)
-        raise typer.Exit(130)
+        raise typer.Exit(130) from None
     except (OSError, ValueError, TimeoutError) as exc:
         _fail(str(exc))
     if share is not None:
@@ -239,7 +239,7 @@ def optimize(
         best, path = optimize_scenario(study, directory, workers, progress=not quiet, echo=echo)
     except KeyboardInterrupt:
         typer.echo(f"\ninterrupted: the evaluations so far are in {directory}/optimization.parquet", err=True)
-        raise typer.Exit(130)
+        raise typer.Exit(130) from None
     except (OSError, ValueError) as exc:
         _fail(str(exc))
     if not quiet:

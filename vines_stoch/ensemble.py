@@ -366,7 +366,7 @@ def _consolidate(study: Study, the_plan: Plan, states: list[PointState], directo
                  grids: list[tuple[int, int] | None], spec: History | None) -> tuple[pd.DataFrame, pd.DataFrame]:
     """Gather the parts kept (up to each point's stopping count) into the result files."""
     frames = []
-    for p, state in enumerate(states):
+    for state in states:
         for c in state.chunks:
             if state.stop is not None and c[1] >= state.stop:
                 break

@@ -104,8 +104,8 @@ def finish(raw: np.ndarray, scene: Scene, samples: np.ndarray | None = None) -> 
         row[f"acc_max_{k + 1}"] = g(slot + ACC_MAX_K * nf)
     finite = all(math.isfinite(v) for k, v in row.items() if k not in ("edm", "energy_residual"))
     passages = passage_slots(nf)
-    for l, name in enumerate(scene.limit_names):  # (NaN where a limit never passed)
-        row[f"first_passage_{name}"] = g(passages + l)
+    for limit, name in enumerate(scene.limit_names):  # (NaN where a limit never passed)
+        row[f"first_passage_{name}"] = g(passages + limit)
     row["status"] = "diverged" if g(_S["status"]) == STATUS_DIVERGED or not finite else "ok"
     row["regime"] = (regime(samples, 2.0 * np.pi / scene.period)
                      if samples is not None and samples.size and row["status"] == "ok" else None)

@@ -69,7 +69,7 @@ class Scenario(_Model):
         n = self.primary.n_floors
         nbodies = n + len(self.absorbers)
         for i, item in [(f"absorbers.{i}", a) for i, a in enumerate(self.absorbers)] + \
-                       [(f"loads.{i}", l) for i, l in enumerate(self.loads)]:
+                       [(f"loads.{i}", load) for i, load in enumerate(self.loads)]:
             floor = getattr(item, "floor", None)
             if floor is not None and not 1 <= floor <= n:
                 raise FieldError(f"{i}.floor", floor, f"must be in [1, {n}] (the primary has {n} floor{'s' * (n > 1)})")
@@ -110,7 +110,7 @@ class Scenario(_Model):
     @property
     def contents(self) -> tuple[bool, bool, bool, bool]:
         """What the schemes must accept: noise, filtered loads, impact absorbers, Hertz absorbers."""
-        return (self.has_noise, any(draws_filter_noise(l) for l in self.loads),
+        return (self.has_noise, any(draws_filter_noise(load) for load in self.loads),
                 any(isinstance(a, ImpactAbsorber) for a in self.absorbers),
                 any(isinstance(a, HertzAbsorber) for a in self.absorbers))
 
@@ -148,5 +148,5 @@ class Scenario(_Model):
     @property
     def has_noise(self) -> bool:
         """True when any random load acts (white, filtered noise, stochastic ground motion, wind)."""
-        return any((isinstance(l, WhiteNoiseLoad) and l.intensity > 0) or draws_filter_noise(l)
-                   for l in self.loads)
+        return any((isinstance(load, WhiteNoiseLoad) and load.intensity > 0) or draws_filter_noise(load)
+                   for load in self.loads)

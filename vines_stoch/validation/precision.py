@@ -59,12 +59,13 @@ def deterministic(impact: bool) -> list[Curve]:
         dt = 100.0 / n  # T = 100 in whole steps
         scene = scenes.scene("impulse_parallel" if impact else "impulse", {"simulation.dt": float(dt)})
         simulate(scene)
-        seconds, raw = _timed(lambda: simulate(scene), repeats=max(1, int(0.2 / (scene.n_steps * 2e-7))))
+        seconds, raw = _timed(lambda scene=scene: simulate(scene),
+                              repeats=max(1, int(0.2 / (scene.n_steps * 2e-7))))
         edm = finish(raw, scene)["edm"]
         ours.points.append((f"dt = {dt:.3g}", seconds, abs(edm - exact)))
     peer = Curve("scipy DOP853 + events")
     for rtol in (1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10):
-        seconds, edm = _timed(lambda: reference(rtol, rtol * 1e-3))
+        seconds, edm = _timed(lambda rtol=rtol: reference(rtol, rtol * 1e-3))
         peer.points.append((f"rtol = {rtol:.0e}", seconds, abs(edm - exact)))
     return [ours, peer]
 
@@ -136,7 +137,7 @@ def strong(paths: int = 8, fine_dt: float = 2.5e-5, duration: float = 20.0,
             simulate(scene, normals=replays[0])
             finals = np.zeros((paths, 2, 2))
 
-            def ours() -> None:
+            def ours(scene=scene, replays=replays, finals=finals) -> None:
                 for c, out in zip(replays, finals):
                     simulate(scene, normals=c, final=out)
 
@@ -149,8 +150,11 @@ def strong(paths: int = 8, fine_dt: float = 2.5e-5, duration: float = 20.0,
         tspan = np.linspace(0.0, n_steps * dt, n_steps + 1)
         increments = [(coarse_increments(n, m)[0] * math.sqrt(dt)).reshape(-1, 1) for n in normals[:sdeint_paths]]
         for curve, method in ((euler, sdeint.itoEuler), (sri2, sdeint.itoSRI2)):
-            seconds, ys = min((_timed(lambda: [method(f, g, np.zeros(4), tspan, dW=dw) for dw in increments])
-                               for _ in range(5 if dt > 4e-3 else 2)), key=lambda timed: timed[0])
+
+            def theirs(method=method, tspan=tspan, increments=increments) -> list[np.ndarray]:
+                return [method(f, g, np.zeros(4), tspan, dW=dw) for dw in increments]
+
+            seconds, ys = min((_timed(theirs) for _ in range(5 if dt > 4e-3 else 2)), key=lambda timed: timed[0])
             errors = [np.linalg.norm(np.array([y[-1, :2], y[-1, 2:]]) - ref) for y, ref in zip(ys, reference)]
             curve.points.append((f"dt = {dt:g}", seconds / sdeint_paths, float(np.mean(errors))))
     return [kdk, sra, euler, sri2]
@@ -243,7 +247,7 @@ def same_path_errors(kind: str, levels: list[int], fine: int = 14, paths: int = 
     for m in range(paths):
         normals = rng.standard_normal(math.ceil(duration * 2**fine))
 
-        def x1_end(level: int) -> float:
+        def x1_end(level: int, m: int = m, normals: np.ndarray = normals) -> float:
             simulate(by_level[level], np.random.default_rng(m), normals=normals, refine=2 ** (fine - level),
                      final=final)
             return final[0, 0]
