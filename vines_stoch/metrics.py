@@ -77,7 +77,8 @@ def finish(raw: np.ndarray, scene: Scene, samples: np.ndarray | None = None) -> 
     absorbed = g(_S["absorber_dissipation"]) + g(_S["impact_loss"])
     dissipated = absorbed + g(_S["primary_dissipation"])
     edm = absorbed / input_energy if input_energy > 0 else math.nan
-    residual = (input_energy - g(_S["final_energy"]) - dissipated) / input_energy if input_energy > 0 else math.nan
+    residual = ((input_energy - g(_S["final_energy"]) - dissipated) / input_energy if input_energy > 0
+                else math.nan)
     row: dict[str, float | str | None] = {
         "input_energy": input_energy,
         "edm": edm,
@@ -120,7 +121,8 @@ def ground_intensity(scene: Scene, streams) -> dict[str, float]:
     from .spectra import peak, pseudo_acceleration
 
     _, _, ground = load_history(scene, streams)
-    return {"sa": pseudo_acceleration(ground, scene.dt, scene.im_period, scene.im_damping), "pga": peak(ground)}
+    return {"sa": pseudo_acceleration(ground, scene.dt, scene.im_period, scene.im_damping),
+            "pga": peak(ground)}
 
 
 def undefined_notes(ok: pd.DataFrame, metrics: list[str]) -> str:
@@ -129,7 +131,8 @@ def undefined_notes(ok: pd.DataFrame, metrics: list[str]) -> str:
     (``edm`` and ``energy_residual`` where the loads put no energy in)."""
     notes = []
     if len(ok) == 0:
-        notes.append("no realisation ended ok (see status in realizations.parquet): every statistic undefined")
+        notes.append("no realisation ended ok (see status in realizations.parquet): "
+                     "every statistic undefined")
     elif len(ok) == 1:
         notes.append("one realisation ended ok: std, sem and ci95 undefined")
     idle = int((ok["input_energy"] <= 0).sum()) if "input_energy" in ok else 0
