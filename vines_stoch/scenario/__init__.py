@@ -65,10 +65,11 @@ from .sweeps import get_path, set_path
 
 __all__ = [
     "OBJECTIVES", "Absorber", "Bound", "ChirpLoad", "Contact", "CubicAbsorber", "Distribution", "Ensemble",
-    "FilteredNoiseLoad", "ForceRecordLoad", "GroundMotionLoad", "HalfSineLoad", "HarmonicLoad", "HertzAbsorber",
-    "History", "ImpactAbsorber", "IntensityMeasures", "ImpulseLoad", "InitialLoad", "JenningsEnvelope", "Limit", "LinearAbsorber", "Load",
-    "LognormalDistribution", "NormalDistribution", "Optimize", "Output", "Primary", "PulseTrainLoad", "Rayleigh",
-    "RecordLoad", "SaragoniHartEnvelope", "Scenario", "ScenarioError", "Simulation", "Study",
-    "TruncatedNormalDistribution", "UniformDistribution", "WhiteNoiseLoad", "WindLoad", "get_path",
-    "history_signals", "limit_metrics", "load_scenario", "parse_scenario", "quantile_name", "set_path",
+    "FilteredNoiseLoad", "ForceRecordLoad", "GroundMotionLoad", "HalfSineLoad", "HarmonicLoad",
+    "HertzAbsorber", "History", "ImpactAbsorber", "IntensityMeasures", "ImpulseLoad", "InitialLoad",
+    "JenningsEnvelope", "Limit", "LinearAbsorber", "Load", "LognormalDistribution", "NormalDistribution",
+    "Optimize", "Output", "Primary", "PulseTrainLoad", "Rayleigh", "RecordLoad", "SaragoniHartEnvelope",
+    "Scenario", "ScenarioError", "Simulation", "Study", "TruncatedNormalDistribution", "UniformDistribution",
+    "WhiteNoiseLoad", "WindLoad", "get_path", "history_signals", "limit_metrics", "load_scenario",
+    "parse_scenario", "quantile_name", "set_path",
 ]

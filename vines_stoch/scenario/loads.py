@@ -131,7 +131,8 @@ class GroundMotionLoad(_FilteredLoad):
         names = ["ground_frequency", "ground_damping"]
         if self.model == "clough-penzien":
             names += ["filter_frequency", "filter_damping"]
-        for name, value in zip(["ground_frequency", "ground_damping", "filter_frequency", "filter_damping"], preset):
+        for name, value in zip(["ground_frequency", "ground_damping", "filter_frequency", "filter_damping"],
+                               preset):
             if getattr(self, name) is None:
                 setattr(self, name, value)
         for name in names:
@@ -348,7 +349,8 @@ class ForceRecordLoad(_RecordLoad):
 
 
 Load = Annotated[
-    ImpulseLoad | InitialLoad | HarmonicLoad | WhiteNoiseLoad | FilteredNoiseLoad | GroundMotionLoad | WindLoad | HalfSineLoad | PulseTrainLoad | ChirpLoad | RecordLoad | ForceRecordLoad,
+    ImpulseLoad | InitialLoad | HarmonicLoad | WhiteNoiseLoad | FilteredNoiseLoad | GroundMotionLoad
+    | WindLoad | HalfSineLoad | PulseTrainLoad | ChirpLoad | RecordLoad | ForceRecordLoad,
     Field(discriminator="type"),
 ]
 

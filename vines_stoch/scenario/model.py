@@ -60,7 +60,8 @@ class Scenario(_Model):
         if sim.dt > sim.duration:
             raise FieldError("simulation.dt", sim.dt, f"must be <= simulation.duration ({sim.duration:g})")
         if sim.duration / sim.dt > MAX_STEPS:
-            raise FieldError("simulation.dt", sim.dt, f"gives {sim.duration / sim.dt:.3g} steps a path (duration / dt); "
+            raise FieldError("simulation.dt", sim.dt,
+                             f"gives {sim.duration / sim.dt:.3g} steps a path (duration / dt); "
                              f"at most {MAX_STEPS:.0e}")
         if sim.metrics_from >= sim.duration:
             raise FieldError(
@@ -72,7 +73,8 @@ class Scenario(_Model):
                        [(f"loads.{i}", load) for i, load in enumerate(self.loads)]:
             floor = getattr(item, "floor", None)
             if floor is not None and not 1 <= floor <= n:
-                raise FieldError(f"{i}.floor", floor, f"must be in [1, {n}] (the primary has {n} floor{'s' * (n > 1)})")
+                raise FieldError(f"{i}.floor", floor,
+                                 f"must be in [1, {n}] (the primary has {n} floor{'s' * (n > 1)})")
         for i, load in enumerate(self.loads):
             if isinstance(load, WindLoad) and (bad := load.floors_error(n)) is not None:
                 raise FieldError(f"loads.{i}.{bad[0]}", bad[1], bad[2])
@@ -82,24 +84,26 @@ class Scenario(_Model):
                     if values is not None and len(values) != nbodies:
                         raise FieldError(
                             f"loads.{i}.{field}", values,
-                            f"must list {nbodies} values (the {n} floor{'s' * (n > 1)} from the lowest, then each "
-                            "absorber)",
+                            f"must list {nbodies} values (the {n} floor{'s' * (n > 1)} from the lowest, "
+                            "then each absorber)",
                         )
         if sim.history is not None:
             allowed = history_signals(n)
             for signal in sim.history.signals:
                 if signal not in allowed:
                     raise FieldError("simulation.history.signals", sim.history.signals,
-                                    f"{signal!r} is not a signal: give x1, e1, x_k or drift_k with k in [1, {n}]")
+                                     f"{signal!r} is not a signal: give x1, e1, x_k or drift_k "
+                                     f"with k in [1, {n}]")
         metrics = limit_metrics(n)
         for name, limit in self.limits.items():
             if not LIMIT_NAME.fullmatch(name):
-                raise FieldError("limits", name, "a limit's name must start with a letter and hold letters, digits "
-                                 "and '_' only (at most 40 characters): it names the columns first_passage_NAME, p_NAME")
+                raise FieldError("limits", name, "a limit's name must start with a letter and hold letters, "
+                                 "digits and '_' only (at most 40 characters): it names the columns "
+                                 "first_passage_NAME, p_NAME")
             if limit.metric not in metrics:
                 raise FieldError(f"limits.{name}.metric", limit.metric,
-                                 f"must be a peak metric: x1_max, e1_max, or x_max_k, drift_max_k, acc_max_k with k "
-                                 f"in [1, {n}]")
+                                 "must be a peak metric: x1_max, e1_max, or x_max_k, drift_max_k, acc_max_k "
+                                 f"with k in [1, {n}]")
         contents = self.contents
         if sim.scheme != "auto":
             why = schemes.refusal(schemes.SCHEMES[sim.scheme], *contents)
