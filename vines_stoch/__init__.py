@@ -14,6 +14,7 @@ from __future__ import annotations
 
 from typing import Any
 
+
 def _version() -> str:
     """The version of the installed distribution (pyproject.toml is its one source)."""
     from importlib.metadata import PackageNotFoundError, version

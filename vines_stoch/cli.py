@@ -1,11 +1,11 @@
-"""Command line: ``vines-stoch run | validate | loads | report | fragility | compare | optimize | bench | reproduce``."""
+"""Command line:
+``vines-stoch run | validate | loads | report | fragility | compare | optimize | bench | reproduce``."""
 
 from __future__ import annotations
 
 import os
 import sys
 from pathlib import Path
-from typing import Optional
 
 import typer
 
@@ -23,17 +23,28 @@ def _fail(message: str) -> None:
 @app.command()
 def run(
     scenario: Path = typer.Argument(..., help="Scenario TOML file."),
-    out: Optional[Path] = typer.Option(None, "--out", help="Output directory (overrides [output] directory)."),
-    workers: Optional[int] = typer.Option(None, "--workers", min=1, help="Threads of the embedded scheduler (default: all cores)."),
-    chunk: Optional[int] = typer.Option(None, "--chunk", min=0, help="Realisations per task (overrides [ensemble] chunk; 0 = automatic)."),
-    resume: bool = typer.Option(False, "--resume", help="Keep the chunks an interrupted run of the same scenario finished."),
-    scheduler: Optional[str] = typer.Option(None, "--scheduler", help="Address of a running dask.distributed scheduler (e.g. tcp://10.0.0.5:8786)."),
-    scheduler_file: Optional[Path] = typer.Option(None, "--scheduler-file", help="Scheduler file of a running dask.distributed scheduler (dask scheduler --scheduler-file FILE)."),
-    shard: Optional[str] = typer.Option(None, "--shard", help="I/N: run only the I-th of N shares of the chunks (job arrays); then --resume writes the results."),
+    out: Path | None = typer.Option(None, "--out", help="Output directory (overrides [output] directory)."),
+    workers: int | None = typer.Option(None, "--workers", min=1,
+                                       help="Threads of the embedded scheduler (default: all cores)."),
+    chunk: int | None = typer.Option(None, "--chunk", min=0,
+                                     help="Realisations per task (overrides [ensemble] chunk; "
+                                          "0 = automatic)."),
+    resume: bool = typer.Option(False, "--resume",
+                                help="Keep the chunks an interrupted run of the same scenario finished."),
+    scheduler: str | None = typer.Option(None, "--scheduler",
+                                         help="Address of a running dask.distributed scheduler "
+                                              "(e.g. tcp://10.0.0.5:8786)."),
+    scheduler_file: Path | None = typer.Option(None, "--scheduler-file",
+                                               help="Scheduler file of a running dask.distributed scheduler "
+                                                    "(dask scheduler --scheduler-file FILE)."),
+    shard: str | None = typer.Option(None, "--shard",
+                                     help="I/N: run only the I-th of N shares of the chunks (job arrays); "
+                                          "then --resume writes the results."),
     quiet: bool = typer.Option(False, "--quiet", help="No progress or summary output."),
 ) -> None:
     """Run a scenario and write realizations.parquet and summary.parquet."""
-    from .ensemble import output_directory, run as run_study
+    from .ensemble import output_directory
+    from .ensemble import run as run_study
 
     try:
         study = load_scenario(scenario)
@@ -59,13 +70,13 @@ def run(
     except KeyboardInterrupt:
         typer.echo(f"\ninterrupted: finished chunks are kept in {directory}/parts; "
                    f"run again with --resume to complete", err=True)
-        raise typer.Exit(130)
+        raise typer.Exit(130) from None
     except (OSError, ValueError, TimeoutError) as exc:
         _fail(str(exc))
     if share is not None:
         if not quiet:
-            typer.echo(f"shard {shard}: its chunks are in {directory}/parts; once every shard has finished, run "
-                       "again with --resume (no --shard) to write the results", err=True)
+            typer.echo(f"shard {shard}: its chunks are in {directory}/parts; once every shard has finished, "
+                       "run again with --resume (no --shard) to write the results", err=True)
         return
     if quiet:
         return
@@ -75,7 +86,8 @@ def run(
                + (f", {directory}/history.parquet" if study.base.simulation.history else ""))
     import pandas as pd
 
-    columns = study.sweep_keys + ["n_ok", "n_failed"] + [f"{m}_mean" for m in ("edm", "e1_max", "impacts", "energy_residual")]
+    columns = (study.sweep_keys + ["n_ok", "n_failed"]
+               + [f"{m}_mean" for m in ("edm", "e1_max", "impacts", "energy_residual")])
     with pd.option_context("display.width", 200, "display.max_columns", 20, "display.precision", 4):
         typer.echo(summary[columns].to_string(index=False))
 
@@ -93,11 +105,15 @@ def validate(scenario: Path = typer.Argument(..., help="Scenario TOML file.")) -
 @app.command()
 def loads(
     scenario: Path = typer.Argument(..., help="Scenario TOML file."),
-    out: Path = typer.Argument(..., help="File to write: .AT2 (ground acceleration in g) or .csv (t, force, ground)."),
-    seed: Optional[int] = typer.Option(None, "--seed", min=0, max=2**63 - 1, help="Seed (default: the scenario's [ensemble] seed)."),
-    realization: int = typer.Option(0, "--realization", min=0, max=2**63 - 1, help="Realisation whose loads to write."),
+    out: Path = typer.Argument(..., help="File to write: .AT2 (ground acceleration in g) "
+                                         "or .csv (t, force, ground)."),
+    seed: int | None = typer.Option(None, "--seed", min=0, max=2**63 - 1,
+                                    help="Seed (default: the scenario's [ensemble] seed)."),
+    realization: int = typer.Option(0, "--realization", min=0, max=2**63 - 1,
+                                    help="Realisation whose loads to write."),
     point: int = typer.Option(0, "--point", min=0, help="Sweep point."),
-    pga: Optional[float] = typer.Option(None, "--pga", min=0.0, max=100.0, help="Scale the ground acceleration to this peak (in g)."),
+    pga: float | None = typer.Option(None, "--pga", min=0.0, max=100.0,
+                                     help="Scale the ground acceleration to this peak (in g)."),
     every: int = typer.Option(1, "--every", min=1, help="Keep every N-th sample of the time grid."),
 ) -> None:
     """Write one sample path of a scenario's loads (e.g. a synthetic accelerogram): the path
@@ -147,9 +163,13 @@ def loads(
 @app.command()
 def report(
     directories: list[Path] = typer.Argument(..., help="Result directories (several: on the same plots)."),
-    out: Path = typer.Option(Path("reports"), "--out", help="Folder that receives <name>/report.md and the plots."),
-    label: Optional[list[str]] = typer.Option(None, "--label", help="Name of each run in tables and legends (in order)."),
-    point: Optional[int] = typer.Option(None, "--point", min=0, help="Sweep point of the EDM histogram and history plot (default: the middle one)."),
+    out: Path = typer.Option(Path("reports"), "--out",
+                             help="Folder that receives <name>/report.md and the plots."),
+    label: list[str] | None = typer.Option(None, "--label",
+                                           help="Name of each run in tables and legends (in order)."),
+    point: int | None = typer.Option(None, "--point", min=0,
+                                     help="Sweep point of the EDM histogram and history plot "
+                                          "(default: the middle one)."),
 ) -> None:
     """Write a Markdown report with tables and PNG plots of finished runs."""
     from .reports import report as write_report
@@ -165,11 +185,16 @@ def report(
 
 @app.command()
 def fragility(
-    directory: Path = typer.Argument(..., help="Result directory of a run with [limits] and a sweep over intensity."),
+    directory: Path = typer.Argument(..., help="Result directory of a run with [limits] "
+                                               "and a sweep over intensity."),
     limit: str = typer.Option(..., "--limit", help="Name of the limit (a key of [limits])."),
-    im: str = typer.Option(..., "--im", help="Intensity measure: a column constant at each sweep point (a swept key)."),
-    diverged: str = typer.Option("exclude", "--diverged", help="Realisations that did not end ok: 'exclude' or 'exceed' (count them as exceedances)."),
-    samples: int = typer.Option(1000, "--samples", min=0, help="Bootstrap replicates of the confidence bounds (0: none)."),
+    im: str = typer.Option(..., "--im",
+                           help="Intensity measure: a column constant at each sweep point (a swept key)."),
+    diverged: str = typer.Option("exclude", "--diverged",
+                                 help="Realisations that did not end ok: 'exclude' or 'exceed' "
+                                      "(count them as exceedances)."),
+    samples: int = typer.Option(1000, "--samples", min=0,
+                                help="Bootstrap replicates of the confidence bounds (0: none)."),
     seed: int = typer.Option(0, "--seed", min=0, help="Seed of the bootstrap."),
 ) -> None:
     """Fit a lognormal fragility curve to the exceedances of a limit over the sweep points."""
@@ -180,9 +205,11 @@ def fragility(
     except (OSError, ValueError, KeyError) as exc:
         _fail(str(exc).strip("'\""))
     first = rows.iloc[0]
-    typer.echo(f"{limit} against {im}: median {first['median']:.5g} [{first['median_lo']:.5g}, {first['median_hi']:.5g}], "
-               f"beta {first['beta']:.4g} [{first['beta_lo']:.4g}, {first['beta_hi']:.4g}] (95 % bootstrap bounds, "
-               f"{first['bootstrap_fitted']} of {first['bootstrap']} replicates); did not end ok: {first['diverged']}"
+    typer.echo(f"{limit} against {im}: "
+               f"median {first['median']:.5g} [{first['median_lo']:.5g}, {first['median_hi']:.5g}], "
+               f"beta {first['beta']:.4g} [{first['beta_lo']:.4g}, {first['beta_hi']:.4g}] "
+               f"(95 % bootstrap bounds, {first['bootstrap_fitted']} of {first['bootstrap']} replicates); "
+               f"did not end ok: {first['diverged']}"
                + (f"\nnotes: {first['notes']}" if first["notes"] else ""))
     from .plotting import available
 
@@ -192,13 +219,17 @@ def fragility(
 
 @app.command()
 def compare(
-    directories: list[Path] = typer.Argument(..., help="Two or more result directories of the same sweep grid."),
+    directories: list[Path] = typer.Argument(...,
+                                             help="Two or more result directories of the same sweep grid."),
     out: Path = typer.Option(Path("reports/compare.md"), "--out", help="Markdown file to write."),
-    metric: Optional[list[str]] = typer.Option(None, "--metric", help="Metric to compare (repeatable; default edm, e1_max, energy_integral, impacts)."),
+    metric: list[str] | None = typer.Option(None, "--metric",
+                                            help="Metric to compare (repeatable; default edm, e1_max, "
+                                                 "energy_integral, impacts)."),
 ) -> None:
     """Side-by-side summary metrics of several runs, with differences and their standard errors."""
     from .metrics import METRICS
-    from .reports import COMPARED, Run, markdown, compare as compare_runs
+    from .reports import COMPARED, Run, markdown
+    from .reports import compare as compare_runs
 
     if len(directories) < 2:
         _fail("compare needs at least two result directories")
@@ -219,8 +250,10 @@ def compare(
 @app.command()
 def optimize(
     scenario: Path = typer.Argument(..., help="Scenario TOML file with an [optimize] table."),
-    out: Optional[Path] = typer.Option(None, "--out", help="Output directory (default: <output directory>-optimum)."),
-    workers: Optional[int] = typer.Option(None, "--workers", min=1, help="Threads of the embedded scheduler (default: all cores)."),
+    out: Path | None = typer.Option(None, "--out",
+                                    help="Output directory (default: <output directory>-optimum)."),
+    workers: int | None = typer.Option(None, "--workers", min=1,
+                                       help="Threads of the embedded scheduler (default: all cores)."),
     quiet: bool = typer.Option(False, "--quiet", help="No progress output."),
 ) -> None:
     """Tune absorber parameters for the best mean EDM (or other metric); write the optimum,
@@ -238,12 +271,13 @@ def optimize(
         best, path = optimize_scenario(study, directory, workers, progress=not quiet, echo=echo)
     except KeyboardInterrupt:
         typer.echo(f"\ninterrupted: the evaluations so far are in {directory}/optimization.parquet", err=True)
-        raise typer.Exit(130)
+        raise typer.Exit(130) from None
     except (OSError, ValueError) as exc:
         _fail(str(exc))
     if not quiet:
         shown = ", ".join(f"{k} = {v:.6g}" for k, v in best.values.items())
-        typer.echo(f"optimum: {shown}; {study.base.optimize.objective} = {best.objective:.6g} +- {best.sem:.2g}")
+        typer.echo(f"optimum: {shown}; "
+                   f"{study.base.optimize.objective} = {best.objective:.6g} +- {best.sem:.2g}")
         typer.echo(f"wrote {directory}/optimum.toml, {directory}/optimization.parquet, {path}")
 
 
@@ -255,7 +289,8 @@ def bench(
     import importlib.util
 
     if importlib.util.find_spec("sdeint") is None:
-        _fail('vines-stoch bench compares against sdeint, which is not installed: pip install "vines-stoch[bench]"')
+        _fail("vines-stoch bench compares against sdeint, which is not installed: "
+              'pip install "vines-stoch[bench]"')
     from .validation.bench import main as bench_main
 
     bench_main(out)
@@ -264,7 +299,8 @@ def bench(
 @app.command()
 def reproduce(
     out: Path = typer.Option(Path("reports/seed-tables.md"), "--out", help="Markdown report to write."),
-    scenarios: Path = typer.Option(Path("scenarios"), "--scenarios", help="Folder holding the seed003_*.toml files."),
+    scenarios: Path = typer.Option(Path("scenarios"), "--scenarios",
+                                   help="Folder holding the seed003_*.toml files."),
 ) -> None:
     """Reproduce seed 003 Tables 2 and 4 (E1max at 6.3 rad/s, both obstacle conventions)."""
     from .validation.reproduce import reproduce as reproduce_tables

@@ -19,10 +19,10 @@ import os
 import pickle
 import sys
 import time
+from collections.abc import Iterator
 from contextlib import ExitStack, contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Iterator
 
 import numpy as np
 import pandas as pd
@@ -31,11 +31,11 @@ from . import history as hist
 from . import schedulers
 from .kernels import needed_streams, sample_buffer, simulate
 from .metrics import METRICS, finish, ground_intensity, summarise
-from .streams import PARAMETERS, generator, streams
 from .progress import Progress
 from .scenario import History, Study
 from .scene import Scene, build_scene
 from .store import lock_folder, part_path, provenance, read_results, run_key, write_table
+from .streams import PARAMETERS, generator, streams
 
 #: Target work of one chunk, in path-steps (about 0.1-0.3 s of compute).
 CHUNK_STEPS = 5_000_000
@@ -48,7 +48,8 @@ HISTORY_CHUNK_BYTES = 8_000_000
 TARGET_STEP = 100
 
 
-def draw_parameters(study: Study, seed: int, point: int, realization: int, common: bool = True) -> dict[str, float]:
+def draw_parameters(study: Study, seed: int, point: int, realization: int,
+                    common: bool = True) -> dict[str, float]:
     """Values of the uncertain parameters of one realisation, in file order."""
     gen = generator(seed, point, realization, PARAMETERS, common)
     return {key: float(dist.draw(gen)) for key, dist in study.base.uncertain.items()}
@@ -56,7 +57,8 @@ def draw_parameters(study: Study, seed: int, point: int, realization: int, commo
 
 def run_chunk(scene: Scene, seed: int, point: int, start: int, stop: int,
               grid: tuple[int, int] | None = None, study: Study | None = None,
-              common: bool = True, signals: tuple[str, ...] = hist.SIGNALS) -> tuple[pd.DataFrame, np.ndarray | None]:
+              common: bool = True,
+              signals: tuple[str, ...] = hist.SIGNALS) -> tuple[pd.DataFrame, np.ndarray | None]:
     """Realisations ``start..stop-1`` of one sweep point: one metric row each and, when a
     history ``grid = (stride, size)`` is asked for, the paths of the history ``signals``
     ``(len(signals), size, stop - start)``.  With ``study`` (a study with uncertain parameters) each
@@ -194,7 +196,8 @@ def _client(scheduler: str, announce: bool = False) -> Iterator[object]:
 
     by_file = "://" not in scheduler and Path(scheduler).is_file()
     try:
-        client = Client(scheduler_file=scheduler, timeout="30s") if by_file else Client(scheduler, timeout="30s")
+        client = (Client(scheduler_file=scheduler, timeout="30s") if by_file
+                  else Client(scheduler, timeout="30s"))
     except (OSError, TimeoutError, ValueError, KeyError) as exc:
         raise ValueError(f"{'--scheduler-file' if by_file else '--scheduler'} {scheduler}: {exc}") from None
     with client:
@@ -257,18 +260,20 @@ def run(study: Study, directory: str | Path | None = None, *, workers: int | Non
     """
     if shard is not None:
         if not 0 <= shard[0] < shard[1]:
-            raise ValueError(f"--shard {shard[0]}/{shard[1]}: give I/N with 0 <= I < N (e.g. --shard 0/4)")
+            raise ValueError(f"--shard {shard[0]}/{shard[1]}: give I/N with 0 <= I < N "
+                             "(e.g. --shard 0/4)")
         if study.base.simulation.history:
-            raise ValueError(f"--shard: {study.source} asks for history statistics, which are folded from the "
-                             "paths of every realisation in order and cannot be split into shards; run it in one job")
+            raise ValueError(f"--shard: {study.source} asks for history statistics, which are folded from "
+                             "the paths of every realisation in order and cannot be split into shards; "
+                             "run it in one job")
     directory = output_directory(study, directory)
     try:
         directory.mkdir(parents=True, exist_ok=True)
     except FileExistsError:
         raise NotADirectoryError(f"{directory}: exists and is not a folder") from None
     with lock_folder(directory, None if shard is None else f"shard-{shard[0]}-of-{shard[1]}"):
-        return _run(study, directory, workers, chunk, realizations, resume, scheduler, progress, checkpoint_seconds,
-                    shard)
+        return _run(study, directory, workers, chunk, realizations, resume, scheduler, progress,
+                    checkpoint_seconds, shard)
 
 
 def _run(study: Study, directory: Path, workers: int | None, chunk: int | None, realizations: int | None,
@@ -285,8 +290,9 @@ def _run(study: Study, directory: Path, workers: int | None, chunk: int | None, 
     manifest = parts / "manifest.json"
     keep = resume or shard is not None  # the parts already there are this study's
     if keep and manifest.exists() and json.loads(manifest.read_text()).get("key") != key:
-        raise ValueError(f"{directory}: --{'resume' if resume else 'shard'} found parts of a different scenario or "
-                         f"chunk plan; use another --out directory{'' if shard else ' or run without --resume'}")
+        raise ValueError(f"{directory}: --{'resume' if resume else 'shard'} found parts of a different "
+                         "scenario or chunk plan; use another --out directory"
+                         f"{'' if shard else ' or run without --resume'}")
     if not keep:
         for old in parts.glob("*"):
             old.unlink()
@@ -362,11 +368,12 @@ def _run(study: Study, directory: Path, workers: int | None, chunk: int | None, 
     return _consolidate(study, the_plan, states, directory, meta, grids, spec)
 
 
-def _consolidate(study: Study, the_plan: Plan, states: list[PointState], directory: Path, meta: dict[str, str],
-                 grids: list[tuple[int, int] | None], spec: History | None) -> tuple[pd.DataFrame, pd.DataFrame]:
+def _consolidate(study: Study, the_plan: Plan, states: list[PointState], directory: Path,
+                 meta: dict[str, str], grids: list[tuple[int, int] | None],
+                 spec: History | None) -> tuple[pd.DataFrame, pd.DataFrame]:
     """Gather the parts kept (up to each point's stopping count) into the result files."""
     frames = []
-    for p, state in enumerate(states):
+    for state in states:
         for c in state.chunks:
             if state.stop is not None and c[1] >= state.stop:
                 break

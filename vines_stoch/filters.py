@@ -18,6 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.linalg import expm, solve_continuous_lyapunov
 
+
 @dataclass(frozen=True)
 class Filter:
     """One filtered load: ``dz = A z dt + b e(t) dW``, load ``= c . z`` (on the floor ``floor``,
@@ -38,7 +39,8 @@ def oscillator(frequency: float, damping: float) -> np.ndarray:
     return np.array([[0.0, 1.0], [-frequency**2, -2.0 * damping * frequency]])
 
 
-def filtered_noise(intensity: float, frequency: float, damping: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def filtered_noise(intensity: float, frequency: float,
+                   damping: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Wei et al. eq. 23: ``f'' + 2 eta w0 f' + w0^2 f = sigma xi``; the force is ``f``."""
     return oscillator(frequency, damping), np.array([0.0, intensity]), np.array([1.0, 0.0])
 
@@ -50,7 +52,8 @@ def kanai_tajimi(intensity: float, wg: float, zg: float) -> tuple[np.ndarray, np
     return a, np.array([0.0, -intensity]), a[1].copy()
 
 
-def clough_penzien(intensity: float, wg: float, zg: float, wf: float, zf: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def clough_penzien(intensity: float, wg: float, zg: float, wf: float,
+                   zf: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Clough-Penzien: the Kanai-Tajimi acceleration ``a1`` drives a high-pass oscillator
     ``p'' + 2 zf wf p' + wf^2 p = a1``; the ground acceleration is ``a_g = p''``."""
     kt, b, c1 = kanai_tajimi(intensity, wg, zg)

@@ -12,8 +12,9 @@ solved by Fisher scoring (iteratively reweighted least squares, McCullagh and Ne
 Confidence bounds come from the bootstrap over realisations: each replicate resamples every
 stripe's realisations with replacement (its count is then ``Binomial(n_j, z_j / n_j)``; with
 stripes of single realisations, as for intensities of each realisation's own, all
-realisations are resampled together) and is refitted; the bounds are the 2.5 and 97.5 % percentiles of the replicates' ``median`` and
-``beta`` (Efron and Tibshirani, *An Introduction to the Bootstrap*, 13.3).
+realisations are resampled together) and is refitted; the bounds are the 2.5 and 97.5 %
+percentiles of the replicates' ``median`` and ``beta`` (Efron and Tibshirani, *An Introduction
+to the Bootstrap*, 13.3).
 """
 
 from __future__ import annotations
@@ -108,7 +109,8 @@ def stripes(realizations: pd.DataFrame, limit: str, im: str, diverged: str = "ex
     if diverged not in DIVERGED:
         raise ValueError(f"--diverged {diverged}: must be one of {', '.join(DIVERGED)}")
     rows = []
-    for value, group in realizations.groupby(im, sort=True, dropna=False):  # (NaN: a stripe that fit leaves out)
+    # (NaN: a stripe that fit leaves out)
+    for value, group in realizations.groupby(im, sort=True, dropna=False):
         ok = group["status"] == "ok"
         failed = int((~ok).sum())
         exceeded = int(group.loc[ok, column].notna().sum())
@@ -116,12 +118,14 @@ def stripes(realizations: pd.DataFrame, limit: str, im: str, diverged: str = "ex
         if diverged == "exceed":
             exceeded, n = exceeded + failed, n + failed
         fraction, lo, hi = exceedance(exceeded, n)
-        rows.append({"im": float(value), "n": n, "exceeded": exceeded, "fraction": fraction, "fraction_lo": lo,
-                     "fraction_hi": hi, "n_diverged": failed})
-    return pd.DataFrame(rows, columns=["im", "n", "exceeded", "fraction", "fraction_lo", "fraction_hi", "n_diverged"])
+        rows.append({"im": float(value), "n": n, "exceeded": exceeded, "fraction": fraction,
+                     "fraction_lo": lo, "fraction_hi": hi, "n_diverged": failed})
+    return pd.DataFrame(rows, columns=["im", "n", "exceeded", "fraction", "fraction_lo", "fraction_hi",
+                                       "n_diverged"])
 
 
-def _replicates(n: np.ndarray, z: np.ndarray, samples: int, gen: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
+def _replicates(n: np.ndarray, z: np.ndarray, samples: int,
+                gen: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
     """Bootstrap counts ``(n*, z*)``, shape ``(samples, stripes)``: each stripe's realisations
     resampled within the stripe (``z* ~ Binomial(n, z / n)``) where every stripe has two or
     more; otherwise (intensities of single realisations, a cloud) all realisations resampled
@@ -133,7 +137,8 @@ def _replicates(n: np.ndarray, z: np.ndarray, samples: int, gen: np.random.Gener
     exceeded = np.concatenate([np.arange(k) < e for k, e in zip(n.astype(np.int64), z.astype(np.int64))])
     nb, zb = np.empty((samples, n.size)), np.empty((samples, n.size))
     for start in range(0, samples, 100):  # (the draws of 100 replicates at a time)
-        counts = gen.multinomial(stripe.size, np.full(stripe.size, 1.0 / stripe.size), size=min(100, samples - start))
+        counts = gen.multinomial(stripe.size, np.full(stripe.size, 1.0 / stripe.size),
+                                 size=min(100, samples - start))
         for r, c in enumerate(counts, start=start):
             nb[r] = np.bincount(stripe, weights=c, minlength=n.size)
             zb[r] = np.bincount(stripe, weights=c * exceeded, minlength=n.size)
@@ -151,17 +156,20 @@ def fit(table: pd.DataFrame, samples: int = 1000, seed: int = 0) -> dict[str, ob
     use = table[(table["n"] > 0) & (table["im"] > 0) & np.isfinite(table["im"])]
     notes = []
     if len(use) < len(table):
-        notes.append(f"{len(table) - len(use)} stripe(s) without realisations or with an intensity not > 0 left out")
+        notes.append(f"{len(table) - len(use)} stripe(s) without realisations or with an intensity not > 0 "
+                     "left out")
     u, n, z = (np.log(use["im"].to_numpy(float)), use["n"].to_numpy(float), use["exceeded"].to_numpy(float))
     nan = float("nan")
-    result: dict[str, object] = {"median": nan, "beta": nan, "median_lo": nan, "median_hi": nan, "beta_lo": nan,
-                                 "beta_hi": nan, "log_likelihood": nan, "bootstrap": samples, "bootstrap_fitted": 0}
+    result: dict[str, object] = {"median": nan, "beta": nan, "median_lo": nan, "median_hi": nan,
+                                 "beta_lo": nan, "beta_hi": nan, "log_likelihood": nan, "bootstrap": samples,
+                                 "bootstrap_fitted": 0}
     separated, lo, hi = separation(u, n, z)
     if len(use) < 2 or z.sum() == 0 or z.sum() == n.sum():
         notes.append("no fit: need two stripes or more and both exceedances and non-exceedances")
     elif separated:
-        notes.append(f"no fit: the stripes separate (no exceedance below {np.exp(hi):.4g}, none short of the limit "
-                     f"above {np.exp(lo):.4g}: the likelihood grows as beta -> 0); add stripes or realisations between")
+        notes.append(f"no fit: the stripes separate (no exceedance below {np.exp(hi):.4g}, none short of the "
+                     f"limit above {np.exp(lo):.4g}: the likelihood grows as beta -> 0); add stripes or "
+                     "realisations between")
     else:
         a, b, converged = probit_fit(u, n, z)
         if not converged:
@@ -180,13 +188,14 @@ def fit(table: pd.DataFrame, samples: int = 1000, seed: int = 0) -> dict[str, ob
         ab, bb, cb = probit_fit(u, nb[~sep], zb[~sep])
         medians[~sep] = np.where(cb, np.exp(-ab / np.where(cb, bb, 1.0)), np.nan)
         betas[~sep] = np.where(cb, 1.0 / np.where(cb, bb, 1.0), np.nan)
-    gap = np.where(np.isfinite(lo_b) & np.isfinite(hi_b), 0.5 * (lo_b + hi_b), np.where(np.isfinite(hi_b), -np.inf, np.inf))
+    gap = np.where(np.isfinite(lo_b) & np.isfinite(hi_b), 0.5 * (lo_b + hi_b),
+                   np.where(np.isfinite(hi_b), -np.inf, np.inf))
     medians[sep], betas[sep] = np.exp(gap[sep]), 0.0
     used = np.isfinite(betas)
     result["bootstrap_fitted"] = int(used.sum())
     if sep.any():
-        notes.append(f"{int(sep.sum())} of {samples} bootstrap replicates separate (counted as beta = 0, median in "
-                     "their gap)")
+        notes.append(f"{int(sep.sum())} of {samples} bootstrap replicates separate (counted as beta = 0, "
+                     "median in their gap)")
     if (~used).any():
         notes.append(f"{int((~used).sum())} of {samples} bootstrap replicates did not converge (left out)")
     if used.sum() >= 20:
@@ -237,9 +246,10 @@ def _plot(table: pd.DataFrame, result: dict, limit: str, im: str, policy: str, p
     shown, what = table, "stripes"
     if len(table) > PLOT_BINS:  # intensities of their own (a cloud): pooled into bins for the eye
         bins = np.array_split(np.arange(len(table)), PLOT_BINS)
-        shown = pd.DataFrame([{"im": float(np.exp(np.average(np.log(table["im"].iloc[b]), weights=table["n"].iloc[b]
-                                                              + 1e-300))),
-                               "n": int(table["n"].iloc[b].sum()), "exceeded": int(table["exceeded"].iloc[b].sum())}
+        shown = pd.DataFrame([{"im": float(np.exp(np.average(np.log(table["im"].iloc[b]),
+                                                             weights=table["n"].iloc[b] + 1e-300))),
+                               "n": int(table["n"].iloc[b].sum()),
+                               "exceeded": int(table["exceeded"].iloc[b].sum())}
                               for b in bins])
         shown[["fraction", "fraction_lo", "fraction_hi"]] = [exceedance(z, n) for z, n in
                                                               zip(shown["exceeded"], shown["n"])]

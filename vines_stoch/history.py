@@ -74,7 +74,7 @@ class Node:
     rank_error: float = 0.0   # bound on the rank error of the buffer, in realisations
 
     @classmethod
-    def leaf(cls, paths: np.ndarray) -> "Node":
+    def leaf(cls, paths: np.ndarray) -> Node:
         """Node of raw paths, shape ``(signals, grid, m)``."""
         paths = np.ascontiguousarray(paths)  # one memory layout, one summation order
         m = paths.shape[2]

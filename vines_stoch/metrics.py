@@ -8,8 +8,7 @@ import numpy as np
 import pandas as pd
 from scipy.special import stdtrit
 
-from .kernels.common import (ACC_MAX_K, DRIFT_MAX_K, SLOTS, STATUS_DIVERGED, X_MAX_K, X_SQ_INT_K,
-                             passage_slots)
+from .kernels.common import ACC_MAX_K, DRIFT_MAX_K, SLOTS, STATUS_DIVERGED, X_MAX_K, X_SQ_INT_K, passage_slots
 from .scene import Scene
 
 #: Metric columns of realizations.parquet, in order (then the per-floor columns of
@@ -78,7 +77,8 @@ def finish(raw: np.ndarray, scene: Scene, samples: np.ndarray | None = None) -> 
     absorbed = g(_S["absorber_dissipation"]) + g(_S["impact_loss"])
     dissipated = absorbed + g(_S["primary_dissipation"])
     edm = absorbed / input_energy if input_energy > 0 else math.nan
-    residual = (input_energy - g(_S["final_energy"]) - dissipated) / input_energy if input_energy > 0 else math.nan
+    residual = ((input_energy - g(_S["final_energy"]) - dissipated) / input_energy if input_energy > 0
+                else math.nan)
     row: dict[str, float | str | None] = {
         "input_energy": input_energy,
         "edm": edm,
@@ -105,8 +105,8 @@ def finish(raw: np.ndarray, scene: Scene, samples: np.ndarray | None = None) -> 
         row[f"acc_max_{k + 1}"] = g(slot + ACC_MAX_K * nf)
     finite = all(math.isfinite(v) for k, v in row.items() if k not in ("edm", "energy_residual"))
     passages = passage_slots(nf)
-    for l, name in enumerate(scene.limit_names):  # (NaN where a limit never passed)
-        row[f"first_passage_{name}"] = g(passages + l)
+    for limit, name in enumerate(scene.limit_names):  # (NaN where a limit never passed)
+        row[f"first_passage_{name}"] = g(passages + limit)
     row["status"] = "diverged" if g(_S["status"]) == STATUS_DIVERGED or not finite else "ok"
     row["regime"] = (regime(samples, 2.0 * np.pi / scene.period)
                      if samples is not None and samples.size and row["status"] == "ok" else None)
@@ -121,7 +121,8 @@ def ground_intensity(scene: Scene, streams) -> dict[str, float]:
     from .spectra import peak, pseudo_acceleration
 
     _, _, ground = load_history(scene, streams)
-    return {"sa": pseudo_acceleration(ground, scene.dt, scene.im_period, scene.im_damping), "pga": peak(ground)}
+    return {"sa": pseudo_acceleration(ground, scene.dt, scene.im_period, scene.im_damping),
+            "pga": peak(ground)}
 
 
 def undefined_notes(ok: pd.DataFrame, metrics: list[str]) -> str:
@@ -130,7 +131,8 @@ def undefined_notes(ok: pd.DataFrame, metrics: list[str]) -> str:
     (``edm`` and ``energy_residual`` where the loads put no energy in)."""
     notes = []
     if len(ok) == 0:
-        notes.append("no realisation ended ok (see status in realizations.parquet): every statistic undefined")
+        notes.append("no realisation ended ok (see status in realizations.parquet): "
+                     "every statistic undefined")
     elif len(ok) == 1:
         notes.append("one realisation ended ok: std, sem and ci95 undefined")
     idle = int((ok["input_energy"] <= 0).sum()) if "input_energy" in ok else 0

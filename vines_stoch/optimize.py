@@ -14,9 +14,9 @@ from __future__ import annotations
 import math
 import os
 import re
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable
 
 import numpy as np
 import pandas as pd
@@ -86,7 +86,8 @@ def optimize(study: Study, directory: Path, workers: int | None = None,
         if key in seen:
             return seen[key]
         value, sem, failed = objective(sample(study.with_values(values), workers), spec.objective)
-        rows.append({"evaluation": len(rows), **values, spec.objective: value, "sem": sem, "n_failed": failed})
+        rows.append({"evaluation": len(rows), **values, spec.objective: value, "sem": sem,
+                     "n_failed": failed})
         write_table(pd.DataFrame(rows), directory / "optimization.parquet")
         shown = ", ".join(f"{k} = {v:.6g}" for k, v in values.items())
         echo(f"{len(rows):4d}  {shown}  {spec.objective} = {value:.6g} +- {sem:.2g}"
@@ -100,13 +101,15 @@ def optimize(study: Study, directory: Path, workers: int | None = None,
     f0 = evaluate(u0)
     if not math.isfinite(f0):
         raise ValueError(f"{study.source}: optimize.parameters: the starting point "
-                         f"{dict(zip(keys, (b.initial for b in bounds)))} has failed (diverged) realisations; "
-                         "set each parameter's start (within [low, high]) where the scene is stable")
+                         f"{dict(zip(keys, (b.initial for b in bounds)))} has failed (diverged) "
+                         "realisations; set each parameter's start (within [low, high]) where the scene "
+                         "is stable")
     options: dict = {"maxfev": spec.max_evaluations}
     if spec.method == "nelder-mead":
         simplex = [u0] + [u0 + np.eye(len(u0))[i] * (SIMPLEX_STEP if u0[i] <= 0.5 else -SIMPLEX_STEP)
                           for i in range(len(u0))]
-        options.update(initial_simplex=np.array(simplex), xatol=spec.tolerance, fatol=spec.tolerance * abs(f0))
+        options.update(initial_simplex=np.array(simplex), xatol=spec.tolerance,
+                       fatol=spec.tolerance * abs(f0))
     else:
         options.update(xtol=spec.tolerance, ftol=spec.tolerance)
     result = minimize(evaluate, u0, method="Nelder-Mead" if spec.method == "nelder-mead" else "Powell",

@@ -25,7 +25,8 @@ def pyplot(what: str) -> Any | None:
     try:
         import matplotlib
     except ImportError:
-        print(f"note: {what}: not drawn, matplotlib is not installed ({REPORT_EXTRA} adds it)", file=sys.stderr)
+        print(f"note: {what}: not drawn, matplotlib is not installed ({REPORT_EXTRA} adds it)",
+              file=sys.stderr)
         return None
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt

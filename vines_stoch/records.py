@@ -58,12 +58,14 @@ def _at2_header(lines: list[str], path: Path) -> tuple[int, float, int] | None:
         if npts and dt:
             n = _number(npts.group(1).rstrip(",."), path, k + 1)
             if n != int(n):
-                raise RecordError(f"{path}: line {k + 1}: NPTS = {_token(npts.group(1))} is not a whole number")
+                raise RecordError(f"{path}: line {k + 1}: NPTS = {_token(npts.group(1))} "
+                                  "is not a whole number")
             return int(n), _number(dt.group(1).rstrip(","), path, k + 1), k + 1
     return None
 
 
-def read_record(path: str | Path, fmt: str = "auto", dt: float | None = None) -> tuple[np.ndarray, np.ndarray]:
+def read_record(path: str | Path, fmt: str = "auto",
+                dt: float | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Times and values of a record file, in the file's own units.
 
     ``fmt``: ``at2`` (PEER NGA: four header lines, ``NPTS`` and ``DT`` on the fourth, values
@@ -99,7 +101,8 @@ def read_record(path: str | Path, fmt: str = "auto", dt: float | None = None) ->
         raise RecordError(f"{path}: no data")
     width = 2 if fmt == "two-column" else 1 if fmt == "one-column" else len(rows[0][1])
     if width not in (1, 2):
-        raise RecordError(f"{path}: line {rows[0][0]}: {len(rows[0][1])} columns; expected 1 (values) or 2 (t a)")
+        raise RecordError(f"{path}: line {rows[0][0]}: {len(rows[0][1])} columns; "
+                          "expected 1 (values) or 2 (t a)")
     table = np.empty((len(rows), width))
     for r, (line, tokens) in enumerate(rows):
         if len(tokens) != width:

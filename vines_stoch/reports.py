@@ -36,7 +36,7 @@ class Run:
     seed: int
 
     @classmethod
-    def read(cls, directory: str | Path, label: str | None = None) -> "Run":
+    def read(cls, directory: str | Path, label: str | None = None) -> Run:
         directory = Path(directory)
         if not (directory / "summary.parquet").is_file():
             raise FileNotFoundError(f"{directory}: no summary.parquet (not a finished vines-stoch run)")
@@ -92,7 +92,8 @@ def markdown(frame: pd.DataFrame, digits: int = 4) -> str:
         return str(v)
 
     lines = ["| " + " | ".join(map(str, frame.columns)) + " |",
-             "| " + " | ".join("---:" if frame[c].dtype.kind in "fiu" else "---" for c in frame.columns) + " |"]
+             "| " + " | ".join("---:" if frame[c].dtype.kind in "fiu" else "---" for c in frame.columns)
+             + " |"]
     lines += ["| " + " | ".join(cell(v) for v in row) + " |" for row in frame.itertuples(index=False)]
     return "\n".join(lines)
 
@@ -150,9 +151,11 @@ def effective_range(run: Run, level: float = EDM_LEVEL) -> dict[str, object]:
             out[f"{key or 'point'} where {name} >= {level}"] = "none"
             continue
         values = hit[key] if key else hit["point"]
-        out[f"{key or 'point'} where {name} >= {level}"] = f"{values.min():.4g} to {values.max():.4g} ({len(hit)} of {len(s)} points)"
+        out[f"{key or 'point'} where {name} >= {level}"] = (f"{values.min():.4g} to {values.max():.4g} "
+                                                            f"({len(hit)} of {len(s)} points)")
         if name == "mean EDM":
-            out["input energy there"] = f"{hit['input_energy_mean'].min():.4g} to {hit['input_energy_mean'].max():.4g}"
+            out["input energy there"] = (f"{hit['input_energy_mean'].min():.4g} to "
+                                         f"{hit['input_energy_mean'].max():.4g}")
     return out
 
 
@@ -202,7 +205,8 @@ def _plots(runs: list[Run], out: Path, point: int | None) -> list[str]:
         for run in keyed:
             s = run.summary.sort_values(key)
             ax.plot(s[key], s["energy_integral_mean"], "o-", ms=3, label=run.label)
-            ax.fill_between(s[key], s["energy_integral_ci95_lo"].clip(lower=1e-300), s["energy_integral_ci95_hi"], alpha=0.25)
+            ax.fill_between(s[key], s["energy_integral_ci95_lo"].clip(lower=1e-300),
+                            s["energy_integral_ci95_hi"], alpha=0.25)
         ax.set(xscale="log", yscale="log", xlabel=key, ylabel="energy integral of E1 (mean)",
                title="Energy integral of the primary")
         ax.legend()
@@ -248,11 +252,13 @@ def _plots(runs: list[Run], out: Path, point: int | None) -> list[str]:
     save(fig, "edm_histogram.png")
 
     shown = [(run, limit, run.intensity(limit)) for run in runs for limit in run.limits]
-    shown = [(run, limit, key, stripes(run.realizations, limit, key)) for run, limit, key in shown if key is not None]
+    shown = [(run, limit, key, stripes(run.realizations, limit, key)) for run, limit, key in shown
+             if key is not None]
     if shown:  # exceedance against intensity, with the fragility curves fitted
         fig, ax = plt.subplots(figsize=(6.4, 4.2))
         for run, limit, key, table in shown:
-            err = np.vstack([table["fraction"] - table["fraction_lo"], table["fraction_hi"] - table["fraction"]])
+            err = np.vstack([table["fraction"] - table["fraction_lo"],
+                             table["fraction_hi"] - table["fraction"]])
             bars = ax.errorbar(table["im"], table["fraction"], yerr=err, fmt="o", ms=4, capsize=3,
                                label=f"{run.label}: {limit} against {key} (95 % intervals)")
             fits = run.fragility()
@@ -264,23 +270,26 @@ def _plots(runs: list[Run], out: Path, point: int | None) -> list[str]:
                         label=f"fragility: median {median:.4g}, beta {beta:.3g}")
         if all((table["im"] > 0).all() for *_, table in shown):
             ax.set_xscale("log")
-        ax.set(xlabel=", ".join(dict.fromkeys(key for _, _, key, _ in shown)), ylabel="P(exceed)", ylim=(-0.02, 1.02),
-               title="Exceedance probability against intensity")
+        ax.set(xlabel=", ".join(dict.fromkeys(key for _, _, key, _ in shown)), ylabel="P(exceed)",
+               ylim=(-0.02, 1.02), title="Exceedance probability against intensity")
         ax.legend(fontsize=7)
         save(fig, "exceedance.png")
 
     histories = [run for run in runs if run.history is not None and "e1_mean" in run.history.columns]
     if histories:
         fig, ax = plt.subplots(figsize=(6.4, 4.2))
-        shares = all(h.history.loc[h.history["point"] == _point(h, point), "e1_mean"].iloc[0] > 0 for h in histories)
+        shares = all(h.history.loc[h.history["point"] == _point(h, point), "e1_mean"].iloc[0] > 0
+                     for h in histories)
         for run in histories:
             h = run.history[run.history["point"] == _point(run, point)]
             scale = h["e1_mean"].iloc[0] if shares else 1.0
             quantiles = sorted(c for c in h.columns if c.startswith("e1_q"))
             line, = ax.plot(h["t"], h["e1_mean"] / scale, label=f"{run.label}: mean")
             if len(quantiles) >= 2:
-                ax.fill_between(h["t"], h[quantiles[0]] / scale, h[quantiles[-1]] / scale, color=line.get_color(),
-                                alpha=0.2, label=f"{run.label}: {_percent(quantiles[0])} to {_percent(quantiles[-1])} % quantiles")
+                ax.fill_between(h["t"], h[quantiles[0]] / scale, h[quantiles[-1]] / scale,
+                                color=line.get_color(), alpha=0.2,
+                                label=f"{run.label}: {_percent(quantiles[0])} to "
+                                      f"{_percent(quantiles[-1])} % quantiles")
         if shares:  # energy given at t = 0 (impulse, initial state): what is left in the primary
             ax.set(ylabel="E1(t) / E1(0)", title="Share of the initial energy left in the primary")
         else:
@@ -307,17 +316,20 @@ def report(directories: list[str | Path], out: str | Path = "reports", labels: l
                    "edm_ci95_hi", "e1_max_mean", "energy_integral_mean", "impacts_mean"]]
         parts += [f"## {run.label}", "", f"Directory `{run.directory}`, seed {run.seed}, "
                   f"{int(s['n_ok'].sum() + s['n_failed'].sum())} realisations.", "", markdown(table), ""]
-    parts += [f"## Where mean EDM >= {EDM_LEVEL}", "", markdown(pd.DataFrame([effective_range(r) for r in runs])), ""]
+    parts += [f"## Where mean EDM >= {EDM_LEVEL}", "",
+              markdown(pd.DataFrame([effective_range(r) for r in runs])), ""]
     for run in runs:
         if run.limits:
             columns = [c for name in run.limits for c in (f"p_{name}", f"p_{name}_lo", f"p_{name}_hi")]
-            parts += [f"## Exceedance probabilities: {run.label}", "", "Fraction of the ok realisations whose peak "
-                      "exceeded each limit, with its 95 % Wilson interval.", "",
+            parts += [f"## Exceedance probabilities: {run.label}", "",
+                      "Fraction of the ok realisations whose peak exceeded each limit, with its 95 % Wilson "
+                      "interval.", "",
                       markdown(run.summary[["point", *run.swept, "n_ok", *columns]]), ""]
         fits = run.fragility()
         if fits is not None:
-            parts += [f"## Fragility: {run.label}", "", "Lognormal fragility `Phi(ln(IM / median) / beta)` by "
-                      "maximum likelihood over the stripes, 95 % bootstrap bounds (`vines-stoch fragility`).", "",
+            parts += [f"## Fragility: {run.label}", "",
+                      "Lognormal fragility `Phi(ln(IM / median) / beta)` by maximum likelihood over the "
+                      "stripes, 95 % bootstrap bounds (`vines-stoch fragility`).", "",
                       markdown(fits[["limit", "im_key", "median", "median_lo", "median_hi", "beta", "beta_lo",
                                      "beta_hi", "bootstrap_fitted", "diverged", "notes"]]), ""]
     if len(runs) > 1:
@@ -326,8 +338,9 @@ def report(directories: list[str | Path], out: str | Path = "reports", labels: l
         except ValueError as exc:
             table = f"Not compared: {exc}."
         parts += ["## Comparison (later runs minus the first)", "", table, ""]
-    parts += ["## Plots", ""] + ([f"![{f}]({f})" for f in files] if files else
-                                 [f"Not drawn: matplotlib is not installed; `{REPORT_EXTRA}` adds them."]) + [""]
+    plots = ([f"![{f}]({f})" for f in files] if files
+             else [f"Not drawn: matplotlib is not installed; `{REPORT_EXTRA}` adds them."])
+    parts += ["## Plots", ""] + plots + [""]
     path = folder / "report.md"
     path.write_text("\n".join(parts))
     return path

@@ -9,7 +9,8 @@ from __future__ import annotations
 
 import queue
 import threading
-from typing import Any, Callable, Iterable, Iterator
+from collections.abc import Callable, Iterable, Iterator
+from typing import Any
 
 import dask
 
@@ -25,7 +26,8 @@ def _next(pending: Iterator[Any], skip: Callable[[Any], bool]) -> Any:
     return None
 
 
-def embedded(jobs: Iterable[Any], call: Call, skip: Callable[[Any], bool], workers: int) -> Iterator[tuple[Any, Any]]:
+def embedded(jobs: Iterable[Any], call: Call, skip: Callable[[Any], bool],
+             workers: int) -> Iterator[tuple[Any, Any]]:
     """Run ``fn(*args)`` for ``(fn, args) = call(job)`` on dask's local threaded scheduler:
     ``workers`` loops take the jobs in order (kernels release the GIL)."""
     lock = threading.Lock()
@@ -70,7 +72,8 @@ def embedded(jobs: Iterable[Any], call: Call, skip: Callable[[Any], bool], worke
         stop.set()
 
 
-def distributed(client: Any, jobs: Iterable[Any], call: Call, skip: Callable[[Any], bool]) -> Iterator[tuple[Any, Any]]:
+def distributed(client: Any, jobs: Iterable[Any], call: Call,
+                skip: Callable[[Any], bool]) -> Iterator[tuple[Any, Any]]:
     """Submit ``fn(*args)`` for ``(fn, args) = call(job)`` to a ``dask.distributed`` client,
     two jobs per worker thread in flight; jobs that ``skip`` rules out once running are
     cancelled.  A lost worker's jobs are rerun by the scheduler."""

@@ -112,9 +112,9 @@ def _owner(path: Path) -> tuple[str | None, dict] | None:
 
 def _in_use(directory: Path, path: Path, owner: dict) -> FolderInUse:
     what = "the run" if path.name == LOCK else f"the {path.name.removeprefix(LOCK + '.')} run"
-    return FolderInUse(f"{directory}: in use by {what} of process {owner.get('pid')} on host {owner.get('host')} "
-                       f"(since {owner.get('since')}); wait for it, or use another --out folder (if that run is "
-                       f"gone, remove {path})")
+    return FolderInUse(f"{directory}: in use by {what} of process {owner.get('pid')} "
+                       f"on host {owner.get('host')} (since {owner.get('since')}); wait for it, "
+                       f"or use another --out folder (if that run is gone, remove {path})")
 
 
 def _acquire(directory: Path, path: Path) -> None:

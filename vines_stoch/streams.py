@@ -39,7 +39,7 @@ class Streams:
     filter: np.random.Generator | None = None
 
     @classmethod
-    def shared(cls, gen: np.random.Generator) -> "Streams":
+    def shared(cls, gen: np.random.Generator) -> Streams:
         """One generator for every purpose (quick experiments; an ensemble uses ``streams``)."""
         return cls(gen, gen, gen)
 

@@ -66,11 +66,11 @@ def read_text(path: str | Path, limit: int) -> str:
     data = data.removeprefix(codecs.BOM_UTF8)
     nul = data.find(b"\x00")
     if nul >= 0:
-        raise TextFileError(f"{path}: a NUL byte at line {_line(data, nul)}: binary data or UTF-16 text, not UTF-8 "
-                            "text")
+        raise TextFileError(f"{path}: a NUL byte at line {_line(data, nul)}: binary data or UTF-16 text, "
+                            "not UTF-8 text")
     try:
         return data.decode("utf-8")
     except UnicodeDecodeError as exc:
         line = _line(data, exc.start)
-        raise TextFileError(f"{path}: line {line}: byte 0x{data[exc.start]:02X} is not UTF-8; save the file as "
-                            "UTF-8") from None
+        raise TextFileError(f"{path}: line {line}: byte 0x{data[exc.start]:02X} is not UTF-8; "
+                            "save the file as UTF-8") from None

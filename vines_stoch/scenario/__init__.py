@@ -10,26 +10,66 @@ history, ensemble, optimisation, output), ``distributions``, ``model`` (the root
 expanded).  It imports neither numba, dask nor pandas: ``vines-stoch validate`` stays light.
 """
 
-from .bodies import (Absorber, Contact, CubicAbsorber, HertzAbsorber, ImpactAbsorber, LinearAbsorber, Primary,
-                     Rayleigh)
-from .distributions import (Distribution, LognormalDistribution, NormalDistribution, TruncatedNormalDistribution,
-                            UniformDistribution)
+from .bodies import (
+    Absorber,
+    Contact,
+    CubicAbsorber,
+    HertzAbsorber,
+    ImpactAbsorber,
+    LinearAbsorber,
+    Primary,
+    Rayleigh,
+)
+from .distributions import (
+    Distribution,
+    LognormalDistribution,
+    NormalDistribution,
+    TruncatedNormalDistribution,
+    UniformDistribution,
+)
 from .errors import ScenarioError
-from .loads import (ChirpLoad, FilteredNoiseLoad, ForceRecordLoad, GroundMotionLoad, HalfSineLoad, HarmonicLoad,
-                    ImpulseLoad, InitialLoad, JenningsEnvelope, Load, PulseTrainLoad, RecordLoad,
-                    SaragoniHartEnvelope, WhiteNoiseLoad, WindLoad)
+from .loads import (
+    ChirpLoad,
+    FilteredNoiseLoad,
+    ForceRecordLoad,
+    GroundMotionLoad,
+    HalfSineLoad,
+    HarmonicLoad,
+    ImpulseLoad,
+    InitialLoad,
+    JenningsEnvelope,
+    Load,
+    PulseTrainLoad,
+    RecordLoad,
+    SaragoniHartEnvelope,
+    WhiteNoiseLoad,
+    WindLoad,
+)
 from .model import Scenario
-from .settings import (OBJECTIVES, Bound, Ensemble, History, IntensityMeasures, Limit, Optimize, Output, Simulation, history_signals,
-                       limit_metrics, quantile_name)
+from .settings import (
+    OBJECTIVES,
+    Bound,
+    Ensemble,
+    History,
+    IntensityMeasures,
+    Limit,
+    Optimize,
+    Output,
+    Simulation,
+    history_signals,
+    limit_metrics,
+    quantile_name,
+)
 from .study import Study, load_scenario, parse_scenario
 from .sweeps import get_path, set_path
 
 __all__ = [
     "OBJECTIVES", "Absorber", "Bound", "ChirpLoad", "Contact", "CubicAbsorber", "Distribution", "Ensemble",
-    "FilteredNoiseLoad", "ForceRecordLoad", "GroundMotionLoad", "HalfSineLoad", "HarmonicLoad", "HertzAbsorber",
-    "History", "ImpactAbsorber", "IntensityMeasures", "ImpulseLoad", "InitialLoad", "JenningsEnvelope", "Limit", "LinearAbsorber", "Load",
-    "LognormalDistribution", "NormalDistribution", "Optimize", "Output", "Primary", "PulseTrainLoad", "Rayleigh",
-    "RecordLoad", "SaragoniHartEnvelope", "Scenario", "ScenarioError", "Simulation", "Study",
-    "TruncatedNormalDistribution", "UniformDistribution", "WhiteNoiseLoad", "WindLoad", "get_path",
-    "history_signals", "limit_metrics", "load_scenario", "parse_scenario", "quantile_name", "set_path",
+    "FilteredNoiseLoad", "ForceRecordLoad", "GroundMotionLoad", "HalfSineLoad", "HarmonicLoad",
+    "HertzAbsorber", "History", "ImpactAbsorber", "IntensityMeasures", "ImpulseLoad", "InitialLoad",
+    "JenningsEnvelope", "Limit", "LinearAbsorber", "Load", "LognormalDistribution", "NormalDistribution",
+    "Optimize", "Output", "Primary", "PulseTrainLoad", "Rayleigh", "RecordLoad", "SaragoniHartEnvelope",
+    "Scenario", "ScenarioError", "Simulation", "Study", "TruncatedNormalDistribution", "UniformDistribution",
+    "WhiteNoiseLoad", "WindLoad", "get_path", "history_signals", "limit_metrics", "load_scenario",
+    "parse_scenario", "quantile_name", "set_path",
 ]

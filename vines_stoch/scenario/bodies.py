@@ -3,13 +3,14 @@
 
 from __future__ import annotations
 
-from typing import Annotated, Literal, Union
+from typing import Annotated, Literal
 
 import numpy as np
 from pydantic import Field, model_validator
 
 from .errors import FieldError
 from .fields import MAX_FLOORS, Floor, NonNegative, Positive, Real, _Model
+
 
 class Rayleigh(_Model):
     """Rayleigh damping ``C = alpha M + beta K`` with damping ``ratio`` at two ``modes`` of the
@@ -35,24 +36,25 @@ class Primary(_Model):
     rayleigh: Rayleigh | None = None
 
     @model_validator(mode="after")
-    def _layout(self) -> "Primary":
+    def _layout(self) -> Primary:
         scalars = {"mass": self.mass, "stiffness": self.stiffness, "damping": self.damping}
         lists = {"masses": self.masses, "stiffnesses": self.stiffnesses, "dampings": self.dampings}
         if self.masses is None:
             if self.mass is None:
-                raise FieldError("mass", None, "missing: give mass (one storey) or masses = [...] (floors from the "
-                                "lowest to the roof)")
+                raise FieldError("mass", None, "missing: give mass (one storey) or masses = [...] "
+                                 "(floors from the lowest to the roof)")
             for name, value in lists.items():
                 if value is not None:
-                    raise FieldError(name, value, "needs masses = [...]: a one-storey primary takes mass, stiffness "
-                                    "and damping")
+                    raise FieldError(name, value, "needs masses = [...]: a one-storey primary takes mass, "
+                                     "stiffness and damping")
             if self.rayleigh is not None:
-                raise FieldError("rayleigh", None, "needs a multi-storey primary (masses = [...]); give damping")
+                raise FieldError("rayleigh", None,
+                                 "needs a multi-storey primary (masses = [...]); give damping")
             return self
         for name, value in scalars.items():
             if value is not None:
-                raise FieldError(name, value, f"give either {name} (one storey) or the lists masses, stiffnesses, "
-                                "dampings, not both")
+                raise FieldError(name, value, f"give either {name} (one storey) or the lists masses, "
+                                 "stiffnesses, dampings, not both")
         n = len(self.masses)
         for name in ("stiffnesses", "dampings"):
             value = lists[name]
@@ -67,7 +69,8 @@ class Primary(_Model):
             if modes[0] == modes[1] or max(modes) > n:
                 raise FieldError("rayleigh.modes", modes, f"must be two different modes in [1, {n}]")
             if self.frequencies()[0] <= 0.0:
-                raise FieldError("rayleigh", None, "needs a primary fixed to the ground (every storey stiffness > 0)")
+                raise FieldError("rayleigh", None,
+                                 "needs a primary fixed to the ground (every storey stiffness > 0)")
         return self
 
     @property
@@ -164,12 +167,13 @@ class Contact(_Model):
 
     k: Positive | None = None
     young: Annotated[list[Positive], Field(min_length=2, max_length=2)] | None = None
-    poisson: Annotated[list[Annotated[float, Field(ge=0, lt=0.5)]], Field(min_length=2, max_length=2)] | None = None
+    poisson: Annotated[list[Annotated[float, Field(ge=0, lt=0.5)]],
+                       Field(min_length=2, max_length=2)] | None = None
     radius: Positive | None = None
     q: Positive = 0.318
 
     @model_validator(mode="after")
-    def _one_way(self) -> "Contact":
+    def _one_way(self) -> Contact:
         surfaces = (self.young, self.poisson, self.radius)
         if self.k is not None and any(s is not None for s in surfaces):
             raise FieldError("k", self.k, "give either k or young/poisson/radius, not both")
@@ -210,13 +214,14 @@ class HertzAbsorber(_Model):
     rest: Real | None = None
 
     @model_validator(mode="after")
-    def _geometry(self) -> "HertzAbsorber":
+    def _geometry(self) -> HertzAbsorber:
         if self.obstacle == "from-primary":
             if self.geometry != "single-sided":
-                raise FieldError("obstacle", self.obstacle, "'from-primary' (seed 002) is defined for single-sided geometry only")
+                raise FieldError("obstacle", self.obstacle,
+                                 "'from-primary' (seed 002) is defined for single-sided geometry only")
             if self.offset >= self.gap:
-                raise FieldError("offset", self.offset, f"must be < gap ({self.gap:g}) with obstacle = 'from-primary' "
-                                "(the absorber would start inside the obstacle)")
+                raise FieldError("offset", self.offset, f"must be < gap ({self.gap:g}) with obstacle = "
+                                 "'from-primary' (the absorber would start inside the obstacle)")
         return self
 
     @property
@@ -241,5 +246,5 @@ class HertzAbsorber(_Model):
 
 
 Absorber = Annotated[
-    Union[LinearAbsorber, CubicAbsorber, ImpactAbsorber, HertzAbsorber], Field(discriminator="type")
+    LinearAbsorber | CubicAbsorber | ImpactAbsorber | HertzAbsorber, Field(discriminator="type")
 ]

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import math
-from typing import Annotated, Literal, Union
+from typing import Annotated, Literal
 
 import numpy as np
 from pydantic import Field, model_validator
@@ -58,7 +58,7 @@ class _Bounded(_Model):
     high: Real
 
     @model_validator(mode="after")
-    def _order(self) -> "_Bounded":
+    def _order(self) -> _Bounded:
         if not self.low < self.high:
             raise FieldError("high", self.high, f"must be > low ({self.low:g})")
         return self
@@ -94,6 +94,6 @@ class TruncatedNormalDistribution(_Bounded):
 
 
 Distribution = Annotated[
-    Union[NormalDistribution, LognormalDistribution, UniformDistribution, TruncatedNormalDistribution],
+    NormalDistribution | LognormalDistribution | UniformDistribution | TruncatedNormalDistribution,
     Field(discriminator="distribution"),
 ]

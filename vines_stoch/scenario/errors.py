@@ -173,7 +173,8 @@ def _describe(root: type[BaseModel], err: dict[str, Any], data: Any) -> tuple[st
     if kind in ("greater_than", "greater_than_equal", "less_than", "less_than_equal") and info:
         return key, value, _interval(_constraints(info), value) or err["msg"]
     if kind in ("float_parsing", "float_type", "int_parsing", "int_type", "int_from_float"):
-        return key, value, ("must be " + ("an integer" if kind.startswith("int") else "a number") + _not(value))
+        return key, value, ("must be " + ("an integer" if kind.startswith("int") else "a number")
+                            + _not(value))
     if kind == "bool_type":
         return key, value, "must be true or false" + _not(value)
     if kind == "string_type":
@@ -203,7 +204,8 @@ def _allowed_keys(root: type[BaseModel], loc: tuple[Any, ...], data: Any) -> lis
     model: Any = root
     node = data
     for part in loc:
-        node = node[part] if isinstance(node, (dict, list)) and part in (node if isinstance(node, dict) else range(len(node))) else None
+        node = (node[part] if isinstance(node, (dict, list))
+                and part in (node if isinstance(node, dict) else range(len(node))) else None)
         if isinstance(part, int) or isinstance(model, dict):
             continue  # a list index, or a key of a table of tagged models
         info = model.model_fields.get(part) if isinstance(model, type) else None

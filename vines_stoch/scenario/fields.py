@@ -6,6 +6,7 @@ from typing import Annotated
 
 from pydantic import BaseModel, ConfigDict, Field
 
+
 class _Model(BaseModel):
     model_config = ConfigDict(extra="forbid", strict=True, frozen=False)
 

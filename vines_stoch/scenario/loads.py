@@ -3,7 +3,7 @@ ground motion, wind and records (MODEL.md section 3)."""
 
 from __future__ import annotations
 
-from typing import Annotated, Literal, Union
+from typing import Annotated, Literal
 
 import numpy as np
 from pydantic import Field, PrivateAttr, model_validator
@@ -70,7 +70,7 @@ class JenningsEnvelope(_Model):
     decay: NonNegative
 
     @model_validator(mode="after")
-    def _order(self) -> "JenningsEnvelope":
+    def _order(self) -> JenningsEnvelope:
         if self.hold < self.rise:
             raise FieldError("hold", self.hold, f"must be >= rise ({self.rise:g})")
         return self
@@ -85,7 +85,7 @@ class SaragoniHartEnvelope(_Model):
     shape: Positive
 
 
-Envelope = Annotated[Union[JenningsEnvelope, SaragoniHartEnvelope], Field(discriminator="type")]
+Envelope = Annotated[JenningsEnvelope | SaragoniHartEnvelope, Field(discriminator="type")]
 
 
 class _FilteredLoad(_Model):
@@ -96,7 +96,7 @@ class _FilteredLoad(_Model):
     start: Literal["rest", "stationary"] = "rest"
 
     @model_validator(mode="after")
-    def _stationary(self) -> "_FilteredLoad":
+    def _stationary(self) -> _FilteredLoad:
         if self.start == "stationary" and self.envelope is not None:
             raise FieldError("start", self.start, "a stationary start needs a load without envelope")
         return self
@@ -126,12 +126,13 @@ class GroundMotionLoad(_FilteredLoad):
     filter_damping: Positive | None = None
 
     @model_validator(mode="after")
-    def _parameters(self) -> "GroundMotionLoad":
+    def _parameters(self) -> GroundMotionLoad:
         preset = SOILS.get(self.soil, (None,) * 4)
         names = ["ground_frequency", "ground_damping"]
         if self.model == "clough-penzien":
             names += ["filter_frequency", "filter_damping"]
-        for name, value in zip(["ground_frequency", "ground_damping", "filter_frequency", "filter_damping"], preset):
+        for name, value in zip(["ground_frequency", "ground_damping", "filter_frequency", "filter_damping"],
+                               preset):
             if getattr(self, name) is None:
                 setattr(self, name, value)
         for name in names:
@@ -167,7 +168,7 @@ class WindLoad(_Model):
     start: Literal["rest", "stationary"] = "rest"
 
     @model_validator(mode="after")
-    def _choices(self) -> "WindLoad":
+    def _choices(self) -> WindLoad:
         pairs = (("height", "heights", "storey heights (m)"), ("area", "areas", "tributary areas"))
         for one, many, what in pairs:
             if (getattr(self, one) is None) == (getattr(self, many) is None):
@@ -260,7 +261,7 @@ class PulseTrainLoad(_Model):
     floor: Floor | None = None
 
     @model_validator(mode="after")
-    def _width(self) -> "PulseTrainLoad":
+    def _width(self) -> PulseTrainLoad:
         if self.width > self.period:
             raise FieldError("width", self.width, f"must be <= period ({self.period:g})")
         return self
@@ -318,7 +319,7 @@ class RecordLoad(_RecordLoad):
     sa: SpectralTarget | None = None
 
     @model_validator(mode="after")
-    def _one_scale(self) -> "RecordLoad":
+    def _one_scale(self) -> RecordLoad:
         if self.sa is not None and self.scale != 1.0:
             raise FieldError("scale", self.scale, "give scale or sa, not both (sa sets the scale)")
         return self
@@ -348,8 +349,8 @@ class ForceRecordLoad(_RecordLoad):
 
 
 Load = Annotated[
-    Union[ImpulseLoad, InitialLoad, HarmonicLoad, WhiteNoiseLoad, FilteredNoiseLoad, GroundMotionLoad,
-          WindLoad, HalfSineLoad, PulseTrainLoad, ChirpLoad, RecordLoad, ForceRecordLoad],
+    ImpulseLoad | InitialLoad | HarmonicLoad | WhiteNoiseLoad | FilteredNoiseLoad | GroundMotionLoad
+    | WindLoad | HalfSineLoad | PulseTrainLoad | ChirpLoad | RecordLoad | ForceRecordLoad,
     Field(discriminator="type"),
 ]
 

@@ -9,13 +9,29 @@ import numpy as np
 from pydantic import Field, model_validator
 
 from .. import schemes
-from .bodies import Absorber, CubicAbsorber, HertzAbsorber, ImpactAbsorber, Primary, eigenfrequencies, shear_stiffness
+from .bodies import (
+    Absorber,
+    CubicAbsorber,
+    HertzAbsorber,
+    ImpactAbsorber,
+    Primary,
+    eigenfrequencies,
+    shear_stiffness,
+)
 from .distributions import Distribution
 from .errors import FieldError
 from .fields import MAX_ABSORBERS, MAX_LIMITS, MAX_LOADS, MAX_STEPS, _Model
 from .loads import InitialLoad, Load, WhiteNoiseLoad, WindLoad, draws_filter_noise
-from .settings import (Ensemble, IntensityMeasures, Limit, Optimize, Output, Simulation, history_signals,
-                       limit_metrics)
+from .settings import (
+    Ensemble,
+    IntensityMeasures,
+    Limit,
+    Optimize,
+    Output,
+    Simulation,
+    history_signals,
+    limit_metrics,
+)
 
 #: A limit's name (it becomes part of column names).
 LIMIT_NAME = re.compile(r"[A-Za-z][A-Za-z0-9_]{0,39}")
@@ -39,12 +55,13 @@ class Scenario(_Model):
     output: Output = Output()
 
     @model_validator(mode="after")
-    def _consistency(self) -> "Scenario":
+    def _consistency(self) -> Scenario:
         sim = self.simulation
         if sim.dt > sim.duration:
             raise FieldError("simulation.dt", sim.dt, f"must be <= simulation.duration ({sim.duration:g})")
         if sim.duration / sim.dt > MAX_STEPS:
-            raise FieldError("simulation.dt", sim.dt, f"gives {sim.duration / sim.dt:.3g} steps a path (duration / dt); "
+            raise FieldError("simulation.dt", sim.dt,
+                             f"gives {sim.duration / sim.dt:.3g} steps a path (duration / dt); "
                              f"at most {MAX_STEPS:.0e}")
         if sim.metrics_from >= sim.duration:
             raise FieldError(
@@ -53,10 +70,11 @@ class Scenario(_Model):
         n = self.primary.n_floors
         nbodies = n + len(self.absorbers)
         for i, item in [(f"absorbers.{i}", a) for i, a in enumerate(self.absorbers)] + \
-                       [(f"loads.{i}", l) for i, l in enumerate(self.loads)]:
+                       [(f"loads.{i}", load) for i, load in enumerate(self.loads)]:
             floor = getattr(item, "floor", None)
             if floor is not None and not 1 <= floor <= n:
-                raise FieldError(f"{i}.floor", floor, f"must be in [1, {n}] (the primary has {n} floor{'s' * (n > 1)})")
+                raise FieldError(f"{i}.floor", floor,
+                                 f"must be in [1, {n}] (the primary has {n} floor{'s' * (n > 1)})")
         for i, load in enumerate(self.loads):
             if isinstance(load, WindLoad) and (bad := load.floors_error(n)) is not None:
                 raise FieldError(f"loads.{i}.{bad[0]}", bad[1], bad[2])
@@ -66,24 +84,26 @@ class Scenario(_Model):
                     if values is not None and len(values) != nbodies:
                         raise FieldError(
                             f"loads.{i}.{field}", values,
-                            f"must list {nbodies} values (the {n} floor{'s' * (n > 1)} from the lowest, then each "
-                            "absorber)",
+                            f"must list {nbodies} values (the {n} floor{'s' * (n > 1)} from the lowest, "
+                            "then each absorber)",
                         )
         if sim.history is not None:
             allowed = history_signals(n)
             for signal in sim.history.signals:
                 if signal not in allowed:
                     raise FieldError("simulation.history.signals", sim.history.signals,
-                                    f"{signal!r} is not a signal: give x1, e1, x_k or drift_k with k in [1, {n}]")
+                                     f"{signal!r} is not a signal: give x1, e1, x_k or drift_k "
+                                     f"with k in [1, {n}]")
         metrics = limit_metrics(n)
         for name, limit in self.limits.items():
             if not LIMIT_NAME.fullmatch(name):
-                raise FieldError("limits", name, "a limit's name must start with a letter and hold letters, digits "
-                                 "and '_' only (at most 40 characters): it names the columns first_passage_NAME, p_NAME")
+                raise FieldError("limits", name, "a limit's name must start with a letter and hold letters, "
+                                 "digits and '_' only (at most 40 characters): it names the columns "
+                                 "first_passage_NAME, p_NAME")
             if limit.metric not in metrics:
                 raise FieldError(f"limits.{name}.metric", limit.metric,
-                                 f"must be a peak metric: x1_max, e1_max, or x_max_k, drift_max_k, acc_max_k with k "
-                                 f"in [1, {n}]")
+                                 "must be a peak metric: x1_max, e1_max, or x_max_k, drift_max_k, acc_max_k "
+                                 f"with k in [1, {n}]")
         contents = self.contents
         if sim.scheme != "auto":
             why = schemes.refusal(schemes.SCHEMES[sim.scheme], *contents)
@@ -94,7 +114,7 @@ class Scenario(_Model):
     @property
     def contents(self) -> tuple[bool, bool, bool, bool]:
         """What the schemes must accept: noise, filtered loads, impact absorbers, Hertz absorbers."""
-        return (self.has_noise, any(draws_filter_noise(l) for l in self.loads),
+        return (self.has_noise, any(draws_filter_noise(load) for load in self.loads),
                 any(isinstance(a, ImpactAbsorber) for a in self.absorbers),
                 any(isinstance(a, HertzAbsorber) for a in self.absorbers))
 
@@ -132,5 +152,5 @@ class Scenario(_Model):
     @property
     def has_noise(self) -> bool:
         """True when any random load acts (white, filtered noise, stochastic ground motion, wind)."""
-        return any((isinstance(l, WhiteNoiseLoad) and l.intensity > 0) or draws_filter_noise(l)
-                   for l in self.loads)
+        return any((isinstance(load, WhiteNoiseLoad) and load.intensity > 0) or draws_filter_noise(load)
+                   for load in self.loads)

@@ -10,6 +10,7 @@ from pydantic import Field, field_validator, model_validator
 from .errors import FieldError
 from .fields import MAX_REALIZATIONS, NonNegative, Positive, Real, _Model
 
+
 class History(_Model):
     """Ensemble statistics of time histories on a decimated grid (history.parquet): by default
     the roof's displacement ``x1`` and the structure's energy ``e1``; ``signals`` may also name
@@ -20,7 +21,7 @@ class History(_Model):
     signals: Annotated[list[str], Field(min_length=1)] = ["x1", "e1"]
 
     @model_validator(mode="after")
-    def _distinct(self) -> "History":
+    def _distinct(self) -> History:
         if len(set(self.signals)) != len(self.signals):
             raise FieldError("signals", self.signals, "must not repeat a signal")
         if len(set(self.quantiles)) != len(self.quantiles):
@@ -88,7 +89,7 @@ class Bound(_Model):
     scale: Literal["linear", "log"] = "linear"
 
     @model_validator(mode="after")
-    def _range(self) -> "Bound":
+    def _range(self) -> Bound:
         if not self.low < self.high:
             raise FieldError("high", self.high, f"must be > low ({self.low:g})")
         if self.scale == "log" and self.low <= 0:

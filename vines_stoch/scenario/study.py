@@ -23,7 +23,6 @@ from .loads import _RecordLoad
 from .model import Scenario
 from .sweeps import _grid, _product, _zipped, get_path, set_path
 
-
 #: The largest scenario file read (bytes).
 SCENARIO_BYTES = 4 * 2**20
 
@@ -33,18 +32,21 @@ def _validate(data: dict[str, Any], source: str) -> Scenario:
     return validate(Scenario, data, source)
 
 
-def _require_numeric(data: dict[str, Any], key: str, where: str, spec: Any, source: str, text: bool = False) -> None:
+def _require_numeric(data: dict[str, Any], key: str, where: str, spec: Any, source: str,
+                     text: bool = False) -> None:
     """``key`` must address an existing numeric field of the file (``text``: a text field)."""
     try:
         current = get_path(data, key)
     except (KeyError, IndexError, ValueError, TypeError):
         current = None
     if text and not isinstance(current, str):
-        raise ScenarioError(format_error(source, where, spec, "texts sweep an existing text field of the file (e.g. "
-                                         "loads.0.file for a suite of records)"))
+        raise ScenarioError(format_error(source, where, spec,
+                                         "texts sweep an existing text field of the file "
+                                         "(e.g. loads.0.file for a suite of records)"))
     if not text and (isinstance(current, bool) or not isinstance(current, (int, float))):
         raise ScenarioError(format_error(source, where, spec,
-                                    "must name an existing numeric field of the file (e.g. loads.0.velocity)"))
+                                         "must name an existing numeric field of the file "
+                                         "(e.g. loads.0.velocity)"))
 
 
 def _check_values(data: dict[str, Any], key: str, ends: tuple[float, float], where: str, spec: Any,
@@ -60,7 +62,8 @@ def _check_values(data: dict[str, Any], key: str, ends: tuple[float, float], whe
             _validate(variant, source)
         except ScenarioError as exc:
             rule = str(exc).split("\n")[0].rsplit(": ", 1)[-1]
-            raise ScenarioError(format_error(source, where, spec, message.format(end=end, rule=rule))) from None
+            raise ScenarioError(format_error(source, where, spec,
+                                             message.format(end=end, rule=rule))) from None
 
 
 def _check_stability(scenario: Scenario, source: str) -> None:
@@ -70,9 +73,9 @@ def _check_stability(scenario: Scenario, source: str) -> None:
     if omega * dt >= limit:
         raise ScenarioError(format_error(
             source, "simulation.dt", dt,
-            f"is past the stability limit of the {scenario.scheme} scheme: the highest linear natural frequency "
-            f"of the scene is {omega:.6g} rad/s, which needs dt < {limit:.4g} / omega = {limit / omega:.4g} "
-            f"(use about a tenth of that for accuracy)"))
+            f"is past the stability limit of the {scenario.scheme} scheme: the highest linear natural "
+            f"frequency of the scene is {omega:.6g} rad/s, which needs dt < {limit:.4g} / omega = "
+            f"{limit / omega:.4g} (use about a tenth of that for accuracy)"))
 
 
 class Study:
@@ -100,8 +103,8 @@ class Study:
             _require_numeric(data, key, f"uncertain.{key}", data["uncertain"][key], source)
             if self._integer(key):
                 raise ScenarioError(format_error(source, f"uncertain.{key}", data["uncertain"][key],
-                                                 "names an integer field, and distributions draw real numbers: "
-                                                 "sweep it instead"))
+                                                 "names an integer field, and distributions draw real "
+                                                 "numbers: sweep it instead"))
             if key in self.sweep_keys:
                 raise ScenarioError(format_error(source, f"uncertain.{key}", data["uncertain"][key],
                                             "is also swept: a parameter is either swept or uncertain"))
@@ -136,9 +139,9 @@ class Study:
         if steps > ens.max_path_steps:
             raise ScenarioError(format_error(
                 source, "ensemble.realizations", ens.realizations,
-                f"the run would take {steps:.3g} path-steps ({len(self.points)} sweep point(s) x {ens.realizations} "
-                f"realisation(s) x duration / dt), past ensemble.max_path_steps = {ens.max_path_steps:.3g}: raise "
-                "that if the run is meant"))
+                f"the run would take {steps:.3g} path-steps ({len(self.points)} sweep point(s) x "
+                f"{ens.realizations} realisation(s) x duration / dt), past ensemble.max_path_steps = "
+                f"{ens.max_path_steps:.3g}: raise that if the run is meant"))
 
     def _check_support(self, data: dict[str, Any], key: str, dist: Any, source: str) -> None:
         """Every value ``dist`` can draw must be valid for ``key``: check both ends of its support."""
@@ -147,12 +150,15 @@ class Study:
         lo = lo if math.isfinite(lo) else -LARGEST
         lo = lo if lo != 0.0 or not isinstance(dist, LognormalDistribution) else 2.2e-308
         _check_values(data, key, (lo, hi if math.isfinite(hi) else LARGEST), where, spec, source,
-                      f"{dist.distribution} draws reach {{end:g}}, but the value {{rule}}; choose a distribution whose "
-                      "support fits (lognormal for positive values, uniform or truncated-normal within bounds)")
+                      f"{dist.distribution} draws reach {{end:g}}, but the value {{rule}}; choose a "
+                      "distribution whose support fits (lognormal for positive values, uniform or "
+                      "truncated-normal within bounds)")
         for end in dist.reach():
             if not abs(end) <= LARGEST:
-                raise ScenarioError(format_error(source, where, spec, f"{dist.distribution} draws reach {end:.3g} "
-                                                 f"({REACH:g} standard deviations), past the largest magnitude {LARGEST:g}"))
+                raise ScenarioError(format_error(source, where, spec,
+                                                 f"{dist.distribution} draws reach {end:.3g} "
+                                                 f"({REACH:g} standard deviations), "
+                                                 f"past the largest magnitude {LARGEST:g}"))
 
     def _check_optimize(self, data: dict[str, Any], source: str) -> None:
         """Optimised parameters: numeric fields, neither swept nor uncertain, valid at both bounds."""
@@ -161,11 +167,12 @@ class Study:
             spec = data["optimize"]["parameters"][key]
             _require_numeric(data, key, where, spec, source)
             if self._integer(key):
-                raise ScenarioError(format_error(source, where, spec, "names an integer field, and the optimiser "
-                                                 "moves parameters continuously: sweep it instead"))
+                raise ScenarioError(format_error(source, where, spec,
+                                                 "names an integer field, and the optimiser moves "
+                                                 "parameters continuously: sweep it instead"))
             if key in self.sweep_keys or key in self.uncertain_keys:
-                raise ScenarioError(format_error(source, where, spec, "is swept or uncertain: an optimised parameter "
-                                                                 "must be neither"))
+                raise ScenarioError(format_error(source, where, spec, "is swept or uncertain: "
+                                                 "an optimised parameter must be neither"))
             _check_values(data, key, (bound.low, bound.high), where, spec, source,
                           "the bound {end:g} is not allowed: the value {rule}")
 
@@ -176,7 +183,7 @@ class Study:
             set_path(variant, key, value)
         return self._read_records(_validate(variant, self.source), self.source)
 
-    def with_values(self, values: dict[str, float]) -> "Study":
+    def with_values(self, values: dict[str, float]) -> Study:
         """The study with the fields named by ``values`` set (e.g. an optimiser's candidate)."""
         data = copy.deepcopy(self.data)
         for key, value in values.items():
@@ -193,7 +200,8 @@ class Study:
                     try:
                         self._records[key] = read_record(path, load.format, load.dt)
                     except RecordError as exc:
-                        raise ScenarioError(format_error(source, f"loads.{i}.file", load.file, str(exc))) from None
+                        raise ScenarioError(format_error(source, f"loads.{i}.file", load.file,
+                                                         str(exc))) from None
                 load._times, load._values = self._records[key]
         return scenario
 
@@ -205,8 +213,8 @@ class Study:
 def _whole(values: list[float], where: str, spec: Any, source: str) -> list[int]:
     """Sweep values of an integer field: whole numbers, as integers."""
     if any(v != int(v) for v in values):
-        raise ScenarioError(format_error(source, where, spec, "names an integer field: the values must be whole "
-                                         "numbers"))
+        raise ScenarioError(format_error(source, where, spec,
+                                         "names an integer field: the values must be whole numbers"))
     return [int(v) for v in values]
 
 
@@ -229,8 +237,8 @@ def parse_scenario(text: str, source: str = "<scenario>", directory: str | Path 
     except tomllib.TOMLDecodeError as exc:
         raise ScenarioError(f"{source}: TOML syntax error: {exc}") from None
     except RecursionError:
-        raise ScenarioError(f"{source}: tables, arrays or keys nest too deep to read (a scenario nests at most "
-                            f"{MAX_DEPTH} levels)") from None
+        raise ScenarioError(f"{source}: tables, arrays or keys nest too deep to read "
+                            f"(a scenario nests at most {MAX_DEPTH} levels)") from None
     _check_depth(data, source)
     return Study(source, text, data, Path(directory))
 
@@ -254,8 +262,8 @@ def _check_keys(text: str, source: str) -> None:
             head = head.split("=", 1)[0]
         key = _QUOTED.sub("", head)
         if _KEY.fullmatch(key) and key.count(".") >= MAX_DEPTH:
-            raise ScenarioError(f"{source}: line {number}: a dotted key of more than {MAX_DEPTH} parts; a scenario "
-                                "nests fewer")
+            raise ScenarioError(f"{source}: line {number}: a dotted key of more than {MAX_DEPTH} parts; "
+                                "a scenario nests fewer")
 
 
 def _check_depth(data: dict[str, Any], source: str) -> None:
@@ -265,7 +273,7 @@ def _check_depth(data: dict[str, Any], source: str) -> None:
         node, path = stack.pop()
         if len(path) > MAX_DEPTH:
             key = ".".join(path[:4]) + "..."
-            raise ScenarioError(format_error(source, key, MISSING, f"nests more than {MAX_DEPTH} levels of tables "
-                                             "and arrays; a scenario needs fewer"))
+            raise ScenarioError(format_error(source, key, MISSING, f"nests more than {MAX_DEPTH} levels of "
+                                             "tables and arrays; a scenario needs fewer"))
         items = node.items() if isinstance(node, dict) else enumerate(node) if isinstance(node, list) else ()
         stack.extend((value, path + (str(key),)) for key, value in items)

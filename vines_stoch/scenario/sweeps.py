@@ -11,6 +11,7 @@ import numpy as np
 from .errors import MISSING, ScenarioError, format_error
 from .fields import MAX_POINTS
 
+
 def _grid(key: str, spec: Any, source: str) -> list[float] | list[str]:
     """Values of one ``[sweep]`` entry: a list of numbers or of texts, ``{linspace = [a, b, n]}`` or
     ``{logspace = [a, b, n]}``."""
@@ -26,19 +27,24 @@ def _grid(key: str, spec: Any, source: str) -> list[float] | list[str]:
         kind, args = next(iter(spec.items()))
         if not (isinstance(args, list) and len(args) == 3 and all(isinstance(a, (int, float)) for a in args)
                 and isinstance(args[2], int) and not isinstance(args[2], bool) and args[2] >= 1):
-            raise ScenarioError(format_error(source, f"{where}.{kind}", args, "must be [first, last, count] with count an integer >= 1"))
+            raise ScenarioError(format_error(source, f"{where}.{kind}", args,
+                                             "must be [first, last, count] with count an integer >= 1"))
         first, last, count = args
         if count > MAX_POINTS:
-            raise ScenarioError(format_error(source, f"{where}.{kind}", args, f"count {count}: a sweep has at most "
+            raise ScenarioError(format_error(source, f"{where}.{kind}", args,
+                                             f"count {count}: a sweep has at most "
                                              f"{MAX_POINTS} points (split the study into several files)"))
         if kind == "logspace":
             if first <= 0 or last <= 0:
-                raise ScenarioError(format_error(source, f"{where}.logspace", args, "first and last must be > 0 (values, not exponents)"))
+                raise ScenarioError(format_error(source, f"{where}.logspace", args,
+                                                 "first and last must be > 0 (values, not exponents)"))
             values = list(np.geomspace(first, last, count))
         else:
             values = list(np.linspace(first, last, count))
     else:
-        raise ScenarioError(format_error(source, where, spec, "must be a list of values, {linspace = [first, last, count]} or {logspace = [first, last, count]}"))
+        raise ScenarioError(format_error(source, where, spec,
+                                         "must be a list of values, {linspace = [first, last, count]} "
+                                         "or {logspace = [first, last, count]}"))
     if not values:
         raise ScenarioError(format_error(source, where, spec, "must hold at least one value"))
     if len(values) > MAX_POINTS:
@@ -46,8 +52,8 @@ def _grid(key: str, spec: Any, source: str) -> list[float] | list[str]:
                                          f"{MAX_POINTS} points (split the study into several files)"))
     for v in values:
         if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
-            raise ScenarioError(format_error(source, where, spec, "values must be finite numbers (or all texts, for a "
-                                             "text field such as a record's file)"))
+            raise ScenarioError(format_error(source, where, spec, "values must be finite numbers "
+                                             "(or all texts, for a text field such as a record's file)"))
     return [float(v) for v in values]
 
 
@@ -86,7 +92,8 @@ def _zipped(spec: Any, sweep: dict[str, Any], source: str) -> list[str]:
         raise ScenarioError(format_error(source, "sweep.zip", spec, "must be a list of swept keys"))
     for key in spec:
         if key not in sweep:
-            raise ScenarioError(format_error(source, "sweep.zip", spec, f"names {key!r}, which is not swept in [sweep]"))
+            raise ScenarioError(format_error(source, "sweep.zip", spec,
+                                             f"names {key!r}, which is not swept in [sweep]"))
     return list(dict.fromkeys(spec))
 
 
@@ -96,12 +103,13 @@ def _product(grids: dict[str, list], zipped: list[str], source: str) -> list[dic
         lengths = {len(grids[k]) for k in zipped}
         if len(lengths) > 1:
             sizes = ", ".join(f"{k}: {len(grids[k])}" for k in zipped)
-            raise ScenarioError(format_error(source, "sweep.zip", zipped, f"zipped keys need equally many values ({sizes})"))
+            raise ScenarioError(format_error(source, "sweep.zip", zipped,
+                                             f"zipped keys need equally many values ({sizes})"))
     size = math.prod([len(grids[zipped[0]])] if zipped else []) * math.prod(
         len(g) for k, g in grids.items() if k not in zipped)
     if size > MAX_POINTS:
-        raise ScenarioError(format_error(source, "sweep", MISSING, f"{size} points; a sweep has at most {MAX_POINTS} "
-                                         "points (split the study into several files)"))
+        raise ScenarioError(format_error(source, "sweep", MISSING, f"{size} points; a sweep has at most "
+                                         f"{MAX_POINTS} points (split the study into several files)"))
     axes: list[list[dict[str, float]]] = []
     if zipped:
         axes.append([{k: grids[k][i] for k in zipped} for i in range(len(grids[zipped[0]]))])

@@ -37,8 +37,7 @@ from numba import njit
 
 from ..ensemble import run
 from ..kernels import load_history, simulate
-from ..kernels.common import (ABSORBER_DISS, E1_MAX, FINAL_ENERGY, IMPACT_LOSS, INPUT,
-                              PRIMARY_DISS)
+from ..kernels.common import ABSORBER_DISS, E1_MAX, FINAL_ENERGY, IMPACT_LOSS, INPUT, PRIMARY_DISS
 from ..physics import KERNEL, hertz_constant
 from ..records import G, write_at2
 from . import precision, scenes, stability
@@ -182,7 +181,8 @@ def _contact_rates(n_paths: int, directory: Path) -> list[tuple[str, float, floa
         elapsed = time.perf_counter() - start
         sim = one.points[0].simulation
         rows.append((name, n_paths * sim.duration / sim.dt / elapsed,
-                     float(realizations["energy_residual"].abs().max()), float(realizations["impacts"].mean())))
+                     float(realizations["energy_residual"].abs().max()),
+                     float(realizations["impacts"].mean())))
     return rows
 
 
@@ -244,11 +244,13 @@ from pathlib import Path
 from vines_stoch import parse_scenario, run
 start = time.perf_counter()
 realizations, _ = run(parse_scenario(sys.argv[1]), Path(sys.argv[2]))
-print(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024, time.perf_counter() - start, len(realizations))
+print(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024, time.perf_counter() - start,
+      len(realizations))
 """
 
 
-def _floors(counts: tuple[int, ...] = (1, 3, 9, 20), repeats: int = 5) -> list[tuple[str, float, float, float]]:
+def _floors(counts: tuple[int, ...] = (1, 3, 9, 20),
+            repeats: int = 5) -> list[tuple[str, float, float, float]]:
     """Cost against size: rows ``(scene, M steps/s, ns a step, first call s)`` of ``n``-storey
     buildings (unit floor masses, storey stiffness ``4 n^2``: the first mode near 1 rad/s) with
     a cubic NES on the roof and an impact absorber on the floor below it, under white noise on
@@ -326,7 +328,8 @@ def _startup(directory: Path) -> list[tuple[str, float, float]]:
     smooth = directory / "smooth.toml"
     smooth.write_text(scenes.text(scenes.changed(scenes.scene_data("smooth"),
                                                  {"ensemble.realizations": 4, "simulation.duration": 20.0})))
-    cases = [("scenarios/cubic_nes_impulse.toml (RK4, 15 runs)", REPOSITORY / "scenarios/cubic_nes_impulse.toml"),
+    cases = [("scenarios/cubic_nes_impulse.toml (RK4, 15 runs)",
+              REPOSITORY / "scenarios/cubic_nes_impulse.toml"),
              ("smooth scene, 4 paths of 20 s (kick-drift-kick)", smooth)]
     env = {**os.environ, "NUMBA_CACHE_DIR": str(directory / "numba-cache")}
     rows = []
@@ -370,14 +373,16 @@ def main(out: Path = Path("reports/benchmarks.md"), n_paths: int = 200) -> str:
         startup = _startup(Path(tmp))
     floors = _floors()
     ssvi = _ssvi()
-    same_path = {kind: precision.same_path_errors(kind, SAME_PATH_LEVELS, paths=20) for kind in ("hertz", "impact")}
+    same_path = {kind: precision.same_path_errors(kind, SAME_PATH_LEVELS, paths=20)
+                 for kind in ("hertz", "impact")}
     out.parent.mkdir(parents=True, exist_ok=True)
     work_precision = precision.section(out.parent)
     stability_suite = stability.section()
     cores = os.cpu_count()
     scipy_row = (f"| scipy DOP853 + events, rtol {ssvi['scipy_rtol']:.0e} | {ssvi['scipy_s'] * 1e3:.1f} | "
                  f"{ssvi['scipy_error']:.1e} | {ssvi['scipy_s'] / ssvi['ours_s']:.0f}x slower |"
-                 if "scipy_s" in ssvi else "| scipy DOP853 + events | - | no tolerance down to 1e-10 matched | - |")
+                 if "scipy_s" in ssvi
+                 else "| scipy DOP853 + events | - | no tolerance down to 1e-10 matched | - |")
     text = f"""# Benchmarks
 
 Machine: {cores} cores. All figures from one run of `make bench`; ratios are within that run.
@@ -387,14 +392,21 @@ Machine: {cores} cores. All figures from one run of `make bench`; ratios are wit
 LPO m = k = 1, cubic NES eps = 0.05, c = 0.01, k3 = 1; 0.1 cos t + white noise 0.05; T = 200,
 dt = 1e-3, {n_paths} realisations, Euler-Maruyama (kick-drift-kick).
 
-| runner | threads | M path-steps/s | ratio to the roofline | ratio to the recurrence roofline | max abs energy residual |
+| runner | threads | M path-steps/s | ratio to the roofline | ratio to the recurrence roofline | \
+max abs energy residual |
 | --- | ---: | ---: | ---: | ---: | ---: |
-| roofline: minimal numba loop of the same scheme (kick-drift-kick), `cos` a step, no metrics | 1 | {loop / 1e6:.1f} | 1.00 | {loop / rec:.2f} | - |
-| the same loop with the same metrics (scalar code for this one scene) | 1 | {loop_metrics / 1e6:.1f} | {loop_metrics / loop:.2f} | {loop_metrics / rec:.2f} | - |
-| recurrence roofline: the roofline with the load from a turned phasor, as the step loop | 1 | {rec / 1e6:.1f} | {rec / loop:.2f} | 1.00 | - |
-| the recurrence roofline with the same metrics | 1 | {rec_metrics / 1e6:.1f} | {rec_metrics / loop:.2f} | {rec_metrics / rec:.2f} | - |
-| minimal numba loop, semi-implicit Euler (one force evaluation a step) | 1 | {euler_loop / 1e6:.1f} | {euler_loop / loop:.2f} | {euler_loop / rec:.2f} | - |
-| vines_stoch step loop (`simulate`, seeded as in an ensemble) | 1 | {kernel / 1e6:.1f} | {kernel / loop:.2f} | {kernel / rec:.2f} | - |
+| roofline: minimal numba loop of the same scheme (kick-drift-kick), `cos` a step, no metrics | 1 | \
+{loop / 1e6:.1f} | 1.00 | {loop / rec:.2f} | - |
+| the same loop with the same metrics (scalar code for this one scene) | 1 | {loop_metrics / 1e6:.1f} | \
+{loop_metrics / loop:.2f} | {loop_metrics / rec:.2f} | - |
+| recurrence roofline: the roofline with the load from a turned phasor, as the step loop | 1 | \
+{rec / 1e6:.1f} | {rec / loop:.2f} | 1.00 | - |
+| the recurrence roofline with the same metrics | 1 | {rec_metrics / 1e6:.1f} | {rec_metrics / loop:.2f} | \
+{rec_metrics / rec:.2f} | - |
+| minimal numba loop, semi-implicit Euler (one force evaluation a step) | 1 | {euler_loop / 1e6:.1f} | \
+{euler_loop / loop:.2f} | {euler_loop / rec:.2f} | - |
+| vines_stoch step loop (`simulate`, seeded as in an ensemble) | 1 | {kernel / 1e6:.1f} | \
+{kernel / loop:.2f} | {kernel / rec:.2f} | - |
 | `vines_stoch.run` | 1 | {api1 / 1e6:.1f} | {api1 / near:.2f} | {api1 / near_rec:.2f} | {res1:.1e} |
 | `vines_stoch.run` | 2 | {api2 / 1e6:.1f} | {api2 / near:.2f} | {api2 / near_rec:.2f} | {res2:.1e} |
 
@@ -423,7 +435,8 @@ ratios to the smooth scene's 1-thread `run` above.
 
 | scene | M path-steps/s | ratio to the smooth scene | contacts and impacts a path | max abs energy residual |
 | --- | ---: | ---: | ---: | ---: |
-{chr(10).join(f"| {name} | {rate / 1e6:.2f} | {rate / api1:.2f} | {hits:.0f} | {res:.1e} |" for name, rate, res, hits in contact)}
+{chr(10).join(f"| {name} | {rate / 1e6:.2f} | {rate / api1:.2f} | {hits:.0f} | {res:.1e} |"
+              for name, rate, res, hits in contact)}
 
 Work-precision on one Brownian path (`precision.same_path_errors`): LPO m = k = 1, c = 0.02 with
 a double-sided Hertz absorber (K = 7e5 N/m^1.5) or an impact absorber (r = 0.9), white noise 0.1,
@@ -432,10 +445,13 @@ run replays the same fine normals and tree seed); time per path of the kernel.
 
 | dt | Hertz: error | Hertz: ms per path | impact: error | impact: ms per path |
 | ---: | ---: | ---: | ---: | ---: |
-{chr(10).join(f"| 2^-{lv} | {same_path['hertz'][0][i]:.2e} | {same_path['hertz'][1][i] * 1e3:.3f} | {same_path['impact'][0][i]:.2e} | {same_path['impact'][1][i] * 1e3:.3f} |" for i, lv in enumerate(SAME_PATH_LEVELS))}
+{chr(10).join(f"| 2^-{lv} | {same_path['hertz'][0][i]:.2e} | {same_path['hertz'][1][i] * 1e3:.3f} | "
+              f"{same_path['impact'][0][i]:.2e} | {same_path['impact'][1][i] * 1e3:.3f} |"
+              for i, lv in enumerate(SAME_PATH_LEVELS))}
 
 Measured strong order: Hertz contact {precision.strong_order(SAME_PATH_LEVELS, same_path['hertz'][0]):.2f},
-impacts {precision.strong_order(SAME_PATH_LEVELS, same_path['impact'][0]):.2f} (README, "Schemes": 1 and 1/2 expected).
+impacts {precision.strong_order(SAME_PATH_LEVELS, same_path['impact'][0]):.2f} \
+(README, "Schemes": 1 and 1/2 expected).
 
 ## SSVI design SS-1(60) of seed 003
 
@@ -467,8 +483,11 @@ samples) and under a harmonic force of the same peak (`m1 * 0.3 g * cos 6t`).
 
 | load | M path-steps/s | ratio to harmonic | energy residual | `e1_max` change dt -> dt/2 |
 | --- | ---: | ---: | ---: | ---: |
-| harmonic force | {seismic['harmonic'][0] / 1e6:.2f} | 1.00 | {seismic['harmonic'][1]:.1e} | {seismic['harmonic'][2]:.1e} |
-| record (base excitation) | {seismic['record'][0] / 1e6:.2f} | {seismic['record'][0] / seismic['harmonic'][0]:.2f} | {seismic['record'][1]:.1e} | {seismic['record'][2]:.1e} |
+| harmonic force | {seismic['harmonic'][0] / 1e6:.2f} | 1.00 | {seismic['harmonic'][1]:.1e} | \
+{seismic['harmonic'][2]:.1e} |
+| record (base excitation) | {seismic['record'][0] / 1e6:.2f} | \
+{seismic['record'][0] / seismic['harmonic'][0]:.2f} | {seismic['record'][1]:.1e} | \
+{seismic['record'][2]:.1e} |
 
 ## Floors
 
@@ -486,7 +505,8 @@ Scheduler overhead: 10^4 realisations of the smooth scene with T = 20 (2 x 10^8 
 | scheduler | workers | time (s) | ratio |
 | --- | --- | ---: | ---: |
 | embedded (threaded scheduler) | {cores} threads | {overhead[0]:.2f} | 1.00 |
-| local `dask.distributed` cluster on loopback | {cores} processes x 1 thread | {overhead[1]:.2f} | {overhead[1] / overhead[0]:.2f} |
+| local `dask.distributed` cluster on loopback | {cores} processes x 1 thread | {overhead[1]:.2f} | \
+{overhead[1] / overhead[0]:.2f} |
 
 Realisations bitwise identical on both: {"yes" if overhead[2] else "NO"}.
 Overhead of the distributed scheduler: {100 * (overhead[1] / overhead[0] - 1):+.1f} %.

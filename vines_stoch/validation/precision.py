@@ -59,12 +59,13 @@ def deterministic(impact: bool) -> list[Curve]:
         dt = 100.0 / n  # T = 100 in whole steps
         scene = scenes.scene("impulse_parallel" if impact else "impulse", {"simulation.dt": float(dt)})
         simulate(scene)
-        seconds, raw = _timed(lambda: simulate(scene), repeats=max(1, int(0.2 / (scene.n_steps * 2e-7))))
+        seconds, raw = _timed(lambda scene=scene: simulate(scene),
+                              repeats=max(1, int(0.2 / (scene.n_steps * 2e-7))))
         edm = finish(raw, scene)["edm"]
         ours.points.append((f"dt = {dt:.3g}", seconds, abs(edm - exact)))
     peer = Curve("scipy DOP853 + events")
     for rtol in (1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10):
-        seconds, edm = _timed(lambda: reference(rtol, rtol * 1e-3))
+        seconds, edm = _timed(lambda rtol=rtol: reference(rtol, rtol * 1e-3))
         peer.points.append((f"rtol = {rtol:.0e}", seconds, abs(edm - exact)))
     return [ours, peer]
 
@@ -72,9 +73,11 @@ def deterministic(impact: bool) -> list[Curve]:
 def noisy_scene(dt: float, duration: float = 20.0, scheme: str = "euler-maruyama", sigma: float = SIGMA,
                 amplitude: float = 0.1):
     """The Scene of the stochastic smooth scene (``scenes/noisy.toml``: 2-DOF cubic NES under
-    ``amplitude cos t`` plus white noise ``sigma``) at step ``dt`` over ``duration`` with ``scheme``."""
-    return scenes.scene("noisy", {"simulation.dt": dt, "simulation.duration": duration, "simulation.scheme": scheme,
-                                  "loads.0.amplitude": amplitude, "loads.1.intensity": sigma})
+    ``amplitude cos t`` plus white noise ``sigma``) at step ``dt`` over ``duration`` with
+    ``scheme``."""
+    return scenes.scene("noisy", {"simulation.dt": dt, "simulation.duration": duration,
+                                  "simulation.scheme": scheme, "loads.0.amplitude": amplitude,
+                                  "loads.1.intensity": sigma})
 
 
 def coarse_increments(normals: np.ndarray, m: int) -> tuple[np.ndarray, np.ndarray]:
@@ -136,7 +139,7 @@ def strong(paths: int = 8, fine_dt: float = 2.5e-5, duration: float = 20.0,
             simulate(scene, normals=replays[0])
             finals = np.zeros((paths, 2, 2))
 
-            def ours() -> None:
+            def ours(scene=scene, replays=replays, finals=finals) -> None:
                 for c, out in zip(replays, finals):
                     simulate(scene, normals=c, final=out)
 
@@ -147,10 +150,15 @@ def strong(paths: int = 8, fine_dt: float = 2.5e-5, duration: float = 20.0,
             continue
         n_steps = math.ceil(duration / dt - 1e-9)
         tspan = np.linspace(0.0, n_steps * dt, n_steps + 1)
-        increments = [(coarse_increments(n, m)[0] * math.sqrt(dt)).reshape(-1, 1) for n in normals[:sdeint_paths]]
+        increments = [(coarse_increments(n, m)[0] * math.sqrt(dt)).reshape(-1, 1)
+                      for n in normals[:sdeint_paths]]
         for curve, method in ((euler, sdeint.itoEuler), (sri2, sdeint.itoSRI2)):
-            seconds, ys = min((_timed(lambda: [method(f, g, np.zeros(4), tspan, dW=dw) for dw in increments])
-                               for _ in range(5 if dt > 4e-3 else 2)), key=lambda timed: timed[0])
+
+            def theirs(method=method, tspan=tspan, increments=increments) -> list[np.ndarray]:
+                return [method(f, g, np.zeros(4), tspan, dW=dw) for dw in increments]
+
+            seconds, ys = min((_timed(theirs) for _ in range(5 if dt > 4e-3 else 2)),
+                              key=lambda timed: timed[0])
             errors = [np.linalg.norm(np.array([y[-1, :2], y[-1, 2:]]) - ref) for y, ref in zip(ys, reference)]
             curve.points.append((f"dt = {dt:g}", seconds / sdeint_paths, float(np.mean(errors))))
     return [kdk, sra, euler, sri2]
@@ -171,12 +179,13 @@ def weak(paths: int = 1024, duration: float = 1100.0) -> list[tuple[str, float, 
             values = np.array([simulate(scene, np.random.default_rng(r))[X1_SQ_INT] / (duration - 100.0)
                                for r in range(paths)])
             seconds = (time.perf_counter() - start) / paths
-            rows.append((scheme, dt, float(values.mean()) - exact, float(values.std(ddof=1) / math.sqrt(paths)),
-                         seconds))
+            rows.append((scheme, dt, float(values.mean()) - exact,
+                         float(values.std(ddof=1) / math.sqrt(paths)), seconds))
     return rows
 
 
-#: The smooth scene's loads for the weak study of the metrics: (label, harmonic amplitude, noise intensity).
+#: The smooth scene's loads for the weak study of the metrics: (label, harmonic amplitude,
+#: noise intensity).
 WEAK_LOADS = (("0.1 cos t + white noise 0.05", 0.1, 0.05), ("white noise 0.2", 0.0, 0.2))
 
 
@@ -243,7 +252,7 @@ def same_path_errors(kind: str, levels: list[int], fine: int = 14, paths: int = 
     for m in range(paths):
         normals = rng.standard_normal(math.ceil(duration * 2**fine))
 
-        def x1_end(level: int) -> float:
+        def x1_end(level: int, m: int = m, normals: np.ndarray = normals) -> float:
             simulate(by_level[level], np.random.default_rng(m), normals=normals, refine=2 ** (fine - level),
                      final=final)
             return final[0, 0]
@@ -282,7 +291,8 @@ def plot(panels: dict[str, list[Curve]], path: Path, xlabel: str = "seconds per 
     fig, axes = plt.subplots(1, len(panels), figsize=(5.2 * len(panels), 4.2), squeeze=False)
     for ax, (title, curves) in zip(axes[0], panels.items()):
         for curve in curves:
-            ax.loglog([p[1] for p in curve.points], [max(p[2], 1e-17) for p in curve.points], "o-", label=curve.name)
+            ax.loglog([p[1] for p in curve.points], [max(p[2], 1e-17) for p in curve.points], "o-",
+                      label=curve.name)
         ax.set_title(title)
         ax.set_xlabel(xlabel)
         ax.set_ylabel("error")
@@ -302,7 +312,8 @@ def _table(curves: list[Curve]) -> str:
 
 
 def _ratios(ours: Curve, peers: list[Curve]) -> str:
-    lines = ["| peer | peer setting | our cheapest setting with equal or smaller error | peer time / our time |",
+    lines = ["| peer | peer setting | our cheapest setting with equal or smaller error "
+             "| peer time / our time |",
              "| --- | --- | --- | ---: |"]
     for peer in peers:
         rows = ratio_at_equal_error(ours, peer)
@@ -322,9 +333,11 @@ def section(folder: Path) -> str:
                   "noise, cubic NES (strong error at T)": noisy}, folder / "work-precision.png")
     figure = ("![work-precision diagrams](work-precision.png)" if drawn else
               f"(The diagrams are not drawn: matplotlib is not installed; `{REPORT_EXTRA}` adds them.)")
-    metric_rows = "\n".join(f"| {label} | {scheme} | {dt:g} | {100 * e:+.3f} % | {100 * es:.3f} % | {100 * d:+.2f} % | "
-                            f"{100 * ds:.2f} % | {sec * 1e3:.3f} |" for label, scheme, dt, e, es, d, ds, sec in weak_metrics())
-    weak_rows = "\n".join(f"| {scheme} | {dt:g} | {bias:+.3f} | {se:.3f} | {100 * bias / 5.0:+.2f} % | {sec * 1e3:.1f} |"
+    metric_rows = "\n".join(f"| {label} | {scheme} | {dt:g} | {100 * e:+.3f} % | {100 * es:.3f} % | "
+                            f"{100 * d:+.2f} % | {100 * ds:.2f} % | {sec * 1e3:.3f} |"
+                            for label, scheme, dt, e, es, d, ds, sec in weak_metrics())
+    weak_rows = "\n".join(f"| {scheme} | {dt:g} | {bias:+.3f} | {se:.3f} | {100 * bias / 5.0:+.2f} % | "
+                          f"{sec * 1e3:.1f} |"
                           for scheme, dt, bias, se, sec in variance)
     schemes = "\n".join(f"| {a} | {b} | {r:.1f}x |" for a, b, r in ratio_at_equal_error(noisy[1], noisy[0]))
     return f"""## Work-precision

@@ -12,8 +12,10 @@ from ..scene import build_scene
 
 #: Seed 003 tables as printed: scenario file, variant labels, E1max (J) at 6.3 rad/s.
 TABLES = {
-    "seed003_ss60.toml": (["SS-1(60)", "SS-2(60)", "SS-3(60)", "SS-4(60)", "SS-5(60)"], [321, 570, 241, 145, 335]),
-    "seed003_ds60.toml": (["DS-1(60)", "DS-2(60)", "DS-3(60)", "DS-4(60)", "DS-5(60)"], [379, 303, 206, 761, 135]),
+    "seed003_ss60.toml": (["SS-1(60)", "SS-2(60)", "SS-3(60)", "SS-4(60)", "SS-5(60)"],
+                          [321, 570, 241, 145, 335]),
+    "seed003_ds60.toml": (["DS-1(60)", "DS-2(60)", "DS-3(60)", "DS-4(60)", "DS-5(60)"],
+                          [379, 303, 206, 761, 135]),
     "seed003_ss20.toml": (["SS-1(20)", "SS-2(20)", "SS-3(20)", "SS-4(20)"], [586, 573, 672, 526]),
     "seed003_ds20.toml": (["DS-1(20)", "DS-2(20)", "DS-3(20)", "DS-4(20)"], [200, 204, 134, 101]),
 }
@@ -62,10 +64,12 @@ def reproduce(scenarios: Path = Path("scenarios"), out: Path = Path("reports/see
         f"Primary alone: {e1_primary:.1f} J (paper 1557 J, {100 * (e1_primary / PRIMARY_E1MAX - 1):+.2f} %).",
         "",
         "`from-rest`: right obstacle at D + C (MODEL.md default; double-sided: obstacles at V and V + 2C,",
-        "spring relaxed at V + C). `from-primary`: right obstacle at C from the primary (seed 002; single-sided",
+        "spring relaxed at V + C). `from-primary`: right obstacle at C from the primary "
+            "(seed 002; single-sided",
         "only, and only where D < C). Regime `nT,k,m` from Poincare samples of the last 32 forcing periods.",
         "",
-        "| variant | paper E1max (J) | from-rest (J) | diff | regime | from-primary (J) | diff | within 10 % (from-rest) |",
+        "| variant | paper E1max (J) | from-rest (J) | diff | regime | from-primary (J) | diff "
+            "| within 10 % (from-rest) |",
         "|---|---|---|---|---|---|---|---|",
     ]
     misses = []

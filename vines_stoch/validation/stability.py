@@ -39,9 +39,10 @@ class Case:
         names it in messages (default: the case's name)."""
         return scenes.study(self.data, source=source or self.name)
 
-    def halved(self) -> "Case":
+    def halved(self) -> Case:
         """The case at half the step (the same Brownian paths are not implied: new grid)."""
-        return replace(self, data=scenes.changed(self.data, {"simulation.dt": self.data["simulation"]["dt"] / 2}))
+        return replace(self, data=scenes.changed(self.data,
+                                                 {"simulation.dt": self.data["simulation"]["dt"] / 2}))
 
 
 def _case(name: str, scene: str, changes: dict[str, Any], bound_s: float = 120.0, **expected: Any) -> Case:
@@ -64,7 +65,8 @@ def _steel(noise: bool) -> dict[str, Any]:
 CASES = (
     _case("restitution 0 (plastic impacts, sticking), impulse", "impulse_parallel",
           {"name": "r0", "absorbers.1.restitution": 0.0}),
-    _case("restitution 1e-3, impulse", "impulse_parallel", {"name": "r1e-3", "absorbers.1.restitution": 1e-3}),
+    _case("restitution 1e-3, impulse", "impulse_parallel",
+          {"name": "r1e-3", "absorbers.1.restitution": 1e-3}),
     _case("restitution 0 under harmonic + white noise (4 paths)", "impulse_parallel",
           {"name": "r0-noise", "absorbers.1.restitution": 0.0, "loads": NOISE, **FOUR_PATHS},
           tolerance=1e-5, realizations=4, order=1),
@@ -123,7 +125,8 @@ def run_case(case: Case, directory: Path | None = None) -> Outcome:
 def section() -> str:
     """The Markdown section of ``reports/benchmarks.md``."""
     lines = ["## Stability suite", "",
-             "Every case of `tests/test_stability.py`, one thread, wall time with the kernels compiled (the tests' bounds allow for compiling on a cold cache);",
+             "Every case of `tests/test_stability.py`, one thread, wall time with the kernels compiled "
+                 "(the tests' bounds allow for compiling on a cold cache);",
              "cases whose residual is the scheme's own error state it at dt and dt/2 as well.",
              "", "| case | bound (s) | time (s) | outcome | max abs energy residual | EDM | most impacts |",
              "| --- | ---: | ---: | --- | ---: | --- | ---: |"]

@@ -62,8 +62,8 @@ def text(data: Mapping[str, Any]) -> str:
     return tomlkit.dumps(dict(data))
 
 
-def study(scene: str | Mapping[str, Any], changes: Mapping[str, Any] | None = None, *, source: str | None = None,
-          directory: Path = Path(".")) -> Study:
+def study(scene: str | Mapping[str, Any], changes: Mapping[str, Any] | None = None, *,
+          source: str | None = None, directory: Path = Path(".")) -> Study:
     """The validated Study of the scene named ``scene`` (or of scene data) with ``changes``
     (dotted keys) applied; ``source`` names it in messages (default: its file, or its name),
     record files are found relative to ``directory``."""
