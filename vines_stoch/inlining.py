@@ -11,7 +11,7 @@ In the step loops this was about half of a kernel's cold compile time.
 of the IR copies the scope once, as one deep copy of the whole IR would. The inliner asks the
 copied blocks for their one scope (it asserts there is one) and renames its variables there,
 then points every inlined block at the caller's scope, so nothing reads which scope copy a
-block held: the compiled code is the same (``tests/test_compile.py`` checks the LLVM IR of
+block held: the compiled code is the same (``tests/unit/kernels/test_compile.py`` checks the LLVM IR of
 nested inlined functions with and without it, and the scenario outputs did not change).
 Compilation holds numba's global compiler lock, so the module attribute swapped for the call is
 seen by no other thread. Where numba's inliner has another shape (a later release), nothing is

@@ -125,8 +125,8 @@ def run_case(case: Case, directory: Path | None = None) -> Outcome:
 def section() -> str:
     """The Markdown section of ``reports/benchmarks.md``."""
     lines = ["## Stability suite", "",
-             "Every case of `tests/test_stability.py`, one thread, wall time with the kernels compiled "
-                 "(the tests' bounds allow for compiling on a cold cache);",
+             "Every case of `tests/integration/test_stability.py`, one thread, wall time with the kernels "
+                 "compiled (the tests' bounds allow for compiling on a cold cache);",
              "cases whose residual is the scheme's own error state it at dt and dt/2 as well.",
              "", "| case | bound (s) | time (s) | outcome | max abs energy residual | EDM | most impacts |",
              "| --- | ---: | ---: | --- | ---: | --- | ---: |"]
