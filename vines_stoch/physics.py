@@ -113,13 +113,15 @@ def contact_force_law(rows, a: int, u: float) -> float:
     """Hertz contact force on absorber row ``a`` at relative position ``u``: ``+K_L z_L^1.5 -
     K_R z_R^1.5`` (MODEL.md section 2); the opposite acts on its host floor.  (Rows are
     indexed in place: a row view would cost reference counting in the step loops.)"""
-    return hertz_force(rows[a, WALL_LO] - u, rows[a, K_LEFT]) - hertz_force(u - rows[a, WALL_HI], rows[a, K_RIGHT])
+    return (hertz_force(rows[a, WALL_LO] - u, rows[a, K_LEFT])
+            - hertz_force(u - rows[a, WALL_HI], rows[a, K_RIGHT]))
 
 
 @njit(**INLINE)
 def contact_energy(rows, a: int, u: float) -> float:
     """Energy stored in both Hertz contacts of absorber row ``a`` at relative position ``u``."""
-    return hertz_energy(rows[a, WALL_LO] - u, rows[a, K_LEFT]) + hertz_energy(u - rows[a, WALL_HI], rows[a, K_RIGHT])
+    return (hertz_energy(rows[a, WALL_LO] - u, rows[a, K_LEFT])
+            + hertz_energy(u - rows[a, WALL_HI], rows[a, K_RIGHT]))
 
 
 @njit(**INLINE)

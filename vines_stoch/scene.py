@@ -4,19 +4,57 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from functools import cached_property
 
 import numpy as np
 
 from . import filters, wind
 from .kernels.common import ACC_MAX_K, DRIFT_MAX_K, LIMIT_E1, POINCARE_SAMPLES, X_MAX_K
-from .kernels.loads import (CHIRP, FORCE_ROW, GROUND, HALF_SINE, HARMONIC, JENNINGS, PULSE_TRAIN, SARAGONI_HART,
-                            STATIONARY, has_breaks)
-from .physics import (CLEARANCE, DAMPING, HERTZ, IMPACT, K_CUBIC, K_LEFT, K_LIN, K_RIGHT, LAWS, REST, RESTITUTION, ROW,
-                      WALL_HI, WALL_LO)
-from .scenario import (ChirpLoad, CubicAbsorber, FilteredNoiseLoad, ForceRecordLoad, GroundMotionLoad,
-                       HalfSineLoad, HarmonicLoad, HertzAbsorber, ImpactAbsorber, ImpulseLoad, InitialLoad,
-                       JenningsEnvelope, PulseTrainLoad, RecordLoad, Scenario, WhiteNoiseLoad, WindLoad)
+from .kernels.loads import (
+    CHIRP,
+    FORCE_ROW,
+    GROUND,
+    HALF_SINE,
+    HARMONIC,
+    JENNINGS,
+    PULSE_TRAIN,
+    SARAGONI_HART,
+    STATIONARY,
+)
+from .physics import (
+    CLEARANCE,
+    DAMPING,
+    HERTZ,
+    IMPACT,
+    K_CUBIC,
+    K_LEFT,
+    K_LIN,
+    K_RIGHT,
+    LAWS,
+    REST,
+    RESTITUTION,
+    ROW,
+    WALL_HI,
+    WALL_LO,
+)
+from .scenario import (
+    ChirpLoad,
+    CubicAbsorber,
+    FilteredNoiseLoad,
+    ForceRecordLoad,
+    GroundMotionLoad,
+    HalfSineLoad,
+    HarmonicLoad,
+    HertzAbsorber,
+    ImpactAbsorber,
+    ImpulseLoad,
+    InitialLoad,
+    JenningsEnvelope,
+    PulseTrainLoad,
+    RecordLoad,
+    Scenario,
+    WhiteNoiseLoad,
+    WindLoad,
+)
 
 
 @dataclass(frozen=True)
@@ -38,7 +76,8 @@ class Scene:
     series_v: np.ndarray      # values (force or ground acceleration, scaled)
     series_ptr: np.ndarray    # (n_series + 1,) offsets
     series_target: np.ndarray  # (n_series,) floor of a force record, loads.GROUND for a ground acceleration
-    filters: dict             # filter arrays (filters.block_diagonal): phi, chol, envelope, c_force, c_ground, p0
+    filters: dict             # filter arrays (filters.block_diagonal): phi, chol, envelope, c_force,
+                              # c_ground, p0
     sigma: np.ndarray         # (n_floors,) white-noise intensity on each floor, F dt = sigma dW
     x0: np.ndarray
     v0: np.ndarray
@@ -79,14 +118,6 @@ class Scene:
     def excitation(self) -> tuple:
         """The kernels' tuple of closed-form loads and records (kernels/loads.py)."""
         return self.forces, self.series_t, self.series_v, self.series_ptr, self.series_target
-
-    @cached_property
-    def kernel_flags(self) -> tuple[bool, bool]:
-        """Compile-time flags of the step loops, computed once a scene: loads with kinks or
-        jumps inside the run (pulses, half-sines, records: sub-steps and pieces) and ground
-        acceleration (records or filtered ground motion)."""
-        ground = (self.series_target == GROUND).any() or self.filters["c_ground"].any()
-        return bool(has_breaks(self.excitation)), bool(ground)
 
     @property
     def has_impact(self) -> bool:
@@ -206,9 +237,11 @@ def build_scene(scenario: Scenario) -> Scene:
         sigma=np.sqrt(variance), x0=x0, v0=v0, dt=float(sim.dt), n_steps=n_steps,
         i0=min(n_steps - 1, int(round(sim.metrics_from / sim.dt))), scheme=scheme,
         period=period, sample_from=sample_from,
-        limits=np.array([limit_row(l.metric, l.value, nf) for l in scenario.limits.values()], dtype=float).reshape(-1, 3),
+        limits=np.array([limit_row(limit.metric, limit.value, nf) for limit in scenario.limits.values()],
+                        dtype=float).reshape(-1, 3),
         limit_names=tuple(scenario.limits),
-        **({"im_period": scenario.intensity_measures.period, "im_damping": scenario.intensity_measures.damping}
+        **({"im_period": scenario.intensity_measures.period,
+            "im_damping": scenario.intensity_measures.damping}
            if scenario.intensity_measures else {}),
     )
 

@@ -27,13 +27,11 @@ _NO_HISTORY = np.zeros((0, 2))
 
 def kernel_for(scene):
     """The compiled loop for a scene's scheme (``schemes.SCHEMES``) and structure."""
-    piecewise, ground = scene.kernel_flags
     nb, nf = scene.mass.shape[0], scene.n_floors
-    watch = scene.limits.shape[0] > 0
     if SCHEMES[scene.scheme].kernel == "rk4":
-        return rk4_kernel(nb, nf, scene.has_impact, scene.has_hertz, scene.period > 0, piecewise, watch)
+        return rk4_kernel(nb, nf, scene.has_impact, scene.has_hertz)
     return kdk_kernel(nb, nf, scene.forces.shape[0], scene.has_white_noise, scene.has_impact, scene.has_hertz,
-                      scene.has_filters, piecewise, ground, scene.scheme == "sra", watch)
+                      scene.has_filters, scene.scheme == "sra")
 
 
 def sample_buffer(scene) -> np.ndarray:
@@ -73,8 +71,8 @@ def _streams_for(scene, replay: bool, streams: Streams | np.random.Generator | N
         return increments, None, None
     if streams is None:
         raise ValueError("streams: this scene draws random numbers (white or filtered noise, or the "
-                         "Brownian trees' seed of impacts and contact under white noise); pass a numpy generator (one for every "
-                         "purpose) or vines_stoch.streams.Streams")
+                         "Brownian trees' seed of impacts and contact under white noise); pass a numpy "
+                         "generator (one for every purpose) or vines_stoch.streams.Streams")
     if isinstance(streams, np.random.Generator):
         streams = Streams.shared(streams)
     chosen = (streams.increments, streams.bridge, streams.filter)
@@ -89,8 +87,8 @@ def bundles(scene, x: np.ndarray, v: np.ndarray, fl: tuple, normals: np.ndarray,
             samples: np.ndarray, history: np.ndarray, stride: int, gens: tuple, refine: int = 1) -> tuple:
     """The kernels' arguments as named bundles: bodies (masses, storey stiffnesses and dashpots,
     mass-proportional dashpots, state), absorbers (kinds, hosts, rows), loads, filters, noise
-    (intensity per floor, replayed normals, replayed fine steps a step), grid, outputs (with the limits whose first passages
-    the metric vector records); then the three generators of
+    (intensity per floor, replayed normals, replayed fine steps a step), grid, outputs (with the
+    limits whose first passages the metric vector records); then the three generators of
     ``gens`` (increments, bridge, filter) as arguments of their own (see ``kdk.kdk_kernel``)."""
     return (
         (scene.mass, scene.storey_k, scene.storey_c, scene.floor_c, x, v),
@@ -104,9 +102,10 @@ def bundles(scene, x: np.ndarray, v: np.ndarray, fl: tuple, normals: np.ndarray,
     )
 
 
-def simulate(scene, streams: Streams | np.random.Generator | None = None, *, normals: np.ndarray | None = None,
-             final: np.ndarray | None = None, samples: np.ndarray | None = None,
-             history: np.ndarray | None = None, stride: int = 1, refine: int = 1) -> np.ndarray:
+def simulate(scene, streams: Streams | np.random.Generator | None = None, *,
+             normals: np.ndarray | None = None, final: np.ndarray | None = None,
+             samples: np.ndarray | None = None, history: np.ndarray | None = None,
+             stride: int = 1, refine: int = 1) -> np.ndarray:
     """Run one realisation of ``scene``; returns the raw metric vector (see ``SLOTS``).
 
     ``streams`` (``vines_stoch.streams.Streams``: increments, bridge draws, filter noise; or
@@ -116,8 +115,9 @@ def simulate(scene, streams: Streams | np.random.Generator | None = None, *, nor
     drawing the increments; with ``refine`` (kick-drift-kick only) it holds ``refine`` fine
     normals a step and noisy floor, fine step by fine step, and the run sees the path of the
     fine steps, inside a step too (``brownian``): a coarse run and the run of the fine steps
-    (``refine = 1``, ``dt / refine``) on the same normals and streams integrate the same path; ``final`` (shape ``(2, n_bodies)``) receives the final
-    positions and velocities; ``samples`` (from ``sample_buffer``) receives the Poincare
+    (``refine = 1``, ``dt / refine``) on the same normals and streams integrate the same path;
+    ``final`` (shape ``(2, n_bodies)``) receives the final positions and velocities;
+    ``samples`` (from ``sample_buffer``) receives the Poincare
     samples of periodic scenes; ``history`` (shape ``(G, 2)`` or ``(G, 2 + n_floors)``)
     receives the roof's ``x``, ``E1`` (and every floor's ``x``) at ``t = j stride dt``,
     ``j < G`` (rows after a divergence keep their previous content).
@@ -129,8 +129,8 @@ def simulate(scene, streams: Streams | np.random.Generator | None = None, *, nor
     replay = normals is not None
     needed = scene.n_steps * SCHEMES[scene.scheme].normals * max(scene.noisy_floors, 1) * refine
     if refine < 1 or (refine > 1 and (not replay or scene.scheme != "euler-maruyama")):
-        raise ValueError(f"refine: {refine} fine steps a step; must be >= 1, and more than 1 only with replayed "
-                         "normals and the euler-maruyama scheme")
+        raise ValueError(f"refine: {refine} fine steps a step; must be >= 1, and more than 1 only with "
+                         "replayed normals and the euler-maruyama scheme")
     if replay and normals.shape[0] < needed:
         raise ValueError(f"normals: need {needed} values, got {normals.shape[0]}")
     if replay and scene.has_filters:
@@ -144,7 +144,9 @@ def simulate(scene, streams: Streams | np.random.Generator | None = None, *, nor
     return out
 
 
-def load_history(scene, streams: Streams | np.random.Generator | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def load_history(
+    scene, streams: Streams | np.random.Generator | None = None
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """One sample path of a scene's loads on its time grid: ``(t, force on each floor (shape
     (n_steps + 1, n_floors)), ground acceleration)``; filtered loads start from the same law
     and take the same exact steps as in the step loops (white noise, having no path value, is

@@ -74,7 +74,8 @@ def new_memo(n_floors: int) -> np.ndarray:
 
 
 @njit(**INLINE)
-def tree_value(total: float, length: float, tau: float, scale: float, key, interval: int, memo, base: int) -> float:
+def tree_value(total: float, length: float, tau: float, scale: float, key, interval: int, memo,
+               base: int) -> float:
     """``W(tau)`` of ``scale`` times a Brownian motion on ``[0, length]`` with ``W(0) = 0``,
     ``W(length) = total``: the virtual Brownian tree of ``key``.
 
@@ -89,7 +90,8 @@ def tree_value(total: float, length: float, tau: float, scale: float, key, inter
         return total
     levels = base + MEMO - 2
     if memo[levels] == 0.0 or memo[levels + 1] != interval:
-        memo[base], memo[base + 1], memo[base + 2], memo[base + 3], memo[base + 4] = 0.0, length, 0.0, total, 1.0
+        (memo[base], memo[base + 1], memo[base + 2], memo[base + 3],
+         memo[base + 4]) = 0.0, length, 0.0, total, 1.0
         memo[levels], memo[levels + 1] = 1.0, interval
     level = int(memo[levels]) - 1
     while level > 0 and not (memo[base + 5 * level] < tau < memo[base + 5 * level + 1]):
@@ -113,8 +115,8 @@ def tree_value(total: float, length: float, tau: float, scale: float, key, inter
 
 
 @njit(**INLINE)
-def path_value(seed, step: int, k: int, total: float, dt: float, tau: float, scale: float, normals, refine: int,
-               stride: int, slot: int, replay: bool, memo) -> float:
+def path_value(seed, step: int, k: int, total: float, dt: float, tau: float, scale: float, normals,
+               refine: int, stride: int, slot: int, replay: bool, memo) -> float:
     """``W_k(tau)`` of floor ``k`` inside step ``step`` (``0 <= tau <= dt``; ``total``: the step's
     increment, ``scale``: ``sigma_k``).  With ``replay``, ``refine`` fine normals a step, floor
     ``k``'s at ``normals[fine * stride + slot]``.  ``memo``: each floor's descent memo
@@ -129,4 +131,5 @@ def path_value(seed, step: int, k: int, total: float, dt: float, tau: float, sca
     for f in range(first, first + j):
         base += root * normals[f * stride + slot]
     fine = root * normals[(first + j) * stride + slot]
-    return base + tree_value(fine, h, tau - j * h, scale, interval_key(seed, first + j, k), first + j, memo, k * MEMO)
+    return base + tree_value(fine, h, tau - j * h, scale, interval_key(seed, first + j, k), first + j, memo,
+                             k * MEMO)

@@ -18,9 +18,28 @@ from numba.core import cgutils
 from numba.extending import intrinsic
 from numba.np.arrayobj import make_array, populate_array
 
-from ..physics import (CLEARANCE, DAMPING, HERTZ, IMPACT, INLINE, KERNEL, K_CUBIC, K_LEFT, K_LIN, K_RIGHT, REST, WALL_HI,
-                       WALL_LO, contact_energy, contact_force_law, hertz_force, primary_energy,
-                       restitution_impact, spring_damper_energy, spring_damper_force)
+from ..physics import (
+    CLEARANCE,
+    DAMPING,
+    HERTZ,
+    IMPACT,
+    INLINE,
+    K_CUBIC,
+    K_LEFT,
+    K_LIN,
+    K_RIGHT,
+    KERNEL,
+    REST,
+    WALL_HI,
+    WALL_LO,
+    contact_energy,
+    contact_force_law,
+    hertz_force,
+    primary_energy,
+    restitution_impact,
+    spring_damper_energy,
+    spring_damper_force,
+)
 
 #: Slots of the raw metric vector a kernel fills; ``metrics.finish`` turns it into columns.
 SLOTS = (
@@ -177,7 +196,8 @@ def contact_forces(x, nf: int, kind, host, rows, force, active=True):
 def contact_force(x, nf: int, a: int, host, rows) -> float:
     """Magnitude of the contact force on Hertz absorber ``a`` (either side)."""
     u = x[nf + a] - x[host_of(host, a, nf)]
-    return (hertz_force(rows[a, WALL_LO] - u, rows[a, K_LEFT]) + hertz_force(u - rows[a, WALL_HI], rows[a, K_RIGHT]))
+    return (hertz_force(rows[a, WALL_LO] - u, rows[a, K_LEFT])
+            + hertz_force(u - rows[a, WALL_HI], rows[a, K_RIGHT]))
 
 
 #: Sub-steps per Hertz contact duration (MODEL.md section 2 asks for at least about 20).
@@ -423,7 +443,8 @@ def new_metrics(n_floors: int = 1, n_limits: int = 0) -> np.ndarray:
 
 
 @njit(**INLINE)
-def first_passages(limits, t, nf: int, x_max, drift_max, acc_max, inv_mass, acc_force: bool, e1_max, out) -> int:
+def first_passages(limits, t, nf: int, x_max, drift_max, acc_max, inv_mass, acc_force: bool, e1_max,
+                   out) -> int:
     """Record ``t`` as the first passage of each limit (rows of ``scene.limit_row``: code,
     floor, value) whose running peak exceeds its value for the first time, in the slots after
     the floor blocks; returns how many limits have not passed yet (the loops stop calling at
@@ -433,10 +454,10 @@ def first_passages(limits, t, nf: int, x_max, drift_max, acc_max, inv_mass, acc_
     when its metric exceeds the value."""
     base = passage_slots(nf)
     left = 0
-    for l in range(limits.shape[0]):
-        if out[base + l] != out[base + l]:  # NaN: not passed yet
-            code = limits[l, 0]
-            k = int(limits[l, 1])
+    for limit in range(limits.shape[0]):
+        if out[base + limit] != out[base + limit]:  # NaN: not passed yet
+            code = limits[limit, 0]
+            k = int(limits[limit, 1])
             if code == X_MAX_K or (code == DRIFT_MAX_K and k == 0):
                 peak = x_max[k]
             elif code == DRIFT_MAX_K:
@@ -445,8 +466,8 @@ def first_passages(limits, t, nf: int, x_max, drift_max, acc_max, inv_mass, acc_
                 peak = acc_max[k] * inv_mass[k] if acc_force else acc_max[k]
             else:
                 peak = e1_max
-            if peak > limits[l, 2]:
-                out[base + l] = t
+            if peak > limits[limit, 2]:
+                out[base + limit] = t
             else:
                 left += 1
     return left

@@ -37,21 +37,56 @@ is the scheme's own error in the potential energy (MODEL.md section 4).
 
 from __future__ import annotations
 
-from functools import lru_cache
+from functools import cache
 
 import numpy as np
 from numba import njit
 
 from ..physics import CLEARANCE, HERTZ, IMPACT, KERNEL, RESTITUTION, WALL_HI, WALL_LO, primary_energy
 from .brownian import MEMO, path_value
-from .common import (ABSORBER_DISS, CAPPED, CHECK_EVERY, CONTACT_TIME, E1_MAX, ENERGY_INT, FINAL_ENERGY,
-                     IMPACT_LOSS, IMPACTS, IMPACTS_LEFT, IMPACTS_RIGHT, INLINE, INPUT, MAX_EVENTS,
-                     MAX_SUBSTEPS, PEAK_FORCE, PRIMARY_DISS, STATUS, STATUS_DIVERGED, absorber_dissipation,
-                     attachment_forces, block_end, contact_force, contact_forces, contact_step, diverged,
-                     first_passages, floor_peaks, host_of, keep_in_cavities, momentum, pin_to_walls,
-                     record_history, resolve_impact, scratch, start_history, stick_together, stored_energy,
-                     structure_dissipation, write_floor_metrics)
-from .loads import advance_filters, excitation, phasors, rotations, turn
+from .common import (
+    ABSORBER_DISS,
+    CAPPED,
+    CHECK_EVERY,
+    CONTACT_TIME,
+    E1_MAX,
+    ENERGY_INT,
+    FINAL_ENERGY,
+    IMPACT_LOSS,
+    IMPACTS,
+    IMPACTS_LEFT,
+    IMPACTS_RIGHT,
+    INLINE,
+    INPUT,
+    MAX_EVENTS,
+    MAX_SUBSTEPS,
+    PEAK_FORCE,
+    PRIMARY_DISS,
+    STATUS,
+    STATUS_DIVERGED,
+    absorber_dissipation,
+    attachment_forces,
+    block_end,
+    contact_force,
+    contact_forces,
+    contact_step,
+    diverged,
+    first_passages,
+    floor_peaks,
+    host_of,
+    keep_in_cavities,
+    momentum,
+    pin_to_walls,
+    record_history,
+    resolve_impact,
+    scratch,
+    start_history,
+    stick_together,
+    stored_energy,
+    structure_dissipation,
+    write_floor_metrics,
+)
+from .loads import advance_filters, excitation, has_breaks, has_ground, phasors, rotations, turn
 from .sra3 import sra3_step
 
 #: Iterations of the bracketed search for the impact instant (Illinois method).
@@ -62,8 +97,8 @@ ROOT_ITERATIONS = 100
 def kick(v, s, dws, load, ag, force, inv_mass, vn, ground):
     """Velocities after a kick of length ``s`` into ``vn``: forces, the loads ``load`` and
     Wiener increments ``dws`` on the floors (one entry each), ground acceleration ``ag`` on
-    every body if ``ground`` (a compile-time flag: ``0 * s`` cannot be folded away under IEEE
-    rules) (the caller makes stuck absorbers move with their floor).  ``inv_mass``: the
+    every body if ``ground`` (a run-time flag: ``0 * s`` cannot be folded away under IEEE rules)
+    (the caller makes stuck absorbers move with their floor).  ``inv_mass``: the
     reciprocal masses.  The state-dependent force term comes last, one fused multiply-add after
     the forces (the step's critical path)."""
     base = ag * s if ground else 0.0
@@ -100,13 +135,13 @@ def increments(path, dw, off, s, left, w_at, sigma, normals, slot, memo, out):
         elif sigma[k] == 0.0:
             out[k] = 0.0
         else:
-            out[k] = path_value(seed, step, k, dw[k], dt, end, sigma[k], normals, refine, stride, int(slot[k]),
-                                replay, memo) - w_at[k]
+            out[k] = path_value(seed, step, k, dw[k], dt, end, sigma[k], normals, refine, stride,
+                                int(slot[k]), replay, memo) - w_at[k]
 
 
 @njit(**INLINE)
-def crossing(x, v, length, left, path, dw, off, w_at, sigma, normals, slot, memo, load, ag, force, mass, inv_mass,
-             nf, stuck, host, a, side, wall, vt, dws, group_mass, group_sum, ground, sticking):
+def crossing(x, v, length, left, path, dw, off, w_at, sigma, normals, slot, memo, load, ag, force, mass,
+             inv_mass, nf, stuck, host, a, side, wall, vt, dws, group_mass, group_sum, ground, sticking):
     """Sub-step length in ``(0, length]`` after which absorber ``a`` is exactly at ``wall``
     (side ``side``: the gap ``side (x_a - x_host) - wall`` crosses zero upwards) of its host
     floor, by the Illinois method on the bracket ``[0, length]``; the trial kicks take the
@@ -163,14 +198,15 @@ def contact_sides(x, nf, kind, host, rows, touching):
             touching[a] = 1
 
 
-@lru_cache(maxsize=None)
+@cache
 def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_impact: bool, has_hertz: bool,
-               filtered: bool, piecewise: bool, ground: bool, sra: bool = False, watch: bool = False):
-    """The kick-drift-kick Euler-Maruyama loop specialised to a scene's structure (number of
-    bodies, of floors and of closed-form force rows, white noise, impact absorbers, filtered
-    loads, loads with kinks or jumps, ground acceleration: ``Scene.kernel_flags``; limits whose
-    first passages to watch: ``watch``, so that a scene without limits has no check in its step).
-    Harmonic loads on the step grid come from phasors (``loads.turn``), set exactly every
+               filtered: bool, sra: bool = False):
+    """The kick-drift-kick Euler-Maruyama loop specialised to a scene's structure: the numbers
+    of bodies, of floors and of closed-form force rows (the sizes of its arrays on the stack),
+    white noise, impact and Hertz absorbers, filtered loads and the scheme.  What costs nothing
+    measurable as a run-time value is one: loads with kinks or jumps (``loads.has_breaks``),
+    ground acceleration, the limits whose first passages to watch (none: one integer test a
+    step).  Harmonic loads on the step grid come from phasors (``loads.turn``), set exactly every
     ``CHECK_EVERY`` steps.
 
     The kernel takes its inputs as bundles (``kernels.bundles``): ``bodies`` (masses, storey
@@ -203,7 +239,6 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
     NF = n_floors
     NR = n_rows
     NS = n_bodies if sra else 0
-    GROUND = ground
     ROOT3 = np.sqrt(3.0)
 
     @njit(**KERNEL)
@@ -216,12 +251,15 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
         phi, chol, envelopes, c_force, c_ground, z = fl
         sigma, normals, refine = noise
         replay = normals.shape[0] > 0
+        piecewise = has_breaks(ex)  # re-evaluate each step's start on its own piece
+        ground = has_ground(ex, fl)
         dt, n_steps, i0, period, sample_from, stride = grid
         out, samples, history, limits = outputs
         na = kind.shape[0]
         nz = z.shape[0]
         # the state (copied back at the end) and the scratch, on the stack (see ``common.scratch``)
-        x, v, force, vn, vt, inv_mass = scratch(NB), scratch(NB), scratch(NB), scratch(NB), scratch(NB), scratch(NB)
+        x, v, force, vn, vt, inv_mass = (scratch(NB), scratch(NB), scratch(NB), scratch(NB), scratch(NB),
+                                         scratch(NB))
         xt = scratch(NB)  # with vt: copies of the state for the out-of-line calls
         for b in range(nb):
             x[b] = state_x[b]
@@ -266,7 +304,7 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
         e1_prev = primary_energy(mass, storey_k, x, v, nf)
         h_next = start_history(history, stride, x, nf, e1_prev)
         ag_next = excitation(0.0, 0.5 * dt, 0.0, forces, series_t, series_v, series_ptr, series_target,
-                             filtered, c_force, c_ground, z, zn, pc, False, GROUND, load_next)
+                             filtered, c_force, c_ground, z, zn, pc, False, ground, load_next)
         # accumulators in registers; written to ``out`` once at the end
         # (the trapezoid integrals of E1 and x_k^2 as plain sums of the step ends' values, the
         # window's ends at half weight: one add a step each)
@@ -294,16 +332,17 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
                     if sra:
                         acc[k] *= inv_mass[k]
                 floor_peaks(x, nf, acc, x_max, drift_max, acc_max)
-                if watch and pending > 0:
-                    pending = first_passages(limits, i * dt, nf, x_max, drift_max, acc_max, inv_mass, not sra, e1_max,
-                                             out)
+                if pending > 0:
+                    pending = first_passages(limits, i * dt, nf, x_max, drift_max, acc_max, inv_mass, not sra,
+                                             e1_max, out)
             if i % CHECK_EVERY == 0:
                 if diverged(x):
                     out[STATUS] = STATUS_DIVERGED
                     break
                 phasors(i * dt, forces, pc, ps)
             end = block_end(i, n_steps, i0, h_next)
-            for i in range(i, end):
+            start = i
+            for i in range(start, end):
                 t_step = i * dt
                 tm = t_step + 0.5 * dt
                 if filtered:
@@ -315,15 +354,17 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
                 ag = ag_next
                 if piecewise:  # re-evaluate each step's start on its own piece
                     ag = excitation(t_step, tm, 0.0, forces, series_t, series_v, series_ptr, series_target,
-                                    filtered, c_force, c_ground, z, zn, pc, True, GROUND, load)
+                                    filtered, c_force, c_ground, z, zn, pc, True, ground, load)
                 ag3 = 0.0  # the Runge-Kutta step's mid-step loads
                 if sra:
                     turn(pc, ps, hc, hs, mc, ms)
                     ag3 = excitation(t_step + 0.5 * dt, tm, 0.5, forces, series_t, series_v, series_ptr,
-                                     series_target, filtered, c_force, c_ground, z, zn, mc, True, GROUND, load3)
+                                     series_target, filtered, c_force, c_ground, z, zn, mc, True, ground,
+                                     load3)
                 turn(pc, ps, rc, rs, pc, ps)
-                ag_next = excitation(t_step + dt, tm, 1.0, forces, series_t, series_v, series_ptr, series_target,
-                                     filtered, c_force, c_ground, z, zn, pc, True, GROUND, load_next)
+                ag_next = excitation(t_step + dt, tm, 1.0, forces, series_t, series_v, series_ptr,
+                                     series_target, filtered, c_force, c_ground, z, zn, pc, True, ground,
+                                     load_next)
                 # the step's Wiener increments on the noisy floors (two integrals each for
                 # SRA3), from the increment stream or a replayed path: one normal per noisy floor
                 # (SRA3: all floors' first normals, then their second)
@@ -350,9 +391,10 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
                         if sra:
                             dz[k] = 0.5 * noise_scale[k] * (u1[k] + u2[k] / ROOT3)  # sigma I10 / h
                 if sra:
-                    dwork, dprimary, dabsorber = sra3_step(x, v, vn, force, a1, a2, a3, xs, v2, v3, load, load_next, load3,
-                                                           ag, ag_next, ag3, dw, dz, dt, mass, inv_mass, storey_k,
-                                                           storey_c, floor_c, host, rows, inside, GROUND)
+                    dwork, dprimary, dabsorber = sra3_step(x, v, vn, force, a1, a2, a3, xs, v2, v3, load,
+                                                           load_next, load3, ag, ag_next, ag3, dw, dz, dt,
+                                                           mass, inv_mass, storey_k, storey_c, floor_c, host,
+                                                           rows, inside, ground)
                     work += dwork
                     d_primary += dprimary
                     d_absorber += dabsorber
@@ -387,7 +429,7 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
                             dws[k] = dw[k]
                     for k in range(nf):
                         dwh[k] = 0.5 * dws[k]
-                    kick(v, 0.5 * s, dwh, load, ag, force, inv_mass, vn, GROUND)
+                    kick(v, 0.5 * s, dwh, load, ag, force, inv_mass, vn, ground)
                     if has_impact:
                         stick_together(mass, vn, nf, stuck, host, group_mass, group_sum, True)
                     # the first impact, contact onset or contact end in the sub-step
@@ -411,9 +453,9 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
                                 elif touching[a] > 0 and u_end < rows[a, WALL_HI]:
                                     sq, wall, exits = -1, -rows[a, WALL_HI], True
                             if sq != 0:
-                                sc = crossing(x, v, s, left, path, dw, off, w_at, sigma, normals, slot, memo, load, ag,
-                                              force, mass, inv_mass, nf, stuck, host, a, sq, wall, vt, dwc, group_mass,
-                                              group_sum, GROUND, has_impact)
+                                sc = crossing(x, v, s, left, path, dw, off, w_at, sigma, normals, slot, memo,
+                                              load, ag, force, mass, inv_mass, nf, stuck, host, a, sq, wall,
+                                              vt, dwc, group_mass, group_sum, ground, has_impact)
                                 if hit < 0 or sc < s_hit:
                                     hit, side, s_hit, leaves = a, sq, sc, exits
                         if hit >= 0:  # the first half kick again, to the event
@@ -422,10 +464,12 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
                                 increments(path, dw, off, s, left, w_at, sigma, normals, slot, memo, dws)
                             for k in range(nf):
                                 dwh[k] = 0.5 * dws[k]
-                            kick(v, 0.5 * s, dwh, load, ag, force, inv_mass, vn, GROUND)
-                            stick_together(mass, vn, nf, stuck, host, group_mass, group_sum, False, has_impact)
+                            kick(v, 0.5 * s, dwh, load, ag, force, inv_mass, vn, ground)
+                            stick_together(mass, vn, nf, stuck, host, group_mass, group_sum, False,
+                                           has_impact)
                     if inside:
-                        work += 0.5 * impulse_work(load, s, dws, v, vn) - (0.5 * ag * s * momentum(mass, v, vn) if ag != 0.0 else 0.0)
+                        work += 0.5 * impulse_work(load, s, dws, v, vn) - (
+                            0.5 * ag * s * momentum(mass, v, vn) if ag != 0.0 else 0.0)
                         d_primary += structure_dissipation(v, vn, nf, storey_c, floor_c, s)
                         d_absorber += absorber_dissipation(v, vn, nf, host, rows, s)
                         if has_hertz:  # contact time: the sub-steps that start in contact
@@ -440,19 +484,20 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
                     # slower)
                     ag_end = ag_next
                     if (has_impact or has_hertz) and s < left:
-                        ag_end = excitation(t + s, tm, (t + s - t_step) / dt, forces, series_t, series_v, series_ptr,
-                                            series_target, filtered, c_force, c_ground, z, zn, pc, False, GROUND,
-                                            load_end)
+                        ag_end = excitation(t + s, tm, (t + s - t_step) / dt, forces, series_t, series_v,
+                                            series_ptr, series_target, filtered, c_force, c_ground, z, zn, pc,
+                                            False, ground, load_end)
                     else:
                         for k in range(nf):
                             load_end[k] = load_next[k]
                     attachment_forces(x, v, nf, storey_k, storey_c, floor_c, host, rows, force)
                     contact_forces(x, nf, kind, host, rows, force, has_hertz)
-                    kick(v, 0.5 * s, dwh, load_end, ag_end, force, inv_mass, vn, GROUND)
+                    kick(v, 0.5 * s, dwh, load_end, ag_end, force, inv_mass, vn, ground)
                     if has_impact:
                         stick_together(mass, vn, nf, stuck, host, group_mass, group_sum, False)
                     if inside:
-                        work += 0.5 * impulse_work(load_end, s, dws, v, vn) - (0.5 * ag_end * s * momentum(mass, v, vn) if ag_end != 0.0 else 0.0)
+                        work += 0.5 * impulse_work(load_end, s, dws, v, vn) - (
+                            0.5 * ag_end * s * momentum(mass, v, vn) if ag_end != 0.0 else 0.0)
                         d_primary += structure_dissipation(v, vn, nf, storey_c, floor_c, s)
                         d_absorber += absorber_dissipation(v, vn, nf, host, rows, s)
                     for b in range(nb):
@@ -482,14 +527,16 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
                     if has_hertz and hit >= 0 and kind[hit] == HERTZ:  # onto or off the contact surface
                         h = host_of(host, hit, nf)
                         j = nf + hit
-                        x[j] = x[h] + (rows[hit, WALL_LO] if side * (-1 if leaves else 1) < 0 else rows[hit, WALL_HI])
+                        x[j] = x[h] + (rows[hit, WALL_LO] if side * (-1 if leaves else 1) < 0
+                                       else rows[hit, WALL_HI])
                         touching[hit] = 0 if leaves else side
                     elif has_impact and hit >= 0:  # the impact, at t + s
                         x[j] = x[h] + side * rows[hit, CLEARANCE]
                         gain = (force[j] / mass[j] - (force[h] + load_end[h]) / mass[h]) * dt
                         # the last impact a step may resolve ends a chatter sequence: inelastic collapse
                         last = n_impacts == MAX_EVENTS - 1
-                        loss = resolve_impact(mass, v, nf, hit, side, gain, rows[hit, RESTITUTION], last, stuck, host)
+                        loss = resolve_impact(mass, v, nf, hit, side, gain, rows[hit, RESTITUTION], last,
+                                              stuck, host)
                         n_impacts += 1
                         if inside:
                             loss_sum += loss
@@ -510,9 +557,9 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
                         if not sra:  # the forces on the floor at the step's end
                             acc[k] = force[k] + load_end[k]
                     floor_peaks(x, nf, acc, x_max, drift_max, acc_max)
-                    if watch and pending > 0:
-                        pending = first_passages(limits, t_step + dt, nf, x_max, drift_max, acc_max, inv_mass, not sra,
-                                                 e1_max, out)
+                    if pending > 0:
+                        pending = first_passages(limits, t_step + dt, nf, x_max, drift_max, acc_max, inv_mass,
+                                                 not sra, e1_max, out)
                 e1_prev = e1
             i = end
             if i == h_next:

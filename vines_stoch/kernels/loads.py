@@ -135,7 +135,8 @@ def target(row: float, nf: int) -> int:
 
 
 @njit(**INLINE)
-def applied(t: float, tm: float, forces, series_t, series_v, series_ptr, series_target, pc, on_grid: bool, load) -> float:
+def applied(t: float, tm: float, forces, series_t, series_v, series_ptr, series_target, pc, on_grid: bool,
+            load) -> float:
     """The closed-form loads and records at ``t``: the force on each floor into ``load`` (one
     entry per floor); returns the ground acceleration.  The arrays of ``ex`` come one by one
     (unpacking a tuple in a hot loop costs reference counting); with ``on_grid``, harmonic rows
@@ -165,6 +166,21 @@ def has_breaks(ex) -> bool:
         if forces[r, 0] == HALF_SINE or forces[r, 0] == PULSE_TRAIN:
             return True
     return series_target.shape[0] > 0
+
+
+@njit(**INLINE)
+def has_ground(ex, fl) -> bool:
+    """True when the loads include a ground acceleration (records or filtered ground motion)."""
+    series_target = ex[4]
+    c_ground = fl[4]
+    for s in range(series_target.shape[0]):
+        if series_target[s] == GROUND:
+            return True
+    for i in range(c_ground.shape[0]):
+        for r in range(c_ground.shape[1]):
+            if c_ground[i, r] != 0.0:
+                return True
+    return False
 
 
 @njit(**INLINE)
@@ -248,9 +264,8 @@ def excitation(t: float, tm: float, theta: float, forces, series_t, series_v, se
     acceleration.  The filtered loads (if ``filtered``, a compile-time constant of the kernels)
     are read ``theta`` of the way from the grid states ``z`` to ``zn`` (``c_force`` has one
     read-out row per floor, ``c_ground`` one row); harmonic rows from the phasor cosines ``pc``
-    if ``on_grid`` (see ``applied``).  Without ``has_ground`` (a compile-time constant: the
-    scene has no ground acceleration, see ``Scene.kernel_flags``) the ground acceleration is the
-    constant 0."""
+    if ``on_grid`` (see ``applied``).  Without ``has_ground`` (the scene has no ground
+    acceleration: ``has_ground``) the ground acceleration is the constant 0."""
     ground = applied(t, tm, forces, series_t, series_v, series_ptr, series_target, pc, on_grid, load)
     if filtered:
         for k in range(load.shape[0]):

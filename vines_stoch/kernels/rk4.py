@@ -17,21 +17,67 @@ The outer step ``dt`` never has to be shrunk by the user for contact.
 
 from __future__ import annotations
 
-from functools import lru_cache
+from functools import cache
 
 import numpy as np
 from numba import njit
 
-from ..physics import (CLEARANCE, DAMPING, HERTZ, IMPACT, K_LEFT, K_RIGHT, KERNEL, RESTITUTION, WALL_HI, WALL_LO,
-                       primary_energy)
-from .common import (ABSORBER_DISS, CAPPED, CHECK_EVERY, CONTACT_TIME, E1_MAX, ENERGY_INT, FINAL_ENERGY,
-                     IMPACT_LOSS, IMPACTS, IMPACTS_LEFT, IMPACTS_RIGHT, INLINE, INPUT, MAX_EVENTS,
-                     MAX_SUBSTEPS, PEAK_FORCE, PRIMARY_DISS, STATUS, STATUS_DIVERGED, accelerate,
-                     attachment_forces, block_end, contact_force, contact_forces, contact_step, diverged,
-                     first_passages, floor_peaks, host_of, keep_in_cavities, pick, pin_to_walls, put,
-                     record_history, record_sample, resolve_impact, scratch, start_history, stick_together,
-                     stored_energy, structure_power, write_floor_metrics)
-from .loads import applied, next_break
+from ..physics import (
+    CLEARANCE,
+    DAMPING,
+    HERTZ,
+    IMPACT,
+    KERNEL,
+    RESTITUTION,
+    WALL_HI,
+    WALL_LO,
+    primary_energy,
+)
+from .common import (
+    ABSORBER_DISS,
+    CAPPED,
+    CHECK_EVERY,
+    CONTACT_TIME,
+    E1_MAX,
+    ENERGY_INT,
+    FINAL_ENERGY,
+    IMPACT_LOSS,
+    IMPACTS,
+    IMPACTS_LEFT,
+    IMPACTS_RIGHT,
+    INLINE,
+    INPUT,
+    MAX_EVENTS,
+    MAX_SUBSTEPS,
+    PEAK_FORCE,
+    PRIMARY_DISS,
+    STATUS,
+    STATUS_DIVERGED,
+    accelerate,
+    attachment_forces,
+    block_end,
+    contact_force,
+    contact_forces,
+    contact_step,
+    diverged,
+    first_passages,
+    floor_peaks,
+    host_of,
+    keep_in_cavities,
+    pick,
+    pin_to_walls,
+    put,
+    record_history,
+    record_sample,
+    resolve_impact,
+    scratch,
+    start_history,
+    stick_together,
+    stored_energy,
+    structure_power,
+    write_floor_metrics,
+)
+from .loads import applied, has_breaks, next_break
 
 NEWTON_ITERATIONS = 12
 #: Event kinds.
@@ -77,9 +123,9 @@ def wall_accelerations(x, v, t, nf, mass, inv_mass, storey_k, storey_c, floor_c,
                        group_sum, sticking, contact):
     """``accelerations`` at an instant (an impact, the end of a step with stuck absorbers),
     out of line: rare work that need not grow the step loop."""
-    accelerations(x, v, t, t, nf, mass, inv_mass, storey_k, storey_c, floor_c, kind, host, rows, forces, series_t,
-                  series_v, series_ptr, series_target, stuck, release, acc, load, group_mass, group_sum, sticking,
-                  contact)
+    accelerations(x, v, t, t, nf, mass, inv_mass, storey_k, storey_c, floor_c, kind, host, rows, forces,
+                  series_t, series_v, series_ptr, series_target, stuck, release, acc, load, group_mass,
+                  group_sum, sticking, contact)
 
 
 @njit(**INLINE)
@@ -103,9 +149,9 @@ def rk4_step(x, v, t, h, xo, vo, acc, xs, vs, x2, a0, mass, inv_mass, storey_k, 
                 xs[b] = x[b]
                 vs[b] = v[b]
         ts = t if stage == 0 else (t + h if stage == 3 else tm)
-        r = accelerations(xs, vs, ts, tm, nf, mass, inv_mass, storey_k, storey_c, floor_c, kind, host, rows, forces,
-                          series_t, series_v, series_ptr, series_target, stuck, False, acc, load, group_mass,
-                          group_sum, sticking, contact)
+        r = accelerations(xs, vs, ts, tm, nf, mass, inv_mass, storey_k, storey_c, floor_c, kind, host, rows,
+                          forces, series_t, series_v, series_ptr, series_target, stuck, False, acc, load,
+                          group_mass, group_sum, sticking, contact)
         weight = 1.0 if stage == 0 or stage == 3 else 2.0
         c = 0.5 * h if stage < 2 else h
         for k in range(nf):
@@ -184,13 +230,12 @@ def next_event(x, xn, h, nf, kind, host, rows, stuck, touching):
     return event_kind, hit, hit_side, first
 
 
-@lru_cache(maxsize=None)
-def rk4_kernel(n_bodies: int, n_floors: int, has_impact: bool, has_hertz: bool, sampling: bool, piecewise: bool,
-               watch: bool = False):
-    """The RK4 loop specialised to a scene's structure (number of bodies and of floors, impact
-    absorbers, Hertz absorbers, Poincare sampling for the regime, loads with kinks or jumps:
-    ``Scene.kernel_flags``; limits to watch).  It takes the arguments of ``kdk.kdk_kernel`` (no noise, no
-    generators)."""
+@cache
+def rk4_kernel(n_bodies: int, n_floors: int, has_impact: bool, has_hertz: bool):
+    """The RK4 loop specialised to a scene's structure (the numbers of bodies and of floors, impact
+    absorbers, Hertz absorbers); Poincare sampling for the regime (a period), loads with kinks or
+    jumps (``loads.has_breaks``) and limits to watch are run-time values.  It takes the arguments
+    of ``kdk.kdk_kernel`` (no noise, no generators)."""
     NB = n_bodies
     NF = n_floors
 
@@ -212,7 +257,8 @@ def rk4_kernel(n_bodies: int, n_floors: int, has_impact: bool, has_hertz: bool, 
         load, group_mass, group_sum, x2, a0 = scratch(NF), scratch(NF), scratch(NF), scratch(NF), scratch(NF)
         x_max, drift_max, acc_max, x2_integral = scratch(NF), scratch(NF), scratch(NF), scratch(NF)
         # the out-of-line calls' own arrays, so that the stages' stay in registers
-        acc_wall, x_event, load_wall, gm_wall, gs_wall = scratch(NB), scratch(NB), scratch(NF), scratch(NF), scratch(NF)
+        acc_wall, x_event, load_wall, gm_wall, gs_wall = (scratch(NB), scratch(NB), scratch(NF), scratch(NF),
+                                                          scratch(NF))
         for b in range(nb):
             x[b] = state_x[b]
             v[b] = state_v[b]
@@ -222,25 +268,29 @@ def rk4_kernel(n_bodies: int, n_floors: int, has_impact: bool, has_hertz: bool, 
         next_sample = 0
         h_next = start_history(history, stride, x, nf, primary_energy(mass, storey_k, x, v, nf))
         pending = limits.shape[0]  # limits not passed yet
+        sampling = period > 0.0  # Poincare samples for the regime
+        piecewise = has_breaks(ex)  # sub-steps end at the loads' kinks and jumps
         i = 0
         inside = i0 == 0
         while i < n_steps:
             # rare work between blocks of steps (see ``block_end``)
             if i == i0:
                 inside = True
-                out[INPUT] = stored_energy(x, v, mass, nf, storey_k, kind, host, rows)  # (x, v reach out-of-line calls anyway)
+                # (x, v reach out-of-line calls anyway)
+                out[INPUT] = stored_energy(x, v, mass, nf, storey_k, kind, host, rows)
                 out[E1_MAX] = primary_energy(mass, storey_k, x, v, nf)
                 for k in range(nf):  # (the accelerations from the window's first sub-step on)
                     x_max[k] = abs(x[k])
                     drift_max[k] = abs(x[k] - x[k - 1] if k > 0 else x[k])
-                if watch and pending > 0:
+                if pending > 0:
                     pending = first_passages(limits, i * dt, nf, x_max, drift_max, acc_max, inv_mass, False,
                                              out[E1_MAX], out)
             if i % CHECK_EVERY == 0 and diverged(x):
                 out[STATUS] = STATUS_DIVERGED
                 break
             end = block_end(i, n_steps, i0, h_next)
-            for i in range(i, end):
+            start = i
+            for i in range(start, end):
                 if sampling:
                     xp[:] = x
                     vp[:] = v
@@ -268,15 +318,17 @@ def rk4_kernel(n_bodies: int, n_floors: int, has_impact: bool, has_hertz: bool, 
                             h = left
                             out[CAPPED] += 1
                         tau = h
-                    inc = rk4_step(x, v, t, tau, xn, vn, acc, xs, vs, x2, a0, mass, inv_mass, storey_k, storey_c,
-                                   floor_c, kind, host, rows, forces, series_t, series_v, series_ptr, series_target,
-                                   stuck, load, group_mass, group_sum, sticking, contact)
+                    inc = rk4_step(x, v, t, tau, xn, vn, acc, xs, vs, x2, a0, mass, inv_mass, storey_k,
+                                   storey_c, floor_c, kind, host, rows, forces, series_t, series_v,
+                                   series_ptr, series_target, stuck, load, group_mass, group_sum, sticking,
+                                   contact)
                     if phase == 0:
                         event_kind, q, side, j, hf, sign, wall = NONE, -1, 0, 0, 0, 0, 0.0
                         if (has_impact or has_hertz) and not capped:
                             for b in range(nb):
                                 x_event[b] = xn[b]
-                            event_kind, q, side, tau = next_event(x, x_event, h, nf, kind, host, rows, stuck, touching)
+                            event_kind, q, side, tau = next_event(x, x_event, h, nf, kind, host, rows, stuck,
+                                                                  touching)
                         if event_kind != NONE:
                             j, hf, sign, wall = event_geometry(event_kind, q, side, nf, host, rows)
                             phase = 1
@@ -286,7 +338,8 @@ def rk4_kernel(n_bodies: int, n_floors: int, has_impact: bool, has_hertz: bool, 
                         if approach > 0.0:
                             correction = sign * (pick(xn, j) - xn[hf] - wall) / approach
                             tau = min(max(tau - correction, 0.0), h)
-                            phase = phase + 1 if abs(correction) > 1e-15 * dt and phase < NEWTON_ITERATIONS else -1
+                            phase = (phase + 1 if abs(correction) > 1e-15 * dt and phase < NEWTON_ITERATIONS
+                                     else -1)
                             continue
                     phase = 0
                     h = tau
@@ -301,9 +354,9 @@ def rk4_kernel(n_bodies: int, n_floors: int, has_impact: bool, has_hertz: bool, 
                         # peaks: the state at the sub-step's end, the accelerations at its start
                         floor_peaks(xn, nf, a0, x_max, drift_max, acc_max)
                         out[E1_MAX] = max(out[E1_MAX], primary_energy(mass, storey_k, xn, vn, nf))
-                        if watch and pending > 0:
-                            pending = first_passages(limits, t + h, nf, x_max, drift_max, acc_max, inv_mass, False,
-                                                     out[E1_MAX], out)
+                        if pending > 0:
+                            pending = first_passages(limits, t + h, nf, x_max, drift_max, acc_max, inv_mass,
+                                                     False, out[E1_MAX], out)
                     for b in range(nb):
                         x[b] = xn[b]
                         v[b] = vn[b]
@@ -321,13 +374,13 @@ def rk4_kernel(n_bodies: int, n_floors: int, has_impact: bool, has_hertz: bool, 
                     if has_impact and event_kind == IMPACT_EVENT:
                         n_impacts += 1
                         put(x, j, x[hf] + side * rows[q, CLEARANCE])
-                        wall_accelerations(x, v, t, nf, mass, inv_mass, storey_k, storey_c, floor_c, kind, host, rows,
-                                           forces, series_t, series_v, series_ptr, series_target, stuck, False, acc_wall,
-                                           load_wall, gm_wall, gs_wall, True, contact)
+                        wall_accelerations(x, v, t, nf, mass, inv_mass, storey_k, storey_c, floor_c, kind,
+                                           host, rows, forces, series_t, series_v, series_ptr, series_target,
+                                           stuck, False, acc_wall, load_wall, gm_wall, gs_wall, True, contact)
                         # the last impact a step may resolve ends a chatter sequence: inelastic collapse
                         gain = (pick(acc_wall, j) - acc_wall[hf]) * dt
-                        loss = resolve_impact(mass, v, nf, q, side, gain, rows[q, RESTITUTION], n_impacts >= MAX_EVENTS,
-                                              stuck, host)
+                        loss = resolve_impact(mass, v, nf, q, side, gain, rows[q, RESTITUTION],
+                                              n_impacts >= MAX_EVENTS, stuck, host)
                         if inside:
                             out[IMPACT_LOSS] += loss
                             out[E1_MAX] = max(out[E1_MAX], primary_energy(mass, storey_k, x, v, nf))
@@ -342,15 +395,16 @@ def rk4_kernel(n_bodies: int, n_floors: int, has_impact: bool, has_hertz: bool, 
                 if has_impact and stuck.any():
                     pin_to_walls(x, nf, stuck, host, rows)
                     # release contacts the wall would have to pull (checked at step ends)
-                    wall_accelerations(x, v, t, nf, mass, inv_mass, storey_k, storey_c, floor_c, kind, host, rows,
-                                       forces, series_t, series_v, series_ptr, series_target, stuck, True, acc_wall,
-                                       load_wall, gm_wall, gs_wall, True, False)
+                    wall_accelerations(x, v, t, nf, mass, inv_mass, storey_k, storey_c, floor_c, kind, host,
+                                       rows, forces, series_t, series_v, series_ptr, series_target, stuck,
+                                       True, acc_wall, load_wall, gm_wall, gs_wall, True, False)
                 if sampling:
                     next_sample = record_sample(samples, next_sample, sample_from, period, i * dt, dt,
                                                 xp, vp, x, v, out[IMPACTS_LEFT], out[IMPACTS_RIGHT])
             i = end
             if i == h_next:
-                h_next = record_history(history, stride, h_next, x, nf, primary_energy(mass, storey_k, x, v, nf))
+                h_next = record_history(history, stride, h_next, x, nf,
+                                        primary_energy(mass, storey_k, x, v, nf))
         if diverged(x):
             out[STATUS] = STATUS_DIVERGED
         for b in range(nb):
