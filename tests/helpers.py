@@ -11,7 +11,6 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-from vines_stoch import parse_scenario
 from vines_stoch.cli import main
 from vines_stoch.kernels import SLOTS, simulate
 from vines_stoch.scenario.study import Study
@@ -32,18 +31,6 @@ def two_dof_data(primary_damping: float = 0.02, stiffness: float = 1.0,
     tables of the ensemble tests (add a name, loads and a simulation)."""
     return {"primary": {"mass": 1.0, "stiffness": 1.0, "damping": primary_damping},
             "absorbers": [{"type": "cubic", "mass": 0.05, "stiffness": stiffness, "damping": damping}]}
-
-
-def two_dof(primary_damping: float = 0.02, stiffness: str = "1.0", damping: str = "0.01") -> str:
-    """Scenario text of the primary (m = k = 1) with one cubic NES (m = 0.05): the bodies of the
-    ensemble tests (values as TOML text, so templates may leave placeholders)."""
-    return (f"[primary]\nmass = 1.0\nstiffness = 1.0\ndamping = {primary_damping}\n"
-            f"[[absorbers]]\ntype = \"cubic\"\nmass = 0.05\nstiffness = {stiffness}\ndamping = {damping}\n")
-
-
-def scene_of(text: str, point: int = 0):
-    """The Scene of one sweep point of scenario text."""
-    return build_scene(parse_scenario(text).points[point])
 
 
 def example_data(name: str, *drop: str) -> dict[str, Any]:
