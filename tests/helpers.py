@@ -1,43 +1,64 @@
-"""Helpers of the tests: scenes from dicts or scenario text, one realisation's metrics by name, the
-command line run in-process."""
+"""Helpers of the tests: scenes and studies from dicts (the tables of a scenario file), one
+realisation's metrics by name, the command line run in-process."""
 
 from __future__ import annotations
 
 import contextlib
 import io
 import sys
+import tomllib
+from collections.abc import Mapping
 from pathlib import Path
+from typing import Any
 
-from vines_stoch import parse_scenario
 from vines_stoch.cli import main
 from vines_stoch.kernels import SLOTS, simulate
 from vines_stoch.scenario.study import Study
 from vines_stoch.scene import build_scene
+from vines_stoch.validation.scenes import changed
+from vines_stoch.validation.scenes import text as toml_text
 
 #: The repository's root folder (scenario examples under ``scenarios/``; ``../shared`` beside it).
 ROOT = Path(__file__).resolve().parents[1]
 
-
-def two_dof(primary_damping: float = 0.02, stiffness: str = "1.0", damping: str = "0.01") -> str:
-    """Scenario text of the primary (m = k = 1) with one cubic NES (m = 0.05): the bodies of the
-    ensemble tests (values as TOML text, so templates may leave placeholders)."""
-    return (f"[primary]\nmass = 1.0\nstiffness = 1.0\ndamping = {primary_damping}\n"
-            f"[[absorbers]]\ntype = \"cubic\"\nmass = 0.05\nstiffness = {stiffness}\ndamping = {damping}\n")
+__all__ = ["ROOT", "changed", "cli", "example_data", "raw_metrics", "scene_from", "study_from", "toml_text",
+           "two_dof_data"]
 
 
-def scene_of(text: str, point: int = 0):
-    """The Scene of one sweep point of scenario text."""
-    return build_scene(parse_scenario(text).points[point])
+def two_dof_data(primary_damping: float = 0.02, stiffness: float = 1.0,
+                 damping: float = 0.01) -> dict[str, Any]:
+    """The primary (m = k = 1) with one cubic NES (m = 0.05): the ``primary`` and ``absorbers``
+    tables of the ensemble tests (add a name, loads and a simulation)."""
+    return {"primary": {"mass": 1.0, "stiffness": 1.0, "damping": primary_damping},
+            "absorbers": [{"type": "cubic", "mass": 0.05, "stiffness": stiffness, "damping": damping}]}
 
 
-def scene_from(data: dict, point: int = 0):
-    """The Scene of one sweep point of a scenario given as a dict (the tables of a scenario file)."""
-    return build_scene(Study("<test scenario>", "", data).points[point])
+def example_data(name: str, *drop: str) -> dict[str, Any]:
+    """The tables of the example scenario ``scenarios/<name>.toml``, those named in ``drop``
+    (e.g. ``"sweep"``) left out."""
+    data = tomllib.loads((ROOT / "scenarios" / f"{name}.toml").read_text())
+    for table in drop:
+        del data[table]
+    return data
 
 
-def raw_metrics(scene, generator=None) -> dict[str, float]:
-    """Raw kernel slots of one realisation, by name."""
-    return dict(zip(SLOTS, simulate(scene, generator)))
+def study_from(data: Mapping[str, Any], changes: Mapping[str, Any] | None = None, *,
+               source: str = "<test scenario>", directory: Path = Path(".")) -> Study:
+    """The validated Study of a scenario given as a dict, with ``changes`` (dotted keys, as
+    ``changed``) applied; its text (what a run records) is the TOML of the tables."""
+    data = changed(data, changes)
+    return Study(source, toml_text(data), data, Path(directory))
+
+
+def scene_from(data: Mapping[str, Any], point: int = 0, changes: Mapping[str, Any] | None = None):
+    """The Scene of one sweep point of a scenario given as a dict (with ``changes`` applied)."""
+    return build_scene(study_from(data, changes).points[point])
+
+
+def raw_metrics(scene, generator=None, **options) -> dict[str, float]:
+    """Raw kernel slots of one realisation, by name (``options``: those of ``simulate``, e.g.
+    ``final``)."""
+    return dict(zip(SLOTS, simulate(scene, generator, **options)))
 
 
 def cli(*args: str) -> tuple[int, str]:

@@ -2,51 +2,33 @@
 
 from __future__ import annotations
 
-import pandas as pd
-import pytest
 from pathlib import Path
 
-from vines_stoch import load_scenario, parse_scenario, read_results, run
+import pandas as pd
+import pytest
+
+from tests.helpers import study_from
+from vines_stoch import load_scenario, read_results, run
 from vines_stoch.metrics import METRICS
 from vines_stoch.store import read_metadata
 
-TEXT = """
-name = "repro"
-[primary]
-mass = 1.0
-stiffness = 1.0
-[[absorbers]]
-type = "cubic"
-mass = 0.05
-stiffness = 1.0
-damping = 0.01
-[[absorbers]]
-type = "impact"
-mass = 0.05
-clearance = 0.2
-restitution = 0.6
-[[loads]]
-type = "harmonic"
-amplitude = 0.1
-frequency = 1.0
-[[loads]]
-type = "white-noise"
-intensity = 0.1
-[simulation]
-duration = 5.0
-dt = 1e-3
-[ensemble]
-realizations = 23
-seed = 11
-[sweep]
-"loads.1.intensity" = [0.05, 0.1]
-"""
+DATA = {
+    "name": "repro",
+    "primary": {"mass": 1.0, "stiffness": 1.0},
+    "absorbers": [{"type": "cubic", "mass": 0.05, "stiffness": 1.0, "damping": 0.01},
+                  {"type": "impact", "mass": 0.05, "clearance": 0.2, "restitution": 0.6}],
+    "loads": [{"type": "harmonic", "amplitude": 0.1, "frequency": 1.0},
+              {"type": "white-noise", "intensity": 0.1}],
+    "simulation": {"duration": 5.0, "dt": 1e-3},
+    "ensemble": {"realizations": 23, "seed": 11},
+    "sweep": {"loads.1.intensity": [0.05, 0.1]},
+}
 
 METRIC_COLUMNS = ["point", "realization", "loads.1.intensity", *METRICS, "status"]
 
 
 def test_bitwise_identical_for_any_chunk_and_thread_count(tmp_path):
-    study = parse_scenario(TEXT)
+    study = study_from(DATA)
     frames = []
     for i, (chunk, workers) in enumerate([(1, 1), (7, 2), (0, 2), (0, 1)]):
         realizations, _ = run(study, tmp_path / str(i), chunk=chunk, workers=workers)
@@ -57,7 +39,7 @@ def test_bitwise_identical_for_any_chunk_and_thread_count(tmp_path):
 
 
 def test_results_contract(tmp_path):
-    study = parse_scenario(TEXT)
+    study = study_from(DATA)
     run(study, tmp_path)
     realizations, summary = read_results(tmp_path)
     assert len(realizations) == 2 * 23 and set(METRIC_COLUMNS) <= set(realizations.columns)
@@ -71,12 +53,12 @@ def test_results_contract(tmp_path):
     assert summary.loc[1, "edm_mean"] == pytest.approx(group.mean(), rel=1e-14)
     assert summary.loc[1, "edm_sem"] == pytest.approx(group.std(ddof=1) / 23**0.5, rel=1e-12)
     meta = read_metadata(tmp_path / "summary.parquet")
-    assert meta["vines_stoch.scenario"] == TEXT and meta["vines_stoch.seed"] == "11"
+    assert meta["vines_stoch.scenario"] == study.text and meta["vines_stoch.seed"] == "11"
     assert "numba" in meta["vines_stoch.dependencies"]
 
 
 def test_resume_keeps_finished_chunks(tmp_path):
-    study = parse_scenario(TEXT)
+    study = study_from(DATA)
     first, _ = run(study, tmp_path, chunk=5)
     parts = sorted((tmp_path / "parts").glob("*.parquet"))
     parts[-1].unlink()  # as if interrupted before the last chunk

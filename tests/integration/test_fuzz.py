@@ -9,7 +9,6 @@ with an ``error:`` line that names the file (and, for a mutated value, its key),
 from __future__ import annotations
 
 import re
-from pathlib import Path
 
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
@@ -30,7 +29,7 @@ VALUES = ['"1.0"', "true", "false", "1.5", "0", "-1", "-1.0", "0.0", "1e308", "-
 def mutate(text: str, kind: str, line: int, value: str, cut: float) -> tuple[bytes, str | None]:
     """One mutation of scenario text: the bytes to write and the key it touched (if any)."""
     lines = text.splitlines()
-    assignments = [i for i, l in enumerate(lines) if ASSIGNMENT.match(l)]
+    assignments = [i for i, text_line in enumerate(lines) if ASSIGNMENT.match(text_line)]
     i = assignments[line % len(assignments)]
     m = ASSIGNMENT.match(lines[i])
     key = m.group(2)

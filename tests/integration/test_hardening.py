@@ -19,13 +19,29 @@ from pathlib import Path
 import pandas as pd
 import pytest
 
+from tests.helpers import ROOT, cli, toml_text, two_dof_data
 from vines_stoch import parse_scenario
 from vines_stoch.store import LOCK, FolderInUse, lock_folder
 
-from tests.helpers import ROOT, cli, two_dof
-
-BASE = two_dof() + ('[[loads]]\ntype = "impulse"\nvelocity = 0.5\n'
-                    '[simulation]\nduration = 2.0\ndt = 0.01\n[ensemble]\nrealizations = 2\n')
+#: Scenario text (the cases below change its lines): the primary with a cubic NES under an impulse.
+BASE = """[primary]
+mass = 1.0
+stiffness = 1.0
+damping = 0.02
+[[absorbers]]
+type = "cubic"
+mass = 0.05
+stiffness = 1.0
+damping = 0.01
+[[loads]]
+type = "impulse"
+velocity = 0.5
+[simulation]
+duration = 2.0
+dt = 0.01
+[ensemble]
+realizations = 2
+"""
 
 
 def refused(path: Path, *fragments: str, command: str = "validate") -> str:
@@ -51,7 +67,8 @@ def scenario(text: str) -> str:
     ("stiffness = 1.0\ndamping = 0.02", "stiffness = true\ndamping = 0.02",
      ("primary.stiffness = True: must be a number, not true or false",)),
     ("realizations = 2", "realizations = 2.0", ("ensemble.realizations = 2.0: must be an integer",)),
-    ("realizations = 2", "realizations = 100000000000", ("ensemble.realizations", "must be in [1, 10000000]")),
+    ("realizations = 2", "realizations = 100000000000",
+     ("ensemble.realizations", "must be in [1, 10000000]")),
     ("duration = 2.0", "duration = 1e12", ("simulation.dt = 0.01", "steps a path", "at most")),
     ("mass = 1.0", "mass = 1e308", ("primary.mass = 1e+308", "<= 1e+15 (use other units)")),
     ("velocity = 0.5", "velocity = nan", ("loads.0.velocity = nan: must be a finite number",)),
@@ -113,7 +130,8 @@ def test_nesting_has_a_limit(write, text, fragments):
 
 def test_absorber_count_has_a_limit(write):
     absorber = '[[absorbers]]\ntype = "cubic"\nmass = 0.05\nstiffness = 1.0\n'
-    refused(write(scenario(BASE + absorber * 20_000)), "absorbers: holds 20001 entries; it may hold at most 100")
+    refused(write(scenario(BASE + absorber * 20_000)),
+            "absorbers: holds 20001 entries; it may hold at most 100")
 
 
 def test_long_values_and_keys_are_cut_in_messages(write):
@@ -226,14 +244,18 @@ def test_lock_refuses_a_live_owner_and_takes_over_a_dead_one(tmp_path):
         assert json.loads((tmp_path / LOCK).read_text())["pid"] == os.getpid()
 
 
-SLOW = scenario(two_dof() + '[[loads]]\ntype = "white-noise"\nintensity = 0.1\n'
-                '[simulation]\nduration = 1000.0\ndt = 0.001\n[ensemble]\nrealizations = {n}\nchunk = 1\n')
+def slow(intensity: float) -> str:
+    """Scenario text of 200 realisations of 10^6 steps, one a chunk, under white noise."""
+    return toml_text({"name": "hardening", **two_dof_data(),
+                      "loads": [{"type": "white-noise", "intensity": intensity}],
+                      "simulation": {"duration": 1000.0, "dt": 0.001},
+                      "ensemble": {"realizations": 200, "chunk": 1}})
 
 
 def _start(path: Path, out: Path, *extra: str) -> subprocess.Popen:
-    return subprocess.Popen([sys.executable, "-m", "vines_stoch.cli", "run", str(path), "--out", str(out), "--quiet",
-                             "--workers", "1", *extra], cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                            text=True)
+    return subprocess.Popen([sys.executable, "-m", "vines_stoch.cli", "run", str(path), "--out", str(out),
+                             "--quiet", "--workers", "1", *extra], cwd=ROOT, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
 
 
 def _wait_for_parts(out: Path, count: int, process: subprocess.Popen) -> None:
@@ -249,8 +271,8 @@ def test_two_runs_into_one_folder_and_a_killed_run_resumed(tmp_path):
     killed with SIGKILL leaves its lock, which --resume takes over, and the resumed results
     equal those of a run never interrupted."""
     first, second = tmp_path / "first.toml", tmp_path / "second.toml"
-    first.write_text(SLOW.format(n=200))
-    second.write_text(SLOW.format(n=200).replace("intensity = 0.1", "intensity = 0.2"))
+    first.write_text(slow(0.1))
+    second.write_text(slow(0.2))
     out = tmp_path / "out"
     a = _start(first, out)
     _wait_for_parts(out, 2, a)
@@ -279,10 +301,8 @@ def test_one_version_string_from_the_package_metadata():
     """``__version__`` is the installed distribution's version (pyproject.toml's), and the
     results' metadata carry it."""
     import tomllib
-    from pathlib import Path
 
     import vines_stoch
-
     from vines_stoch.store import provenance
 
     project = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]

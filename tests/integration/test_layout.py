@@ -12,11 +12,10 @@ from pathlib import Path
 import pytest
 
 import vines_stoch
+from tests.helpers import cli
 from vines_stoch import plotting
 from vines_stoch.scenario import load_scenario
 from vines_stoch.validation import scenes
-
-from tests.helpers import cli
 
 PACKAGE = Path(vines_stoch.__file__).resolve().parent
 ROOT = PACKAGE.parent
@@ -46,7 +45,8 @@ def _targets(module: str, path: Path, node: ast.Import | ast.ImportFrom) -> list
             base = ".".join(package[:len(package) - node.level + 1] + ([node.module] if node.module else []))
         else:
             base = node.module or ""
-        names = [f"{base}.{alias.name}" if f"{base}.{alias.name}" in MODULES else base for alias in node.names]
+        names = [f"{base}.{alias.name}" if f"{base}.{alias.name}" in MODULES else base
+                 for alias in node.names]
     targets = []
     for name in names:
         while name and name not in MODULES:  # an attribute or a module outside the package
@@ -62,10 +62,12 @@ def _imports() -> dict[str, list[tuple[str, bool]]]:
     graph: dict[str, list[tuple[str, bool]]] = {}
     for module, path in MODULES.items():
         tree = ast.parse(path.read_text(), str(path))
-        lazy = {id(node) for function in ast.walk(tree) if isinstance(function, (ast.FunctionDef, ast.AsyncFunctionDef))
+        lazy = {id(node) for function in ast.walk(tree)
+                if isinstance(function, (ast.FunctionDef, ast.AsyncFunctionDef))
                 for node in ast.walk(function)}
         graph[module] = [(target, id(node) not in lazy) for node in ast.walk(tree)
-                         if isinstance(node, (ast.Import, ast.ImportFrom)) for target in _targets(module, path, node)]
+                         if isinstance(node, (ast.Import, ast.ImportFrom))
+                         for target in _targets(module, path, node)]
     return graph
 
 
@@ -103,7 +105,8 @@ def _cycles(graph: dict[str, set[str]]) -> list[list[str]]:
 
 def test_the_import_graph_sees_the_package():
     graph = _imports()
-    assert ("vines_stoch.validation.stability", True) in {(t, top) for t, top in graph["vines_stoch.validation.bench"]}
+    bench = {(t, top) for t, top in graph["vines_stoch.validation.bench"]}
+    assert ("vines_stoch.validation.stability", True) in bench
     assert ("vines_stoch.scenario.study", True) in graph["vines_stoch.validation.scenes"]
     assert ("vines_stoch.validation.bench", False) in graph["vines_stoch.cli"]
 
@@ -136,7 +139,8 @@ print(sorted(name for name in ("sdeint", "matplotlib", "vines_stoch.validation")
 
 
 def test_a_run_imports_neither_sdeint_nor_matplotlib(tmp_path):
-    done = subprocess.run([sys.executable, "-c", RUN, str(ROOT / "scenarios/cubic_nes_impulse.toml"), str(tmp_path)],
+    scenario = ROOT / "scenarios/cubic_nes_impulse.toml"
+    done = subprocess.run([sys.executable, "-c", RUN, str(scenario), str(tmp_path)],
                           cwd=ROOT, capture_output=True, text=True, timeout=600)
     assert done.returncode == 0, done.stderr
     assert done.stdout.split("\n")[-2] == "[]"

@@ -11,7 +11,8 @@ import tomllib
 import pandas as pd
 import pytest
 
-from vines_stoch import ScenarioError, parse_scenario
+from tests.helpers import study_from, toml_text
+from vines_stoch import ScenarioError
 from vines_stoch.optimize import from_unit, to_unit
 from vines_stoch.scenario import Bound
 
@@ -19,35 +20,21 @@ MU = 0.05
 
 #: Undamped primary (m = k = 1) with a linear TMD of mass ratio MU under a white-noise force;
 #: x1_rms is the root mean square displacement over 2000 s of stationary response.
-TMD = f"""
-name = "tmd-white-noise"
-[primary]
-mass = 1.0
-stiffness = 1.0
-[[absorbers]]
-type = "linear"
-mass = {MU}
-stiffness = 0.05
-damping = 0.01
-[[loads]]
-type = "white-noise"
-intensity = 1.0
-[simulation]
-duration = 2100.0
-dt = 0.05
-metrics_from = 100.0
-[ensemble]
-realizations = 32
-seed = 7
-"""
+TMD = {
+    "name": "tmd-white-noise",
+    "primary": {"mass": 1.0, "stiffness": 1.0},
+    "absorbers": [{"type": "linear", "mass": MU, "stiffness": 0.05, "damping": 0.01}],
+    "loads": [{"type": "white-noise", "intensity": 1.0}],
+    "simulation": {"duration": 2100.0, "dt": 0.05, "metrics_from": 100.0},
+    "ensemble": {"realizations": 32, "seed": 7},
+}
 
-OPTIMIZE = """
-[optimize]
-objective = "x1_rms"
-[optimize.parameters]
-"absorbers.0.stiffness" = { low = 0.03, high = 0.07 }
-"absorbers.0.damping" = { low = 0.002, high = 0.05, scale = "log" }
-"""
+#: The ``[optimize]`` table: the absorber's stiffness and (log-scaled) damping for the least x1_rms.
+OPTIMIZE = {
+    "objective": "x1_rms",
+    "parameters": {"absorbers.0.stiffness": {"low": 0.03, "high": 0.07},
+                   "absorbers.0.damping": {"low": 0.002, "high": 0.05, "scale": "log"}},
+}
 
 
 def warburton() -> tuple[float, float]:
@@ -58,7 +45,7 @@ def warburton() -> tuple[float, float]:
 
 
 def test_finds_the_closed_form_tmd_tuning_within_two_percent(write, tmp_path):
-    path = write(TMD + OPTIMIZE)
+    path = write(toml_text(TMD | {"optimize": OPTIMIZE}))
     out = tmp_path / "opt"
     done = subprocess.run([sys.executable, "-m", "vines_stoch.cli", "optimize", str(path), "--out", str(out)],
                           capture_output=True, text=True)
@@ -85,8 +72,7 @@ def test_common_random_numbers_make_the_objective_a_function_of_the_parameters(w
     from vines_stoch.ensemble import sample
     from vines_stoch.optimize import objective
 
-    study = parse_scenario(TMD.replace("realizations = 32", "realizations = 4")
-                           .replace("duration = 2100.0", "duration = 300.0") + OPTIMIZE)
+    study = study_from(TMD, {"ensemble.realizations": 4, "simulation.duration": 300.0, "optimize": OPTIMIZE})
     values = {"absorbers.0.stiffness": 0.046, "absorbers.0.damping": 0.0105}
     first = objective(sample(study.with_values(values), workers=1), "x1_rms")
     again = objective(sample(study.with_values(values), workers=2), "x1_rms")
@@ -101,30 +87,30 @@ def test_scaled_coordinates_round_trip(scale):
     assert from_unit(bound, 1.5) == 0.05 and from_unit(bound, -0.5) == 0.002
 
 
-@pytest.mark.parametrize("table, message", [
-    ('"absorbers.0.damping" = { low = -0.01, high = 0.05 }',
-     "optimize.parameters.absorbers.0.damping = {'low': -0.01, 'high': 0.05}: the bound -0.01 is not allowed: "
-     "the value must be >= 0"),
-    ('"absorbers.0.damping" = { low = 0.0, high = 0.05, scale = "log" }', "must be > 0 with scale = 'log'"),
-    ('"absorbers.0.damping" = { low = 0.05, high = 0.01 }', "must be > low (0.05)"),
-    ('"absorbers.0.damping" = { low = 0.01, high = 0.05, start = 0.1 }', "must be in [0.01, 0.05]"),
-    ('"absorbers.0.colour" = { low = 0.01, high = 0.05 }', "must name an existing numeric field"),
-    ('"loads.0.intensity" = { low = 0.5, high = 2.0 }', "is swept or uncertain"),
+@pytest.mark.parametrize("parameters, message", [
+    ({"absorbers.0.damping": {"low": -0.01, "high": 0.05}},
+     "optimize.parameters.absorbers.0.damping = {'low': -0.01, 'high': 0.05}: "
+     "the bound -0.01 is not allowed: the value must be >= 0"),
+    ({"absorbers.0.damping": {"low": 0.0, "high": 0.05, "scale": "log"}}, "must be > 0 with scale = 'log'"),
+    ({"absorbers.0.damping": {"low": 0.05, "high": 0.01}}, "must be > low (0.05)"),
+    ({"absorbers.0.damping": {"low": 0.01, "high": 0.05, "start": 0.1}}, "must be in [0.01, 0.05]"),
+    ({"absorbers.0.colour": {"low": 0.01, "high": 0.05}}, "must name an existing numeric field"),
+    ({"loads.0.intensity": {"low": 0.5, "high": 2.0}}, "is swept or uncertain"),
 ])
-def test_bad_optimize_tables_are_named(table, message):
-    text = TMD + '[sweep]\n"loads.0.intensity" = [1.0, 2.0]\n[optimize]\n[optimize.parameters]\n' + table + "\n"
+def test_bad_optimize_tables_are_named(parameters, message):
+    changes = {"sweep": {"loads.0.intensity": [1.0, 2.0]}, "optimize": {"parameters": parameters}}
     with pytest.raises(ScenarioError) as err:
-        parse_scenario(text, "tmd.toml")
+        study_from(TMD, changes, source="tmd.toml")
     assert message in str(err.value)
     assert str(err.value).startswith("tmd.toml: optimize.parameters.")
 
 
 def test_unknown_objective_lists_the_allowed_ones():
     with pytest.raises(ScenarioError, match="optimize.objective = 'impacts': must be 'edm', 'e1_max'"):
-        parse_scenario(TMD + OPTIMIZE.replace('"x1_rms"', '"impacts"'), "tmd.toml")
+        study_from(TMD, {"optimize": OPTIMIZE | {"objective": "impacts"}}, source="tmd.toml")
 
 
 def test_optimize_without_table_is_refused(write):
-    done = subprocess.run([sys.executable, "-m", "vines_stoch.cli", "optimize", str(write(TMD))],
+    done = subprocess.run([sys.executable, "-m", "vines_stoch.cli", "optimize", str(write(toml_text(TMD)))],
                           capture_output=True, text=True)
     assert done.returncode == 2 and "no [optimize] table" in done.stderr

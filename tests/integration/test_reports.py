@@ -9,35 +9,30 @@ import sys
 import numpy as np
 import pytest
 
-from vines_stoch import parse_scenario, run
+from tests.helpers import study_from, two_dof_data
+from vines_stoch import run
 from vines_stoch.reports import Run, compare, effective_range, report
 
-from tests.helpers import two_dof
 
-TEXT = """
-name = "{name}"
-""" + two_dof(0.0, "{k3}") + """[[loads]]
-type = "impulse"
-velocity = 0.5
-[simulation]
-duration = 20.0
-dt = 1e-2
-history = {{ points = 50 }}
-[ensemble]
-realizations = 12
-seed = {seed}
-[sweep]
-"loads.0.velocity" = [0.1, 0.5, 2.0]
-[uncertain]
-"absorbers.0.damping" = {{ distribution = "uniform", low = 0.005, high = 0.05 }}
-"""
+def scenario(name: str, k3: float, seed: int) -> dict:
+    """An impulse sweep of the undamped primary with a cubic NES of stiffness ``k3`` and an
+    uncertain damping."""
+    return {
+        "name": name,
+        **two_dof_data(0.0, k3),
+        "loads": [{"type": "impulse", "velocity": 0.5}],
+        "simulation": {"duration": 20.0, "dt": 1e-2, "history": {"points": 50}},
+        "ensemble": {"realizations": 12, "seed": seed},
+        "sweep": {"loads.0.velocity": [0.1, 0.5, 2.0]},
+        "uncertain": {"absorbers.0.damping": {"distribution": "uniform", "low": 0.005, "high": 0.05}},
+    }
 
 
 @pytest.fixture(scope="module")
 def runs(tmp_path_factory):
     root = tmp_path_factory.mktemp("runs")
     for name, k3, seed in (("soft", 1.0, 3), ("stiff", 4.0, 3), ("other-seed", 4.0, 4)):
-        run(parse_scenario(TEXT.format(name=name, k3=k3, seed=seed)), root / name, workers=2)
+        run(study_from(scenario(name, k3, seed)), root / name, workers=2)
     return root
 
 
@@ -82,10 +77,11 @@ def test_report_writes_markdown_and_plots(runs, tmp_path):
 
 def test_compare_command_prints_and_writes(runs, tmp_path):
     out = tmp_path / "cmp.md"
-    done = subprocess.run([sys.executable, "-m", "vines_stoch.cli", "compare", str(runs / "soft"), str(runs / "stiff"),
-                           "--out", str(out), "--metric", "edm"], capture_output=True, text=True)
+    done = subprocess.run([sys.executable, "-m", "vines_stoch.cli", "compare", str(runs / "soft"),
+                           str(runs / "stiff"), "--out", str(out), "--metric", "edm"],
+                          capture_output=True, text=True)
     assert done.returncode == 0, done.stderr
     assert "stiff - soft" in done.stdout and out.read_text().count("| edm |") == 3
-    bad = subprocess.run([sys.executable, "-m", "vines_stoch.cli", "compare", str(runs / "soft"), str(tmp_path)],
-                         capture_output=True, text=True)
+    bad = subprocess.run([sys.executable, "-m", "vines_stoch.cli", "compare", str(runs / "soft"),
+                          str(tmp_path)], capture_output=True, text=True)
     assert bad.returncode == 2 and "no summary.parquet" in bad.stderr

@@ -15,31 +15,22 @@ import pandas as pd
 import pytest
 from scipy.stats import t as student_t
 
-from vines_stoch import ensemble, history, parse_scenario, run
+from tests.helpers import cli, study_from, toml_text, two_dof_data
+from vines_stoch import ensemble, history, run
 from vines_stoch.kernels import simulate
 from vines_stoch.scene import build_scene
 from vines_stoch.store import read_metadata
 
-from tests.helpers import cli, two_dof
 
-TEXT = """
-name = "scale"
-""" + two_dof() + """[[loads]]
-type = "white-noise"
-intensity = 0.1
-[simulation]
-duration = {duration}
-dt = {dt}
-history = {{ points = 51, quantiles = [0.05, 0.5, 0.95] }}
-[ensemble]
-realizations = {n}
-seed = 7
-chunk = {chunk}
-"""
-
-
-def scenario(n: int = 60, chunk: int = 0, duration: float = 5.0, dt: float = 1e-2) -> str:
-    return TEXT.format(n=n, chunk=chunk, duration=duration, dt=dt)
+def scenario(n: int = 60, chunk: int = 0, duration: float = 5.0, dt: float = 1e-2, history: bool = True,
+             **ensemble) -> dict:
+    """The two-body scene under white noise, ``n`` realisations in chunks of ``chunk``, with
+    history statistics (or without: ``history=False``); ``ensemble``: more keys of its table."""
+    simulation: dict = {"duration": duration, "dt": dt}
+    if history:
+        simulation["history"] = {"points": 51, "quantiles": [0.05, 0.5, 0.95]}
+    return {"name": "scale", **two_dof_data(), "loads": [{"type": "white-noise", "intensity": 0.1}],
+            "simulation": simulation, "ensemble": {"realizations": n, "seed": 7, "chunk": chunk, **ensemble}}
 
 
 def stored_paths(study, n: int) -> tuple[np.ndarray, np.ndarray]:
@@ -56,7 +47,7 @@ def stored_paths(study, n: int) -> tuple[np.ndarray, np.ndarray]:
 
 def test_history_equals_statistics_of_stored_paths(tmp_path):
     """Small ensemble (n <= BLOCK): moments to round-off, quantiles exactly numpy's."""
-    study = parse_scenario(scenario(n=60, chunk=7))
+    study = study_from(scenario(n=60, chunk=7))
     run(study, tmp_path, workers=2)
     h = pd.read_parquet(tmp_path / "history.parquet")
     paths, t = stored_paths(study, 60)
@@ -66,7 +57,8 @@ def test_history_equals_statistics_of_stored_paths(tmp_path):
         np.testing.assert_allclose(h[f"{name}_mean"], paths[s].mean(axis=1), rtol=1e-12, atol=1e-15)
         np.testing.assert_allclose(h[f"{name}_std"], paths[s].std(axis=1, ddof=1), rtol=1e-11, atol=1e-15)
         for q in (0.05, 0.5, 0.95):
-            np.testing.assert_array_equal(h[f"{name}_q{int(round(q * 100)):02d}"], np.quantile(paths[s], q, axis=1))
+            np.testing.assert_array_equal(h[f"{name}_q{int(round(q * 100)):02d}"],
+                                          np.quantile(paths[s], q, axis=1))
 
 
 def test_history_tree_is_chunk_invariant_and_within_its_rank_bound(tmp_path, monkeypatch):
@@ -77,12 +69,12 @@ def test_history_tree_is_chunk_invariant_and_within_its_rank_bound(tmp_path, mon
     n = 300
     frames = []
     for i, (chunk, workers) in enumerate([(0, 2), (1, 1), (7, 2), (64, 2)]):
-        run(parse_scenario(scenario(n=n, chunk=chunk)), tmp_path / str(i), workers=workers)
+        run(study_from(scenario(n=n, chunk=chunk)), tmp_path / str(i), workers=workers)
         frames.append(pd.read_parquet(tmp_path / str(i) / "history.parquet"))
     for other in frames[1:]:
         pd.testing.assert_frame_equal(frames[0], other, check_exact=True)
     h = frames[0]
-    paths, _ = stored_paths(parse_scenario(scenario(n=n)), n)
+    paths, _ = stored_paths(study_from(scenario(n=n)), n)
     bound = h["rank_error"].iloc[0]
     assert 0 < bound < 0.25
     for s, name in enumerate(history.SIGNALS):
@@ -110,12 +102,10 @@ def test_history_memory_does_not_grow_with_realisations(monkeypatch):
 
 
 def test_target_sem_stops_at_a_multiple_of_the_step_whatever_the_chunks(tmp_path):
-    text = scenario(n=2000, chunk=0).replace("seed = 7", "seed = 7\ntarget_sem = 0.004")
-    text = text.replace("history = { points = 51, quantiles = [0.05, 0.5, 0.95] }", "")
     results = []
     for i, chunk in enumerate([0, 37]):
-        realizations, summary = run(parse_scenario(text.replace("chunk = 0", f"chunk = {chunk}")),
-                                    tmp_path / str(i), workers=2)
+        study = study_from(scenario(n=2000, chunk=chunk, history=False, target_sem=0.004))
+        realizations, summary = run(study, tmp_path / str(i), workers=2)
         results.append(realizations)
     pd.testing.assert_frame_equal(results[0], results[1], check_exact=True)
     n = len(results[0])
@@ -127,8 +117,7 @@ def test_target_sem_stops_at_a_multiple_of_the_step_whatever_the_chunks(tmp_path
 
 
 def test_summary_confidence_interval(tmp_path):
-    _, summary = run(parse_scenario(scenario(n=40).replace("history = { points = 51, quantiles = [0.05, 0.5, 0.95] }", "")),
-                     tmp_path, workers=1)
+    _, summary = run(study_from(scenario(n=40, history=False)), tmp_path, workers=1)
     row = summary.iloc[0]
     half = student_t.ppf(0.975, row["n_ok"] - 1) * row["edm_sem"]
     assert row["edm_ci95_lo"] == pytest.approx(row["edm_mean"] - half, rel=1e-12)
@@ -140,7 +129,7 @@ def test_interrupted_run_resumes_history_from_its_checkpoint(tmp_path, monkeypat
     """An interruption after some chunks (checkpoint after every fold) and --resume give the
     same realisations and history as an uninterrupted run."""
     monkeypatch.setattr(history, "BLOCK", 8)
-    study = parse_scenario(scenario(n=120, chunk=5))
+    study = study_from(scenario(n=120, chunk=5))
     reference = run(study, tmp_path / "ref", workers=2)
     ref_history = pd.read_parquet(tmp_path / "ref" / "history.parquet")
 
@@ -175,15 +164,15 @@ def test_sigkill_midway_then_resume_is_bitwise_identical(tmp_path):
     """A real process is killed with SIGKILL after a few chunks; --resume completes the run and
     realizations.parquet is byte for byte the uninterrupted run's."""
     path = tmp_path / "kill.toml"
-    path.write_text(scenario(n=240, chunk=3, duration=60.0, dt=1e-3).replace(
-        "history = { points = 51, quantiles = [0.05, 0.5, 0.95] }", ""))
+    path.write_text(toml_text(scenario(n=240, chunk=3, duration=60.0, dt=1e-3, history=False)))
     reference = spawn("run", str(path), "--out", str(tmp_path / "ref"), "--workers", "1", "--quiet")
     assert reference.wait(timeout=600) == 0, reference.stderr.read()
 
     victim = spawn("run", str(path), "--out", str(tmp_path / "cut"), "--workers", "1", "--quiet")
     parts = tmp_path / "cut" / "parts"
     deadline = time.monotonic() + 300
-    while len(list(parts.glob("point*.parquet"))) < 5 and victim.poll() is None and time.monotonic() < deadline:
+    while (len(list(parts.glob("point*.parquet"))) < 5 and victim.poll() is None
+           and time.monotonic() < deadline):
         time.sleep(0.01)
     victim.send_signal(signal.SIGKILL)
     victim.wait(timeout=60)
@@ -193,7 +182,8 @@ def test_sigkill_midway_then_resume_is_bitwise_identical(tmp_path):
 
     resumed = spawn("run", str(path), "--out", str(tmp_path / "cut"), "--workers", "1", "--quiet", "--resume")
     assert resumed.wait(timeout=600) == 0, resumed.stderr.read()
-    assert (tmp_path / "cut" / "realizations.parquet").read_bytes() == (tmp_path / "ref" / "realizations.parquet").read_bytes()
+    cut, ref = tmp_path / "cut" / "realizations.parquet", tmp_path / "ref" / "realizations.parquet"
+    assert cut.read_bytes() == ref.read_bytes()
 
 
 def test_distributed_cluster_survives_a_killed_worker(tmp_path):
@@ -201,7 +191,7 @@ def test_distributed_cluster_survives_a_killed_worker(tmp_path):
     with realisations and history identical to the embedded scheduler's."""
     from dask.distributed import Client, LocalCluster
 
-    study = parse_scenario(scenario(n=160, chunk=2, duration=100.0, dt=1e-3))
+    study = study_from(scenario(n=160, chunk=2, duration=100.0, dt=1e-3))
     embedded = run(study, tmp_path / "embedded", workers=2)
     with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None,
                       host="127.0.0.1") as cluster, Client(cluster) as client:
@@ -223,10 +213,12 @@ def test_distributed_cluster_survives_a_killed_worker(tmp_path):
     pd.testing.assert_frame_equal(embedded[0], distributed[0], check_exact=True)
     pd.testing.assert_frame_equal(embedded[1], distributed[1], check_exact=True)
     pd.testing.assert_frame_equal(pd.read_parquet(tmp_path / "embedded" / "history.parquet"),
-                                  pd.read_parquet(tmp_path / "distributed" / "history.parquet"), check_exact=True)
+                                  pd.read_parquet(tmp_path / "distributed" / "history.parquet"),
+                                  check_exact=True)
     meta = read_metadata(tmp_path / "distributed" / "realizations.parquet")
     assert meta["vines_stoch.scheduler"] == f"dask.distributed at {cluster.scheduler_address}"
-    assert read_metadata(tmp_path / "embedded" / "realizations.parquet")["vines_stoch.scheduler"] == "embedded"
+    embedded_meta = read_metadata(tmp_path / "embedded" / "realizations.parquet")
+    assert embedded_meta["vines_stoch.scheduler"] == "embedded"
 
 
 def test_scheduler_file(tmp_path):
@@ -238,7 +230,7 @@ def test_scheduler_file(tmp_path):
     from dask.distributed import LocalCluster
 
     path = tmp_path / "s.toml"
-    path.write_text(scenario(n=8, chunk=2))
+    path.write_text(toml_text(scenario(n=8, chunk=2)))
     code, err = cli("run", path, "--out", tmp_path / "embedded", "--quiet", "--workers", "1")
     assert code == 0, err
     with LocalCluster(n_workers=1, threads_per_worker=1, processes=True, dashboard_address=":0",
@@ -251,7 +243,8 @@ def test_scheduler_file(tmp_path):
     meta = read_metadata(tmp_path / "cluster" / "realizations.parquet")
     assert meta["vines_stoch.scheduler"] == f"dask.distributed at {cluster.scheduler_address}"
     pd.testing.assert_frame_equal(pd.read_parquet(tmp_path / "embedded" / "realizations.parquet"),
-                                  pd.read_parquet(tmp_path / "cluster" / "realizations.parquet"), check_exact=True)
+                                  pd.read_parquet(tmp_path / "cluster" / "realizations.parquet"),
+                                  check_exact=True)
     code, err = cli("run", path, "--scheduler-file", tmp_path / "missing.json")
     assert code == 2 and "no such file" in err
 
@@ -262,8 +255,7 @@ def test_shards_then_resume_give_the_one_run(tmp_path):
     run; shards share the folder with each other but not with a whole run; history studies
     are refused."""
     path = tmp_path / "s.toml"
-    path.write_text(scenario(n=24, chunk=2).replace(
-        "history = { points = 51, quantiles = [0.05, 0.5, 0.95] }", ""))
+    path.write_text(toml_text(scenario(n=24, chunk=2, history=False)))
     one, split = tmp_path / "one", tmp_path / "split"
     assert cli("run", path, "--out", one, "--quiet", "--workers", "1")[0] == 0
     code, err = cli("run", path, "--out", split, "--workers", "1", "--shard", "0/2")
@@ -277,7 +269,7 @@ def test_shards_then_resume_give_the_one_run(tmp_path):
         assert (split / name).read_bytes() == (one / name).read_bytes()
     assert cli("run", path, "--out", split, "--shard", "2/2")[0] == 2
     with_history = tmp_path / "h.toml"
-    with_history.write_text(scenario(n=4))
+    with_history.write_text(toml_text(scenario(n=4)))
     code, err = cli("run", with_history, "--out", tmp_path / "h", "--shard", "0/2")
     assert code == 2 and "history statistics" in err
 

@@ -9,7 +9,8 @@ import math
 import numpy as np
 import pytest
 
-from vines_stoch import ScenarioError, parse_scenario, run
+from tests.helpers import study_from
+from vines_stoch import ScenarioError, run
 from vines_stoch.validation.stability import CASES, run_case
 
 
@@ -37,48 +38,37 @@ def test_step_past_the_stability_limit_names_the_limit():
     # absorber m = 0.05 on k = 1e6 over a primary m = k = 1: omega^2 = k (1/m1 + 1/m2) + ...
     omega = math.sqrt(np.linalg.eigvalsh(np.array([[1.0 + 1e6, -1e6 / math.sqrt(0.05)],
                                                    [-1e6 / math.sqrt(0.05), 1e6 / 0.05]])).max())
-    assert message.startswith("coarse.toml: simulation.dt = 0.001: is past the stability limit of the rk4 scheme")
+    assert message.startswith("coarse.toml: simulation.dt = 0.001: "
+                              "is past the stability limit of the rk4 scheme")
     assert f"{omega:.6g} rad/s" in message and f"{2 * math.sqrt(2) / omega:.4g}" in message
 
 
-DIVERGING = """
-name = "diverging"
-[primary]
-mass = 1.0
-stiffness = 1.0
-damping = 0.02
-[[absorbers]]
-type = "linear"
-mass = 0.05
-stiffness = 1.0
-[[loads]]
-type = "impulse"
-velocity = 0.5
-[simulation]
-duration = 200.0
-dt = 0.1
-scheme = "euler-maruyama"
-[ensemble]
-realizations = {n}
-seed = {seed}
-[uncertain]
-"absorbers.0.stiffness" = {law}
-"""
+#: A linear absorber whose drawn stiffness can put kick-drift-kick past its stability limit.
+DIVERGING = {
+    "name": "diverging",
+    "primary": {"mass": 1.0, "stiffness": 1.0, "damping": 0.02},
+    "absorbers": [{"type": "linear", "mass": 0.05, "stiffness": 1.0}],
+    "loads": [{"type": "impulse", "velocity": 0.5}],
+    "simulation": {"duration": 200.0, "dt": 0.1, "scheme": "euler-maruyama"},
+}
 
 
 @pytest.mark.parametrize("n, seed, law, expected", [
     # one of 20 draws has omega dt = 2.07 > 2 (the next largest 1.94)
-    (20, 3, '{ distribution = "uniform", low = 0.5, high = 20.5 }', 1),
-    (40, 2, '{ distribution = "lognormal", median = 1.0, cov = 10.0 }', None),
+    (20, 3, {"distribution": "uniform", "low": 0.5, "high": 20.5}, 1),
+    (40, 2, {"distribution": "lognormal", "median": 1.0, "cov": 10.0}, None),
 ])
 def test_diverging_realisations_are_counted_not_averaged(tmp_path, n, seed, law, expected):
     """Realisations whose drawn absorber stiffness puts velocity Verlet past its stability limit
     (omega_max dt > 2) overflow: those, and only those, are marked "diverged", counted in
     n_failed and left out of every statistic."""
-    realizations, summary = run(parse_scenario(DIVERGING.format(n=n, seed=seed, law=law)), tmp_path, workers=1)
+    study = study_from(DIVERGING, {"ensemble": {"realizations": n, "seed": seed},
+                                   "uncertain": {"absorbers.0.stiffness": law}})
+    realizations, summary = run(study, tmp_path, workers=1)
     k = realizations["absorbers.0.stiffness"].to_numpy()
     root_m = math.sqrt(0.05)
-    omega = np.array([math.sqrt(np.linalg.eigvalsh(np.array([[1.0 + ka, -ka / root_m], [-ka / root_m, ka / 0.05]])).max())
+    omega = np.array([math.sqrt(np.linalg.eigvalsh(np.array([[1.0 + ka, -ka / root_m],
+                                                             [-ka / root_m, ka / 0.05]])).max())
                       for ka in k])
     unstable = omega * 0.1 > 2.0
     assert 0 < unstable.sum() < n and (expected is None or unstable.sum() == expected)

@@ -7,11 +7,10 @@ from __future__ import annotations
 
 import pytest
 
+from tests.helpers import raw_metrics
 from vines_stoch import load_scenario
 from vines_stoch.scene import build_scene
 from vines_stoch.validation.reproduce import PRIMARY_E1MAX, TABLES
-
-from tests.helpers import raw_metrics
 
 
 def test_primary_alone_matches_seed_003():

@@ -18,8 +18,8 @@ import numpy as np
 from vines_stoch.kernels.common import stored_energy
 x, v = np.array([0.1, 0.3]), np.array([0.0, 0.0])
 rows = np.zeros((1, 10)); rows[0, 0] = 2.0
-print(repr(stored_energy(x, v, np.array([1.0, 0.1]), 1, np.array([1.0]), np.zeros(1, np.int64), np.zeros(1, np.int64),
-                         rows)))
+print(repr(stored_energy(x, v, np.array([1.0, 0.1]), 1, np.array([1.0]), np.zeros(1, np.int64),
+                         np.zeros(1, np.int64), rows)))
 '''
 
 
@@ -70,6 +70,6 @@ def test_a_package_in_a_zip_archive_keeps_numba_s_own_locations(tmp_path):
             z.write(f, f.relative_to(cache.PACKAGE.parent))
     env = {**os.environ, "PYTHONPATH": str(archive)}
     done = subprocess.run([sys.executable, "-c", "import vines_stoch.physics, vines_stoch.cache as c; "
-                           "print(repr(c.key_by_sources()), c.PACKAGE)"], cwd=tmp_path, env=env, capture_output=True,
-                          text=True, check=True)
+                           "print(repr(c.key_by_sources()), c.PACKAGE)"], cwd=tmp_path, env=env,
+                          capture_output=True, text=True, check=True)
     assert done.stdout.startswith("'' ") and "vs.zip" in done.stdout

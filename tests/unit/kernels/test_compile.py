@@ -75,8 +75,9 @@ def test_shared_scope_copies_compile_the_same_code_with_fewer_copies():
 
 
 def test_the_kernels_inline_with_shared_scope_copies():
-    import vines_stoch.physics  # noqa: F401  (installs it)
     from numba.core import inline_closurecall as ic
+
+    import vines_stoch.physics  # noqa: F401  (installs it)
 
     assert share_scope_copies()
     assert ic.InlineWorker.inline_ir.shares_scope_copies

@@ -9,59 +9,45 @@ import numpy as np
 import pytest
 from scipy.special import beta
 
+from tests.helpers import changed, raw_metrics, scene_from
 from vines_stoch import load_scenario
-from vines_stoch.kernels import SLOTS, simulate
+from vines_stoch.kernels import simulate
 from vines_stoch.metrics import finish, regime
 from vines_stoch.physics import hertz_constant
 from vines_stoch.scene import build_scene
-
-from tests.helpers import raw_metrics, scene_of
 from vines_stoch.validation.reference import hertz_reference
 
-SEED_ABSORBER = """
-[[absorbers]]
-type = "hertz"
-geometry = "{geometry}"
-mass = {mass}
-stiffness = {k}
-damping = {c}
-offset = {d}
-gap = {g}
-contact_left = {{ {left} }}
-contact_right = {{ {right} }}
-"""
+#: Contact surfaces of the seed 003 designs (soft left and right barriers) and steel on steel.
+SOFT_LEFT = {"young": [2.1e11, 2.21e7], "poisson": [0.3, 0.3], "radius": 1.0}
+SOFT_RIGHT = {"young": [2.1e11, 2.05e7], "poisson": [0.3, 0.3], "radius": 1.0}
+STEEL = {"young": [2.1e11, 2.1e11], "poisson": [0.3, 0.3], "radius": 1.0}
 
-SEED_BASE = """
-name = "seed"
-[primary]
-mass = 1000.0
-stiffness = 3.95e4
-damping = 452.0
-{absorber}
-[[loads]]
-type = "harmonic"
-amplitude = 800.0
-frequency = 6.3
-[simulation]
-duration = {duration}
-dt = 1e-3
-"""
 
-SOFT_LEFT = "young = [2.1e11, 2.21e7], poisson = [0.3, 0.3], radius = 1.0"
-SOFT_RIGHT = "young = [2.1e11, 2.05e7], poisson = [0.3, 0.3], radius = 1.0"
+def seed_absorber(geometry: str, mass: float, k: float, c: float, d: float, g: float, left: dict,
+                  right: dict) -> dict:
+    """A Hertz absorber table: ``k``, ``c`` its spring and dashpot, ``d`` its offset, ``g`` its gap."""
+    return {"type": "hertz", "geometry": geometry, "mass": mass, "stiffness": k, "damping": c, "offset": d,
+            "gap": g, "contact_left": left, "contact_right": right}
+
+
+def seed_data(absorber: dict, duration: float) -> dict:
+    """The seed 003 primary under 800 cos(6.3 t) N with ``absorber``, from rest."""
+    return {"name": "seed",
+            "primary": {"mass": 1000.0, "stiffness": 3.95e4, "damping": 452.0},
+            "absorbers": [absorber],
+            "loads": [{"type": "harmonic", "amplitude": 800.0, "frequency": 6.3}],
+            "simulation": {"duration": duration, "dt": 1e-3}}
 
 
 def single_contact(k: float, approach: float, m1=1000.0, m2=60.0, gap=0.01):
     """A free primary and a free Hertz absorber approaching the right obstacle at ``approach``:
     one contact, then the absorber flies back across the cavity (no second contact)."""
     flight = gap / approach
-    text = SEED_BASE.format(absorber=SEED_ABSORBER.format(
-        geometry="double-sided", mass=m2, k=0.0, c=0.0, d=0.0, g=gap, left=f"k = {k}", right=f"k = {k}"),
-        duration=3.0 * flight).replace("stiffness = 3.95e4", "stiffness = 0.0").replace(
-        "damping = 452.0", "damping = 0.0").replace("amplitude = 800.0", "amplitude = 0.0").replace(
-        "mass = 1000.0", f"mass = {m1}")
-    text += "\n[[loads]]\ntype = \"initial\"\nvelocity = [0.0, %r]\n" % approach
-    return scene_of(text)
+    absorber = seed_absorber("double-sided", m2, 0.0, 0.0, 0.0, gap, {"k": k}, {"k": k})
+    data = changed(seed_data(absorber, 3.0 * flight), {"primary.mass": m1, "primary.stiffness": 0.0,
+                                                        "primary.damping": 0.0, "loads.0.amplitude": 0.0})
+    data["loads"].append({"type": "initial", "velocity": [0.0, approach]})
+    return scene_from(data)
 
 
 @pytest.mark.parametrize("k, approach", [(hertz_constant([2.1e11, 2.05e7], [0.3, 0.3], 1.0), 1.0),
@@ -71,7 +57,7 @@ def test_single_hertz_contact_matches_the_closed_form(k, approach):
     m1, m2 = 1000.0, 60.0
     scene = single_contact(k, approach, m1, m2)
     final = np.zeros((2, 2))
-    raw = dict(zip(SLOTS, simulate(scene, final=final)))
+    raw = raw_metrics(scene, final=final)
     m = m1 * m2 / (m1 + m2)
     z_max = (5.0 * m * approach**2 / (4.0 * k)) ** 0.4
     duration = 2.0 * z_max / approach * 0.4 * beta(0.4, 0.5)
@@ -87,10 +73,8 @@ def test_single_hertz_contact_matches_the_closed_form(k, approach):
 
 def test_steel_contact_at_the_default_step_is_stable():
     """Steel on steel (contact of about 0.5 ms) at dt = 1e-3 on a seed design: finite, balanced."""
-    steel = "young = [2.1e11, 2.1e11], poisson = [0.3, 0.3], radius = 1.0"
-    text = SEED_BASE.format(absorber=SEED_ABSORBER.format(
-        geometry="single-sided", mass=60.0, k=215.0, c=232.0, d=0.06, g=0.3, left=steel, right=steel), duration=60.0)
-    scene = scene_of(text)
+    absorber = seed_absorber("single-sided", 60.0, 215.0, 232.0, 0.06, 0.3, STEEL, STEEL)
+    scene = scene_from(seed_data(absorber, 60.0))
     row = finish(simulate(scene), scene)
     assert row["status"] == "ok" and row["impacts"] > 10
     assert abs(row["energy_residual"]) < 1e-6
@@ -100,13 +84,12 @@ def test_ssvi_seed_design_matches_a_tight_scipy_reference():
     """SS-1(60) from rest for 12 s (about 10 contacts): x1 and e1_max against DOP853 with events."""
     duration = 12.0
     times = np.linspace(1.0, duration, 12)
-    absorber = SEED_ABSORBER.format(geometry="single-sided", mass=60.0, k=215.0, c=232.0, d=0.06, g=0.3,
-                                    left=SOFT_LEFT, right=SOFT_RIGHT)
+    absorber = seed_absorber("single-sided", 60.0, 215.0, 232.0, 0.06, 0.3, SOFT_LEFT, SOFT_RIGHT)
     x1 = []
     for t in times:
-        scene = scene_of(SEED_BASE.format(absorber=absorber, duration=t))
+        scene = scene_from(seed_data(absorber, float(t)))
         final = np.zeros((2, 2))
-        raw = dict(zip(SLOTS, simulate(scene, final=final)))
+        raw = raw_metrics(scene, final=final)
         x1.append(final[0, 0])
     k_left = hertz_constant([2.1e11, 2.21e7], [0.3, 0.3], 1.0)
     k_right = hertz_constant([2.1e11, 2.05e7], [0.3, 0.3], 1.0)
@@ -122,26 +105,12 @@ def test_ssvi_seed_design_matches_a_tight_scipy_reference():
 def test_chatter_ends_in_sticking(restitution):
     """An absorber in a small cavity of a strongly forced primary: chatter sequences end in
     sticking and separation; bounded time, bounded impacts, closed energy balance."""
-    text = f"""
-name = "chatter"
-[primary]
-mass = 1.0
-stiffness = 1.0
-damping = 0.05
-[[absorbers]]
-type = "impact"
-mass = 0.2
-clearance = 0.01
-restitution = {restitution}
-[[loads]]
-type = "harmonic"
-amplitude = 1.0
-frequency = 1.0
-[simulation]
-duration = 60.0
-dt = 1e-3
-"""
-    scene = scene_of(text)
+    scene = scene_from({
+        "name": "chatter",
+        "primary": {"mass": 1.0, "stiffness": 1.0, "damping": 0.05},
+        "absorbers": [{"type": "impact", "mass": 0.2, "clearance": 0.01, "restitution": restitution}],
+        "loads": [{"type": "harmonic", "amplitude": 1.0, "frequency": 1.0}],
+        "simulation": {"duration": 60.0, "dt": 1e-3}})
     raw = raw_metrics(scene)  # compiles the kernel on a cold cache
     start = time.perf_counter()
     row = finish(simulate(scene), scene)

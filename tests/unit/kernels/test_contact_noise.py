@@ -8,11 +8,9 @@ import math
 import numpy as np
 import pytest
 
+from tests.helpers import example_data, raw_metrics, scene_from, study_from
 from vines_stoch.kernels.brownian import MEMO, new_memo, path_value, tree_value
-
 from vines_stoch.validation.precision import same_path_errors, strong_order
-
-from tests.helpers import raw_metrics, scene_from, scene_of
 
 #: Soft contact surfaces (K = 7.3e2 N/m^1.5: contacts last long enough to matter for the
 #: statistics) and steel on steel.
@@ -58,9 +56,10 @@ def test_tree_is_one_path_for_a_coarse_step_and_its_fine_steps():
             fine = normals[(step * refine + np.arange(refine)) * 2 + k] * sigma * math.sqrt(h)
             for tau in rng.uniform(0.0, dt, 50):
                 j = min(int(tau / h), refine - 1)
-                expected = fine[:j].sum() + path_value(seed, step * refine + j, k, fine[j], h, tau - j * h, sigma,
-                                                       normals, 1, 2, k, False, new_memo(2))
-                got = path_value(seed, step, k, fine.sum(), dt, tau, sigma, normals, refine, 2, k, True, new_memo(2))
+                expected = fine[:j].sum() + path_value(seed, step * refine + j, k, fine[j], h, tau - j * h,
+                                                       sigma, normals, 1, 2, k, False, new_memo(2))
+                got = path_value(seed, step, k, fine.sum(), dt, tau, sigma, normals, refine, 2, k, True,
+                                 new_memo(2))
                 assert got == pytest.approx(expected, rel=1e-10, abs=1e-13)  # (summation order)
 
 
@@ -71,7 +70,8 @@ def test_tree_values_do_not_depend_on_the_queries_before_them():
     instants, on two floors' memos, each switching between two steps' trees."""
     rng = np.random.default_rng(11)
     length = 1e-3
-    times = np.concatenate([0.3e-3 + 1e-9 * np.arange(40), length * np.array([0.5, 0.25, 0.75, 0.0, 1.0, 0.625]),
+    times = np.concatenate([0.3e-3 + 1e-9 * np.arange(40),
+                            length * np.array([0.5, 0.25, 0.75, 0.0, 1.0, 0.625]),
                             rng.uniform(0.0, length, 60)])
     queries = [(tau, floor, step) for tau in times for floor in (0, 1) for step in (3, 4)]
     for order in (np.arange(len(queries)), rng.permutation(len(queries)), rng.permutation(len(queries))):
@@ -132,14 +132,12 @@ def test_noise_to_zero_reproduces_the_deterministic_contact_solution():
     relative, and its error halves with ``dt`` (the scheme's first-order damping term: the
     closing kick takes the dashpots at the half-step velocity), contact counts and contact
     time agreeing."""
-    with open("scenarios/seed003_ss20.toml") as f:
-        text = f.read().split("[sweep]")[0]
-    reference = raw_metrics(scene_of(text))
+    data = example_data("seed003_ss20", "sweep")
+    reference = raw_metrics(scene_from(data))
     errors = []
     for dt in (1e-3, 5e-4):
-        noisy = text.replace("dt = 1e-3", f"dt = {dt}").replace(
-            "[simulation]", '[[loads]]\ntype = "white-noise"\nintensity = 1e-6\n\n[simulation]')
-        scene = scene_of(noisy)
+        noise = {"type": "white-noise", "intensity": 1e-6}
+        scene = scene_from(data, changes={"simulation.dt": dt, "loads": [*data["loads"], noise]})
         assert scene.scheme == "euler-maruyama"
         m = raw_metrics(scene, np.random.default_rng(1))
         errors.append(m["e1_max"] / reference["e1_max"] - 1.0)
@@ -211,11 +209,10 @@ def test_every_absorber_law_runs_under_every_load_type(absorber):
     which takes every scene.  (What remains refusable: RK4 with noise, being deterministic, and
     SRA3 with events or filters; ``schemes.refusal`` names why.)"""
     from vines_stoch import schemes
-    from vines_stoch.scenario.study import Study
 
     for name, load in LOADS.items():
         for extra in ([], [LOADS["white-noise"]]):
-            study = Study("<test scenario>", "", {
+            study = study_from({
                 "name": "combination", "primary": {"mass": 1.0, "stiffness": 1.0, "damping": 0.02},
                 "absorbers": [ABSORBERS[absorber]], "loads": [load, *extra],
                 "simulation": {"duration": 10.0, "dt": 1e-3}})
@@ -240,6 +237,6 @@ def test_hertz_absorbers_run_under_filtered_and_piecewise_noisy_loads(loads):
     for path in range(3):
         m = raw_metrics(scene, np.random.default_rng(path))
         assert m["status"] == 0 and m["impacts"] > 0 and m["contact_time"] > 0
-        residual = (m["input_energy"] - m["final_energy"] - m["primary_dissipation"] - m["absorber_dissipation"]
-                    - m["impact_loss"])
+        residual = (m["input_energy"] - m["final_energy"] - m["primary_dissipation"]
+                    - m["absorber_dissipation"] - m["impact_loss"])
         assert abs(residual) < 1e-3 * m["input_energy"]

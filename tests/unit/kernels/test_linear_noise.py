@@ -13,26 +13,18 @@ from __future__ import annotations
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from vines_stoch import parse_scenario, run
+from tests.helpers import study_from
+from vines_stoch import run
 
 M, K, C, SIGMA, T, DT, N = 1.0, 1.0, 0.1, 0.5, 20.0, 2e-3, 3000
 
-TEXT = f"""
-name = "sdof-noise"
-[primary]
-mass = {M}
-stiffness = {K}
-damping = {C}
-[[loads]]
-type = "white-noise"
-intensity = {SIGMA}
-[simulation]
-duration = {T}
-dt = {DT}
-[ensemble]
-realizations = {N}
-seed = 7
-"""
+DATA = {
+    "name": "sdof-noise",
+    "primary": {"mass": M, "stiffness": K, "damping": C},
+    "loads": [{"type": "white-noise", "intensity": SIGMA}],
+    "simulation": {"duration": T, "dt": DT},
+    "ensemble": {"realizations": N, "seed": 7},
+}
 
 
 def exact_moments():
@@ -51,7 +43,7 @@ def exact_moments():
 
 
 def test_white_noise_moments_match_lyapunov(tmp_path):
-    realizations, _ = run(parse_scenario(TEXT), tmp_path / "out")
+    realizations, _ = run(study_from(DATA), tmp_path / "out")
     mean_x2, energy_integral, input_energy = exact_moments()
     for column, exact in (("x1_rms", mean_x2), ("energy_integral", energy_integral),
                           ("input_energy", input_energy)):

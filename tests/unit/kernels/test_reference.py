@@ -8,8 +8,8 @@ from __future__ import annotations
 
 import pytest
 
-from vines_stoch import load_scenario, parse_scenario, run
-
+from tests.helpers import example_data, study_from
+from vines_stoch import run
 from vines_stoch.validation.reference import parallel_nes_reference
 
 DURATION = 100.0
@@ -17,10 +17,9 @@ DURATION = 100.0
 
 @pytest.mark.parametrize("impulse", [0.3, 0.5, 1.0, 1.6])
 def test_parallel_nes_matches_scipy_reference(tmp_path, impulse):
-    study = load_scenario("scenarios/parallel_nes_impulse.toml")
-    text = study.text.replace("duration = 300.0", f"duration = {DURATION}")
-    text = text.split("[sweep]")[0].replace("velocity = 1.0", f"velocity = {impulse}")
-    realizations, _ = run(parse_scenario(text), tmp_path)
+    data = example_data("parallel_nes_impulse", "sweep", "output")
+    study = study_from(data, {"simulation.duration": DURATION, "loads.0.velocity": impulse})
+    realizations, _ = run(study, tmp_path)
     row = realizations.iloc[0]
     edm, impacts = parallel_nes_reference(1.0, 1.0, 0.0, (0.05, 1.0, 0.01), (0.05, 0.2, 0.6),
                                           impulse, DURATION)

@@ -16,34 +16,26 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from scipy.integrate import solve_ivp
 from numba import njit
+from scipy.integrate import solve_ivp
 from scipy.signal import welch
 
+from tests.helpers import raw_metrics, scene_from, study_from
 from vines_stoch.filters import oscillator, stationary_covariance
-from vines_stoch.scenario.loads import SOILS
 from vines_stoch.kernels import load_history, simulate
-from vines_stoch.kernels.common import CHECK_EVERY
+from vines_stoch.kernels.common import CHECK_EVERY, INPUT
 from vines_stoch.kernels.loads import HARMONIC, phasors, rotations, turn
-
-from tests.helpers import raw_metrics, scene_of
+from vines_stoch.scenario.loads import SOILS
 
 M, K, C = 2.0, 50.0, 0.3
 
 
-def primary_text(loads: str, duration: float, dt: float = 1e-3, extra: str = "") -> str:
-    return f"""
-name = "loads"
-[primary]
-mass = {M}
-stiffness = {K}
-damping = {C}
-{loads}
-[simulation]
-duration = {duration}
-dt = {dt}
-{extra}
-"""
+def primary_data(loads: list[dict], duration: float, dt: float = 1e-3, **simulation) -> dict:
+    """The primary (``M``, ``K``, ``C``) alone under ``loads``; ``simulation``: more keys of its table."""
+    return {"name": "loads",
+            "primary": {"mass": M, "stiffness": K, "damping": C},
+            "loads": loads,
+            "simulation": {"duration": duration, "dt": dt, **simulation}}
 
 
 def duhamel(t: float, pieces) -> tuple[float, float]:
@@ -58,7 +50,8 @@ def duhamel(t: float, pieces) -> tuple[float, float]:
     for amplitude, mu, a, b in pieces:
         b = min(b, t)
         if b > a:
-            integral = amplitude * np.exp(lam * t) * (np.exp((mu - lam) * b) - np.exp((mu - lam) * a)) / (mu - lam)
+            integral = (amplitude * np.exp(lam * t) * (np.exp((mu - lam) * b) - np.exp((mu - lam) * a))
+                        / (mu - lam))
             x += integral
             v += lam * integral
     return x.imag / (M * wd), v.imag / (M * wd)
@@ -71,10 +64,10 @@ def half_sine_pieces(f0, td, t0):
 
 
 SHOCKS = {
-    "half-sine": ('[[loads]]\ntype = "half-sine"\namplitude = 3.0\nduration = 0.4567\nstart = 0.1234',
+    "half-sine": ({"type": "half-sine", "amplitude": 3.0, "duration": 0.4567, "start": 0.1234},
                   half_sine_pieces(3.0, 0.4567, 0.1234)),
-    "pulse-train": ('[[loads]]\ntype = "pulse-train"\namplitude = 2.0\nwidth = 0.2033\nperiod = 0.5071\n'
-                    'start = 0.0517\ncount = 3',
+    "pulse-train": ({"type": "pulse-train", "amplitude": 2.0, "width": 0.2033, "period": 0.5071,
+                     "start": 0.0517, "count": 3},
                     [(2.0, 0.0, 0.0517 + k * 0.5071, 0.0517 + k * 0.5071 + 0.2033) for k in range(3)]),
 }
 
@@ -82,10 +75,10 @@ SHOCKS = {
 @pytest.mark.parametrize("kind", SHOCKS)
 def test_shocks_match_the_duhamel_closed_form(kind):
     """Break points off the time grid: sub-steps end at them, so RK4 keeps its order."""
-    loads, pieces = SHOCKS[kind]
+    load, pieces = SHOCKS[kind]
     peak = max(abs(duhamel(t, pieces)[0]) for t in np.linspace(0.0, 3.0, 3001))
     for duration in (0.3, 0.61, 1.0, 2.345):
-        scene = scene_of(primary_text(loads, duration))
+        scene = scene_from(primary_data([load], duration))
         final = np.zeros((2, 1))
         simulate(scene, final=final)
         x_ref, v_ref = duhamel(scene.n_steps * scene.dt, pieces)
@@ -105,13 +98,13 @@ def test_harmonic_loads_on_the_step_grid_converge_at_the_schemes_order(scheme, o
     phase, row or half-step turn would leave an error that does not fall.  (Kick-drift-kick
     is first order on a damped primary: its closing half kick takes the damping force at the
     half-step velocity.)"""
-    loads = "".join(f'[[loads]]\ntype = "harmonic"\namplitude = {a}\nfrequency = {w}\nphase = {p}\n'
-                    for a, w, p in HARMONICS)
+    loads = [{"type": "harmonic", "amplitude": a, "frequency": w, "phase": p} for a, w, p in HARMONICS]
     pieces = [piece for a, w, p in HARMONICS
-              for piece in ((a / 2 * np.exp(1j * p), 1j * w, 0.0, np.inf), (a / 2 * np.exp(-1j * p), -1j * w, 0.0, np.inf))]
+              for piece in ((a / 2 * np.exp(1j * p), 1j * w, 0.0, np.inf),
+                            (a / 2 * np.exp(-1j * p), -1j * w, 0.0, np.inf))]
     errors = []
     for dt in (4e-3, 2e-3):
-        scene = scene_of(primary_text(loads, 20.0, dt, f'scheme = "{scheme}"'))
+        scene = scene_from(primary_data(loads, 20.0, dt, scheme=scheme))
         final = np.zeros((2, 1))
         simulate(scene, final=final)
         x_ref, v_ref = duhamel(scene.n_steps * scene.dt, pieces)
@@ -149,9 +142,9 @@ def phasor_error(forces, dt, n):
 
 def test_chirp_matches_a_tight_scipy_solution():
     a, f0, f1, sweep, duration = 1.5, 0.2, 2.0, 4.0, 5.0
-    text = primary_text(f'[[loads]]\ntype = "chirp"\namplitude = {a}\nf0 = {f0}\nf1 = {f1}\nduration = {sweep}', duration)
+    chirp = {"type": "chirp", "amplitude": a, "f0": f0, "f1": f1, "duration": sweep}
     final = np.zeros((2, 1))
-    simulate(scene_of(text), final=final)
+    simulate(scene_from(primary_data([chirp], duration)), final=final)
 
     def rhs(t, y):
         force = a * np.sin(2 * np.pi * (f0 * t + (f1 - f0) * t * t / (2 * sweep)))
@@ -168,30 +161,26 @@ def test_base_excitation_equals_the_equivalent_force(tmp_path):
     ag = np.sin(7.0 * t) * np.exp(-0.5 * t) + 0.3 * np.cos(23.0 * t)
     np.savetxt(tmp_path / "ground.txt", np.c_[t, ag])
     np.savetxt(tmp_path / "force.txt", np.c_[t, -M * ag])
-    paths = {}
-    for name, load in (("ground", 'type = "record"\nfile = "ground.txt"\nunits = "m/s2"'),
-                       ("force", 'type = "force-record"\nfile = "force.txt"')):
-        path = tmp_path / f"{name}.toml"
-        path.write_text(primary_text(f"[[loads]]\n{load}", 5.0, dt=1e-3))
-        paths[name] = path
-    from vines_stoch import load_scenario
     from vines_stoch.scene import build_scene
 
     results = {}
-    for name, path in paths.items():
+    for name, load in (("ground", {"type": "record", "file": "ground.txt", "units": "m/s2"}),
+                       ("force", {"type": "force-record", "file": "force.txt"})):
+        study = study_from(primary_data([load], 5.0, dt=1e-3), directory=tmp_path)  # (files beside it)
         final = np.zeros((2, 1))
-        raw = simulate(build_scene(load_scenario(path).points[0]), final=final)
+        raw = simulate(build_scene(study.points[0]), final=final)
         results[name] = (final.copy(), raw)
     (fg, rg), (ff, rf) = results["ground"], results["force"]
     assert np.max(np.abs(fg)) > 1e-3
     np.testing.assert_allclose(fg, ff, rtol=1e-12, atol=1e-15)
-    np.testing.assert_allclose(rg[0], rf[0], rtol=1e-12)  # input energy (work of a_g vs of F)
+    np.testing.assert_allclose(rg[INPUT], rf[INPUT], rtol=1e-12)  # input energy (work of a_g vs of F)
 
 
-def stationary_mean(text: str, n: int, quantity) -> tuple[float, float]:
+def stationary_mean(data: dict, n: int, quantity) -> tuple[float, float]:
     """Ensemble mean of ``quantity(raw metrics)`` over ``n`` realisations and its standard error."""
-    scene = scene_of(text)
-    values = np.array([quantity(raw_metrics(scene, np.random.default_rng(1000 + r)), scene) for r in range(n)])
+    scene = scene_from(data)
+    values = np.array([quantity(raw_metrics(scene, np.random.default_rng(1000 + r)), scene)
+                       for r in range(n)])
     return values.mean(), values.std(ddof=1) / np.sqrt(n)
 
 
@@ -204,15 +193,15 @@ def test_filtered_noise_force_variance_and_psd():
     """Exact filter steps: ``Var f = sigma^2 / (4 eta w0^3)``; one-sided Welch PSD of ``f`` in
     1/Hz is ``4 pi S(2 pi f)`` with ``S(w) = sigma^2 / (2 pi) / ((w0^2 - w^2)^2 + (2 eta w0 w)^2)``."""
     sigma, w0, eta, dt = 0.5, 2.0, 0.3, 0.05
-    load = (f'[[loads]]\ntype = "filtered-noise"\nintensity = {sigma}\nfrequency = {w0}\ndamping = {eta}\n'
-            'start = "stationary"')
+    load = {"type": "filtered-noise", "intensity": sigma, "frequency": w0, "damping": eta,
+            "start": "stationary"}
     variance = sigma**2 / (4.0 * eta * w0**3)
     # variance: final values of independent short paths (chi-square: SE = var sqrt(2 / (n - 1)))
-    short = scene_of(primary_text(load, 1.0, dt=dt))
+    short = scene_from(primary_data([load], 1.0, dt=dt))
     finals = np.array([load_history(short, np.random.default_rng(r))[1][-1, 0] for r in range(4000)])
     assert abs(finals.var() - variance) < 4.0 * variance * np.sqrt(2.0 / 3999)
     # PSD of one long path: about 3900 Welch segments, 1.7 % scatter per bin
-    long = scene_of(primary_text(load, 200_000.0, dt=dt))
+    long = scene_from(primary_data([load], 200_000.0, dt=dt))
     force = load_history(long, np.random.default_rng(5))[1][:, 0]  # (the primary's one floor)
     freq, psd = welch(force, fs=1.0 / dt, nperseg=2048)
     w = 2.0 * np.pi * freq
@@ -236,11 +225,11 @@ def augmented_variance(load_rows: np.ndarray, noise: np.ndarray, coupling) -> fl
 
 def test_filtered_noise_response_variance():
     sigma, w0, eta = 3.0, 4.0, 0.3
-    load = (f'[[loads]]\ntype = "filtered-noise"\nintensity = {sigma}\nfrequency = {w0}\ndamping = {eta}\n'
-            'start = "stationary"')
+    load = {"type": "filtered-noise", "intensity": sigma, "frequency": w0, "damping": eta,
+            "start": "stationary"}
     # the primary starts at rest: open the window after 15 of its decay times (2 m / c)
-    text = primary_text(load, 300.0, dt=0.01, extra="metrics_from = 200.0")
-    mean, se = stationary_mean(text, 300, window_variance)
+    data = primary_data([load], 300.0, dt=0.01, metrics_from=200.0)
+    mean, se = stationary_mean(data, 300, window_variance)
     exact = augmented_variance(oscillator(w0, eta), np.array([0.0, sigma]), [1.0 / M, 0.0])
     assert abs(mean - exact) < 4.0 * se, (mean, se, exact)
     assert se < 0.05 * exact
@@ -252,9 +241,10 @@ def test_ground_motion_response_variance(model):
     ``a_g = c . z`` enters the augmented drift as ``-c`` in the primary's acceleration row."""
     sigma = 2.0
     wg, zg, wf, zf = SOILS["medium"]
-    load = f'[[loads]]\ntype = "ground-motion"\nmodel = "{model}"\nsoil = "medium"\nintensity = {sigma}\nstart = "stationary"'
-    text = primary_text(load, 300.0, dt=0.005, extra="metrics_from = 200.0")
-    mean, se = stationary_mean(text, 300, window_variance)
+    load = {"type": "ground-motion", "model": model, "soil": "medium", "intensity": sigma,
+            "start": "stationary"}
+    data = primary_data([load], 300.0, dt=0.005, metrics_from=200.0)
+    mean, se = stationary_mean(data, 300, window_variance)
     from vines_stoch.filters import clough_penzien, kanai_tajimi
 
     rows, noise, readout = (kanai_tajimi(sigma, wg, zg) if model == "kanai-tajimi"
@@ -266,11 +256,13 @@ def test_ground_motion_response_variance(model):
 
 def test_filtered_loads_close_the_energy_balance():
     """Base excitation work and filtered force work are booked with the kicks."""
-    for load in ('type = "filtered-noise"\nintensity = 3.0\nfrequency = 4.0\ndamping = 0.3',
-                 'type = "ground-motion"\nsoil = "firm"\nintensity = 2.0\nenvelope = { type = "jennings", rise = 2.0, hold = 8.0, decay = 0.3 }'):
-        text = primary_text(f"[[loads]]\n{load}", 20.0, dt=0.005).replace(
-            "[simulation]", '[[absorbers]]\ntype = "impact"\nmass = 0.1\nclearance = 0.02\nrestitution = 0.6\n[simulation]')
-        raw = raw_metrics(scene_of(text), np.random.default_rng(3))
+    impact = {"type": "impact", "mass": 0.1, "clearance": 0.02, "restitution": 0.6}
+    jennings = {"type": "jennings", "rise": 2.0, "hold": 8.0, "decay": 0.3}
+    for load in ({"type": "filtered-noise", "intensity": 3.0, "frequency": 4.0, "damping": 0.3},
+                 {"type": "ground-motion", "soil": "firm", "intensity": 2.0, "envelope": jennings}):
+        data = primary_data([load], 20.0, dt=0.005) | {"absorbers": [impact]}
+        raw = raw_metrics(scene_from(data), np.random.default_rng(3))
         assert raw["impacts"] > 0
-        residual = raw["input_energy"] - raw["primary_dissipation"] - raw["absorber_dissipation"] - raw["impact_loss"] - raw["final_energy"]
+        residual = (raw["input_energy"] - raw["primary_dissipation"] - raw["absorber_dissipation"]
+                    - raw["impact_loss"] - raw["final_energy"])
         assert abs(residual) < 1e-3 * raw["input_energy"]

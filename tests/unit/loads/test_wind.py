@@ -31,8 +31,8 @@ from scipy.linalg import expm
 from scipy.signal import get_window, welch
 from scipy.stats import chi2
 
-from vines_stoch import ScenarioError, parse_scenario
-from vines_stoch import wind
+from tests.helpers import study_from, toml_text
+from vines_stoch import ScenarioError, parse_scenario, wind
 from vines_stoch.filters import block_diagonal, stationary_covariance, transition
 from vines_stoch.scenario.bodies import shear_stiffness
 from vines_stoch.scene import build_scene, wind_load
@@ -41,34 +41,28 @@ MASS, STOREY_K, STOREY_C = 1000.0, 4.0e5, 4.5e3
 SPEED, HEIGHT, AREA, DRAG, RHO = 25.0, 3.0, 30.0, 1.3, 1.25
 
 SPECTRA = {  # the spectrum's keys, and (sigma_u^2, T) by the formulas of the README
-    "davenport": ("", 6.0 * 0.005 * SPEED**2, 1200.0 / SPEED),  # z_ref = 10 m: U10 = speed
-    "kaimal": ("friction_velocity = 1.6\n", 6.0 * 1.6**2, 10.0 / SPEED),
+    "davenport": ({}, 6.0 * 0.005 * SPEED**2, 1200.0 / SPEED),  # z_ref = 10 m: U10 = speed
+    "kaimal": ({"friction_velocity": 1.6}, 6.0 * 1.6**2, 10.0 / SPEED),
 }
 
 
-def frame(load: str, duration: float = 10.0, dt: float = 2e-3, extra: str = "") -> str:
-    """A three-floor shear building (storey dashpots: 5 % damping in mode 1) under ``load``."""
-    return f"""
-name = "wind"
-[primary]
-masses = [{MASS}, {MASS}, {MASS}]
-stiffnesses = [{STOREY_K}, {STOREY_K}, {STOREY_K}]
-dampings = [{STOREY_C}, {STOREY_C}, {STOREY_C}]
-[[loads]]
-{load}
-[simulation]
-duration = {duration}
-dt = {dt}
-{extra}"""
+def frame(load: dict, duration: float = 10.0, dt: float = 2e-3, **simulation) -> dict:
+    """A three-floor shear building (storey dashpots: 5 % damping in mode 1) under ``load``;
+    ``simulation``: more keys of its table."""
+    return {"name": "wind",
+            "primary": {"masses": [MASS] * 3, "stiffnesses": [STOREY_K] * 3, "dampings": [STOREY_C] * 3},
+            "loads": [load],
+            "simulation": {"duration": duration, "dt": dt, **simulation}}
 
 
-def wind_text(spectrum: str = "davenport", more: str = "") -> str:
-    return (f'type = "wind"\nspeed = {SPEED}\nheight = {HEIGHT}\narea = {AREA}\ndrag = {DRAG}\n'
-            f'spectrum = "{spectrum}"\n{SPECTRA[spectrum][0]}{more}')
+def wind_table(spectrum: str = "davenport", **more) -> dict:
+    """The wind load table on every floor of ``frame`` (``more``: more of its keys)."""
+    return {"type": "wind", "speed": SPEED, "height": HEIGHT, "area": AREA, "drag": DRAG,
+            "spectrum": spectrum, **SPECTRA[spectrum][0], **more}
 
 
-def the_load(spectrum: str, more: str = ""):
-    return parse_scenario(frame(wind_text(spectrum, more))).points[0].loads[0]
+def the_load(spectrum: str, **more):
+    return study_from(frame(wind_table(spectrum, **more))).points[0].loads[0]
 
 
 def weights() -> np.ndarray:
@@ -135,7 +129,7 @@ def test_rational_filter_variance_and_fit(spectrum, order):
 def test_a_given_band_moves_the_fit():
     """``band`` (Hz) is the fitting band: the fit over a narrow band near the first mode is
     closer to the target there than the default fit."""
-    load = the_load("davenport", "band = [0.5, 5.0]\n")
+    load = the_load("davenport", band=[0.5, 5.0])
     variance, time_scale = load.turbulence()
     n = np.geomspace(0.5, 5.0, 401)
     target = wind.target_spectrum("davenport", n, variance, time_scale)
@@ -212,7 +206,7 @@ def test_welch_spectrum_of_exact_steps(spectrum):
     autocovariance through the window) is the rational closed form ``2 |H(i 2 pi n)|^2``
     aliased by the sampling, to within 1 % (Hann leakage: measured 0.2 % Davenport, 0.8 %
     Kaimal from bin 8 up)."""
-    load = the_load(spectrum, 'start = "stationary"\n')
+    load = the_load(spectrum, start="stationary")
     variance, time_scale = load.turbulence()
     _, turbulence = wind_load(load, 3)
     a, b, c = turbulence.a, turbulence.b, turbulence.c
@@ -271,9 +265,9 @@ def test_building_under_wind_end_to_end(tmp_path):
     from vines_stoch import run
 
     realizations = 400
-    extra = ('metrics_from = 20.0\nhistory = { points = 11, signals = ["x_1", "x_2", "x_3"] }\n'
-             f"[ensemble]\nrealizations = {realizations}\nseed = 5\n")
-    study = parse_scenario(frame(wind_text("davenport", 'start = "stationary"\n'), 40.0, 2e-3, extra))
+    data = frame(wind_table("davenport", start="stationary"), 40.0, 2e-3, metrics_from=20.0,
+                 history={"points": 11, "signals": ["x_1", "x_2", "x_3"]})
+    study = study_from(data | {"ensemble": {"realizations": realizations, "seed": 5}})
     rows, _ = run(study, tmp_path, workers=1)
     history = pd.read_parquet(tmp_path / "history.parquet")
     last = history.iloc[-1]
@@ -298,8 +292,8 @@ def test_building_under_wind_end_to_end(tmp_path):
 def test_scene_of_a_wind_load():
     """The scene: one harmonic row of frequency 0 (the mean force) per floor, the filter read
     out on every floor, Euler-Maruyama (noise)."""
-    scene = build_scene(parse_scenario(frame(wind_text("kaimal"))).points[0])
-    mean, turbulence = wind_load(parse_scenario(frame(wind_text("kaimal"))).points[0].loads[0], 3)
+    scene = build_scene(study_from(frame(wind_table("kaimal"))).points[0])
+    mean, turbulence = wind_load(study_from(frame(wind_table("kaimal"))).points[0].loads[0], 3)
     np.testing.assert_array_equal(scene.forces[:, 1], mean)
     np.testing.assert_array_equal(scene.forces[:, [0, 2, 3]], 0.0)  # HARMONIC, frequency 0, phase 0
     np.testing.assert_array_equal(scene.forces[:, 6], [0, 1, 2])
@@ -336,7 +330,7 @@ BAD = [
 
 @pytest.mark.parametrize("old, new, message", BAD, ids=[b[2].split(":")[0] + " " + b[1][:12] for b in BAD])
 def test_bad_wind_input_names_the_key(old, new, message):
-    text = frame(wind_text("davenport"))
+    text = toml_text(frame(wind_table("davenport")))  # (a message names the key of a changed line)
     assert old in text
     with pytest.raises(ScenarioError) as info:
         parse_scenario(text.replace(old, new, 1), source="w.toml")

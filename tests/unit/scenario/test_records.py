@@ -2,16 +2,14 @@
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 import pytest
 
+from tests.helpers import ROOT, toml_text
 from vines_stoch import ScenarioError, load_scenario
 from vines_stoch.kernels.loads import GROUND
 from vines_stoch.records import G, RecordError, read_record
 from vines_stoch.scene import build_scene
-from tests.helpers import ROOT
 
 AT2_NEW = """PEER NGA STRONG MOTION DATABASE RECORD
 IMPERIAL VALLEY 05/19/40, EL CENTRO ARRAY #9, 180
@@ -31,22 +29,12 @@ AT2_OLD = """PACIFIC ENGINEERING AND ANALYSIS STRONG-MOTION DATA
 
 VALUES = np.array([0.01, 0.02, -0.03, 0.04, 0.05, -0.06, 0.07])
 
-SCENARIO = """
-name = "record"
-[primary]
-mass = 2.0
-stiffness = 30.0
-damping = 0.5
-[[loads]]
-type = "record"
-file = "{file}"
-units = "{units}"
-scale = {scale}
-{extra}
-[simulation]
-duration = 0.2
-dt = 0.001
-"""
+def scenario(file: str, units: str, scale: float, **load) -> str:
+    """Scenario text of a primary under the record ``file`` (``load``: more keys of the load)."""
+    return toml_text({"name": "record",
+                      "primary": {"mass": 2.0, "stiffness": 30.0, "damping": 0.5},
+                      "loads": [{"type": "record", "file": file, "units": units, "scale": scale, **load}],
+                      "simulation": {"duration": 0.2, "dt": 0.001}})
 
 
 @pytest.mark.parametrize("text", [AT2_NEW, AT2_OLD], ids=["npts=-header", "old-header"])
@@ -96,7 +84,7 @@ def test_scenario_reads_records_relative_to_its_file(tmp_path):
     (tmp_path / "records").mkdir()
     (tmp_path / "records" / "r.AT2").write_text(AT2_NEW)
     path = tmp_path / "s.toml"
-    path.write_text(SCENARIO.format(file="records/r.AT2", units="g", scale=2.0, extra=""))
+    path.write_text(scenario("records/r.AT2", "g", 2.0))
     scene = build_scene(load_scenario(path).points[0])
     np.testing.assert_allclose(scene.series_v, 2.0 * G * VALUES)
     assert scene.series_target.tolist() == [GROUND]
@@ -104,15 +92,15 @@ def test_scenario_reads_records_relative_to_its_file(tmp_path):
 
 
 @pytest.mark.parametrize("file, units, extra, message", [
-    ("missing.txt", "g", "", "loads.0.file = 'missing.txt': "),
-    ("r.AT2", "g", "dt = -0.01", "loads.0.dt = -0.01: must be > 0"),
-    ("r.AT2", "gal", "", "loads.0.units = 'gal': must be 'g' or 'm/s2'"),
-    ("r.AT2", "g", "dt = 0.02", "the header says DT = 0.01, the scenario dt = 0.02"),
+    ("missing.txt", "g", {}, "loads.0.file = 'missing.txt': "),
+    ("r.AT2", "g", {"dt": -0.01}, "loads.0.dt = -0.01: must be > 0"),
+    ("r.AT2", "gal", {}, "loads.0.units = 'gal': must be 'g' or 'm/s2'"),
+    ("r.AT2", "g", {"dt": 0.02}, "the header says DT = 0.01, the scenario dt = 0.02"),
 ])
 def test_scenario_record_errors(tmp_path, file, units, extra, message):
     (tmp_path / "r.AT2").write_text(AT2_NEW)
     path = tmp_path / "s.toml"
-    path.write_text(SCENARIO.format(file=file, units=units, scale=1.0, extra=extra))
+    path.write_text(scenario(file, units, 1.0, **extra))
     with pytest.raises(ScenarioError) as err:
         load_scenario(path)
     assert str(path) in str(err.value)

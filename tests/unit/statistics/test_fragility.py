@@ -12,9 +12,8 @@ import pytest
 from scipy.optimize import minimize
 from scipy.special import log_ndtr, ndtr
 
-from vines_stoch.fragility import fit, probit_fit, stripes
-
 from tests.helpers import cli
+from vines_stoch.fragility import fit, probit_fit, stripes
 
 MEDIAN, BETA = 0.4, 0.5
 IM = np.geomspace(0.1, 1.5, 8)
@@ -29,7 +28,8 @@ def synthetic(gen: np.random.Generator, failed: int = 0) -> pd.DataFrame:
         exceeded = gen.random(PER_STRIPE) < ndtr(math.log(x / MEDIAN) / BETA)
         for r, e in enumerate(exceeded):
             rows.append({"point": point, "realization": r, "loads.0.intensity": x,
-                         "status": "diverged" if r < failed else "ok", "first_passage_drift": 1.0 if e else np.nan})
+                         "status": "diverged" if r < failed else "ok",
+                         "first_passage_drift": 1.0 if e else np.nan})
     return pd.DataFrame(rows)
 
 
@@ -64,7 +64,8 @@ def test_fisher_scoring_reaches_the_likelihood_maximum():
         eta = (u - p[0]) / math.exp(p[1])
         return -float((z * log_ndtr(eta) + (n - z) * log_ndtr(-eta)).sum())
 
-    best = minimize(nll, [0.0, 0.0], method="Nelder-Mead", options={"xatol": 1e-10, "fatol": 1e-12, "maxiter": 20000})
+    best = minimize(nll, [0.0, 0.0], method="Nelder-Mead",
+                    options={"xatol": 1e-10, "fatol": 1e-12, "maxiter": 20000})
     result = fit(table, samples=0)
     assert result["median"] == pytest.approx(math.exp(best.x[0]), rel=1e-6)
     assert result["beta"] == pytest.approx(math.exp(best.x[1]), rel=1e-6)
@@ -122,7 +123,8 @@ def test_points_at_one_intensity_make_one_stripe():
     frame = synthetic(np.random.default_rng(5))
     doubled = pd.concat([frame, frame.assign(point=frame["point"] + len(IM))], ignore_index=True)
     one, two = stripes(frame, "drift", "loads.0.intensity"), stripes(doubled, "drift", "loads.0.intensity")
-    assert len(two) == len(IM) and (two["n"] == 2 * one["n"]).all() and (two["exceeded"] == 2 * one["exceeded"]).all()
+    assert len(two) == len(IM) and (two["n"] == 2 * one["n"]).all()
+    assert (two["exceeded"] == 2 * one["exceeded"]).all()
     cloud = frame.assign(sa=frame["loads.0.intensity"] * np.exp(0.01 * np.arange(len(frame))))
     table = stripes(cloud, "drift", "sa")
     assert len(table) == len(frame) and (table["n"] == 1).all()

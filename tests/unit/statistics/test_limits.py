@@ -19,7 +19,7 @@ import pandas as pd
 from scipy.linalg import expm
 from scipy.optimize import brentq
 
-from vines_stoch import parse_scenario
+from tests.helpers import study_from
 from vines_stoch.ensemble import sample
 from vines_stoch.metrics import exceedance, summarise
 
@@ -27,26 +27,16 @@ OMEGA, ZETA, SIGMA, T, DT, LIMIT = 2.0 * math.pi, 0.05, 1.0, 5.0, 0.005, 0.25
 N, GROUP = 8000, 40
 
 
-def sdof(limits: str, realizations: int = N, omega: float = OMEGA, zeta: float = ZETA,
-         load: str = f'type = "white-noise"\nintensity = {SIGMA}', duration: float = T, dt: float = DT) -> str:
-    """A unit-mass oscillator of ``omega`` and ``zeta`` under ``load`` with ``limits``."""
-    return f"""
-name = "sdof-limits"
-[primary]
-mass = 1.0
-stiffness = {omega**2!r}
-damping = {2 * zeta * omega!r}
-[[loads]]
-{load}
-[simulation]
-duration = {duration}
-dt = {dt}
-[ensemble]
-realizations = {realizations}
-seed = 11
-[limits]
-{limits}
-"""
+def sdof(limits: dict, realizations: int = N, omega: float = OMEGA, zeta: float = ZETA,
+         load: dict | None = None, duration: float = T, dt: float = DT) -> dict:
+    """A unit-mass oscillator of ``omega`` and ``zeta`` under ``load`` (white noise ``SIGMA`` by
+    default) with ``limits``."""
+    return {"name": "sdof-limits",
+            "primary": {"mass": 1.0, "stiffness": omega**2, "damping": 2 * zeta * omega},
+            "loads": [load or {"type": "white-noise", "intensity": SIGMA}],
+            "simulation": {"duration": duration, "dt": dt},
+            "ensemble": {"realizations": realizations, "seed": 11},
+            "limits": limits}
 
 
 def exact_transition_exceedance(n_paths: int, seed: int) -> float:
@@ -69,7 +59,7 @@ def exact_transition_exceedance(n_paths: int, seed: int) -> float:
 
 
 def test_exceedance_of_a_linear_oscillator_against_the_exact_gaussian_transition():
-    frame = sample(parse_scenario(sdof(f'roof = {{ metric = "x1_max", value = {LIMIT} }}')))
+    frame = sample(study_from(sdof({"roof": {"metric": "x1_max", "value": LIMIT}})))
     summary = summarise(frame, [])
     p = float(summary["p_roof"].iloc[0])
     n_ref = 100_000
@@ -102,55 +92,28 @@ def test_exceedance_interval_at_the_ends():
     assert all(math.isnan(v) for v in exceedance(0, 0))
 
 
-BUILDING = """
-name = "two-storey-limits"
-[primary]
-masses = [2.0, 1.0]
-stiffnesses = [200.0, 120.0]
-dampings = [0.8, 0.5]
-{absorber}
-{loads}
-[simulation]
-duration = 8.0
-dt = 0.002
-metrics_from = 1.0
-{scheme}
-[ensemble]
-realizations = {n}
-seed = 4
-{sweep}
-{limits}
-"""
-
-IMPACT = """[[absorbers]]
-type = "impact"
-floor = 1
-mass = 0.1
-stiffness = 5.0
-clearance = 0.05
-restitution = 0.7"""
-
-NOISE = """[[loads]]
-type = "white-noise"
-intensity = 2.0
-floor = 1
-[[loads]]
-type = "white-noise"
-intensity = 1.0"""
-
-IMPULSE = """[[loads]]
-type = "impulse"
-velocity = 1.0"""
+IMPACT = [{"type": "impact", "floor": 1, "mass": 0.1, "stiffness": 5.0, "clearance": 0.05,
+           "restitution": 0.7}]
+NOISE = [{"type": "white-noise", "intensity": 2.0, "floor": 1}, {"type": "white-noise", "intensity": 1.0}]
+IMPULSE = [{"type": "impulse", "velocity": 1.0}]
 
 WATCHED = ["x1_max", "e1_max", "x_max_1", "drift_max_1", "drift_max_2", "acc_max_1", "acc_max_2"]
 
 
-def _building(absorber: str, loads: str, scheme: str, sweep: str, limits: dict[str, float]) -> pd.DataFrame:
-    table = "[limits]\n" + "\n".join(f'w{i} = {{ metric = "{m}", value = {v!r} }}'
-                                     for i, (m, v) in enumerate(limits.items())) if limits else ""
-    n = 1 if sweep else 60
-    return sample(parse_scenario(BUILDING.format(absorber=absorber, loads=loads, scheme=scheme, n=n,
-                                                 sweep=sweep, limits=table)))
+def _building(absorbers: list[dict], loads: list[dict], simulation: dict, sweep: dict,
+              limits: dict[str, float]) -> pd.DataFrame:
+    """A sample of the two-storey building (one realisation a sweep point, else 60) with a limit
+    ``w<i>`` on each metric of ``limits`` at its value; ``simulation``: more keys of its table."""
+    return sample(study_from({
+        "name": "two-storey-limits",
+        "primary": {"masses": [2.0, 1.0], "stiffnesses": [200.0, 120.0], "dampings": [0.8, 0.5]},
+        "absorbers": absorbers,
+        "loads": loads,
+        "simulation": {"duration": 8.0, "dt": 0.002, "metrics_from": 1.0, **simulation},
+        "ensemble": {"realizations": 1 if sweep else 60, "seed": 4},
+        "sweep": sweep,
+        "limits": {f"w{i}": {"metric": m, "value": v} for i, (m, v) in enumerate(limits.items())},
+    }))
 
 
 def test_first_passage_exactly_when_the_peak_exceeds_the_limit():
@@ -159,15 +122,16 @@ def test_first_passage_exactly_when_the_peak_exceeds_the_limit():
     same as without limits (the check does not touch the motion); kick-drift-kick with an
     impact absorber under noise, SRA3 under noise, RK4 with impacts over a sweep."""
     cases = [
-        (IMPACT, NOISE, "", ""),
-        ("", NOISE, 'scheme = "sra"', ""),
-        (IMPACT, IMPULSE, 'scheme = "rk4"', '[sweep]\n"loads.0.velocity" = { linspace = [0.2, 2.0, 15] }'),
+        (IMPACT, NOISE, {}, {}),
+        ([], NOISE, {"scheme": "sra"}, {}),
+        (IMPACT, IMPULSE, {"scheme": "rk4"}, {"loads.0.velocity": {"linspace": [0.2, 2.0, 15]}}),
     ]
-    for absorber, loads, scheme, sweep in cases:
-        plain = _building(absorber, loads, scheme, sweep, {})
+    for absorbers, loads, simulation, sweep in cases:
+        scheme = simulation.get("scheme", "auto")
+        plain = _building(absorbers, loads, simulation, sweep, {})
         assert (plain["status"] == "ok").all()
         medians = {m: float(plain[m].median()) for m in WATCHED}
-        frame = _building(absorber, loads, scheme, sweep, medians)
+        frame = _building(absorbers, loads, simulation, sweep, medians)
         pd.testing.assert_frame_equal(frame[plain.columns], plain)
         for i, (m, value) in enumerate(medians.items()):
             first = frame[f"first_passage_w{i}"]
@@ -192,10 +156,9 @@ def test_first_passage_time_of_free_vibration():
     peak_time = math.atan(wd / (zeta * omega)) / wd
     b = 0.8 * x(peak_time)
     exact = brentq(lambda t: x(t) - b, 0.0, peak_time, xtol=1e-14)
-    limits = (f'b = {{ metric = "x1_max", value = {b!r} }}\n'
-              f'never = {{ metric = "x1_max", value = {1.01 * x(peak_time)!r} }}')
-    text = sdof(limits, 1, omega, zeta, f"type = \"impulse\"\nvelocity = {v0}", 3.0, dt)
-    frame = sample(parse_scenario(text))
+    limits = {"b": {"metric": "x1_max", "value": b},
+              "never": {"metric": "x1_max", "value": 1.01 * x(peak_time)}}
+    frame = sample(study_from(sdof(limits, 1, omega, zeta, {"type": "impulse", "velocity": v0}, 3.0, dt)))
     first = float(frame["first_passage_b"].iloc[0])
     assert exact <= first < exact + dt + 1e-12, (first, exact)
     assert math.isnan(frame["first_passage_never"].iloc[0])
@@ -204,19 +167,19 @@ def test_first_passage_time_of_free_vibration():
 def test_bad_limits_are_named_with_their_key_value_and_range():
     from vines_stoch.scenario import ScenarioError
 
-    def message(limits: str) -> str:
+    def message(limits: dict) -> str:
         try:
-            parse_scenario(sdof(limits, realizations=1), source="x.toml")
+            study_from(sdof(limits, realizations=1), source="x.toml")
         except ScenarioError as error:
             return str(error)
-        raise AssertionError("accepted: " + limits)
+        raise AssertionError(f"accepted: {limits}")
 
-    text = message('r = { metric = "x_max_2", value = 0.1 }')
+    text = message({"r": {"metric": "x_max_2", "value": 0.1}})
     assert "x.toml: limits.r.metric = 'x_max_2'" in text and "k in [1, 1]" in text
-    text = message('r = { metric = "x1_rms", value = 0.1 }')
+    text = message({"r": {"metric": "x1_rms", "value": 0.1}})
     assert "limits.r.metric" in text and "peak metric" in text
-    assert "limits.r.value = 0" in message('r = { metric = "x1_max", value = 0 }')
-    assert "limits.r.value" in message('r = { metric = "x1_max", value = nan }')
-    text = message('"2nd" = { metric = "x1_max", value = 0.1 }')
+    assert "limits.r.value = 0" in message({"r": {"metric": "x1_max", "value": 0}})
+    assert "limits.r.value" in message({"r": {"metric": "x1_max", "value": math.nan}})
+    text = message({"2nd": {"metric": "x1_max", "value": 0.1}})
     assert "limits = '2nd'" in text and "start with a letter" in text
-    assert "limits.r.level" in message('r = { metric = "x1_max", value = 0.1, level = 2 }')
+    assert "limits.r.level" in message({"r": {"metric": "x1_max", "value": 0.1, "level": 2}})

@@ -9,55 +9,39 @@ from __future__ import annotations
 
 import numpy as np
 
-from vines_stoch import parse_scenario
+from tests.helpers import study_from
 from vines_stoch.ensemble import sample
 from vines_stoch.kernels import simulate
+from vines_stoch.kernels.common import IMPACTS
 from vines_stoch.scene import build_scene
 from vines_stoch.streams import BRIDGE, FILTER, INCREMENTS, generator, streams
 
 #: A 1e-6 kg impact absorber, which barely touches the primary, swept over its clearance
-#: (impacts at 0.05 and 0.2, none at 100) under harmonic + white + filtered noise.
-TEXT = """
-name = "crn"
-[primary]
-mass = 1.0
-stiffness = 1.0
-damping = 0.05
-[[absorbers]]
-type = "impact"
-mass = 1e-6
-clearance = 0.2
-restitution = 0.6
-[[loads]]
-type = "harmonic"
-amplitude = 0.1
-frequency = 1.0
-[[loads]]
-type = "white-noise"
-intensity = 0.05
-{filtered}[simulation]
-duration = 200.0
-dt = 0.01
-[ensemble]
-realizations = 4
-seed = 7
-[sweep]
-"absorbers.0.clearance" = [0.05, 0.2, 100.0]
-"""
-FILTERED = '[[loads]]\ntype = "filtered-noise"\nintensity = 0.05\nfrequency = 2.0\ndamping = 0.3\n'
+#: (impacts at 0.05 and 0.2, none at 100) under harmonic + white (+ filtered: ``FILTERED``) noise.
+DATA = {
+    "name": "crn",
+    "primary": {"mass": 1.0, "stiffness": 1.0, "damping": 0.05},
+    "absorbers": [{"type": "impact", "mass": 1e-6, "clearance": 0.2, "restitution": 0.6}],
+    "loads": [{"type": "harmonic", "amplitude": 0.1, "frequency": 1.0},
+              {"type": "white-noise", "intensity": 0.05}],
+    "simulation": {"duration": 200.0, "dt": 0.01},
+    "ensemble": {"realizations": 4, "seed": 7},
+    "sweep": {"absorbers.0.clearance": [0.05, 0.2, 100.0]},
+}
+FILTERED = {"type": "filtered-noise", "intensity": 0.05, "frequency": 2.0, "damping": 0.3}
 
 
 def test_increment_stream_is_the_same_at_every_sweep_point():
     """At every clearance the kernel takes exactly one increment a step from the increment
     stream (the impacts' bridge draws come from their own stream), and running on the streams
     equals replaying those very increments."""
-    study = parse_scenario(TEXT.format(filtered=""))  # (a replayed path drives white noise only)
+    study = study_from(DATA)  # (a replayed path drives white noise only)
     impacts = []
     for point, scenario in enumerate(study.points):
         scene = build_scene(scenario)
         gens = streams(7, point, 3)
         raw = simulate(scene, gens)
-        impacts.append(raw[8])
+        impacts.append(raw[IMPACTS])
         # the increment stream advanced by exactly one normal a step, whatever the impacts
         fresh = generator(7, point, 3, INCREMENTS)
         normals = fresh.standard_normal(scene.n_steps)
@@ -81,7 +65,7 @@ def test_common_random_numbers_whatever_the_impacts():
     """The primary barely feels a 1e-6 kg absorber, so with common random numbers a
     realisation's roof RMS is the same at every clearance: within 1e-2 relative (one stream for
     every purpose made it differ by up to 143 % once impacts occurred)."""
-    frame = sample(parse_scenario(TEXT.format(filtered=FILTERED)), workers=1)
+    frame = sample(study_from(DATA, {"loads": [*DATA["loads"], FILTERED]}), workers=1)
     assert (frame["status"] == "ok").all()
     assert frame.groupby("point")["impacts"].sum().tolist()[2] == 0
     for _, group in frame.groupby("realization"):

@@ -21,7 +21,7 @@ import pytest
 from scipy.integrate import solve_ivp
 from scipy.linalg import solve_continuous_lyapunov
 
-from vines_stoch import parse_scenario
+from tests.helpers import study_from
 from vines_stoch.ensemble import sample
 from vines_stoch.scenario import ScenarioError
 
@@ -40,8 +40,9 @@ def storey_matrix(values) -> np.ndarray:
     return a
 
 
-def floors_toml(masses, stiffnesses, dampings) -> str:
-    return f"[primary]\nmasses = {list(masses)}\nstiffnesses = {list(stiffnesses)}\ndampings = {list(dampings)}\n"
+def floors(masses, stiffnesses, dampings) -> dict:
+    """The ``primary`` table of a shear building (lowest floor first)."""
+    return {"masses": list(masses), "stiffnesses": list(stiffnesses), "dampings": list(dampings)}
 
 
 # ----------------------------------------------------------------------------- white noise
@@ -61,22 +62,13 @@ NOISE_DT, NOISE_FROM, NOISE_T, NOISE_N = 0.002, 150.0, 1150.0, 64
 
 
 def test_stationary_floor_variances_match_lyapunov():
-    text = f"""
-name = "three-storey-noise"
-{floors_toml(NOISE_M, NOISE_K, NOISE_C)}
-[[loads]]
-type = "white-noise"
-intensity = {SIGMA}
-floor = {NOISE_FLOOR}
-[simulation]
-duration = {NOISE_T}
-dt = {NOISE_DT}
-metrics_from = {NOISE_FROM}
-[ensemble]
-realizations = {NOISE_N}
-seed = 20240611
-"""
-    study = parse_scenario(text)
+    study = study_from({
+        "name": "three-storey-noise",
+        "primary": floors(NOISE_M, NOISE_K, NOISE_C),
+        "loads": [{"type": "white-noise", "intensity": SIGMA, "floor": NOISE_FLOOR}],
+        "simulation": {"duration": NOISE_T, "dt": NOISE_DT, "metrics_from": NOISE_FROM},
+        "ensemble": {"realizations": NOISE_N, "seed": 20240611},
+    })
     assert study.points[0].scheme == "euler-maruyama"
     n = len(NOISE_M)
     m = np.diag(NOISE_M)
@@ -109,21 +101,13 @@ seed = 20240611
 ABS_MASS, ABS_K, ABS_C, ABS_FLOOR = 0.12, 2.0, 0.05, 2
 
 
-def building_with_tmd(extra_load: str = "", dt: float = 1e-3) -> str:
-    return f"""
-name = "three-storey-tmd"
-{floors_toml(NOISE_M, NOISE_K, NOISE_C)}
-[[absorbers]]
-type = "linear"
-floor = {ABS_FLOOR}
-mass = {ABS_MASS}
-stiffness = {ABS_K}
-damping = {ABS_C}
-{extra_load}
-[simulation]
-duration = 10.0
-dt = {dt}
-"""
+def building_with_tmd(loads: list[dict] | None = None, dt: float = 1e-3) -> dict:
+    return {"name": "three-storey-tmd",
+            "primary": floors(NOISE_M, NOISE_K, NOISE_C),
+            "absorbers": [{"type": "linear", "floor": ABS_FLOOR, "mass": ABS_MASS, "stiffness": ABS_K,
+                           "damping": ABS_C}],
+            "loads": loads or [],
+            "simulation": {"duration": 10.0, "dt": dt}}
 
 
 def full_matrices():
@@ -144,7 +128,7 @@ def test_natural_frequencies_against_numpy():
     m, k = full_matrices()
     expected = np.sort(np.sqrt(np.linalg.eigvals(np.linalg.solve(m, k)).real))
     # (2.36368771, 4.16039787, 6.32579728, 8.98637999) rad/s: no two close, no coincidence
-    scenario = parse_scenario(building_with_tmd()).points[0]
+    scenario = study_from(building_with_tmd()).points[0]
     got = np.asarray(scenario.natural_frequencies(), dtype=float)
     # rtol 1e-10: both are eigenvalues of a well-conditioned 4x4 problem (round-off ~1e-15)
     np.testing.assert_allclose(got, expected, rtol=1e-10)
@@ -152,29 +136,20 @@ def test_natural_frequencies_against_numpy():
 
     # a cubic NES without a linear spring is a free mass: one zero frequency, the rest are the
     # bare building's (atol 1e-6: sqrt of a round-off eigenvalue ~1e-14 is ~1e-7)
-    cubic = f"""
-name = "three-storey-nes"
-{floors_toml(NOISE_M, NOISE_K, NOISE_C)}
-[[absorbers]]
-type = "cubic"
-floor = 1
-mass = 0.05
-stiffness = 1.0
-damping = 0.01
-[simulation]
-duration = 10.0
-dt = 1e-3
-"""
+    cubic = {"name": "three-storey-nes",
+             "primary": floors(NOISE_M, NOISE_K, NOISE_C),
+             "absorbers": [{"type": "cubic", "floor": 1, "mass": 0.05, "stiffness": 1.0, "damping": 0.01}],
+             "simulation": {"duration": 10.0, "dt": 1e-3}}
     bare = np.sort(np.sqrt(np.linalg.eigvals(np.linalg.solve(np.diag(NOISE_M), storey_matrix(NOISE_K))).real))
-    got = np.asarray(parse_scenario(cubic).points[0].natural_frequencies(), dtype=float)
+    got = np.asarray(study_from(cubic).points[0].natural_frequencies(), dtype=float)
     np.testing.assert_allclose(got, np.concatenate([[0.0], bare]), rtol=1e-10, atol=1e-6)
 
     # euler-maruyama (auto, with noise) is stable for omega_max dt < 2: 10 % past it is refused
     omega = expected[-1]
-    noise = '[[loads]]\ntype = "white-noise"\nintensity = 0.1\nfloor = 1\n'
-    parse_scenario(building_with_tmd(noise, dt=float(f"{1.9 / omega:.6g}")))  # just inside: accepted
+    noise = [{"type": "white-noise", "intensity": 0.1, "floor": 1}]
+    study_from(building_with_tmd(noise, dt=float(f"{1.9 / omega:.6g}")))  # just inside: accepted
     with pytest.raises(ScenarioError) as err:
-        parse_scenario(building_with_tmd(noise, dt=float(f"{2.2 / omega:.6g}")))
+        study_from(building_with_tmd(noise, dt=float(f"{2.2 / omega:.6g}")))
     message = str(err.value)
     assert "simulation.dt" in message and f"{omega:.6g}" in message, message
 
@@ -272,29 +247,13 @@ def reference_path(rtol: float = 1e-11, atol: float = 1e-13) -> dict:
 
 
 def test_three_storey_cubic_and_impact_against_scipy():
-    text = f"""
-name = "three-storey-nes-vi"
-{floors_toml(IMP_M, IMP_K, IMP_C)}
-[[absorbers]]
-type = "cubic"
-floor = {NES["floor"]}
-mass = {NES["mass"]}
-stiffness = {NES["stiffness"]}
-damping = {NES["damping"]}
-[[absorbers]]
-type = "impact"
-floor = {VI["floor"]}
-mass = {VI["mass"]}
-clearance = {VI["clearance"]}
-restitution = {VI["restitution"]}
-[[loads]]
-type = "impulse"
-velocity = {X}
-[simulation]
-duration = {DURATION}
-dt = {DT}
-"""
-    study = parse_scenario(text)
+    study = study_from({
+        "name": "three-storey-nes-vi",
+        "primary": floors(IMP_M, IMP_K, IMP_C),
+        "absorbers": [{"type": "cubic", **NES}, {"type": "impact", **VI}],
+        "loads": [{"type": "impulse", "velocity": X}],
+        "simulation": {"duration": DURATION, "dt": DT},
+    })
     assert study.points[0].scheme == "rk4"
     ref = reference_path()
     # the reference itself: its energy balance closes to round-off of rtol 1e-11 (about 2e-11)
@@ -322,51 +281,46 @@ dt = {DT}
 
 # ----------------------------------------------------------------------------- bad input
 
-def bad_text(primary: str = "", absorber: str = "", load: str = "") -> str:
-    primary = primary or floors_toml(NOISE_M, NOISE_K, NOISE_C)
-    absorber = absorber or 'type = "cubic"\nmass = 0.05\nstiffness = 1.0\ndamping = 0.01\n'
-    load = load or 'type = "impulse"\nvelocity = 0.5\n'
-    return f"""
-name = "bad"
-{primary}
-[[absorbers]]
-{absorber}
-[[loads]]
-{load}
-[simulation]
-duration = 10.0
-dt = 1e-3
-"""
+def bad_data(primary: dict | None = None, absorber: dict | None = None, load: dict | None = None) -> dict:
+    return {"name": "bad",
+            "primary": primary or floors(NOISE_M, NOISE_K, NOISE_C),
+            "absorbers": [absorber or {"type": "cubic", "mass": 0.05, "stiffness": 1.0, "damping": 0.01}],
+            "loads": [load or {"type": "impulse", "velocity": 0.5}],
+            "simulation": {"duration": 10.0, "dt": 1e-3}}
 
 
-RAYLEIGH = "rayleigh = {{ ratio = 0.02, modes = {modes} }}\n"
-PRIMARY_HEAD = "[primary]\nmasses = [1.0, 1.0, 0.8]\n"
+def rayleigh(modes: list[int]) -> dict:
+    """Rayleigh damping of ratio 0.02 in ``modes``."""
+    return {"ratio": 0.02, "modes": modes}
 
 
-@pytest.mark.parametrize("text, needles", [
-    (bad_text(absorber='type = "cubic"\nfloor = 5\nmass = 0.05\nstiffness = 1.0\n'),
+MASSES = {"masses": [1.0, 1.0, 0.8]}
+
+
+@pytest.mark.parametrize("data, needles", [
+    (bad_data(absorber={"type": "cubic", "floor": 5, "mass": 0.05, "stiffness": 1.0}),
      [("absorbers.0.floor",), ("[1, 3]",)]),
-    (bad_text(load='type = "harmonic"\namplitude = 0.1\nfrequency = 1.0\nfloor = 4\n'),
+    (bad_data(load={"type": "harmonic", "amplitude": 0.1, "frequency": 1.0, "floor": 4}),
      [("loads.0.floor",), ("[1, 3]",)]),
-    (bad_text(load='type = "impulse"\nvelocity = 0.5\nfloor = 0\n'),
+    (bad_data(load={"type": "impulse", "velocity": 0.5, "floor": 0}),
      [("loads.0.floor",), ("[1, 3]",)]),
     # (no digit 3 in the values, so "3" can only be the expected length)
-    (bad_text(primary=PRIMARY_HEAD + "stiffnesses = [20.0, 25.0]\ndampings = [0.2, 0.2, 0.2]\n"),
+    (bad_data(primary=MASSES | {"stiffnesses": [20.0, 25.0], "dampings": [0.2, 0.2, 0.2]}),
      [("primary.stiffnesses",), ("3",)]),
-    (bad_text(primary=PRIMARY_HEAD + "stiffnesses = [30.0, -25.0, 20.0]\ndampings = [0.3, 0.3, 0.3]\n"),
+    (bad_data(primary=MASSES | {"stiffnesses": [30.0, -25.0, 20.0], "dampings": [0.3, 0.3, 0.3]}),
      [("primary.stiffnesses",), (">= 0", "> 0")]),
-    (bad_text(primary=PRIMARY_HEAD + "stiffnesses = [30.0, 25.0, 20.0]\n" + RAYLEIGH.format(modes="[1, 4]")),
+    (bad_data(primary=MASSES | {"stiffnesses": [30.0, 25.0, 20.0], "rayleigh": rayleigh([1, 4])}),
      [("primary.rayleigh.modes",), ("[1, 3]",)]),
-    (bad_text(primary=PRIMARY_HEAD + "stiffnesses = [30.0, 25.0, 20.0]\ndampings = [0.3, 0.3, 0.3]\n"
-              + RAYLEIGH.format(modes="[1, 2]")),
+    (bad_data(primary=MASSES | {"stiffnesses": [30.0, 25.0, 20.0], "dampings": [0.3, 0.3, 0.3],
+                                "rayleigh": rayleigh([1, 2])}),
      [("primary",), ("rayleigh", "dampings")]),
 ], ids=["absorber-floor", "force-load-floor", "impulse-floor", "lengths", "negative-storey",
         "rayleigh-modes", "dampings-and-rayleigh"])
-def test_bad_multistorey_input(text, needles):
+def test_bad_multistorey_input(data, needles):
     """Each needle group is a set of alternatives, one of which the message must contain: the
     dotted key and the allowed range (the exact wording is the implementation's)."""
     with pytest.raises(ScenarioError) as err:
-        parse_scenario(text)
+        study_from(data, source="<scenario>")
     message = str(err.value)
     assert message.startswith("<scenario>"), message
     for alternatives in needles:
@@ -374,36 +328,24 @@ def test_bad_multistorey_input(text, needles):
 
 
 def test_bad_input_fixtures_are_otherwise_valid():
-    """The bad texts differ from a runnable scenario only in the broken key."""
-    parse_scenario(bad_text())
-    parse_scenario(bad_text(primary=PRIMARY_HEAD + "stiffnesses = [30.0, 25.0, 20.0]\n"
-                            + RAYLEIGH.format(modes="[1, 3]")))
+    """The bad scenarios differ from a runnable scenario only in the broken key."""
+    study_from(bad_data())
+    study_from(bad_data(primary=MASSES | {"stiffnesses": [30.0, 25.0, 20.0], "rayleigh": rayleigh([1, 3])}))
 
 
 # ----------------------------------------------------------------------------- one storey
 
-def one_storey(primary: str) -> str:
-    return f"""
-name = "one-storey"
-{primary}
-[[absorbers]]
-type = "cubic"
-mass = 0.05
-stiffness = 1.0
-damping = 0.01
-[[loads]]
-type = "impulse"
-velocity = 0.5
-[simulation]
-duration = 50.0
-dt = 1e-3
-"""
+def one_storey(primary: dict):
+    return study_from({"name": "one-storey",
+                       "primary": primary,
+                       "absorbers": [{"type": "cubic", "mass": 0.05, "stiffness": 1.0, "damping": 0.01}],
+                       "loads": [{"type": "impulse", "velocity": 0.5}],
+                       "simulation": {"duration": 50.0, "dt": 1e-3}})
 
 
 def test_one_storey_lists_equal_scalars():
-    lists = sample(parse_scenario(one_storey(floors_toml([1.0], [1.0], [0.02]))), workers=1)
-    scalars = sample(parse_scenario(one_storey("[primary]\nmass = 1.0\nstiffness = 1.0\ndamping = 0.02\n")),
-                     workers=1)
+    lists = sample(one_storey(floors([1.0], [1.0], [0.02])), workers=1)
+    scalars = sample(one_storey({"mass": 1.0, "stiffness": 1.0, "damping": 0.02}), workers=1)
     assert (lists["status"] == "ok").all()
     # exact: the same scene, so the same floating-point operations
     pd.testing.assert_frame_equal(lists, scalars, check_exact=True)
@@ -413,30 +355,16 @@ def test_one_storey_lists_equal_scalars():
         assert (frame["drift_max_1"] == frame["x_max_1"]).all()  # d_1 = x_1 - 0
 
 
-HISTORY_TEXT = """
-name = "floor-history"
-[primary]
-masses = [1.0, 0.8]
-stiffnesses = [20.0, 15.0]
-dampings = [0.2, 0.2]
-[[absorbers]]
-type = "cubic"
-mass = 0.05
-stiffness = 1.0
-damping = 0.01
-[[loads]]
-type = "white-noise"
-intensity = 0.3
-floor = 1
-[simulation]
-duration = 5.0
-dt = 1e-2
-history = {{ points = 51, signals = {signals} }}
-[ensemble]
-realizations = 12
-seed = 3
-chunk = 5
-"""
+def floor_history(signals: list[str]):
+    """The Study of a two-storey building under noise with the history of ``signals``."""
+    return study_from({
+        "name": "floor-history",
+        "primary": floors([1.0, 0.8], [20.0, 15.0], [0.2, 0.2]),
+        "absorbers": [{"type": "cubic", "mass": 0.05, "stiffness": 1.0, "damping": 0.01}],
+        "loads": [{"type": "white-noise", "intensity": 0.3, "floor": 1}],
+        "simulation": {"duration": 5.0, "dt": 1e-2, "history": {"points": 51, "signals": signals}},
+        "ensemble": {"realizations": 12, "seed": 3, "chunk": 5},
+    })
 
 
 def test_history_selects_floor_signals(tmp_path):
@@ -448,7 +376,7 @@ def test_history_selects_floor_signals(tmp_path):
     from vines_stoch.scene import build_scene
     from vines_stoch.streams import streams
 
-    study = parse_scenario(HISTORY_TEXT.format(signals='["x_1", "drift_2", "x1"]'))
+    study = floor_history(["x_1", "drift_2", "x1"])
     run(study, tmp_path, workers=1)
     h = pd.read_parquet(tmp_path / "history.parquet")
     scene = build_scene(study.points[0])
@@ -467,4 +395,4 @@ def test_history_selects_floor_signals(tmp_path):
 
 def test_history_signal_out_of_range_is_refused():
     with pytest.raises(ScenarioError, match=r"simulation\.history\.signals.*'drift_3'.*\[1, 2\]"):
-        parse_scenario(HISTORY_TEXT.format(signals='["drift_3"]'))
+        floor_history(["drift_3"])
