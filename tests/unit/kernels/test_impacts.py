@@ -38,9 +38,7 @@ def test_loss_per_impact_matches_formula(r):
 @pytest.mark.parametrize("scheme", ["rk4", "euler-maruyama"])
 def test_single_impact_loss_inside_the_solver(scheme):
     # a free primary at V hits the resting absorber once before T: loss is the formula's
-    # NOTE: ``scheme`` is not applied, as before: the scenario text this test built replaced
-    # "dt = 1e-3" in a text that read "dt = 0.001", so both cases run the automatic scheme (rk4)
-    m = raw_metrics(scene_from(two_body(0.0, 0.5, 0.1, 1.0, 0.15, dt=1e-3)))
+    m = raw_metrics(scene_from(two_body(0.0, 0.5, 0.1, 1.0, 0.15, dt=1e-3, scheme=scheme)))
     m1, ma = 1.0, 0.05
     assert m["impacts"] == 1
     assert m["impact_loss"] == pytest.approx((1 - 0.25) * m1 * ma / (2 * (m1 + ma)) * 1.0, rel=1e-12)
@@ -68,8 +66,7 @@ def geometric_sequence(v: float, r: float, clearance: float, m1: float, ma: floa
 @pytest.mark.parametrize("r", [0.6, 0.9])
 def test_free_primary_geometric_impact_sequence(scheme, r):
     duration = 7.77
-    # NOTE: ``scheme`` is not applied, as before (see test_single_impact_loss_inside_the_solver)
-    m = raw_metrics(scene_from(two_body(0.0, r, 0.1, 1.0, duration)))
+    m = raw_metrics(scene_from(two_body(0.0, r, 0.1, 1.0, duration, scheme=scheme)))
     count, edm = geometric_sequence(1.0, r, 0.1, 1.0, 0.05, duration)
     assert count >= 4
     assert m["impacts"] == count
