@@ -120,6 +120,11 @@ class Scene:
         return self.forces, self.series_t, self.series_v, self.series_ptr, self.series_target
 
     @property
+    def has_ground(self) -> bool:
+        """The loads include a ground acceleration (records or filtered ground motion)."""
+        return bool((self.series_target == GROUND).any() or self.filters["c_ground"].any())
+
+    @property
     def has_impact(self) -> bool:
         return bool((self.kind == IMPACT).any())
 

@@ -31,7 +31,7 @@ def kernel_for(scene):
     if SCHEMES[scene.scheme].kernel == "rk4":
         return rk4_kernel(nb, nf, scene.has_impact, scene.has_hertz)
     return kdk_kernel(nb, nf, scene.forces.shape[0], scene.has_white_noise, scene.has_impact, scene.has_hertz,
-                      scene.has_filters, scene.scheme == "sra")
+                      scene.has_filters, scene.has_ground, scene.scheme == "sra")
 
 
 def sample_buffer(scene) -> np.ndarray:

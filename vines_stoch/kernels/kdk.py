@@ -86,7 +86,7 @@ from .common import (
     structure_dissipation,
     write_floor_metrics,
 )
-from .loads import advance_filters, excitation, has_breaks, has_ground, phasors, rotations, turn
+from .loads import advance_filters, excitation, has_breaks, phasors, rotations, turn
 from .sra3 import sra3_step
 
 #: Iterations of the bracketed search for the impact instant (Illinois method).
@@ -97,8 +97,8 @@ ROOT_ITERATIONS = 100
 def kick(v, s, dws, load, ag, force, inv_mass, vn, ground):
     """Velocities after a kick of length ``s`` into ``vn``: forces, the loads ``load`` and
     Wiener increments ``dws`` on the floors (one entry each), ground acceleration ``ag`` on
-    every body if ``ground`` (a run-time flag: ``0 * s`` cannot be folded away under IEEE rules)
-    (the caller makes stuck absorbers move with their floor).  ``inv_mass``: the
+    every body if ``ground`` (a compile-time flag: ``0 * s`` cannot be folded away under IEEE
+    rules) (the caller makes stuck absorbers move with their floor).  ``inv_mass``: the
     reciprocal masses.  The state-dependent force term comes last, one fused multiply-add after
     the forces (the step's critical path)."""
     base = ag * s if ground else 0.0
@@ -200,14 +200,15 @@ def contact_sides(x, nf, kind, host, rows, touching):
 
 @cache
 def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_impact: bool, has_hertz: bool,
-               filtered: bool, sra: bool = False):
+               filtered: bool, ground: bool, sra: bool = False):
     """The kick-drift-kick Euler-Maruyama loop specialised to a scene's structure: the numbers
     of bodies, of floors and of closed-form force rows (the sizes of its arrays on the stack),
-    white noise, impact and Hertz absorbers, filtered loads and the scheme.  What costs nothing
-    measurable as a run-time value is one: loads with kinks or jumps (``loads.has_breaks``),
-    ground acceleration, the limits whose first passages to watch (none: one integer test a
-    step).  Harmonic loads on the step grid come from phasors (``loads.turn``), set exactly every
-    ``CHECK_EVERY`` steps.
+    white noise, impact and Hertz absorbers, filtered loads, ground acceleration
+    (``Scene.has_ground``: as a run-time value it cost the smooth scene 7 % of its speed, the
+    ground term joining every kick) and the scheme.  What costs nothing measurable as a run-time
+    value is one: loads with kinks or jumps (``loads.has_breaks``) and the limits whose first
+    passages to watch (none: one integer test a step).  Harmonic loads on the step grid come
+    from phasors (``loads.turn``), set exactly every ``CHECK_EVERY`` steps.
 
     The kernel takes its inputs as bundles (``kernels.bundles``): ``bodies`` (masses, storey
     stiffnesses and dashpots, mass-proportional damping, state), ``absorbers`` (kind codes,
@@ -235,6 +236,7 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
     EVENTS = 0 if sra else (MAX_SUBSTEPS if has_hertz else (MAX_EVENTS + 1 if has_impact else 1))
     TREE = has_noise and (has_impact or has_hertz)  # sub-steps take increments from the Brownian tree
     MEMO_SIZE = n_floors * MEMO if TREE else 0
+    GROUND = ground
     NB = n_bodies
     NF = n_floors
     NR = n_rows
@@ -252,7 +254,7 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
         sigma, normals, refine = noise
         replay = normals.shape[0] > 0
         piecewise = has_breaks(ex)  # re-evaluate each step's start on its own piece
-        ground = has_ground(ex, fl)
+        ground = GROUND
         dt, n_steps, i0, period, sample_from, stride = grid
         out, samples, history, limits = outputs
         na = kind.shape[0]

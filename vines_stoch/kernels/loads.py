@@ -169,21 +169,6 @@ def has_breaks(ex) -> bool:
 
 
 @njit(**INLINE)
-def has_ground(ex, fl) -> bool:
-    """True when the loads include a ground acceleration (records or filtered ground motion)."""
-    series_target = ex[4]
-    c_ground = fl[4]
-    for s in range(series_target.shape[0]):
-        if series_target[s] == GROUND:
-            return True
-    for i in range(c_ground.shape[0]):
-        for r in range(c_ground.shape[1]):
-            if c_ground[i, r] != 0.0:
-                return True
-    return False
-
-
-@njit(**INLINE)
 def next_break(t: float, ex) -> float:
     """The first break point of the loads after ``t`` (``inf`` if none)."""
     forces, series_t, series_v, series_ptr, series_target = ex
@@ -264,8 +249,9 @@ def excitation(t: float, tm: float, theta: float, forces, series_t, series_v, se
     acceleration.  The filtered loads (if ``filtered``, a compile-time constant of the kernels)
     are read ``theta`` of the way from the grid states ``z`` to ``zn`` (``c_force`` has one
     read-out row per floor, ``c_ground`` one row); harmonic rows from the phasor cosines ``pc``
-    if ``on_grid`` (see ``applied``).  Without ``has_ground`` (the scene has no ground
-    acceleration: ``has_ground``) the ground acceleration is the constant 0."""
+    if ``on_grid`` (see ``applied``).  Without ``has_ground`` (a compile-time constant of the
+    kernels: the scene has no ground acceleration, ``Scene.has_ground``) the ground acceleration
+    is the constant 0."""
     ground = applied(t, tm, forces, series_t, series_v, series_ptr, series_target, pc, on_grid, load)
     if filtered:
         for k in range(load.shape[0]):

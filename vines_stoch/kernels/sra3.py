@@ -30,7 +30,7 @@ def sra3_step(x, v, vn, force, a1, a2, a3, xs, v2, v3, load, load_next, load3, a
     increments of the input work, the structure's and the absorbers' dissipation (zero unless
     ``inside`` the metrics window), with the mean of the step's end velocities, for which the
     kinetic energy change equals the work of the step's impulses exactly.  ``ground``: the
-    scene has a ground acceleration (``loads.has_ground``).
+    scene has a ground acceleration (a compile-time flag).
     """
     nb = x.shape[0]
     nf = load.shape[0]
