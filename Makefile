@@ -20,7 +20,7 @@ run: $(STAMP)
 # The linter, then every test (the slow convergence studies included) on one worker process per
 # core: the kernels they compile are shared through numba's on-disk cache.
 test: lint
-	$(BIN)/python -m pytest -q -n auto --dist worksteal
+	$(BIN)/python -m pytest -q -n auto --dist loadfile
 
 lint: $(STAMP)
 	$(BIN)/ruff check .
