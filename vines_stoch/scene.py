@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 
@@ -119,9 +120,10 @@ class Scene:
         """The kernels' tuple of closed-form loads and records (kernels/loads.py)."""
         return self.forces, self.series_t, self.series_v, self.series_ptr, self.series_target
 
-    @property
+    @cached_property
     def has_ground(self) -> bool:
-        """The loads include a ground acceleration (records or filtered ground motion)."""
+        """The loads include a ground acceleration (records or filtered ground motion): a
+        compile-time flag of the step loops, looked up once a scene, not once a realisation."""
         return bool((self.series_target == GROUND).any() or self.filters["c_ground"].any())
 
     @property
