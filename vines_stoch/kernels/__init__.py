@@ -44,12 +44,12 @@ def sample_buffer(scene) -> np.ndarray:
 def filter_tuple(scene, generator: np.random.Generator | None) -> tuple:
     """The kernels' filter arrays with the initial filter state: zero (from rest) or a draw
     from the stationary law (``p0`` is the root of its covariance) from ``generator`` (the
-    filter stream)."""
+    filter stream); then the next state's and the normals' scratch (``loads.advance_filters``)."""
     f = scene.filters
     z = np.zeros(f["phi"].shape[0])
     if z.shape[0] and f["p0"].any():
         z = f["p0"] @ generator.standard_normal(z.shape[0])
-    return f["phi"], f["chol"], f["envelope"], f["c_force"], f["c_ground"], z
+    return f["phi"], f["chol"], f["envelope"], f["c_force"], f["c_ground"], z, z.copy(), np.zeros(z.shape[0])
 
 
 def needed_streams(scene, replay: bool = False) -> tuple[bool, bool, bool]:

@@ -413,6 +413,15 @@ def write_floor_metrics(out, nf: int, x_max, drift_max, acc_max, x2_integral):
 
 
 @njit(**INLINE)
+def any_set(a) -> bool:
+    """True if any entry of ``a`` is not zero (``a.any()``, which the GPU target lacks)."""
+    for j in range(a.shape[0]):
+        if a[j] != 0.0:
+            return True
+    return False
+
+
+@njit(**INLINE)
 def diverged(x) -> bool:
     """True if any coordinate is not finite or beyond ``DIVERGED``."""
     for b in range(x.shape[0]):

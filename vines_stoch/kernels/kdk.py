@@ -65,6 +65,7 @@ from .common import (
     STATUS,
     STATUS_DIVERGED,
     absorber_dissipation,
+    any_set,
     attachment_forces,
     block_end,
     contact_force,
@@ -87,6 +88,7 @@ from .common import (
     write_floor_metrics,
 )
 from .loads import advance_filters, excitation, has_breaks, phasors, rotations, turn
+from .rng import normal, uniform
 from .sra3 import sra3_step
 
 #: Iterations of the bracketed search for the impact instant (Illinois method).
@@ -239,6 +241,7 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
     GROUND = ground
     NB = n_bodies
     NF = n_floors
+    NA = n_bodies - n_floors
     NR = n_rows
     NS = n_bodies if sra else 0
     ROOT3 = np.sqrt(3.0)
@@ -250,7 +253,7 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
         mass, storey_k, storey_c, floor_c, state_x, state_v = bodies
         kind, host, rows = absorbers
         forces, series_t, series_v, series_ptr, series_target = ex
-        phi, chol, envelopes, c_force, c_ground, z = fl
+        phi, chol, envelopes, c_force, c_ground, z, zn, draws = fl
         sigma, normals, refine = noise
         replay = normals.shape[0] > 0
         piecewise = has_breaks(ex)  # re-evaluate each step's start on its own piece
@@ -286,12 +289,12 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
         # the seed of the Brownian trees inside the steps (``brownian``)
         seed = np.uint64(0)
         if TREE:
-            high, low = gen_bridge.random(), gen_bridge.random()
+            high, low = uniform(gen_bridge), uniform(gen_bridge)
             seed = (np.uint64(high * 2.0**32) << np.uint64(32)) | np.uint64(low * 2.0**32)
         # the Runge-Kutta stages' scratch, only where they run
         a1, a2, a3, xs, v2, v3 = scratch(NS), scratch(NS), scratch(NS), scratch(NS), scratch(NS), scratch(NS)
-        zn = z.copy()
-        draws = np.zeros(nz)
+        for r in range(nz):
+            zn[r] = z[r]
         # phasors (cos, sin) of the harmonic loads at the step's start and at its midpoint, and
         # their turns in a step and in half a step; on the stack (heap arrays passed to the
         # inlined load functions cost reference counting in the step loop)
@@ -299,8 +302,8 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
         rc, rs, hc, hs = scratch(NR), scratch(NR), scratch(NR), scratch(NR)
         rotations(forces, dt, rc, rs)
         rotations(forces, 0.5 * dt, hc, hs)
-        stuck = np.zeros(na, np.int64)
-        touching = np.zeros(na, np.int64)  # the side each Hertz absorber touches (``contact_sides``)
+        # per absorber: the wall it sticks to, the side it touches (``contact_sides``)
+        stuck, touching = scratch(NA), scratch(NA)
         if has_hertz:
             contact_sides(x, nf, kind, host, rows, touching)
         e1_prev = primary_energy(mass, storey_k, x, v, nf)
@@ -383,7 +386,7 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
                                         u += normals[(i * refine + f) * noisy + int(slot[k])]
                                     u /= np.sqrt(refine)
                                 else:
-                                    u = gen.standard_normal()
+                                    u = normal(gen)
                                 if part == 0:
                                     u1[k] = u
                                 else:
@@ -422,7 +425,7 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
                     s = left
                     if has_hertz and not search:
                         capped = True
-                    elif has_hertz and touching.any():
+                    elif has_hertz and any_set(touching):
                         s = min(left, contact_step(x, v, nf, mass, host, rows, touching))
                     if TREE:
                         increments(path, dw, off, s, left, w_at, sigma, normals, slot, memo, dws)

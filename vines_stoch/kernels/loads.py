@@ -34,6 +34,7 @@ import numpy as np
 from numba import njit
 
 from ..physics import INLINE, KERNEL
+from .rng import normal
 
 #: Kinds of closed-form force rows, their width and the column of their floor.
 HARMONIC, HALF_SINE, PULSE_TRAIN, CHIRP = 0, 1, 2, 3
@@ -223,7 +224,7 @@ def advance_filters(z, zn, t: float, dt: float, phi, chol, envelopes, gen, draws
     (``draws`` is scratch for the standard normals ``n``)."""
     nz = z.shape[0]
     for c in range(nz):
-        draws[c] = gen.standard_normal()
+        draws[c] = normal(gen)
     for r in range(nz):
         acc = 0.0
         noise = 0.0
@@ -265,10 +266,9 @@ def load_path(ex, fl, dt: float, n_steps: int, gen, force, ground):
     """Force on each floor (``force``, shape ``(n_steps + 1, n_floors)``) and ground
     acceleration at ``t = i dt``, ``i = 0..n_steps``, with the filters advanced exactly as in
     the step loops (``fl`` as the kernels take it; ``gen``: the filter stream)."""
-    phi, chol, envelopes, c_force, c_ground, z = fl
+    phi, chol, envelopes, c_force, c_ground, z, zn, draws = fl
     forces, series_t, series_v, series_ptr, series_target = ex
-    zn = z.copy()
-    draws = np.zeros(z.shape[0])
+    zn[:] = z
     for i in range(n_steps + 1):
         t = i * dt
         ground[i] = excitation(t, t, 0.0, forces, series_t, series_v, series_ptr, series_target, True,

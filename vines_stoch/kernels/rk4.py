@@ -19,7 +19,6 @@ from __future__ import annotations
 
 from functools import cache
 
-import numpy as np
 from numba import njit
 
 from ..physics import (
@@ -54,6 +53,7 @@ from .common import (
     STATUS,
     STATUS_DIVERGED,
     accelerate,
+    any_set,
     attachment_forces,
     block_end,
     contact_force,
@@ -238,6 +238,7 @@ def rk4_kernel(n_bodies: int, n_floors: int, has_impact: bool, has_hertz: bool):
     of ``kdk.kdk_kernel`` (no noise, no generators)."""
     NB = n_bodies
     NF = n_floors
+    NA = n_bodies - n_floors
 
     @njit(**KERNEL)
     def kernel(bodies, absorbers, ex, fl, noise, grid, outputs, gen, gen_bridge, gen_filter):
@@ -263,8 +264,7 @@ def rk4_kernel(n_bodies: int, n_floors: int, has_impact: bool, has_hertz: bool):
             x[b] = state_x[b]
             v[b] = state_v[b]
             inv_mass[b] = 1.0 / mass[b]
-        stuck = np.zeros(na, np.int64)
-        touching = np.zeros(na, np.int64)
+        stuck, touching = scratch(NA), scratch(NA)  # per absorber: its wall when stuck, its contact side
         next_sample = 0
         h_next = start_history(history, stride, x, nf, primary_energy(mass, storey_k, x, v, nf))
         pending = limits.shape[0]  # limits not passed yet
@@ -304,8 +304,8 @@ def rk4_kernel(n_bodies: int, n_floors: int, has_impact: bool, has_hertz: bool):
                 phase = 0
                 while True:
                     if phase == 0:
-                        sticking = has_impact and stuck.any()
-                        contact = has_hertz and touching.any()
+                        sticking = has_impact and any_set(stuck)
+                        contact = has_hertz and any_set(touching)
                         h = left
                         if contact:
                             h = min(left, contact_step(x, v, nf, mass, host, rows, touching))
@@ -392,7 +392,7 @@ def rk4_kernel(n_bodies: int, n_floors: int, has_impact: bool, has_hertz: bool):
                         out[IMPACTS] += 1
                         out[IMPACTS_LEFT if side < 0 else IMPACTS_RIGHT] += 1
                     sub += 1
-                if has_impact and stuck.any():
+                if has_impact and any_set(stuck):
                     pin_to_walls(x, nf, stuck, host, rows)
                     # release contacts the wall would have to pull (checked at step ends)
                     wall_accelerations(x, v, t, nf, mass, inv_mass, storey_k, storey_c, floor_c, kind, host,
