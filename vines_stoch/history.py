@@ -39,9 +39,9 @@ def needs_floors(signals: list[str] | tuple[str, ...]) -> bool:
 
 def select(rows: np.ndarray, signals: list[str] | tuple[str, ...]) -> np.ndarray:
     """The ``signals`` (``scenario.history_signals``) of a kernel's history rows ``(grid,
-    2 [+ n_floors])``, as ``(len(signals), grid)``: ``x1``, ``e1``, ``x_k``, ``drift_k =
-    x_k - x_{k-1}``."""
-    out = np.empty((len(signals), rows.shape[0]))
+    2 [+ n_floors])`` (or of many realisations' rows, ``(grid, 2 [+ n_floors], n)``), as
+    ``(len(signals), grid[, n])``: ``x1``, ``e1``, ``x_k``, ``drift_k = x_k - x_{k-1}``."""
+    out = np.empty((len(signals), rows.shape[0], *rows.shape[2:]))
     for i, name in enumerate(signals):
         if name in SIGNALS:
             out[i] = rows[:, SIGNALS.index(name)]

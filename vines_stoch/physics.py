@@ -14,6 +14,8 @@ restitution, ``restitution_impact``), a ``HERTZ`` row finite-duration contact fo
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numba import njit
 
@@ -97,7 +99,7 @@ def hertz_constant(young, poisson, radius: float, q: float = 0.318) -> float:
     ``radius`` on a flat, ``A = B = 1 / (2 radius)``, ``delta_i = (1 - nu_i^2) / (pi E_i)``
     (MODEL.md section 2, Lizunov et al. eq. 3)."""
     deltas = sum((1.0 - nu * nu) / (np.pi * e) for e, nu in zip(young, poisson))
-    return 4.0 / 3.0 * q / (deltas * np.sqrt(1.0 / radius))
+    return 4.0 / 3.0 * q / (deltas * math.sqrt(1.0 / radius))
 
 
 @njit(**INLINE)
@@ -105,7 +107,7 @@ def hertz_force(z: float, k: float) -> float:
     """Quasi-static Hertz contact force ``K z^1.5`` for an approach ``z > 0``, else 0 (Johnson,
     *Contact Mechanics*, Cambridge 1985, section 4.2; Lizunov, Pogorelova and Postnikova, "Choice
     of the model for vibro-impact nonlinear sink", eq. 3)."""
-    return k * z * np.sqrt(z) if z > 0.0 else 0.0
+    return k * z * math.sqrt(z) if z > 0.0 else 0.0
 
 
 @njit(**INLINE)
@@ -127,4 +129,4 @@ def contact_energy(rows, a: int, u: float) -> float:
 @njit(**INLINE)
 def hertz_energy(z: float, k: float) -> float:
     """Energy stored in a Hertz contact: ``0.4 K z^2.5`` for ``z > 0``, else 0."""
-    return 0.4 * k * z * z * np.sqrt(z) if z > 0.0 else 0.0
+    return 0.4 * k * z * z * math.sqrt(z) if z > 0.0 else 0.0

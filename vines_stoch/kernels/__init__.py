@@ -16,7 +16,7 @@ from ..schemes import SCHEMES
 from ..streams import Streams
 from .common import POINCARE_SAMPLES, SLOTS, new_metrics
 from .kdk import kdk_kernel
-from .loads import load_path
+from .loads import load_path, stationary_start
 from .rk4 import rk4_kernel
 
 _NO_NORMALS = np.zeros(0)
@@ -41,13 +41,16 @@ def sample_buffer(scene) -> np.ndarray:
     return np.full((POINCARE_SAMPLES, 2 * scene.mass.shape[0] + 2), np.nan)
 
 
-def filter_tuple(scene, generator: np.random.Generator | None) -> tuple:
+def filter_tuple(scene, generator: np.random.Generator | np.ndarray | None) -> tuple:
     """The kernels' filter arrays with the initial filter state: zero (from rest) or a draw
     from the stationary law (``p0`` is the root of its covariance) from ``generator`` (the
-    filter stream); then the next state's and the normals' scratch (``loads.advance_filters``)."""
+    filter stream: a numpy Generator, or a Philox stream as on the GPU, ``loads.stationary_start``);
+    then the next state's and the normals' scratch (``loads.advance_filters``)."""
     f = scene.filters
     z = np.zeros(f["phi"].shape[0])
-    if z.shape[0] and f["p0"].any():
+    if isinstance(generator, np.ndarray):
+        stationary_start(f["p0"], generator, z, np.zeros(z.shape[0]))
+    elif z.shape[0] and f["p0"].any():
         z = f["p0"] @ generator.standard_normal(z.shape[0])
     return f["phi"], f["chol"], f["envelope"], f["c_force"], f["c_ground"], z, z.copy(), np.zeros(z.shape[0])
 
@@ -145,18 +148,19 @@ def simulate(scene, streams: Streams | np.random.Generator | None = None, *,
 
 
 def load_history(
-    scene, streams: Streams | np.random.Generator | None = None
+    scene, streams: Streams | np.random.Generator | np.ndarray | None = None
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """One sample path of a scene's loads on its time grid: ``(t, force on each floor (shape
     (n_steps + 1, n_floors)), ground acceleration)``; filtered loads start from the same law
     and take the same exact steps as in the step loops (white noise, having no path value, is
-    left out); ``streams`` gives the filter stream (default: a generator seeded with 0), so
-    the streams of an ensemble's realisation give the path that realisation saw."""
+    left out); ``streams`` gives the filter stream (default: a generator seeded with 0; a
+    Philox stream array is a GPU realisation's), so the streams of an ensemble's realisation
+    give the path that realisation saw."""
     n = scene.n_steps
     force, ground = np.zeros((n + 1, scene.n_floors)), np.zeros(n + 1)
     if streams is None:
         streams = np.random.default_rng(0)
-    gen = streams if isinstance(streams, np.random.Generator) else streams.filter
+    gen = streams if isinstance(streams, (np.random.Generator, np.ndarray)) else streams.filter
     if gen is None:
         gen = np.random.default_rng(0)  # a scene without filters draws nothing
     load_path(scene.excitation, filter_tuple(scene, gen), scene.dt, n, gen, force, ground)

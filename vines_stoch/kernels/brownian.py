@@ -22,6 +22,8 @@ normals see the same path, the basis of the strong convergence studies.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numba import njit
 
@@ -60,7 +62,7 @@ def node_normal(key, node: int) -> float:
     h = mix(key ^ (np.uint64(node) * _GOLDEN))
     u1 = (np.float64(h >> _S32) + 0.5) * 2.0**-32
     u2 = (np.float64(h & _LOW32) + 0.5) * 2.0**-32
-    return np.sqrt(-2.0 * np.log(u1)) * np.cos(_TWO_PI * u2)
+    return math.sqrt(-2.0 * math.log(u1)) * math.cos(_TWO_PI * u2)
 
 
 #: Entries of a floor's memo of its last descent (``tree_value``): ``lo, hi, W(lo), W(hi)`` and
@@ -100,7 +102,7 @@ def tree_value(total: float, length: float, tau: float, scale: float, key, inter
     lo, hi, w_lo, w_hi, node = memo[row], memo[row + 1], memo[row + 2], memo[row + 3], int(memo[row + 4])
     for depth in range(level, TREE_DEPTH):
         mid = 0.5 * (lo + hi)
-        w_mid = 0.5 * (w_lo + w_hi) + scale * np.sqrt(0.25 * (hi - lo)) * node_normal(key, node)
+        w_mid = 0.5 * (w_lo + w_hi) + scale * math.sqrt(0.25 * (hi - lo)) * node_normal(key, node)
         if tau == mid:
             memo[levels] = depth + 1.0
             return w_mid
@@ -125,7 +127,7 @@ def path_value(seed, step: int, k: int, total: float, dt: float, tau: float, sca
         return tree_value(total, dt, tau, scale, interval_key(seed, step, k), step, memo, k * MEMO)
     h = dt / refine
     j = min(int(tau / h), refine - 1)
-    root = scale * np.sqrt(h)
+    root = scale * math.sqrt(h)
     base = 0.0
     first = step * refine
     for f in range(first, first + j):

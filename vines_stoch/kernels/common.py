@@ -11,6 +11,8 @@ registers too, at several times the compile time of every kernel).
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from llvmlite import ir
 from numba import njit, types
@@ -220,11 +222,11 @@ def contact_substep(x, v, nf: int, mass, host, rows, a: int, side: int, steps: i
     w = v[j] - v[hf]
     k = rows[a, K_LEFT] if side < 0 else rows[a, K_RIGHT]
     z = max(rows[a, WALL_LO] - u if side < 0 else u - rows[a, WALL_HI], 0.0)
-    energy = 0.5 * m_eff * w * w + 0.4 * k * z * z * np.sqrt(z)
+    energy = 0.5 * m_eff * w * w + 0.4 * k * z * z * math.sqrt(z)
     z_ref = max(z, (energy / (0.4 * k)) ** 0.4)
     if z_ref <= 0.0:
         return np.inf
-    return 4.0 / (steps * np.sqrt(1.5 * k * np.sqrt(z_ref) / m_eff))
+    return 4.0 / (steps * math.sqrt(1.5 * k * math.sqrt(z_ref) / m_eff))
 
 
 @njit(**KERNEL)

@@ -37,6 +37,7 @@ is the scheme's own error in the potential energy (MODEL.md section 4).
 
 from __future__ import annotations
 
+import math
 from functools import cache
 
 import numpy as np
@@ -244,7 +245,7 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
     NA = n_bodies - n_floors
     NR = n_rows
     NS = n_bodies if sra else 0
-    ROOT3 = np.sqrt(3.0)
+    ROOT3 = math.sqrt(3.0)
 
     @njit(**KERNEL)
     def kernel(bodies, absorbers, ex, fl, noise, grid, outputs, gen, gen_bridge, gen_filter):
@@ -282,7 +283,7 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
         x_max, drift_max, acc_max, x2_integral = scratch(NF), scratch(NF), scratch(NF), scratch(NF)
         noisy = 0  # noisy floors (normals a step)
         for k in range(nf):
-            noise_scale[k] = sigma[k] * np.sqrt(dt)
+            noise_scale[k] = sigma[k] * math.sqrt(dt)
             slot[k] = noisy
             if nf == 1 or noise_scale[k] > 0.0:
                 noisy += 1
@@ -384,7 +385,7 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
                                     u = 0.0
                                     for f in range(refine):
                                         u += normals[(i * refine + f) * noisy + int(slot[k])]
-                                    u /= np.sqrt(refine)
+                                    u /= math.sqrt(refine)
                                 else:
                                     u = normal(gen)
                                 if part == 0:

@@ -30,6 +30,8 @@ every ``common.CHECK_EVERY`` steps, so the rounding of the recurrence stays belo
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numba import njit
 
@@ -53,23 +55,23 @@ def closed_form_force(t: float, tm: float, forces, r: int, pc, on_grid: bool) ->
     if kind == HARMONIC:  # P cos(omega t + phi)
         if on_grid:
             return amplitude * pc[r]
-        return amplitude * np.cos(forces[r, 2] * t + forces[r, 3])
+        return amplitude * math.cos(forces[r, 2] * t + forces[r, 3])
     if kind == HALF_SINE:  # F0 sin(pi (t - t0) / Td) on [t0, t0 + Td]
         duration, t0 = forces[r, 2], forces[r, 3]
         if t0 <= tm <= t0 + duration:
-            return amplitude * np.sin(np.pi * (t - t0) / duration)
+            return amplitude * math.sin(np.pi * (t - t0) / duration)
         return 0.0
     if kind == PULSE_TRAIN:  # F0 while (t - t0) mod Tp < tw, t >= t0, at most `count` pulses
         width, period, t0, count = forces[r, 2], forces[r, 3], forces[r, 4], forces[r, 5]
         if tm < t0:
             return 0.0
-        k = np.floor((tm - t0) / period)
+        k = float(math.floor((tm - t0) / period))
         if count > 0 and k >= count:
             return 0.0
         return amplitude if tm - t0 - k * period < width else 0.0
     # CHIRP: A sin(2 pi (f0 t + (f1 - f0) t^2 / (2 T)))
     f0, f1, sweep = forces[r, 2], forces[r, 3], forces[r, 4]
-    return amplitude * np.sin(2.0 * np.pi * (f0 * t + (f1 - f0) * t * t / (2.0 * sweep)))
+    return amplitude * math.sin(2.0 * np.pi * (f0 * t + (f1 - f0) * t * t / (2.0 * sweep)))
 
 
 @njit(**INLINE)
@@ -104,8 +106,8 @@ def phasors(t: float, forces, pc, ps):
     for r in range(pc.shape[0]):
         if forces[r, 0] == HARMONIC:
             phase = forces[r, 2] * t + forces[r, 3]
-            pc[r] = np.cos(phase)
-            ps[r] = np.sin(phase)
+            pc[r] = math.cos(phase)
+            ps[r] = math.sin(phase)
 
 
 @njit(**INLINE)
@@ -115,8 +117,8 @@ def rotations(forces, span: float, rc, rs):
     for r in range(rc.shape[0]):
         rc[r], rs[r] = 1.0, 0.0
         if forces[r, 0] == HARMONIC:
-            rc[r] = np.cos(forces[r, 2] * span)
-            rs[r] = np.sin(forces[r, 2] * span)
+            rc[r] = math.cos(forces[r, 2] * span)
+            rs[r] = math.sin(forces[r, 2] * span)
 
 
 @njit(**INLINE)
@@ -182,7 +184,7 @@ def next_break(t: float, ex) -> float:
                     first = min(first, tb)
         elif row[0] == PULSE_TRAIN:
             width, period, t0, count = row[2], row[3], row[4], row[5]
-            k = max(np.floor((t - t0) / period), 0.0)
+            k = max(float(math.floor((t - t0) / period)), 0.0)
             tb = t0 + k * period
             if tb <= t:
                 tb += width
@@ -211,11 +213,32 @@ def envelope(t: float, row) -> float:
             return (t / row[1]) ** 2
         if t <= row[2]:
             return 1.0
-        return np.exp(-row[3] * (t - row[2]))
+        return math.exp(-row[3] * (t - row[2]))
     if kind == SARAGONI_HART:
         r = t / row[1]
-        return r ** row[2] * np.exp(row[2] * (1.0 - r)) if r > 0.0 else 0.0
+        return r ** row[2] * math.exp(row[2] * (1.0 - r)) if r > 0.0 else 0.0
     return 1.0
+
+
+@njit(**INLINE)
+def stationary_start(p0, gen, z, draws) -> None:
+    """The filters' initial state ``z = P0 n`` with ``n`` standard normals from ``gen``, drawn
+    only where ``P0`` (the root of the stationary covariance) is not zero (else a start from
+    rest, ``z = 0``); ``draws`` is scratch for ``n``."""
+    nz = z.shape[0]
+    stationary = False
+    for r in range(nz):
+        z[r] = 0.0
+        for c in range(nz):
+            stationary = stationary or p0[r, c] != 0.0
+    if stationary:
+        for c in range(nz):
+            draws[c] = normal(gen)
+        for r in range(nz):
+            acc = 0.0
+            for c in range(nz):
+                acc += p0[r, c] * draws[c]
+            z[r] = acc
 
 
 @njit(**INLINE)

@@ -292,8 +292,9 @@ def rk4_kernel(n_bodies: int, n_floors: int, has_impact: bool, has_hertz: bool):
             start = i
             for i in range(start, end):
                 if sampling:
-                    xp[:] = x
-                    vp[:] = v
+                    for b in range(nb):
+                        xp[b] = x[b]
+                        vp[b] = v[b]
                 t = i * dt
                 left = dt
                 n_impacts = 0

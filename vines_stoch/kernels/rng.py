@@ -17,6 +17,8 @@ type when it compiles a kernel, and plain Python (the CUDA simulator) by ``isins
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numba import njit, types
 from numba.extending import overload
@@ -73,7 +75,15 @@ def philox_normal(stream) -> float:
     w0, w1, w2, w3 = next_block(stream)
     u1 = (float((w0 << _S21) | (w1 >> _S11)) + 1.0) * _ULP53
     u2 = float((w2 << _S21) | (w3 >> _S11)) * _ULP53
-    return np.sqrt(-2.0 * np.log(u1)) * np.cos(_TWO_PI * u2)
+    return math.sqrt(-2.0 * math.log(u1)) * math.cos(_TWO_PI * u2)
+
+
+@njit(**INLINE)
+def open_stream(stream, key, place) -> None:
+    """Set ``stream`` (``STREAM_WORDS`` words) to the start of the stream ``(key, place)``."""
+    stream[KEY] = key
+    stream[PLACE] = place
+    stream[DRAWN] = 0
 
 
 def normal(gen) -> float:
@@ -86,14 +96,14 @@ def uniform(gen) -> float:
     return philox_uniform(gen) if isinstance(gen, np.ndarray) else gen.random()
 
 
-@overload(normal, inline="always")
+@overload(normal)
 def _normal(gen):
     if isinstance(gen, types.Array):
         return lambda gen: philox_normal(gen)
     return lambda gen: gen.standard_normal()
 
 
-@overload(uniform, inline="always")
+@overload(uniform)
 def _uniform(gen):
     if isinstance(gen, types.Array):
         return lambda gen: philox_uniform(gen)

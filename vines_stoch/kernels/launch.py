@@ -1,0 +1,77 @@
+"""The CUDA kernel around a step loop: one realisation a thread (``gpu.py``).
+
+Imported only by the cuda backend: it needs numba-cuda (``numba.cuda``), an optional extra.
+"""
+
+from __future__ import annotations
+
+from functools import cache
+
+import numpy as np
+from numba import cuda, float64, njit, uint64
+
+from .loads import stationary_start
+from .rng import STREAM_WORDS, open_stream
+
+
+def _plain(array):
+    """The numpy array behind an array the simulator hands its kernels (the step loop is
+    compiled for the CPU there and takes numpy arrays)."""
+    return array._item._ary
+
+
+@cache
+def launcher(kernel, n_bodies: int, simulated: bool):
+    """The CUDA kernel that runs ``kernel`` (a step loop of ``kernels/``, taking its bundles) for
+    one realisation a thread; memoised by loop and body count (its stack arrays' size)."""
+    NB = n_bodies
+    WORDS = STREAM_WORDS
+    plain = _plain if simulated else njit(inline="always")(lambda a: a)
+
+    @cuda.jit
+    def launch(first, n, per_path, place, keys, mass, storey_k, storey_c, floor_c, x0, v0, rows, forces,
+               sigma, limits, phi, chol, envelope, c_force, c_ground, p0, kind, host, series_t, series_v,
+               series_ptr, series_target, normals, dt, n_steps, i0, period, sample_from, stride, template,
+               out, samples, history, work):
+        t = cuda.grid(1)
+        if t >= n:
+            return
+        p = t if per_path else 0
+        r = first + t
+        x = cuda.local.array(NB, float64)
+        v = cuda.local.array(NB, float64)
+        for b in range(NB):
+            x[b] = x0[p, b]
+            v[b] = v0[p, b]
+        # the realisation's streams: step increments, Brownian trees' seed, filter noise
+        inc = cuda.local.array(WORDS, uint64)
+        bri = cuda.local.array(WORDS, uint64)
+        fil = cuda.local.array(WORDS, uint64)
+        open_stream(inc, keys[0], place | uint64(r))
+        open_stream(bri, keys[1], place | uint64(r))
+        open_stream(fil, keys[2], place | uint64(r))
+        row = plain(out[t])
+        for j in range(row.shape[0]):
+            row[j] = template[j]
+        own_samples = plain(samples[t])
+        for a in range(own_samples.shape[0]):
+            for b in range(own_samples.shape[1]):
+                own_samples[a, b] = np.nan
+        own_history = plain(history[t])
+        for a in range(own_history.shape[0]):
+            for b in range(own_history.shape[1]):
+                own_history[a, b] = np.nan
+        z, zn, draws = plain(work[t, 0]), plain(work[t, 1]), plain(work[t, 2])
+        f0 = plain(p0[p])
+        stationary_start(f0, fil, z, draws)
+        kernel((plain(mass[p]), plain(storey_k[p]), plain(storey_c[p]), plain(floor_c[p]), x, v),
+               (plain(kind), plain(host), plain(rows[p])),
+               (plain(forces[p]), plain(series_t), plain(series_v), plain(series_ptr), plain(series_target)),
+               (plain(phi[p]), plain(chol[p]), plain(envelope[p]), plain(c_force[p]), plain(c_ground[p]),
+                z, zn, draws),
+               (plain(sigma[p]), plain(normals), 1),
+               (dt, n_steps, i0, period, sample_from, stride),
+               (row, own_samples, own_history, plain(limits[p])),
+               inc, bri, fil)
+
+    return launch
