@@ -30,7 +30,7 @@ import pandas as pd
 from . import history as hist
 from . import schedulers
 from .kernels import needed_streams, sample_buffer, simulate
-from .metrics import METRICS, finish, ground_intensity, summarise
+from .metrics import METRICS, finish_table, ground_intensity, summarise
 from .progress import Progress
 from .scenario import History, Study
 from .scene import Scene, build_scene
@@ -64,7 +64,7 @@ def run_chunk(scene: Scene, seed: int, point: int, start: int, stop: int,
     ``(len(signals), size, stop - start)``.  With ``study`` (a study with uncertain parameters) each
     realisation runs its own scene, its drawn values in columns named by their keys.
     ``common``: common random numbers across sweep points (see ``generator``)."""
-    rows = []
+    raws, scenes, samples_rows, drawn_rows, intensities = [], [], [], [], []
     paths = None if grid is None else np.full((len(signals), grid[1], stop - start), np.nan)
     columns = len(hist.SIGNALS) + (scene.n_floors if hist.needs_floors(signals) else 0)
     path = None if grid is None else np.full((grid[1], columns), np.nan)
@@ -77,16 +77,24 @@ def run_chunk(scene: Scene, seed: int, point: int, start: int, stop: int,
             path.fill(np.nan)
         increments, bridge, filters = needed_streams(scene)
         gens = streams(seed, point, r, increments=increments, bridge=bridge, filters=filters, common=common)
-        raw = simulate(scene, gens, samples=samples, history=path, stride=grid[0] if grid else 1)
+        raws.append(simulate(scene, gens, samples=samples, history=path, stride=grid[0] if grid else 1))
         if paths is not None:
             paths[:, :, r - start] = hist.select(path, signals)
-        row = {"point": point, "realization": r, **drawn, **finish(raw, scene, samples)}
-        if scene.im_period > 0:  # (the filter stream afresh: the ground path the realisation saw)
-            row.update(ground_intensity(scene, streams(seed, point, r, increments=False, bridge=False,
-                                                       filters=filters, common=common)))
-        rows.append(row)
-    frame = pd.DataFrame(rows)
-    frame["regime"] = frame["regime"].astype("string")
+        scenes.append(scene)
+        samples_rows.append(samples)
+        drawn_rows.append(drawn)
+        # (the filter stream afresh: the ground path the realisation saw)
+        intensities.append(ground_intensity(scene, streams(seed, point, r, increments=False, bridge=False,
+                                                           filters=filters, common=common))
+                           if scene.im_period > 0 else {})
+    frame = finish_table(np.stack(raws), scenes if study is not None else scene, samples_rows)
+    front = {"point": np.full(stop - start, point, dtype=np.int64),
+             "realization": np.arange(start, stop, dtype=np.int64),
+             **{key: np.array([d[key] for d in drawn_rows], dtype=float) for key in drawn_rows[0]}}
+    for i, (key, values) in enumerate(front.items()):
+        frame.insert(i, key, values)
+    for key in next((m for m in intensities if m), {}):  # sa, pga
+        frame[key] = np.array([m.get(key, np.nan) for m in intensities], dtype=float)
     return frame, paths
 
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 
 import numpy as np
 import pandas as pd
@@ -69,47 +70,91 @@ def regime(samples: np.ndarray, omega: float) -> str | None:
     return "aperiodic"
 
 
-def finish(raw: np.ndarray, scene: Scene, samples: np.ndarray | None = None) -> dict[str, float | str | None]:
-    """Metric columns of one realisation from a kernel's raw vector ``raw`` (``SLOTS``, then
-    the per-floor blocks) and, for periodically forced scenes, its Poincare ``samples``."""
-    g = raw.tolist().__getitem__  # Python floats: no numpy scalar overhead, no warnings to silence
-    input_energy = g(_S["input_energy"])
-    absorbed = g(_S["absorber_dissipation"]) + g(_S["impact_loss"])
-    dissipated = absorbed + g(_S["primary_dissipation"])
-    edm = absorbed / input_energy if input_energy > 0 else math.nan
-    residual = ((input_energy - g(_S["final_energy"]) - dissipated) / input_energy if input_energy > 0
-                else math.nan)
-    row: dict[str, float | str | None] = {
-        "input_energy": input_energy,
-        "edm": edm,
-        "energy_integral": g(_S["energy_integral"]),
-        "e1_max": g(_S["e1_max"]),
-        "x1_max": g(_S["x1_max"]),
-        "x1_rms": math.sqrt(max(g(_S["x1_square_integral"]), 0.0) / scene.window),
-        "impacts": int(g(_S["impacts"])),
-        "energy_residual": residual,
-        "primary_dissipation": g(_S["primary_dissipation"]),
-        "absorber_dissipation": g(_S["absorber_dissipation"]),
-        "impact_loss": g(_S["impact_loss"]),
-        "impacts_left": int(g(_S["impacts_left"])),
-        "impacts_right": int(g(_S["impacts_right"])),
-        "peak_force": g(_S["peak_force"]),
-        "contact_time": g(_S["contact_time"]),
-    }
-    nf = scene.n_floors
-    for k in range(nf):
-        slot = len(SLOTS) + k  # the floor's entry of the first per-floor block (FLOOR_SLOTS)
-        row[f"x_max_{k + 1}"] = g(slot + X_MAX_K * nf)
-        row[f"x_rms_{k + 1}"] = math.sqrt(max(g(slot + X_SQ_INT_K * nf), 0.0) / scene.window)
-        row[f"drift_max_{k + 1}"] = g(slot + DRIFT_MAX_K * nf)
-        row[f"acc_max_{k + 1}"] = g(slot + ACC_MAX_K * nf)
-    finite = all(math.isfinite(v) for k, v in row.items() if k not in ("edm", "energy_residual"))
+def finish_table(raw: np.ndarray, scene: Scene | Sequence[Scene],
+                 samples: Sequence[np.ndarray | None] | np.ndarray | None = None) -> pd.DataFrame:
+    """Metric columns of realisations, one a row of ``raw`` (a kernel's raw vector: ``SLOTS``,
+    the per-floor blocks, the first passages): ``METRICS``, the floors' (``floor_metrics``),
+    ``first_passage_<limit>``, ``status`` and ``regime`` (``"string"``, from the rows' Poincare
+    ``samples`` where the scene is periodically forced).  ``scene``: that of every row, or one
+    a row (an uncertain study's realisations: the same floors and limits, their own window and
+    forcing period)."""
+    raw = np.asarray(raw, dtype=np.float64)
+    if raw.ndim != 2:
+        raise ValueError(f"finish_table: raw must be 2-D (realisations, slots), not of shape {raw.shape}")
+    n = raw.shape[0]
+    if isinstance(scene, Scene):
+        scenes, window = None, scene.window
+    else:
+        scenes = list(scene)
+        if len(scenes) != n or len({(s.n_floors, s.limit_names) for s in scenes}) > 1:
+            raise ValueError(f"finish_table: {len(scenes)} scenes for {n} rows; give one scene, or one "
+                             "a row, all with the same floors and limits")
+        scene, window = scenes[0], np.array([s.window for s in scenes])
+    slot = {name: raw[:, i] for name, i in _S.items()}
+    counts = raw[:, [_S["impacts"], _S["impacts_left"], _S["impacts_right"]]]
+    if not (np.abs(counts) < 2.0**63).all():  # (as int() refuses them)
+        raise ValueError("finish_table: impact counts must be finite integers")
+    input_energy = slot["input_energy"]
+    absorbed = slot["absorber_dissipation"] + slot["impact_loss"]
+    dissipated = absorbed + slot["primary_dissipation"]
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        positive = input_energy > 0  # (NaN where not: no energy in, or none defined)
+        edm = np.where(positive, absorbed / input_energy, np.nan)
+        residual = np.where(positive, (input_energy - slot["final_energy"] - dissipated) / input_energy,
+                            np.nan)
+
+        def rms(square_integral: np.ndarray) -> np.ndarray:  # (negative -> 0 as max(v, 0.0): NaN, -0.0 kept)
+            return np.sqrt(np.where(square_integral < 0, 0.0, square_integral) / window)
+
+        columns: dict[str, np.ndarray] = {
+            "input_energy": input_energy,
+            "edm": edm,
+            "energy_integral": slot["energy_integral"],
+            "e1_max": slot["e1_max"],
+            "x1_max": slot["x1_max"],
+            "x1_rms": rms(slot["x1_square_integral"]),
+            "impacts": counts[:, 0].astype(np.int64),
+            "energy_residual": residual,
+            "primary_dissipation": slot["primary_dissipation"],
+            "absorber_dissipation": slot["absorber_dissipation"],
+            "impact_loss": slot["impact_loss"],
+            "impacts_left": counts[:, 1].astype(np.int64),
+            "impacts_right": counts[:, 2].astype(np.int64),
+            "peak_force": slot["peak_force"],
+            "contact_time": slot["contact_time"],
+        }
+        nf = scene.n_floors
+        for k in range(nf):
+            floor = len(SLOTS) + k  # the floor's entry of the first per-floor block (FLOOR_SLOTS)
+            columns[f"x_max_{k + 1}"] = raw[:, floor + X_MAX_K * nf]
+            columns[f"x_rms_{k + 1}"] = rms(raw[:, floor + X_SQ_INT_K * nf])
+            columns[f"drift_max_{k + 1}"] = raw[:, floor + DRIFT_MAX_K * nf]
+            columns[f"acc_max_{k + 1}"] = raw[:, floor + ACC_MAX_K * nf]
+    finite = np.ones(n, dtype=bool)
+    for name, values in columns.items():
+        if name not in ("edm", "energy_residual") and values.dtype.kind == "f":
+            finite &= np.isfinite(values)
     passages = passage_slots(nf)
     for limit, name in enumerate(scene.limit_names):  # (NaN where a limit never passed)
-        row[f"first_passage_{name}"] = g(passages + limit)
-    row["status"] = "diverged" if g(_S["status"]) == STATUS_DIVERGED or not finite else "ok"
-    row["regime"] = (regime(samples, 2.0 * np.pi / scene.period)
-                     if samples is not None and samples.size and row["status"] == "ok" else None)
+        columns[f"first_passage_{name}"] = raw[:, passages + limit]
+    ok = finite & (slot["status"] != STATUS_DIVERGED)
+    # string columns as codes into their few values (far faster than a string a row)
+    columns["status"] = pd.Series(["diverged", "ok"]).array.take(ok.astype(np.intp))
+    codes, labels = np.zeros(n, dtype=np.intp), {None: 0}
+    if samples is not None:
+        for i in np.flatnonzero(ok):
+            if samples[i] is not None and samples[i].size:
+                period = scene.period if scenes is None else scenes[i].period
+                codes[i] = labels.setdefault(regime(samples[i], 2.0 * np.pi / period), len(labels))
+    columns["regime"] = pd.array(list(labels), dtype="string").take(codes)
+    return pd.DataFrame(columns)
+
+
+def finish(raw: np.ndarray, scene: Scene, samples: np.ndarray | None = None) -> dict[str, float | str | None]:
+    """The row of one realisation (``finish_table``) as a dict of Python values, ``regime``
+    None where undefined."""
+    row = finish_table(raw[np.newaxis], scene, None if samples is None else [samples]).to_dict("records")[0]
+    row["regime"] = None if row["regime"] is pd.NA else row["regime"]
     return row
 
 

@@ -43,7 +43,7 @@ from ..physics import (
     spring_damper_force,
 )
 
-#: Slots of the raw metric vector a kernel fills; ``metrics.finish`` turns it into columns.
+#: Slots of the raw metric vector a kernel fills; ``metrics.finish_table`` turns it into columns.
 SLOTS = (
     "input_energy", "primary_dissipation", "absorber_dissipation", "impact_loss",
     "energy_integral", "e1_max", "x1_max", "x1_square_integral", "impacts",
