@@ -2,7 +2,13 @@
 
 from __future__ import annotations
 
-import pytest
+import os
+
+# The cuda backend's tests run on numba-cuda's simulator where no GPU is (NUMBA_ENABLE_CUDASIM=0
+# runs them on a GPU); numba reads the switch once, when first imported: before anything else.
+os.environ.setdefault("NUMBA_ENABLE_CUDASIM", "1")
+
+import pytest  # noqa: E402
 
 
 @pytest.fixture

@@ -41,11 +41,23 @@ def run(
                                      help="I/N: run only the I-th of N shares of the chunks (job arrays); "
                                           "then --resume writes the results."),
     quiet: bool = typer.Option(False, "--quiet", help="No progress or summary output."),
+    backend: str = typer.Option("cpu", "--backend",
+                                help="cpu (numba on CPU threads) or cuda (an NVIDIA GPU through numba-cuda, "
+                                     "one realisation a thread; its own random streams)."),
 ) -> None:
     """Run a scenario and write realizations.parquet and summary.parquet."""
-    from .ensemble import output_directory
+    from .ensemble import BACKENDS, output_directory
     from .ensemble import run as run_study
 
+    if backend not in BACKENDS:
+        _fail(f"--backend {backend}: must be one of {', '.join(BACKENDS)}")
+    if backend == "cuda":
+        from .gpu import GPUUnavailable, require
+
+        try:
+            require()
+        except GPUUnavailable as exc:
+            _fail(str(exc))
     try:
         study = load_scenario(scenario)
     except ScenarioError as exc:
@@ -66,7 +78,7 @@ def run(
     directory = output_directory(study, out)
     try:
         result = run_study(study, directory, workers=workers, chunk=chunk, resume=resume, scheduler=scheduler,
-                           progress=not quiet, shard=share)
+                           progress=not quiet, shard=share, backend=backend)
     except KeyboardInterrupt:
         typer.echo(f"\ninterrupted: finished chunks are kept in {directory}/parts; "
                    f"run again with --resume to complete", err=True)

@@ -30,12 +30,13 @@ import pandas as pd
 from . import history as hist
 from . import schedulers
 from .kernels import needed_streams, sample_buffer, simulate
+from .kernels.common import POINCARE_SAMPLES
 from .metrics import METRICS, finish_table, ground_intensity, summarise
 from .progress import Progress
 from .scenario import History, Study
 from .scene import Scene, build_scene
 from .store import lock_folder, part_path, provenance, read_results, run_key, write_table
-from .streams import PARAMETERS, generator, streams
+from .streams import FILTER, PARAMETERS, generator, streams
 
 #: Target work of one chunk, in path-steps (about 0.1-0.3 s of compute).
 CHUNK_STEPS = 5_000_000
@@ -46,6 +47,13 @@ CHUNKS_PER_POINT = 32
 HISTORY_CHUNK_BYTES = 8_000_000
 #: ``target_sem`` is tested at every multiple of this many realisations (and never before).
 TARGET_STEP = 100
+#: Realisations of an automatic chunk of the cuda backend (a launch fills a large GPU from
+#: about 1e5 threads on; ``gpu.simulate_many`` splits a chunk into launches that fit its memory).
+GPU_CHUNK = 1 << 20
+#: Largest history paths and Poincare samples of one cuda chunk on the host, in bytes.
+GPU_CHUNK_BYTES = 1 << 29
+#: Where ensembles run: ``run_chunk`` on CPU threads or ``run_chunk_cuda`` on an NVIDIA GPU.
+BACKENDS = ("cpu", "cuda")
 
 
 def draw_parameters(study: Study, seed: int, point: int, realization: int,
@@ -87,15 +95,49 @@ def run_chunk(scene: Scene, seed: int, point: int, start: int, stop: int,
         intensities.append(ground_intensity(scene, streams(seed, point, r, increments=False, bridge=False,
                                                            filters=filters, common=common))
                            if scene.im_period > 0 else {})
-    frame = finish_table(np.stack(raws), scenes if study is not None else scene, samples_rows)
-    front = {"point": np.full(stop - start, point, dtype=np.int64),
-             "realization": np.arange(start, stop, dtype=np.int64),
+    return _table(np.stack(raws), scenes if study is not None else scene, samples_rows, point, start,
+                  drawn_rows, intensities), paths
+
+
+def run_chunk_cuda(scene: Scene, seed: int, point: int, start: int, stop: int,
+                   grid: tuple[int, int] | None = None, study: Study | None = None,
+                   common: bool = True,
+                   signals: tuple[str, ...] = hist.SIGNALS) -> tuple[pd.DataFrame, np.ndarray | None]:
+    """``run_chunk`` on the GPU (``gpu.simulate_many``): the same table and paths, realisation
+    ``r`` drawing from its Philox streams (``kernels/rng.py``) instead of the CPU's PCG64 streams
+    (its uncertain parameters still come from the CPU's parameter stream)."""
+    from . import gpu
+    from .kernels.rng import philox_stream
+
+    n = stop - start
+    drawn_rows = [draw_parameters(study, seed, point, r, common) if study is not None else {}
+                  for r in range(start, stop)]
+    scenes = [build_scene(study.realise(point, d)) for d in drawn_rows] if study is not None else [scene] * n
+    columns = len(hist.SIGNALS) + (scene.n_floors if hist.needs_floors(signals) else 0)
+    batch = gpu.simulate_many(scenes if study is not None else scene, seed, point, start, stop, common, grid,
+                              columns)
+    samples = list(batch.samples) if batch.samples.shape[1] else [None] * n
+    # (the filter stream afresh: the ground path the realisation saw)
+    intensities = [ground_intensity(s, philox_stream(seed, FILTER, r, point, common))
+                   if s.im_period > 0 else {} for s, r in zip(scenes, range(start, stop))]
+    paths = None if grid is None else hist.select(batch.history.transpose(1, 2, 0), signals)
+    return _table(batch.raw, scenes if study is not None else scene, samples, point, start, drawn_rows,
+                  intensities), paths
+
+
+def _table(raw: np.ndarray, scenes: Scene | list[Scene], samples: list, point: int, start: int,
+           drawn_rows: list[dict[str, float]], intensities: list[dict[str, float]]) -> pd.DataFrame:
+    """A chunk's table: point, realisation, drawn parameters, the metrics (``finish_table``),
+    then the intensity measures where the scene asks for them."""
+    frame = finish_table(raw, scenes, samples)
+    front = {"point": np.full(raw.shape[0], point, dtype=np.int64),
+             "realization": np.arange(start, start + raw.shape[0], dtype=np.int64),
              **{key: np.array([d[key] for d in drawn_rows], dtype=float) for key in drawn_rows[0]}}
     for i, (key, values) in enumerate(front.items()):
         frame.insert(i, key, values)
     for key in next((m for m in intensities if m), {}):  # sa, pga
         frame[key] = np.array([m.get(key, np.nan) for m in intensities], dtype=float)
-    return frame, paths
+    return frame
 
 
 @dataclass
@@ -106,10 +148,12 @@ class Plan:
     chunks: list[tuple[int, int, int]]
 
 
-def plan(study: Study, chunk: int | None = None, realizations: int | None = None) -> Plan:
+def plan(study: Study, chunk: int | None = None, realizations: int | None = None,
+         backend: str = "cpu") -> Plan:
     """Split every sweep point's realisations into chunks (``chunk`` 0 or None: automatic,
-    from the scene's cost alone, so the plan is the same on any cluster).  With history
-    statistics a chunk holds at most ``HISTORY_CHUNK_BYTES`` of paths."""
+    from the scene's cost and the backend alone, so the plan is the same on any cluster or
+    GPU).  With history statistics a chunk holds at most ``HISTORY_CHUNK_BYTES`` of paths
+    (cuda: ``GPU_CHUNK_BYTES`` of paths and Poincare samples)."""
     scenes = [build_scene(s) for s in study.points]
     wanted = realizations or study.base.ensemble.realizations
     chunk = study.base.ensemble.chunk if chunk is None else chunk
@@ -118,8 +162,15 @@ def plan(study: Study, chunk: int | None = None, realizations: int | None = None
     counts = [wanted if scene.has_noise or random else 1 for scene in scenes]
     chunks = []
     for p, (scene, n) in enumerate(zip(scenes, counts)):
-        size = chunk or _auto_chunk(scene, n)
-        if spec:
+        if backend == "cuda":
+            size = chunk or min(n, GPU_CHUNK)
+            row_bytes = 8 * (len(spec.signals) * hist.grid(scene.n_steps, spec.points)[1] if spec else 0)
+            if scene.period > 0:
+                row_bytes += 8 * POINCARE_SAMPLES * (2 * scene.mass.shape[0] + 2)
+            size = min(size, max(1, GPU_CHUNK_BYTES // max(row_bytes, 1)))
+        else:
+            size = chunk or _auto_chunk(scene, n)
+        if spec and backend != "cuda":
             row_bytes = 8 * len(spec.signals) * hist.grid(scene.n_steps, spec.points)[1]
             size = min(size, max(1, HISTORY_CHUNK_BYTES // row_bytes))
         chunks += [(p, s, min(s + size, n)) for s in range(0, n, size)]
@@ -249,7 +300,8 @@ def output_directory(study: Study, directory: str | Path | None = None) -> Path:
 def run(study: Study, directory: str | Path | None = None, *, workers: int | None = None,
         chunk: int | None = None, realizations: int | None = None, resume: bool = False,
         scheduler: str | None = None, progress: bool = False, checkpoint_seconds: float = 30.0,
-        shard: tuple[int, int] | None = None) -> tuple[pd.DataFrame, pd.DataFrame] | None:
+        shard: tuple[int, int] | None = None,
+        backend: str = "cpu") -> tuple[pd.DataFrame, pd.DataFrame] | None:
     """Run a validated study; write ``realizations.parquet``, ``summary.parquet`` (and
     ``history.parquet`` when ``simulation.history`` asks for it) into ``directory`` (default:
     the scenario's output directory) and return realisations and summary as DataFrames.
@@ -263,9 +315,20 @@ def run(study: Study, directory: str | Path | None = None, *, workers: int | Non
     return None (for job arrays: shards run side by side, then a ``resume`` run writes the
     results from their parts; not with history statistics, which need the paths).
 
+    ``backend``: ``"cpu"`` (numba loops on CPU threads) or ``"cuda"`` (the same loops on an
+    NVIDIA GPU, one realisation a thread: ``gpu.py``; its realisations draw from Philox streams,
+    not the CPU's, so the two backends give two independent samples of the same law; where no
+    GPU is, ``gpu.GPUUnavailable`` says why).
+
     The directory is owned by one run at a time (``store.lock_folder``): a run into a folder
     another live run writes is refused with ``store.FolderInUse``.
     """
+    if backend not in BACKENDS:
+        raise ValueError(f"backend {backend!r}: must be one of {', '.join(BACKENDS)}")
+    if backend == "cuda":
+        from . import gpu
+
+        gpu.require()
     if shard is not None:
         if not 0 <= shard[0] < shard[1]:
             raise ValueError(f"--shard {shard[0]}/{shard[1]}: give I/N with 0 <= I < N "
@@ -281,18 +344,18 @@ def run(study: Study, directory: str | Path | None = None, *, workers: int | Non
         raise NotADirectoryError(f"{directory}: exists and is not a folder") from None
     with lock_folder(directory, None if shard is None else f"shard-{shard[0]}-of-{shard[1]}"):
         return _run(study, directory, workers, chunk, realizations, resume, scheduler, progress,
-                    checkpoint_seconds, shard)
+                    checkpoint_seconds, shard, backend)
 
 
 def _run(study: Study, directory: Path, workers: int | None, chunk: int | None, realizations: int | None,
          resume: bool, scheduler: str | None, progress: bool, checkpoint_seconds: float,
-         shard: tuple[int, int] | None) -> tuple[pd.DataFrame, pd.DataFrame] | None:
+         shard: tuple[int, int] | None, backend: str) -> tuple[pd.DataFrame, pd.DataFrame] | None:
     """``run`` in a directory it owns."""
     base = study.base
-    the_plan = plan(study, chunk, realizations)
+    the_plan = plan(study, chunk, realizations, backend)
     seed, target, spec = base.ensemble.seed, base.ensemble.target_sem, base.simulation.history
     grids = [hist.grid(scene.n_steps, spec.points) if spec else None for scene in the_plan.scenes]
-    key = run_key(study.text, the_plan.chunks)
+    key = run_key(study.text, the_plan.chunks, backend)
     parts = directory / "parts"
     parts.mkdir(parents=True, exist_ok=True)
     manifest = parts / "manifest.json"
@@ -337,9 +400,12 @@ def _run(study: Study, directory: Path, workers: int | None, chunk: int | None, 
     todo = [c for c in mine if c not in reusable]
     total = sum(c[2] - c[1] for c in mine)
     done = total - sum(c[2] - c[1] for c in todo)
+    chunk_runner = run_chunk_cuda if backend == "cuda" else run_chunk
+
     def call(c: tuple[int, int, int]) -> tuple:
-        return run_chunk, (the_plan.scenes[c[0]], seed, *c, grids[c[0]], study if base.uncertain else None,
-                           base.ensemble.common_random_numbers, tuple(spec.signals) if spec else hist.SIGNALS)
+        return chunk_runner, (the_plan.scenes[c[0]], seed, *c, grids[c[0]], study if base.uncertain else None,
+                              base.ensemble.common_random_numbers,
+                              tuple(spec.signals) if spec else hist.SIGNALS)
 
     def skip(c: tuple[int, int, int]) -> bool:
         return states[c[0]].done
@@ -350,8 +416,13 @@ def _run(study: Study, directory: Path, workers: int | None, chunk: int | None, 
             client = stack.enter_context(_client(scheduler, progress))
             where = f"dask.distributed at {client.scheduler.address}"
             results = schedulers.distributed(client, todo, call, skip)
-        else:
-            where, results = "embedded", schedulers.embedded(todo, call, skip, workers or os.cpu_count() or 1)
+        else:  # (one GPU: its chunks one after the other)
+            threads = 1 if backend == "cuda" else workers or os.cpu_count() or 1
+            where, results = "embedded", schedulers.embedded(todo, call, skip, threads)
+        if backend == "cuda":  # (the workers' GPUs of a cluster are theirs to name)
+            from . import gpu
+
+            where = f"{where}, cuda" + ("" if scheduler else f" ({gpu.device_name()})")
         folding = False
         try:
             for c, (frame, paths) in results:

@@ -23,7 +23,6 @@ slow, for tests of the launcher, its streams and its batching.
 from __future__ import annotations
 
 import math
-import os
 from dataclasses import dataclass
 
 import numpy as np
@@ -53,8 +52,11 @@ class GPUUnavailable(RuntimeError):
 
 
 def simulating() -> bool:
-    """True when numba-cuda's simulator stands in for a GPU (``NUMBA_ENABLE_CUDASIM=1``)."""
-    return os.environ.get("NUMBA_ENABLE_CUDASIM", "0") not in ("", "0")
+    """True when numba-cuda's simulator stands in for a GPU (``NUMBA_ENABLE_CUDASIM=1`` when
+    numba was first imported)."""
+    from numba.core import config
+
+    return bool(getattr(config, "ENABLE_CUDASIM", False))
 
 
 def unavailable() -> str | None:

@@ -173,10 +173,13 @@ def _take_over(path: Path, stale: str | None) -> None:
     aside.unlink()
 
 
-def run_key(scenario_text: str, plan: list[tuple[int, int, int]]) -> str:
-    """Fingerprint of a run (scenario text and chunk plan): parts of another run are never reused."""
+def run_key(scenario_text: str, plan: list[tuple[int, int, int]], backend: str = "cpu") -> str:
+    """Fingerprint of a run (scenario text, chunk plan and, other than the CPU, the backend,
+    whose streams differ): parts of another run are never reused."""
     digest = hashlib.sha256(scenario_text.encode())
     digest.update(json.dumps(plan).encode())
+    if backend != "cpu":
+        digest.update(backend.encode())
     return digest.hexdigest()[:16]
 
 

@@ -1,0 +1,211 @@
+"""The cuda backend (gpu.py, kernels/launch.py) on numba-cuda's simulator: the launcher runs each
+realisation's step loop with its Philox streams, so a GPU realisation is the CPU loop's run on
+the same streams; deterministic scenes give the CPU's metrics; batches and launch sizes change
+nothing; the ensembles of both backends sample the same law."""
+
+from __future__ import annotations
+
+import math
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from tests.helpers import ROOT, changed, cli, example_data, scene_from, study_from
+from vines_stoch import gpu, run
+from vines_stoch.kernels import SLOTS, simulate
+from vines_stoch.kernels.rng import philox_stream
+from vines_stoch.store import read_metadata
+from vines_stoch.streams import BRIDGE, FILTER, INCREMENTS, Streams, streams
+
+pytestmark = pytest.mark.skipif(gpu.unavailable() is not None, reason=f"cuda backend: {gpu.unavailable()}")
+
+_S = {name: i for i, name in enumerate(SLOTS)}
+
+
+def philox_streams(seed: int, r: int, point: int = 0, common: bool = True) -> Streams:
+    """The streams GPU realisation ``r`` draws from, for the CPU loop."""
+    return Streams(*(philox_stream(seed, p, r, point, common) for p in (INCREMENTS, BRIDGE, FILTER)))
+
+
+def contact_noise(duration: float = 1.0):
+    """Steel-on-steel Hertz contact beside a plastic impact NES under harmonic force and white
+    noise: sticking, chatter and contact on the Brownian tree, in one loop."""
+    return scene_from(example_data("contact_noise_parallel"), changes={"simulation.duration": duration})
+
+
+@pytest.mark.parametrize(("name", "changes"), [
+    ("seed003_ds20", {"simulation.duration": 40.0, "simulation.metrics_from": 0.0}),  # Hertz contact, RK4
+    ("parallel_nes_impulse", {"simulation.duration": 20.0}),                          # impacts, RK4
+])
+def test_deterministic_scenes_give_the_cpu_metrics(name, changes):
+    scene = scene_from(example_data(name, "sweep"), changes=changes)
+    cpu = simulate(scene)
+    batch = gpu.simulate_many(scene, seed=1, point=0, start=0, stop=3)
+    for raw in batch.raw:
+        assert raw[_S["impacts"]] == cpu[_S["impacts"]]
+        assert raw[_S["impacts_left"]] == cpu[_S["impacts_left"]]
+        finite = np.isfinite(cpu)
+        np.testing.assert_array_equal(np.isfinite(raw), finite)
+        np.testing.assert_allclose(raw[finite], cpu[finite], rtol=1e-9, atol=1e-300)
+    assert cpu[_S["impacts"]] > 0 or cpu[_S["contact_time"]] > 0  # the scene has events to get right
+
+
+def test_a_noisy_realisation_is_the_cpu_loop_on_its_philox_streams():
+    scene = contact_noise()
+    batch = gpu.simulate_many(scene, seed=20261124, point=0, start=5, stop=9)
+    impacts = 0.0
+    for i, r in enumerate(range(5, 9)):
+        cpu = simulate(scene, philox_streams(20261124, r))
+        np.testing.assert_array_equal(batch.raw[i], cpu)
+        impacts += cpu[_S["impacts"]] + cpu[_S["contact_time"]]
+    assert impacts > 0
+    assert len({float(row[_S["input_energy"]]) for row in batch.raw}) == 4  # four different paths
+
+
+def test_batches_and_launch_sizes_change_nothing(monkeypatch):
+    scene = contact_noise(0.5)
+    whole = gpu.simulate_many(scene, seed=3, point=0, start=0, stop=7)
+    monkeypatch.setattr(gpu, "SIMULATED_BATCH", 3)
+    monkeypatch.setattr(gpu, "THREADS", 2)
+    split = gpu.simulate_many(scene, seed=3, point=0, start=0, stop=7)
+    np.testing.assert_array_equal(split.raw, whole.raw)
+    tail = gpu.simulate_many(scene, seed=3, point=0, start=4, stop=7)  # another chunk boundary
+    np.testing.assert_array_equal(tail.raw, whole.raw[4:])
+
+
+def test_common_random_numbers_across_points_and_without():
+    scene = contact_noise(0.5)
+    p0 = gpu.simulate_many(scene, seed=3, point=0, start=0, stop=2)
+    p1 = gpu.simulate_many(scene, seed=3, point=1, start=0, stop=2)
+    np.testing.assert_array_equal(p0.raw, p1.raw)
+    own = gpu.simulate_many(scene, seed=3, point=1, start=0, stop=2, common=False)
+    assert not np.array_equal(own.raw[:, _S["input_energy"]], p0.raw[:, _S["input_energy"]])
+    np.testing.assert_array_equal(own.raw[1], simulate(scene, philox_streams(3, 1, point=1, common=False)))
+
+
+def test_filtered_loads_start_from_their_stationary_law():
+    scene = scene_from(example_data("filtered_noise"), changes={"simulation.duration": 2.0})
+    assert scene.has_filters and scene.filters["p0"].any()  # the start is a draw, not rest
+    batch = gpu.simulate_many(scene, seed=8, point=0, start=2, stop=4)
+    for i, r in enumerate((2, 3)):
+        np.testing.assert_array_equal(batch.raw[i], simulate(scene, philox_streams(8, r)))
+    assert batch.raw[0, _S["input_energy"]] != batch.raw[1, _S["input_energy"]]
+
+
+def test_history_rows_and_poincare_samples_come_back():
+    scene = scene_from(example_data("parallel_nes_impulse", "sweep"), changes={"simulation.duration": 5.0})
+    history = np.full((11, 2), np.nan)
+    simulate(scene, history=history, stride=100)
+    batch = gpu.simulate_many(scene, seed=0, point=0, start=0, stop=2, grid=(100, 11), n_history=2)
+    for rows in batch.history:
+        np.testing.assert_allclose(rows, history, rtol=1e-12, atol=0.0)
+
+
+def test_uncertain_parameters_run_a_scene_a_realisation():
+    base = example_data("parallel_nes_impulse", "sweep")
+    scenes = [scene_from(base, changes={"simulation.duration": 5.0, "absorbers.0.stiffness": k})
+              for k in (0.5, 1.0, 2.0)]
+    batch = gpu.simulate_many(scenes, seed=0, point=0, start=0, stop=3)
+    for raw, scene in zip(batch.raw, scenes):
+        np.testing.assert_allclose(raw, simulate(scene), rtol=1e-12, atol=0.0)
+    with pytest.raises(ValueError, match="2 scenes for 3 realisations"):
+        gpu.simulate_many(scenes[:2], seed=0, point=0, start=0, stop=3)
+
+
+def test_gpu_and_cpu_ensembles_sample_the_same_law():
+    """A linear oscillator under white noise: the mean squared displacement of both ensembles
+    agree within four standard errors of their difference."""
+    data = example_data("parallel_nes_noise", "sweep")
+    scene = scene_from(data, changes={"simulation.duration": 4.0})
+    n = 200
+    gpu_rows = gpu.simulate_many(scene, seed=11, point=0, start=0, stop=n).raw
+    cpu_rows = np.array([simulate(scene, streams(11, 0, r)) for r in range(n)])
+    for slot in ("x1_square_integral", "input_energy"):
+        a, b = gpu_rows[:, _S[slot]], cpu_rows[:, _S[slot]]
+        se = math.sqrt(a.var(ddof=1) / n + b.var(ddof=1) / n)
+        assert abs(a.mean() - b.mean()) < 4.0 * se
+        assert not np.array_equal(a, b)  # two independent samples (different streams)
+
+
+ENSEMBLE = {
+    "name": "gpu-ensemble",
+    "primary": {"mass": 1.0, "stiffness": 1.0},
+    "absorbers": [{"type": "cubic", "mass": 0.05, "stiffness": 1.0, "damping": 0.01},
+                  {"type": "impact", "mass": 0.05, "clearance": 0.2, "restitution": 0.6}],
+    "loads": [{"type": "harmonic", "amplitude": 0.1, "frequency": 1.0},
+              {"type": "white-noise", "intensity": 0.1}],
+    "simulation": {"duration": 2.0, "dt": 1e-3},
+    "ensemble": {"realizations": 30, "seed": 11},
+    "sweep": {"loads.1.intensity": [0.05, 0.1]},
+}
+
+
+def test_a_cuda_run_writes_the_cpu_tables_from_its_own_streams(tmp_path):
+    study = study_from(ENSEMBLE)
+    realizations, summary = run(study, tmp_path / "gpu", backend="cuda", chunk=7)
+    cpu, _ = run(study, tmp_path / "cpu")
+    assert list(realizations.columns) == list(cpu.columns)
+    assert len(realizations) == 60 and list(summary["n_ok"]) == [30, 30]
+    assert not np.array_equal(realizations["edm"], cpu["edm"])  # other streams
+    assert "cuda" in read_metadata(tmp_path / "gpu" / "realizations.parquet")["vines_stoch.scheduler"]
+    # a realisation's row is its loop run on its Philox streams, whatever the chunk
+    scene = scene_from(ENSEMBLE, point=1)
+    row = realizations[(realizations["point"] == 1) & (realizations["realization"] == 9)].iloc[0]
+    raw = simulate(scene, philox_streams(11, 9))
+    assert row["input_energy"] == raw[_S["input_energy"]] and row["impacts"] == raw[_S["impacts"]]
+    again, _ = run(study, tmp_path / "gpu-whole", backend="cuda")
+    pd.testing.assert_frame_equal(again, realizations, check_exact=True)
+
+
+def test_a_cuda_run_resumes_only_its_own_parts(tmp_path):
+    study = study_from(ENSEMBLE)
+    first, _ = run(study, tmp_path, backend="cuda", chunk=10)
+    parts = sorted((tmp_path / "parts").glob("point*.parquet"))
+    parts[-1].unlink()  # an interrupted run
+    resumed, _ = run(study, tmp_path, backend="cuda", chunk=10, resume=True)
+    pd.testing.assert_frame_equal(resumed, first, check_exact=True)
+    with pytest.raises(ValueError, match="different scenario or chunk plan"):
+        run(study, tmp_path, chunk=10, resume=True)  # the CPU's streams are another run's
+
+
+def test_target_sem_and_history_statistics_on_the_cuda_backend(tmp_path):
+    data = changed(ENSEMBLE, {"ensemble.realizations": 400, "ensemble.target_sem": 1.0,
+                              "simulation.history": {"points": 11}})
+    realizations, _ = run(study_from(data), tmp_path, backend="cuda", chunk=150)
+    assert set(realizations.groupby("point").size()) == {100}  # stopped at the first test
+    history = pd.read_parquet(tmp_path / "history.parquet")
+    assert len(history) == 2 * 11 and history["x1_mean"].notna().all()
+
+
+def test_uncertain_parameters_and_intensity_measures_on_the_cuda_backend(tmp_path):
+    single = {k: v for k, v in ENSEMBLE.items() if k != "sweep"}
+    law = {"distribution": "lognormal", "median": 1.0, "cov": 0.3}
+    data = changed(single, {"ensemble.realizations": 6, "uncertain": {"absorbers.0.stiffness": law}})
+    realizations, _ = run(study_from(data), tmp_path / "u", backend="cuda")
+    cpu, _ = run(study_from(data), tmp_path / "c")
+    # the drawn values come from the CPU's parameter streams on both backends
+    np.testing.assert_array_equal(realizations["absorbers.0.stiffness"], cpu["absorbers.0.stiffness"])
+    assert realizations["absorbers.0.stiffness"].nunique() == 6
+    short = {"simulation.duration": 2.0, "ensemble.realizations": 3, "intensity_measures": {"period": 1.0}}
+    ground = changed(example_data("ground_motion", "sweep"), short)
+    rows, _ = run(study_from(ground), tmp_path / "g", backend="cuda")
+    assert rows["sa"].notna().all() and rows["pga"].nunique() == 3
+
+
+def test_cuda_backend_without_a_gpu_is_a_clear_error(tmp_path, write):
+    scenario = write((ROOT / "scenarios" / "parallel_nes_noise.toml").read_text())
+    env = {k: v for k, v in os.environ.items() if k != "NUMBA_ENABLE_CUDASIM"}
+    if gpu.unavailable() is None and not gpu.simulating():
+        pytest.skip("a GPU is present")
+    done = subprocess.run([sys.executable, "-m", "vines_stoch.cli", "run", str(scenario), "--backend", "cuda",
+                           "--out", str(tmp_path / "out")], capture_output=True, text=True, env=env,
+                          timeout=300)
+    assert done.returncode == 2
+    assert "error: --backend cuda:" in done.stderr and "Traceback" not in done.stderr
+    assert not (tmp_path / "out").exists()
+    code, err = cli("run", str(scenario), "--backend", "tpu")
+    assert code == 2 and "--backend tpu: must be one of cpu, cuda" in err
