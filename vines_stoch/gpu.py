@@ -130,8 +130,7 @@ def _stack(scenes: list[Scene]) -> dict[str, np.ndarray]:
             stacked[name] = np.ascontiguousarray(np.stack([np.asarray(a, dtype=float) for a in arrays]))
         except ValueError:
             raise ValueError(f"backend cuda: the uncertain parameters change the shape of the scene's "
-                             f"{name}, "
-                             "which every realisation of a GPU batch shares") from None
+                             f"{name}, which every realisation of a GPU batch shares") from None
     return stacked
 
 
@@ -145,6 +144,71 @@ def _batch_size(per_path_bytes: int, wanted: int) -> int:
     return max(1, min(wanted, int(MEMORY_SHARE * free) // max(per_path_bytes, 1)))
 
 
+@dataclass
+class Inputs:
+    """A chunk's launcher inputs on the host: the per-path arrays (``PER_PATH``, a leading axis
+    of one, or one a realisation), the shared ones (``SHARED``), the metric row every thread
+    starts from, the streams' keys and place, and the sizes of the outputs."""
+
+    scene: Scene
+    per_path: bool
+    stacked: dict[str, np.ndarray]
+    shared: dict[str, np.ndarray]
+    template: np.ndarray
+    keys: np.ndarray
+    place: np.uint64
+    n_samples: int
+    stride: int
+    size: int
+    n_history: int
+
+    @classmethod
+    def of(cls, scenes: list[Scene], seed: int, point: int, common: bool, grid: tuple[int, int] | None,
+           n_history: int) -> Inputs:
+        scene = scenes[0]
+        stride, size = grid if grid is not None else (1, 0)
+        return cls(scene, len(scenes) > 1, _stack(scenes),
+                   {name: np.ascontiguousarray(getattr(scene, name)) for name in SHARED},
+                   new_metrics(scene.n_floors, scene.limits.shape[0]),
+                   np.array([stream_key(seed, p) for p in (INCREMENTS, BRIDGE, FILTER)], np.uint64),
+                   np.uint64(stream_place(0, point, common)), POINCARE_SAMPLES if scene.period > 0 else 0,
+                   stride, size, n_history)
+
+    @property
+    def n_bodies(self) -> int:
+        return self.scene.mass.shape[0]
+
+    def outputs(self, m: int, empty) -> tuple:
+        """``m`` realisations' output arrays from ``empty(shape)``: metric rows, Poincare
+        samples, history rows, filter scratch (state, next state, normals)."""
+        return (empty((m, self.template.shape[0])), empty((m, self.n_samples, 2 * self.n_bodies + 2)),
+                empty((m, self.size, self.n_history)), empty((m, 3, self.stacked["phi"].shape[1])))
+
+    def row_bytes(self) -> int:
+        """Device bytes a realisation takes (its outputs, and its own scene's arrays)."""
+        own = sum(a[0].nbytes for a in self.stacked.values()) if self.per_path else 0
+        return own + sum(8 * int(np.prod(a[1:])) for a in (o.shape for o in self.outputs(1, np.empty)))
+
+    def arguments(self, first: int, m: int, params: dict, shared: dict, normals, keys, template,
+                  outputs: tuple) -> tuple:
+        """The launcher's arguments, in its order (``kernels.launch.launcher``)."""
+        scene = self.scene
+        return (first, m, self.per_path, self.place, keys, *(params[k] for k in PER_PATH),
+                *(shared[k] for k in SHARED), normals, scene.dt, scene.n_steps, scene.i0, scene.period,
+                scene.sample_from, self.stride, template, *outputs)
+
+
+def launch_types(scene: Scene, grid: tuple[int, int] | None = None, n_history: int = 2) -> tuple:
+    """numba types of the launcher's arguments for ``scene`` (for ``numba.cuda.compile_ptx``,
+    which needs no GPU)."""
+    import numba
+
+    inputs = Inputs.of([scene], 0, 0, True, grid, n_history)
+    args = inputs.arguments(0, 1, inputs.stacked, inputs.shared, np.zeros(0), inputs.keys, inputs.template,
+                            inputs.outputs(1, np.empty))
+    return tuple(numba.typeof(a) for a in args)
+
+
 def simulate_many(scenes: Scene | list[Scene], seed: int, point: int, start: int, stop: int,
                   common: bool = True, grid: tuple[int, int] | None = None, n_history: int = 2) -> Batch:
     """Realisations ``start .. stop - 1`` of sweep point ``point`` on the GPU, in batches that
@@ -153,54 +217,34 @@ def simulate_many(scenes: Scene | list[Scene], seed: int, point: int, start: int
     require()
     from numba import cuda
 
-    scenes = [scenes] if isinstance(scenes, Scene) else list(scenes)
-    n = stop - start
-    per_path = len(scenes) > 1
-    if per_path and len(scenes) != n:
-        raise ValueError(f"simulate_many: {len(scenes)} scenes for {n} realisations")
-    scene = scenes[0]
-    stacked = _stack(scenes)
-    shared = {name: np.ascontiguousarray(getattr(scene, name)) for name in SHARED}
-    nb = scene.mass.shape[0]
-    template = new_metrics(scene.n_floors, scene.limits.shape[0])
-    n_samples = POINCARE_SAMPLES if scene.period > 0 else 0
-    stride, size = grid if grid is not None else (1, 0)
-    nz = stacked["phi"].shape[1]
-    keys = np.array([stream_key(seed, purpose) for purpose in (INCREMENTS, BRIDGE, FILTER)], np.uint64)
-    place = np.uint64(stream_place(0, point, common))
     from .kernels.launch import launcher
 
-    launch = launcher(kernel_for(scene), nb, simulating())
-    per_row = 8 * (template.shape[0] + n_samples * (2 * nb + 2) + size * n_history + 3 * nz)
-    per_scene = sum(a[0].nbytes for a in stacked.values()) if per_path else 0
-    raw = np.empty((n, template.shape[0]))
-    samples = np.empty((n, n_samples, 2 * nb + 2))
-    history = np.empty((n, size, n_history))
-    device = {k: cuda.to_device(a) for k, a in stacked.items()} if not per_path else None
-    shared_d = {k: cuda.to_device(a) for k, a in shared.items()}
-    normals = cuda.to_device(np.zeros(0))
-    template_d = cuda.to_device(template)
+    scenes = [scenes] if isinstance(scenes, Scene) else list(scenes)
+    n = stop - start
+    if len(scenes) > 1 and len(scenes) != n:
+        raise ValueError(f"simulate_many: {len(scenes)} scenes for {n} realisations")
+    inputs = Inputs.of(scenes, seed, point, common, grid, n_history)
+    launch = launcher(kernel_for(inputs.scene), inputs.n_bodies, simulating())
+    raw, samples, history, _ = inputs.outputs(n, np.empty)
+    shared = {k: cuda.to_device(a) for k, a in inputs.shared.items()}
+    device = None if inputs.per_path else {k: cuda.to_device(a) for k, a in inputs.stacked.items()}
+    normals, keys = cuda.to_device(np.zeros(0)), cuda.to_device(inputs.keys)
+    template = cuda.to_device(inputs.template)
     done = 0
     while done < n:
-        m = min(_batch_size(per_row + per_scene, n - done), n - done)
-        params = device if device is not None else {
-            k: cuda.to_device(a[done:done + m]) for k, a in stacked.items()}
-        out_d = cuda.device_array((m, template.shape[0]))
-        samples_d = cuda.device_array((m, n_samples, 2 * nb + 2))
-        history_d = cuda.device_array((m, size, n_history))
-        work_d = cuda.device_array((m, 3, nz))
-        blocks = math.ceil(m / THREADS)
-        launch[blocks, THREADS](start + done, m, per_path, place, cuda.to_device(keys),
-                                *(params[k] for k in PER_PATH), *(shared_d[k] for k in SHARED), normals,
-                                scene.dt, scene.n_steps, scene.i0, scene.period, scene.sample_from, stride,
-                                template_d, out_d, samples_d, history_d, work_d)
-        raw[done:done + m] = out_d.copy_to_host()
-        if n_samples:
-            samples[done:done + m] = samples_d.copy_to_host()
-        if size:
-            history[done:done + m] = history_d.copy_to_host()
+        m = _batch_size(inputs.row_bytes(), n - done)
+        params = device or {k: cuda.to_device(a[done:done + m]) for k, a in inputs.stacked.items()}
+        outputs = inputs.outputs(m, cuda.device_array)
+        launch[math.ceil(m / THREADS), THREADS](
+            *inputs.arguments(start + done, m, params, shared, normals, keys, template, outputs))
+        raw[done:done + m] = outputs[0].copy_to_host()
+        if inputs.n_samples:
+            samples[done:done + m] = outputs[1].copy_to_host()
+        if inputs.size:
+            history[done:done + m] = outputs[2].copy_to_host()
         done += m
     return Batch(raw, samples, history)
 
 
-__all__ = ["Batch", "GPUUnavailable", "device_name", "require", "simulate_many", "unavailable"]
+__all__ = ["Batch", "GPUUnavailable", "Inputs", "device_name", "launch_types", "require", "simulate_many",
+           "unavailable"]

@@ -16,7 +16,7 @@ import pytest
 
 from tests.helpers import ROOT, changed, cli, example_data, scene_from, study_from
 from vines_stoch import gpu, run
-from vines_stoch.kernels import SLOTS, simulate
+from vines_stoch.kernels import SLOTS, sample_buffer, simulate
 from vines_stoch.kernels.rng import philox_stream
 from vines_stoch.store import read_metadata
 from vines_stoch.streams import BRIDGE, FILTER, INCREMENTS, Streams, streams
@@ -43,15 +43,18 @@ def contact_noise(duration: float = 1.0):
 ])
 def test_deterministic_scenes_give_the_cpu_metrics(name, changes):
     scene = scene_from(example_data(name, "sweep"), changes=changes)
-    cpu = simulate(scene)
+    samples = sample_buffer(scene)
+    cpu = simulate(scene, samples=samples)
     batch = gpu.simulate_many(scene, seed=1, point=0, start=0, stop=3)
-    for raw in batch.raw:
+    for raw, own in zip(batch.raw, batch.samples):
+        np.testing.assert_allclose(own, samples, rtol=1e-9, atol=1e-12)  # Poincare samples (NaN where none)
         assert raw[_S["impacts"]] == cpu[_S["impacts"]]
         assert raw[_S["impacts_left"]] == cpu[_S["impacts_left"]]
         finite = np.isfinite(cpu)
         np.testing.assert_array_equal(np.isfinite(raw), finite)
         np.testing.assert_allclose(raw[finite], cpu[finite], rtol=1e-9, atol=1e-300)
     assert cpu[_S["impacts"]] > 0 or cpu[_S["contact_time"]] > 0  # the scene has events to get right
+    assert (scene.period > 0) == (np.isfinite(samples).sum() > 0)
 
 
 def test_a_noisy_realisation_is_the_cpu_loop_on_its_philox_streams():
@@ -87,16 +90,25 @@ def test_common_random_numbers_across_points_and_without():
     np.testing.assert_array_equal(own.raw[1], simulate(scene, philox_streams(3, 1, point=1, common=False)))
 
 
+def filtered(duration: float = 2.0) -> dict:
+    """A filtered force from its stationary law beside filtered ground motion from rest, with
+    the intensity measures of the ground motion each realisation saw."""
+    data = example_data("filtered_noise", "sweep")
+    data["loads"].append(example_data("ground_motion")["loads"][0])
+    return changed(data, {"simulation.duration": duration, "simulation.metrics_from": 0.0,
+                          "intensity_measures": {"period": 1.0}})
+
+
 def test_filtered_loads_start_from_their_stationary_law():
-    scene = scene_from(example_data("filtered_noise"), changes={"simulation.duration": 2.0})
-    assert scene.has_filters and scene.filters["p0"].any()  # the start is a draw, not rest
+    scene = scene_from(filtered())
+    assert scene.has_filters and scene.filters["p0"].any() and scene.has_ground
     batch = gpu.simulate_many(scene, seed=8, point=0, start=2, stop=4)
     for i, r in enumerate((2, 3)):
         np.testing.assert_array_equal(batch.raw[i], simulate(scene, philox_streams(8, r)))
     assert batch.raw[0, _S["input_energy"]] != batch.raw[1, _S["input_energy"]]
 
 
-def test_history_rows_and_poincare_samples_come_back():
+def test_history_rows_come_back():
     scene = scene_from(example_data("parallel_nes_impulse", "sweep"), changes={"simulation.duration": 5.0})
     history = np.full((11, 2), np.nan)
     simulate(scene, history=history, stride=100)
@@ -116,21 +128,6 @@ def test_uncertain_parameters_run_a_scene_a_realisation():
         gpu.simulate_many(scenes[:2], seed=0, point=0, start=0, stop=3)
 
 
-def test_gpu_and_cpu_ensembles_sample_the_same_law():
-    """A linear oscillator under white noise: the mean squared displacement of both ensembles
-    agree within four standard errors of their difference."""
-    data = example_data("parallel_nes_noise", "sweep")
-    scene = scene_from(data, changes={"simulation.duration": 4.0})
-    n = 200
-    gpu_rows = gpu.simulate_many(scene, seed=11, point=0, start=0, stop=n).raw
-    cpu_rows = np.array([simulate(scene, streams(11, 0, r)) for r in range(n)])
-    for slot in ("x1_square_integral", "input_energy"):
-        a, b = gpu_rows[:, _S[slot]], cpu_rows[:, _S[slot]]
-        se = math.sqrt(a.var(ddof=1) / n + b.var(ddof=1) / n)
-        assert abs(a.mean() - b.mean()) < 4.0 * se
-        assert not np.array_equal(a, b)  # two independent samples (different streams)
-
-
 ENSEMBLE = {
     "name": "gpu-ensemble",
     "primary": {"mass": 1.0, "stiffness": 1.0},
@@ -142,6 +139,20 @@ ENSEMBLE = {
     "ensemble": {"realizations": 30, "seed": 11},
     "sweep": {"loads.1.intensity": [0.05, 0.1]},
 }
+
+
+def test_gpu_and_cpu_ensembles_sample_the_same_law():
+    """The noisy two-absorber scene: the mean squared displacement and input energy of both
+    ensembles agree within four standard errors of their difference."""
+    scene = scene_from(ENSEMBLE)
+    n = 200
+    gpu_rows = gpu.simulate_many(scene, seed=11, point=0, start=0, stop=n).raw
+    cpu_rows = np.array([simulate(scene, streams(11, 0, r)) for r in range(n)])
+    for slot in ("x1_square_integral", "input_energy"):
+        a, b = gpu_rows[:, _S[slot]], cpu_rows[:, _S[slot]]
+        se = math.sqrt(a.var(ddof=1) / n + b.var(ddof=1) / n)
+        assert abs(a.mean() - b.mean()) < 4.0 * se
+        assert not np.array_equal(a, b)  # two independent samples (different streams)
 
 
 def test_a_cuda_run_writes_the_cpu_tables_from_its_own_streams(tmp_path):
@@ -190,10 +201,10 @@ def test_uncertain_parameters_and_intensity_measures_on_the_cuda_backend(tmp_pat
     # the drawn values come from the CPU's parameter streams on both backends
     np.testing.assert_array_equal(realizations["absorbers.0.stiffness"], cpu["absorbers.0.stiffness"])
     assert realizations["absorbers.0.stiffness"].nunique() == 6
-    short = {"simulation.duration": 2.0, "ensemble.realizations": 3, "intensity_measures": {"period": 1.0}}
-    ground = changed(example_data("ground_motion", "sweep"), short)
-    rows, _ = run(study_from(ground), tmp_path / "g", backend="cuda")
-    assert rows["sa"].notna().all() and rows["pga"].nunique() == 3
+    ground = study_from(changed(filtered(), {"ensemble.realizations": 3}))
+    rows, _ = run(ground, tmp_path / "g", backend="cuda")
+    # the intensity measures of the ground path each realisation saw: the host replays its filter stream
+    assert rows["sa"].notna().all() and rows["pga"].nunique() == 3 and (rows["pga"] > 0).all()
 
 
 def test_cuda_backend_without_a_gpu_is_a_clear_error(tmp_path, write):
