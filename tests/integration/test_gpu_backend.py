@@ -15,6 +15,7 @@ import pandas as pd
 import pytest
 
 from tests.helpers import ROOT, changed, cli, example_data, scene_from, study_from
+from tests.integration.test_ensemble import DATA
 from vines_stoch import gpu, run
 from vines_stoch.kernels import SLOTS, sample_buffer, simulate
 from vines_stoch.kernels.rng import philox_stream
@@ -128,17 +129,8 @@ def test_uncertain_parameters_run_a_scene_a_realisation():
         gpu.simulate_many(scenes[:2], seed=0, point=0, start=0, stop=3)
 
 
-ENSEMBLE = {
-    "name": "gpu-ensemble",
-    "primary": {"mass": 1.0, "stiffness": 1.0},
-    "absorbers": [{"type": "cubic", "mass": 0.05, "stiffness": 1.0, "damping": 0.01},
-                  {"type": "impact", "mass": 0.05, "clearance": 0.2, "restitution": 0.6}],
-    "loads": [{"type": "harmonic", "amplitude": 0.1, "frequency": 1.0},
-              {"type": "white-noise", "intensity": 0.1}],
-    "simulation": {"duration": 2.0, "dt": 1e-3},
-    "ensemble": {"realizations": 30, "seed": 11},
-    "sweep": {"loads.1.intensity": [0.05, 0.1]},
-}
+#: The noisy two-absorber study of the ensemble tests, shorter.
+ENSEMBLE = changed(DATA, {"name": "gpu-ensemble", "simulation.duration": 2.0, "ensemble.realizations": 30})
 
 
 def test_gpu_and_cpu_ensembles_sample_the_same_law():
