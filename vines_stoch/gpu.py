@@ -69,11 +69,16 @@ def unavailable() -> str | None:
     if simulating():
         return None
     try:
-        if cuda.is_available() and len(cuda.gpus) > 0:
-            return None
+        if not (cuda.is_available() and len(cuda.gpus) > 0):
+            return "no CUDA GPU or driver found on this machine (numba.cuda.is_available() is False)"
     except Exception as exc:  # the driver's own errors are of many kinds
         return f"no usable CUDA device ({type(exc).__name__}: {exc})"
-    return "no CUDA GPU or driver found on this machine (numba.cuda.is_available() is False)"
+    from numba.cuda.cudadrv import nvvm
+
+    if not nvvm.is_available():
+        return ("NVVM, the CUDA compiler library, is not found; install the cuda extra "
+                "(pip install 'vines-stoch[cuda]')")
+    return None
 
 
 def require() -> None:
