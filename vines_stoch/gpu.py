@@ -229,7 +229,8 @@ def simulate_many(scenes: Scene | list[Scene], seed: int, point: int, start: int
     if len(scenes) > 1 and len(scenes) != n:
         raise ValueError(f"simulate_many: {len(scenes)} scenes for {n} realisations")
     inputs = Inputs.of(scenes, seed, point, common, grid, n_history)
-    launch = launcher(kernel_for(inputs.scene), inputs.n_bodies, simulating())
+    # (the simulator runs the CPU loop: the same arithmetic, its flags on the heap)
+    launch = launcher(kernel_for(inputs.scene, gpu=not simulating()), inputs.n_bodies, simulating())
     raw, samples, history, _ = inputs.outputs(n, np.empty)
     shared = {k: cuda.to_device(a) for k, a in inputs.shared.items()}
     device = None if inputs.per_path else {k: cuda.to_device(a) for k, a in inputs.stacked.items()}

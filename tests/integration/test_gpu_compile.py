@@ -39,7 +39,7 @@ for name, grid in (("contact_noise_parallel", None), ("filtered_noise", (10, 5))
     data = example_data(name)
     data.pop("sweep", None)
     scene = scene_from(data, changes={"simulation.duration": 1.0, "simulation.metrics_from": 0.0})
-    launch = launcher(kernel_for(scene), scene.mass.shape[0], False)
+    launch = launcher(kernel_for(scene, gpu=True), scene.mass.shape[0], False)
     ptx, _ = compile_ptx(launch.py_func, launch_types(scene, grid), cc=(9, 0))
     print(json.dumps({"scene": name, "entry": ".entry" in ptx, "sm_90": ".target sm_90" in ptx,
                       "chars": len(ptx)}))

@@ -84,19 +84,15 @@ DIVERGED = 1e100
 POINCARE_SAMPLES = 32
 
 
-@intrinsic
-def scratch(typingctx, size):
-    """``np.zeros(size)`` on the kernel's stack, for a compile-time constant ``size`` (a kernel
-    factory's body count): the compiler then knows these arrays alias nothing else and, with
-    the loops over bodies unrolled, keeps the state in registers across steps.  (The same loop
-    on heap arrays ran at 0.65-0.7x.)  The array must not outlive the kernel that makes it."""
+def _stack_array(dtype, size):
+    """Typing and code of a zeroed 1-D ``dtype`` array of ``size`` (a literal) on the stack."""
     if not isinstance(size, types.IntegerLiteral):
         return None
     n = size.literal_value
-    array_type = types.Array(types.float64, 1, "C")
+    array_type = types.Array(dtype, 1, "C")
 
     def codegen(context, builder, signature, args):
-        data = cgutils.alloca_once(builder, ir.DoubleType(), size=max(n, 1))
+        data = cgutils.alloca_once(builder, context.get_data_type(dtype), size=max(n, 1))
         cgutils.memset(builder, data, ir.Constant(cgutils.intp_t, 8 * max(n, 1)), 0)
         array = make_array(array_type)(context, builder)
         populate_array(array, data=data, shape=[cgutils.intp_t(n)], strides=[cgutils.intp_t(8)],
@@ -104,6 +100,21 @@ def scratch(typingctx, size):
         return array._getvalue()
 
     return array_type(size), codegen
+
+
+@intrinsic
+def scratch(typingctx, size):
+    """``np.zeros(size)`` on the kernel's stack, for a compile-time constant ``size`` (a kernel
+    factory's body count): the compiler then knows these arrays alias nothing else and, with
+    the loops over bodies unrolled, keeps the state in registers across steps.  (The same loop
+    on heap arrays ran at 0.65-0.7x.)  The array must not outlive the kernel that makes it."""
+    return _stack_array(types.float64, size)
+
+
+@intrinsic
+def int_scratch(typingctx, size):
+    """``np.zeros(size, np.int64)`` on the kernel's stack (as ``scratch``): per-absorber flags."""
+    return _stack_array(types.int64, size)
 
 
 @njit(**INLINE)
@@ -418,7 +429,7 @@ def write_floor_metrics(out, nf: int, x_max, drift_max, acc_max, x2_integral):
 def any_set(a) -> bool:
     """True if any entry of ``a`` is not zero (``a.any()``, which the GPU target lacks)."""
     for j in range(a.shape[0]):
-        if a[j] != 0.0:
+        if a[j] != 0:
             return True
     return False
 

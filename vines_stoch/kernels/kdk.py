@@ -76,6 +76,7 @@ from .common import (
     first_passages,
     floor_peaks,
     host_of,
+    int_scratch,
     keep_in_cavities,
     momentum,
     pin_to_walls,
@@ -203,7 +204,7 @@ def contact_sides(x, nf, kind, host, rows, touching):
 
 @cache
 def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_impact: bool, has_hertz: bool,
-               filtered: bool, ground: bool, sra: bool = False):
+               filtered: bool, ground: bool, sra: bool = False, gpu: bool = False):
     """The kick-drift-kick Euler-Maruyama loop specialised to a scene's structure: the numbers
     of bodies, of floors and of closed-form force rows (the sizes of its arrays on the stack),
     white noise, impact and Hertz absorbers, filtered loads, ground acceleration
@@ -232,6 +233,10 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
     stochastic Runge-Kutta step of ``sra3.sra3_step`` instead of the kick-drift-kick one; it
     draws two normals a step and noisy floor (replayed: all floors' first normals, then their
     second).
+
+    ``gpu``: the loop the cuda backend compiles (``kernels/launch.py``), whose per-absorber
+    flags live on the stack (a GPU thread has no heap); on the CPU they are heap arrays (on the
+    stack the impact-rich scene ran 8 % slower).
     """
 
     # passes of a step's event loop: one without impact or Hertz absorbers (nothing to split
@@ -243,6 +248,7 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
     NB = n_bodies
     NF = n_floors
     NA = n_bodies - n_floors
+    GPU = gpu
     NR = n_rows
     NS = n_bodies if sra else 0
     ROOT3 = math.sqrt(3.0)
@@ -304,7 +310,10 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
         rotations(forces, dt, rc, rs)
         rotations(forces, 0.5 * dt, hc, hs)
         # per absorber: the wall it sticks to, the side it touches (``contact_sides``)
-        stuck, touching = scratch(NA), scratch(NA)
+        if GPU:
+            stuck, touching = int_scratch(NA), int_scratch(NA)
+        else:
+            stuck, touching = np.zeros(na, np.int64), np.zeros(na, np.int64)
         if has_hertz:
             contact_sides(x, nf, kind, host, rows, touching)
         e1_prev = primary_energy(mass, storey_k, x, v, nf)

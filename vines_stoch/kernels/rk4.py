@@ -19,6 +19,7 @@ from __future__ import annotations
 
 from functools import cache
 
+import numpy as np
 from numba import njit
 
 from ..physics import (
@@ -63,6 +64,7 @@ from .common import (
     first_passages,
     floor_peaks,
     host_of,
+    int_scratch,
     keep_in_cavities,
     pick,
     pin_to_walls,
@@ -231,7 +233,7 @@ def next_event(x, xn, h, nf, kind, host, rows, stuck, touching):
 
 
 @cache
-def rk4_kernel(n_bodies: int, n_floors: int, has_impact: bool, has_hertz: bool):
+def rk4_kernel(n_bodies: int, n_floors: int, has_impact: bool, has_hertz: bool, gpu: bool = False):
     """The RK4 loop specialised to a scene's structure (the numbers of bodies and of floors, impact
     absorbers, Hertz absorbers); Poincare sampling for the regime (a period), loads with kinks or
     jumps (``loads.has_breaks``) and limits to watch are run-time values.  It takes the arguments
@@ -239,6 +241,7 @@ def rk4_kernel(n_bodies: int, n_floors: int, has_impact: bool, has_hertz: bool):
     NB = n_bodies
     NF = n_floors
     NA = n_bodies - n_floors
+    GPU = gpu
 
     @njit(**KERNEL)
     def kernel(bodies, absorbers, ex, fl, noise, grid, outputs, gen, gen_bridge, gen_filter):
@@ -264,7 +267,11 @@ def rk4_kernel(n_bodies: int, n_floors: int, has_impact: bool, has_hertz: bool):
             x[b] = state_x[b]
             v[b] = state_v[b]
             inv_mass[b] = 1.0 / mass[b]
-        stuck, touching = scratch(NA), scratch(NA)  # per absorber: its wall when stuck, its contact side
+        # per absorber: its wall if stuck, its contact side (on the stack for the GPU: ``kdk_kernel``)
+        if GPU:
+            stuck, touching = int_scratch(NA), int_scratch(NA)
+        else:
+            stuck, touching = np.zeros(na, np.int64), np.zeros(na, np.int64)
         next_sample = 0
         h_next = start_history(history, stride, x, nf, primary_energy(mass, storey_k, x, v, nf))
         pending = limits.shape[0]  # limits not passed yet
