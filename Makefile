@@ -3,8 +3,9 @@ PYTHON ?= python3
 VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
+CUDA_STAMP := $(VENV)/.installed-cuda
 
-.PHONY: run test lint bench seeds elcentro env clean clean-cache
+.PHONY: run test lint bench bench-gpu seeds elcentro env clean clean-cache
 
 $(STAMP): pyproject.toml
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
@@ -27,6 +28,15 @@ lint: $(STAMP)
 
 bench: $(STAMP)
 	$(BIN)/vines-stoch bench
+
+# The cuda extra (numba-cuda with the CUDA 12 compiler wheels), installed once.
+$(CUDA_STAMP): $(STAMP)
+	$(BIN)/python -m pip install --quiet -e ".[cuda]"
+	touch $(CUDA_STAMP)
+
+# GPU ensembles: their section of reports/benchmarks.md (needs an NVIDIA GPU and a CUDA 12 driver).
+bench-gpu: $(STAMP) $(CUDA_STAMP)
+	$(BIN)/vines-stoch bench --backend cuda
 
 seeds: $(STAMP)
 	$(BIN)/vines-stoch reproduce

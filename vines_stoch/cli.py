@@ -296,10 +296,39 @@ def optimize(
 @app.command()
 def bench(
     out: Path = typer.Option(Path("reports/benchmarks.md"), "--out", help="Markdown report to write."),
+    backend: str = typer.Option("cpu", "--backend",
+                                help="cpu (the CPU report) or cuda (GPU ensembles: its own section of the "
+                                     "same report, the rest of the file kept)."),
+    paths: str | None = typer.Option(None, "--paths",
+                                     help="With --backend cuda: path counts, comma-separated "
+                                          "(default 10000,100000,1000000)."),
 ) -> None:
     """Measure throughput and error side by side; write the figures to reports/."""
     import importlib.util
 
+    if backend not in ("cpu", "cuda"):
+        _fail(f"--backend {backend}: must be one of cpu, cuda")
+    if backend == "cuda":
+        from .gpu import GPUUnavailable, require
+
+        counts = (10_000, 100_000, 1_000_000)
+        if paths is not None:
+            try:
+                counts = tuple(int(p) for p in paths.split(","))
+            except ValueError:
+                counts = ()
+            if not counts or min(counts) < 1:
+                _fail(f"--paths {paths}: give positive path counts, comma-separated (e.g. 10000,100000)")
+        try:
+            require()
+        except GPUUnavailable as exc:
+            _fail(str(exc))
+        from .validation.bench_gpu import main as bench_gpu_main
+
+        bench_gpu_main(out, counts)
+        return
+    if paths is not None:
+        _fail("--paths: only with --backend cuda")
     if importlib.util.find_spec("sdeint") is None:
         _fail("vines-stoch bench compares against sdeint, which is not installed: "
               'pip install "vines-stoch[bench]"')

@@ -20,7 +20,8 @@
   1000-point grid (each in a fresh process).
 
 The scenes are the files of ``vines_stoch.validation.scenes``; the example scenarios it times
-(``scenarios/``) are read from the repository, so ``make bench`` runs from its root.
+(``scenarios/``) are read from the repository, so ``make bench`` runs from its root.  The GPU
+section of the report (``make bench-gpu``, ``bench_gpu.py``) is kept when the report is rewritten.
 """
 
 from __future__ import annotations
@@ -41,6 +42,7 @@ from ..kernels.common import ABSORBER_DISS, E1_MAX, FINAL_ENERGY, IMPACT_LOSS, I
 from ..physics import KERNEL, hertz_constant
 from ..records import G, write_at2
 from . import precision, scenes, stability
+from .bench_gpu import replace_section, section_of
 from .reference import hertz_reference
 
 #: The repository this module sits in (its ``scenarios/`` folder holds the example scenarios).
@@ -519,6 +521,7 @@ of x1 and E1 on a 1001-point grid, mean, std and 3 quantiles, in a fresh process
 {chr(10).join(f"| {n:,} | {rss:.0f} | {sec:.1f} |" for n, (rss, sec) in memory.items())}
 """
     out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(text)
+    gpu_section = section_of(out.read_text()) if out.exists() else None  # (make bench-gpu's: kept)
+    out.write_text(text if gpu_section is None else replace_section(text, gpu_section))
     print(text)
     return text
