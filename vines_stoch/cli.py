@@ -20,6 +20,21 @@ def _fail(message: str) -> None:
     raise typer.Exit(2)
 
 
+def _check_backend(backend: str) -> None:
+    """Stop with one line unless ``--backend`` names a backend that can run here."""
+    from .ensemble import BACKENDS
+
+    if backend not in BACKENDS:
+        _fail(f"--backend {backend}: must be one of {', '.join(BACKENDS)}")
+    if backend == "cuda":
+        from .gpu import GPUUnavailable, require
+
+        try:
+            require()
+        except GPUUnavailable as exc:
+            _fail(str(exc))
+
+
 @app.command()
 def run(
     scenario: Path = typer.Argument(..., help="Scenario TOML file."),
@@ -46,18 +61,10 @@ def run(
                                      "one realisation a thread; its own random streams)."),
 ) -> None:
     """Run a scenario and write realizations.parquet and summary.parquet."""
-    from .ensemble import BACKENDS, output_directory
+    from .ensemble import output_directory
     from .ensemble import run as run_study
 
-    if backend not in BACKENDS:
-        _fail(f"--backend {backend}: must be one of {', '.join(BACKENDS)}")
-    if backend == "cuda":
-        from .gpu import GPUUnavailable, require
-
-        try:
-            require()
-        except GPUUnavailable as exc:
-            _fail(str(exc))
+    _check_backend(backend)
     try:
         study = load_scenario(scenario)
     except ScenarioError as exc:
@@ -306,11 +313,8 @@ def bench(
     """Measure throughput and error side by side; write the figures to reports/."""
     import importlib.util
 
-    if backend not in ("cpu", "cuda"):
-        _fail(f"--backend {backend}: must be one of cpu, cuda")
+    _check_backend(backend)
     if backend == "cuda":
-        from .gpu import GPUUnavailable, require
-
         counts = (10_000, 100_000, 1_000_000)
         if paths is not None:
             try:
@@ -319,10 +323,6 @@ def bench(
                 counts = ()
             if not counts or min(counts) < 1:
                 _fail(f"--paths {paths}: give positive path counts, comma-separated (e.g. 10000,100000)")
-        try:
-            require()
-        except GPUUnavailable as exc:
-            _fail(str(exc))
         from .validation.bench_gpu import main as bench_gpu_main
 
         bench_gpu_main(out, counts)

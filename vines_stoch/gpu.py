@@ -109,30 +109,24 @@ class Batch:
     history: np.ndarray
 
 
-def _filter_arrays(scene: Scene) -> dict[str, np.ndarray]:
-    f = scene.filters
-    return {k: np.ascontiguousarray(f[k], dtype=float) for k in _FILTER_KEYS}
+def _array(scene: Scene, name: str):
+    """A launcher input of ``scene`` by name (the filter arrays from its ``filters``)."""
+    return scene.filters[name] if name in _FILTER_KEYS else getattr(scene, name)
 
 
 def _stack(scenes: list[Scene]) -> dict[str, np.ndarray]:
     """The launcher's per-path arrays, with a leading axis: one entry for one scene, one a
     realisation for several (uncertain parameters); the shared arrays must agree."""
     first = scenes[0]
-    for s in scenes[1:]:
-        for name in SHARED:
-            if not np.array_equal(getattr(s, name), getattr(first, name)):
-                raise ValueError(f"backend cuda: the uncertain parameters change the scene's {name}, which "
-                                 "every realisation of a GPU batch shares")
-        for name in ("dt", "n_steps", "i0", "period", "sample_from", "n_floors"):
-            if getattr(s, name) != getattr(first, name):
-                raise ValueError(f"backend cuda: the uncertain parameters change the scene's {name}, which "
-                                 "every realisation of a GPU batch shares")
+    for name in (*SHARED, "dt", "n_steps", "i0", "period", "sample_from", "n_floors"):
+        if any(not np.array_equal(getattr(s, name), getattr(first, name)) for s in scenes[1:]):
+            raise ValueError(f"backend cuda: the uncertain parameters change the scene's {name}, which "
+                             "every realisation of a GPU batch shares")
     stacked = {}
-    filters = [_filter_arrays(s) for s in scenes]
     for name in PER_PATH:
-        arrays = [f[name] for f in filters] if name in _FILTER_KEYS else [getattr(s, name) for s in scenes]
         try:
-            stacked[name] = np.ascontiguousarray(np.stack([np.asarray(a, dtype=float) for a in arrays]))
+            stacked[name] = np.ascontiguousarray(np.stack([np.asarray(_array(s, name), dtype=float)
+                                                           for s in scenes]))
         except ValueError:
             raise ValueError(f"backend cuda: the uncertain parameters change the shape of the scene's "
                              f"{name}, which every realisation of a GPU batch shares") from None
