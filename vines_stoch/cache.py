@@ -20,7 +20,7 @@ from pathlib import Path
 PACKAGE = Path(__file__).resolve().parent
 #: The sources compiled functions are built from: the formulas, the step loops and what they
 #: inline, and the compiler settings.
-SOURCES = ("physics.py", "inlining.py", "cache.py", "kernels")
+SOURCES = ("physics.py", "frontend.py", "cache.py", "kernels")
 
 
 def digest(package: Path = PACKAGE) -> str | None:

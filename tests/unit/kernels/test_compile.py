@@ -1,25 +1,43 @@
-"""numba's inliner with one scope copy per copy of an IR (``vines_stoch.inlining``): the same
-compiled code, fewer copies."""
+"""numba's front end, faster (``vines_stoch.frontend``): one scope copy per copy of an inlined
+IR, live maps on bit sets, SSA on the blocks that name a variable; the same compiled code (for
+the CPU and, through numba-cuda's copy of the front end, PTX), the same live maps, fewer copies."""
 
 from __future__ import annotations
 
 import json
+import os
 import subprocess
 import sys
 
-from vines_stoch.inlining import share_scope_copies
+import pytest
 
-#: Nested ``inline="always"`` functions with loops and branches (many blocks), compiled without
-#: the on-disk cache; prints the kernel's LLVM IR, its result and the scope copies made.
+from vines_stoch import frontend
+
+#: Nested ``inline="always"`` functions with loops, branches and reassigned variables (many
+#: blocks, SSA violators), compiled without the on-disk cache; prints the LLVM IR, the result,
+#: the scope copies made, the live maps checked against numba's own, and the PTX numba-cuda's
+#: front end makes of the same function (none where no NVVM is installed).
 SCRIPT = r'''
 import copy, json, sys
 import numpy as np
 from numba import njit
-from numba.core import ir
-if sys.argv[1] == "shared":
-    from vines_stoch.inlining import share_scope_copies
-    assert share_scope_copies()
-copies = [0]
+from numba.core import ir, ssa
+from vines_stoch import frontend
+copies, checked = [0], [0]
+def watch(package):
+    """Check every live map of ``package``'s front end against its own function."""
+    module = __import__(f"{package}.analysis", fromlist=["analysis"])
+    own = module.compute_live_map
+    if sys.argv[1] == "fast":
+        assert all(frontend.install(package).values())
+    installed = module.compute_live_map
+    def compared(cfg, blocks, use, defs):
+        mine = installed(cfg, blocks, use, defs)
+        assert mine == own(cfg, blocks, use, defs), "live maps differ"
+        checked[0] += 1
+        return mine
+    module.compute_live_map = compared
+watch("numba.core")
 def counted(self, memo):
     copies[0] += 1
     new = ir.Scope.__new__(ir.Scope)
@@ -55,29 +73,72 @@ def outer(a):
 a = np.linspace(-3.0, 3.0, 7)
 value = outer(a)
 from numba.core import inline_closurecall as ic
+ptx = None
+try:
+    from numba import cuda
+    from numba.cuda import compile_ptx
+    import numba.cuda.dispatcher as dispatcher
+    class Sm90:
+        compute_capability = (9, 0)
+    dispatcher.get_current_device = lambda: Sm90()
+    watch("numba.cuda.core")
+    ptx, _ = compile_ptx(outer.py_func, "(float64[:],)", device=True, cc=(9, 0))
+except ImportError:
+    pass
 print(json.dumps({"llvm": outer.inspect_llvm(outer.signatures[0]), "value": value.hex(),
-                  "copies": copies[0], "restored": ic.copy is copy}))
+                  "copies": copies[0], "restored": ic.copy is copy, "checked": checked[0],
+                  "ssa": getattr(ssa._run_ssa, "named_blocks", False), "ptx": ptx}))
 '''
 
 
 def _compile(mode: str) -> dict:
-    done = subprocess.run([sys.executable, "-c", SCRIPT, mode], capture_output=True, text=True, check=True)
-    return json.loads(done.stdout)
+    env = {**os.environ, "NUMBA_ENABLE_CUDASIM": "0", "NUMBA_DISABLE_CACHE": "1"}
+    done = subprocess.run([sys.executable, "-c", SCRIPT, mode], capture_output=True, text=True, env=env)
+    assert done.returncode == 0, done.stderr[-3000:]
+    return json.loads(done.stdout.splitlines()[-1])
 
 
-def test_shared_scope_copies_compile_the_same_code_with_fewer_copies():
-    plain, shared = _compile("plain"), _compile("shared")
-    assert shared["llvm"] == plain["llvm"]
-    assert shared["value"] == plain["value"]
-    assert shared["restored"]
+def test_the_faster_front_end_compiles_the_same_code_with_the_same_live_maps():
+    plain, fast = _compile("plain"), _compile("fast")
+    assert fast["ssa"] and not plain["ssa"]
+    assert fast["llvm"] == plain["llvm"]
+    assert fast["value"] == plain["value"]
+    assert fast["restored"]
+    assert fast["checked"] > 10  # every live map of the compile equals numba's own
     # one copy of the scope per copy of an IR instead of one per block
-    assert 0 < shared["copies"] < plain["copies"] / 4
+    assert 0 < fast["copies"] < plain["copies"] / 4
+    if plain["ptx"] is None:
+        pytest.skip("numba-cuda is not installed: its front end is not checked")
+    assert fast["ptx"] == plain["ptx"] and ".visible .func" in fast["ptx"]
 
 
-def test_the_kernels_inline_with_shared_scope_copies():
+def test_the_kernels_compile_with_the_faster_front_end():
+    from numba.core import analysis, ssa
     from numba.core import inline_closurecall as ic
 
     import vines_stoch.physics  # noqa: F401  (installs it)
 
-    assert share_scope_copies()
+    assert frontend.install() == {"inlining": True, "liveness": True, "ssa": True}
     assert ic.InlineWorker.inline_ir.shares_scope_copies
+    assert analysis.compute_live_map.as_bits and ssa._run_ssa.named_blocks
+
+
+def test_other_sources_keep_their_own_passes(monkeypatch):
+    """A numba whose passes are not the verified ones keeps them (nothing replaced)."""
+    from numba.core import analysis, ssa
+
+    monkeypatch.setattr(analysis, "compute_live_map", analysis.compute_live_map)
+    monkeypatch.setattr(ssa, "_run_ssa", ssa._run_ssa)
+    monkeypatch.setitem(frontend.VERIFIED, "numba.core", {"live": "0" * 16, "ssa": "0" * 16})
+
+    def own_live(cfg, blocks, use, defs):
+        return {}
+
+    def own_ssa(blocks):
+        return blocks
+
+    monkeypatch.setattr(analysis, "compute_live_map", own_live)
+    monkeypatch.setattr(ssa, "_run_ssa", own_ssa)
+    installed = frontend.install()
+    assert not installed["liveness"] and not installed["ssa"]
+    assert analysis.compute_live_map is own_live and ssa._run_ssa is own_ssa
