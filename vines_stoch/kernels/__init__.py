@@ -65,26 +65,28 @@ def needed_streams(scene, replay: bool = False) -> tuple[bool, bool, bool]:
 
 
 def _streams_for(scene, replay: bool, streams: Streams | np.random.Generator | None) -> tuple:
-    """The kernel's generators, ``None`` where it draws nothing (numba's unboxing of a
-    Generator costs about 6 us a call, half the set-up of a short run).  A replayed path keeps
-    a generator (``_UNDRAWN``) in the increments' place, so that it runs the kernel a drawn path
+    """The kernel's generators (increments, bridge, filter).  A numpy Generator is passed only
+    where the kernel draws from it, ``None`` elsewhere (numba's unboxing of a Generator costs
+    about 6 us a call, half the set-up of a short run); a Philox stream (an array,
+    ``rng.philox_stream``, as on the GPU) costs nothing and is passed all the same, so that the
+    loop is the one the cuda backend runs.  A replayed path keeps a generator (``_UNDRAWN``, or
+    the Philox stream given) in the increments' place, so that it runs the kernel a drawn path
     runs (the same argument types) and not a specialisation of its own."""
     wanted = needed_streams(scene, replay)
-    increments = _UNDRAWN if replay and scene.has_white_noise else None
-    if not any(wanted):
-        return increments, None, None
-    if streams is None:
+    if isinstance(streams, np.random.Generator):
+        streams = Streams.shared(streams)
+    chosen = (None, None, None) if streams is None else (streams.increments, streams.bridge, streams.filter)
+    if streams is None and any(wanted):
         raise ValueError("streams: this scene draws random numbers (white or filtered noise, or the "
                          "Brownian trees' seed of impacts and contact under white noise); pass a numpy "
                          "generator (one for every purpose) or vines_stoch.streams.Streams")
-    if isinstance(streams, np.random.Generator):
-        streams = Streams.shared(streams)
-    chosen = (streams.increments, streams.bridge, streams.filter)
     for name, want, gen in zip(("increments", "bridge", "filter"), wanted, chosen):
         if want and gen is None:
             raise ValueError(f"streams: this scene draws from the {name} stream; it is None")
-    gens = tuple(gen if want else None for want, gen in zip(wanted, chosen))
-    return gens if increments is None else (increments, *gens[1:])
+    gens = [gen if want or isinstance(gen, np.ndarray) else None for want, gen in zip(wanted, chosen)]
+    if replay and scene.has_white_noise and gens[0] is None:
+        gens[0] = _UNDRAWN
+    return tuple(gens)
 
 
 def bundles(scene, x: np.ndarray, v: np.ndarray, fl: tuple, normals: np.ndarray, out: np.ndarray,
