@@ -21,6 +21,8 @@ from vines_stoch.kernels import SLOTS, sample_buffer, simulate
 from vines_stoch.kernels.rng import philox_stream
 from vines_stoch.store import read_metadata
 from vines_stoch.streams import BRIDGE, FILTER, INCREMENTS, Streams, streams
+from vines_stoch.validation import bench_gpu
+from vines_stoch.validation.scenes import scene_data
 
 pytestmark = pytest.mark.skipif(gpu.unavailable() is not None, reason=f"cuda backend: {gpu.unavailable()}")
 
@@ -92,10 +94,12 @@ def test_common_random_numbers_across_points_and_without():
 
 
 def filtered(duration: float = 2.0) -> dict:
-    """A filtered force from its stationary law beside filtered ground motion from rest, with
-    the intensity measures of the ground motion each realisation saw."""
-    data = example_data("filtered_noise", "sweep")
-    data["loads"].append(example_data("ground_motion")["loads"][0])
+    """The GPU bench's SSVI scene under its ground motion (from rest) and a filtered force from
+    its stationary law (the bench's loop: no kernel of its own), with the intensity measures of
+    the ground motion each realisation saw."""
+    data = scene_data("ssvi")
+    force = {**example_data("filtered_noise")["loads"][0], "intensity": 100.0}
+    data["loads"] = [force, bench_gpu.GROUND_MOTION]
     return changed(data, {"simulation.duration": duration, "simulation.metrics_from": 0.0,
                           "intensity_measures": {"period": 1.0}})
 
