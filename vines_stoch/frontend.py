@@ -1,4 +1,4 @@
-"""numba's front end, faster: the same compiled code in a third of the time.
+"""numba's front end, faster: the same compiled code in less than half the time.
 
 A step loop's cold compile is mostly numba's Python front end, not LLVM: a profile of the
 contact-under-noise kernel spent 6 of 85 s in LLVM.  Three front-end passes grow as blocks
@@ -145,7 +145,7 @@ def live_map_as_bits(cfg, blocks: dict, var_use_map: dict, var_def_map: dict, fo
                 if t != live[p]:
                     live[p], changed = t, True
     width = max((len(names) + 7) // 8, 1)
-    table = np.array([*names, ""], dtype=object)
+    table = np.array(names, dtype=object)
     out = {}
     for o, m in live.items():
         on = np.flatnonzero(np.unpackbits(np.frombuffer(m.to_bytes(width, "little"), np.uint8),
@@ -222,10 +222,10 @@ def ssa_on_named_blocks(package: str = "numba.core") -> bool:
         blocks = copied
         for varname in violators:
             named = where[varname]
+            defmap = defaultdict(list)
             states = ssa._make_states(blocks)
-            states["varname"], states["defmap"] = varname, defaultdict(list)
+            states.update(varname=varname, defmap=defmap)
             blocks = rewrite(blocks, states, ssa._FreshVarHandler(), named)
-            defmap = states["defmap"]
             states = ssa._make_states(blocks)
             states.update(varname=varname, defmap=defmap, phimap=defaultdict(list), cfg=cfg,
                           phi_locations=ssa._compute_phi_locations(df_plus, defmap))

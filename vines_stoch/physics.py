@@ -34,7 +34,7 @@ KERNEL = dict(cache=True, nogil=True, error_model="numpy", fastmath={"contract"}
 #: inlined copy also costs compile time: a large inlined function gets one call site, and rare
 #: work calls it through an out-of-line wrapper (``rk4.rk4_step``, ``rk4.wall_accelerations``).
 INLINE = dict(KERNEL, inline="always")
-install()  # numba's front end in a third of the time, the same code (see ``frontend``)
+install()  # numba's front end in less than half the time, the same code (see ``frontend``)
 key_by_sources()  # an edited formula never runs from a stale cache (see ``cache``)
 
 #: Kind codes of absorber rows (MODEL.md section 2), by the ``type`` of a scenario's absorber.
