@@ -9,6 +9,7 @@ import math
 import os
 import subprocess
 import sys
+import threading
 
 import numpy as np
 import pandas as pd
@@ -16,8 +17,8 @@ import pytest
 
 from tests.helpers import ROOT, changed, cli, example_data, scene_from, study_from
 from tests.integration.test_ensemble import DATA
-from vines_stoch import gpu, run
-from vines_stoch.kernels import SLOTS, sample_buffer, simulate
+from vines_stoch import gpu, kernels, run
+from vines_stoch.kernels import SLOTS, kernel_for, sample_buffer, simulate
 from vines_stoch.kernels.rng import philox_stream
 from vines_stoch.store import read_metadata
 from vines_stoch.streams import BRIDGE, FILTER, INCREMENTS, Streams, streams
@@ -70,6 +71,29 @@ def test_a_noisy_realisation_is_the_cpu_loop_on_its_philox_streams():
         impacts += cpu[_S["impacts"]] + cpu[_S["contact_time"]]
     assert impacts > 0
     assert len({float(row[_S["input_energy"]]) for row in batch.raw}) == 4  # four different paths
+
+
+def test_the_simulated_threads_find_the_loop_compiled(monkeypatch):
+    """The simulator's threads share the GIL with its busy-polling block manager: the step loop
+    is compiled in the calling thread first (``gpu._compile_here``), and no simulated thread
+    compiles it."""
+    calls = []
+
+    def recording(scene, gpu=False):
+        loop = kernel_for(scene, gpu)
+
+        def call(*args):
+            before = len(loop.overloads)
+            loop(*args)
+            calls.append((threading.current_thread() is threading.main_thread(),
+                          len(loop.overloads) - before))
+        return call
+
+    monkeypatch.setattr(gpu, "kernel_for", recording)
+    monkeypatch.setattr(kernels, "kernel_for", recording)
+    gpu.simulate_many(contact_noise(0.1), seed=2, point=0, start=0, stop=3)
+    assert calls[0][0]  # the caller's thread ran the loop first
+    assert [c for c in calls if not c[0]] == [(False, 0)] * 3  # three threads, none compiled
 
 
 def test_batches_and_launch_sizes_change_nothing(monkeypatch):
