@@ -43,12 +43,13 @@ def test_step_past_the_stability_limit_names_the_limit():
     assert f"{omega:.6g} rad/s" in message and f"{2 * math.sqrt(2) / omega:.4g}" in message
 
 
-#: A linear absorber whose drawn stiffness can put kick-drift-kick past its stability limit.
+#: A linear absorber whose drawn stiffness can put kick-drift-kick past its stability limit
+#: (with a little white noise: the loop of the other noisy two-body scenes, no loop of its own).
 DIVERGING = {
     "name": "diverging",
     "primary": {"mass": 1.0, "stiffness": 1.0, "damping": 0.02},
     "absorbers": [{"type": "linear", "mass": 0.05, "stiffness": 1.0}],
-    "loads": [{"type": "impulse", "velocity": 0.5}],
+    "loads": [{"type": "impulse", "velocity": 0.5}, {"type": "white-noise", "intensity": 0.01}],
     "simulation": {"duration": 200.0, "dt": 0.1, "scheme": "euler-maruyama"},
 }
 

@@ -356,11 +356,11 @@ def test_one_storey_lists_equal_scalars():
 
 
 def floor_history(signals: list[str]):
-    """The Study of a two-storey building under noise with the history of ``signals``."""
+    """The Study of the three-storey building of the Lyapunov test under noise (its loop) with
+    the history of ``signals``."""
     return study_from({
         "name": "floor-history",
-        "primary": floors([1.0, 0.8], [20.0, 15.0], [0.2, 0.2]),
-        "absorbers": [{"type": "cubic", "mass": 0.05, "stiffness": 1.0, "damping": 0.01}],
+        "primary": floors(NOISE_M, NOISE_K, NOISE_C),
         "loads": [{"type": "white-noise", "intensity": 0.3, "floor": 1}],
         "simulation": {"duration": 5.0, "dt": 1e-2, "history": {"points": 51, "signals": signals}},
         "ensemble": {"realizations": 12, "seed": 3, "chunk": 5},
@@ -381,12 +381,12 @@ def test_history_selects_floor_signals(tmp_path):
     h = pd.read_parquet(tmp_path / "history.parquet")
     scene = build_scene(study.points[0])
     stride = scene.n_steps // 50
-    rows = np.empty((12, 51, 4))
+    rows = np.empty((12, 51, 5))
     for r in range(12):
         rows[r] = np.nan
         simulate(scene, streams(3, 0, r, bridge=False, filters=False), history=rows[r], stride=stride)
     expected = {"x_1": rows[:, :, 2], "drift_2": rows[:, :, 3] - rows[:, :, 2], "x1": rows[:, :, 0]}
-    np.testing.assert_array_equal(rows[:, :, 0], rows[:, :, 3])  # the roof is floor 2
+    np.testing.assert_array_equal(rows[:, :, 0], rows[:, :, 4])  # the roof is floor 3
     for name, paths in expected.items():
         np.testing.assert_allclose(h[f"{name}_mean"], paths.mean(axis=0), rtol=1e-12, atol=1e-15)
         np.testing.assert_allclose(h[f"{name}_std"], paths.std(axis=0, ddof=1), rtol=1e-11, atol=1e-15)
@@ -394,5 +394,5 @@ def test_history_selects_floor_signals(tmp_path):
 
 
 def test_history_signal_out_of_range_is_refused():
-    with pytest.raises(ScenarioError, match=r"simulation\.history\.signals.*'drift_3'.*\[1, 2\]"):
-        floor_history(["drift_3"])
+    with pytest.raises(ScenarioError, match=r"simulation\.history\.signals.*'drift_4'.*\[1, 3\]"):
+        floor_history(["drift_4"])
