@@ -16,9 +16,10 @@ from tests.helpers import ROOT
 
 pytestmark = pytest.mark.slow
 
-#: Compiles the launcher of each named scenario (kick-drift-kick with Hertz contact, impacts
-#: and white noise on the Brownian tree; RK4 with Hertz contact; every launcher holds the
-#: filters' stationary start); prints one JSON line per scene.  numba-cuda asks the current
+#: Compiles the launcher of the scenario named by its argument (``contact_noise_parallel``:
+#: kick-drift-kick with Hertz contact, impacts and white noise on the Brownian tree;
+#: ``seed003_ds20``: RK4 with Hertz contact; every launcher holds the filters' stationary start);
+#: prints one JSON line.  numba-cuda asks the current
 #: device's compute capability when it compiles callees; with no device, sm_90 stands in.
 SCRIPT = r"""
 import json, sys
@@ -35,25 +36,27 @@ from tests.helpers import example_data, scene_from
 from vines_stoch.gpu import launch_types
 from vines_stoch.kernels import kernel_for
 from vines_stoch.kernels.launch import launcher
-for name, grid in (("contact_noise_parallel", (10, 5)), ("seed003_ds20", None)):
-    data = example_data(name)
-    data.pop("sweep", None)
-    scene = scene_from(data, changes={"simulation.duration": 1.0, "simulation.metrics_from": 0.0})
-    launch = launcher(kernel_for(scene, gpu=True), scene.mass.shape[0], False)
-    ptx, _ = compile_ptx(launch.py_func, launch_types(scene, grid), cc=(9, 0))
-    print(json.dumps({"scene": name, "entry": ".entry" in ptx, "sm_90": ".target sm_90" in ptx,
-                      "chars": len(ptx)}))
+name = sys.argv[1]
+grid = {"contact_noise_parallel": (10, 5), "seed003_ds20": None}[name]
+data = example_data(name)
+data.pop("sweep", None)
+scene = scene_from(data, changes={"simulation.duration": 1.0, "simulation.metrics_from": 0.0})
+launch = launcher(kernel_for(scene, gpu=True), scene.mass.shape[0], False)
+ptx, _ = compile_ptx(launch.py_func, launch_types(scene, grid), cc=(9, 0))
+print(json.dumps({"scene": name, "entry": ".entry" in ptx, "sm_90": ".target sm_90" in ptx,
+                  "chars": len(ptx)}))
 """
 
 
-def test_the_launchers_compile_to_ptx_for_sm_90():
+@pytest.mark.parametrize("scene", ["contact_noise_parallel", "seed003_ds20"])
+def test_the_launchers_compile_to_ptx_for_sm_90(scene):
+    """One scene a test (a process each), so that the two compiles can run side by side."""
     env = {**os.environ, "NUMBA_ENABLE_CUDASIM": "0", "PYTHONPATH": str(ROOT)}
-    done = subprocess.run([sys.executable, "-c", SCRIPT], cwd=ROOT, env=env, capture_output=True, text=True,
-                          timeout=1800)
+    done = subprocess.run([sys.executable, "-c", SCRIPT, scene], cwd=ROOT, env=env, capture_output=True,
+                          text=True, timeout=1800)
     assert done.returncode == 0, done.stderr[-3000:]
     lines = [json.loads(line) for line in done.stdout.splitlines() if line.startswith("{")]
     if lines and "skip" in lines[0]:
         pytest.skip(f"no NVVM to compile with: {lines[0]['skip']}")
-    assert [line["scene"] for line in lines] == ["contact_noise_parallel", "seed003_ds20"]
-    for line in lines:
-        assert line["entry"] and line["sm_90"] and line["chars"] > 10_000
+    assert [line["scene"] for line in lines] == [scene]
+    assert lines[0]["entry"] and lines[0]["sm_90"] and lines[0]["chars"] > 10_000
