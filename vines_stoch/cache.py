@@ -7,7 +7,8 @@ package in a folder named by a hash of all those sources (``vines-stoch-<hash>``
 package's ``__pycache__`` folders, or under ``NUMBA_CACHE_DIR`` where that is set), so an edit
 anywhere in them compiles afresh, and going back to earlier sources finds their cache again.
 Functions outside the package keep numba's own locations.  ``make clean-cache`` removes the
-folders of earlier sources.
+folders of earlier sources.  ``compile_once`` lets one process of a machine at a time compile a
+loop, so that processes starting the same loop together compile it once.
 """
 
 from __future__ import annotations
@@ -15,6 +16,12 @@ from __future__ import annotations
 import hashlib
 import os
 from pathlib import Path
+from typing import Any
+
+try:
+    import fcntl
+except ImportError:  # (no POSIX file locks: each process compiles on its own)
+    fcntl = None
 
 #: The package's folder.
 PACKAGE = Path(__file__).resolve().parent
@@ -80,3 +87,36 @@ def key_by_sources() -> str:
 
     locators.insert(0, SourceKeyedLocator)
     return name
+
+
+def compile_once(dispatcher: Any, args: tuple) -> None:
+    """Compile ``dispatcher`` (a numba function cached on disk) for the types of ``args``, or load
+    it from the cache, one process of this machine at a time: processes that start the same
+    loop together (the workers of an ensemble or of a test run) compile it once, the others wait
+    for it and load it (a cold step loop takes 10-25 s to compile; two at once take as long
+    each on separate cores, or twice as long on one).  The lock is a file beside the cache,
+    named by a hash of the function, its closure and the argument types; where the cache's
+    folder cannot be written, or there are no POSIX file locks, it compiles unlocked."""
+    from numba import typeof
+
+    signature = tuple(typeof(a) for a in args)
+    if signature in dispatcher.overloads:
+        return
+    func = dispatcher.py_func
+    closure = tuple(cell.cell_contents for cell in func.__closure__ or ())
+    key = hashlib.sha256(repr((func.__module__, func.__qualname__, closure, signature)).encode()).hexdigest()
+    try:
+        if fcntl is None:
+            raise OSError("no POSIX file locks")
+        folder = Path(dispatcher.stats.cache_path)
+        folder.mkdir(parents=True, exist_ok=True)
+        handle = open(folder / f"compile-{key[:16]}.lock", "a")
+    except (AttributeError, OSError, TypeError):
+        dispatcher.compile(signature)
+        return
+    with handle:
+        fcntl.flock(handle, fcntl.LOCK_EX)
+        try:
+            dispatcher.compile(signature)
+        finally:
+            fcntl.flock(handle, fcntl.LOCK_UN)

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..cache import compile_once
 from ..schemes import SCHEMES
 from ..streams import Streams
 from .common import POINCARE_SAMPLES, SLOTS, new_metrics
@@ -23,6 +24,8 @@ _NO_NORMALS = np.zeros(0)
 #: The generator in the increments' place of a replayed path: never drawn from.
 _UNDRAWN = np.random.default_rng(0)
 _NO_HISTORY = np.zeros((0, 2))
+#: The loops this process has run (``cache.compile_once`` saw them first).
+_STARTED: set = set()
 
 
 def kernel_for(scene, gpu: bool = False):
@@ -143,8 +146,13 @@ def simulate(scene, streams: Streams | np.random.Generator | None = None, *,
         raise ValueError("normals: a replayed Brownian path drives white noise only, not filtered loads")
     gens = _streams_for(scene, replay, streams)
     fl = filter_tuple(scene, gens[2])
-    kernel_for(scene)(*bundles(scene, x, v, fl, normals if replay else _NO_NORMALS, out, samples,
-                                       _NO_HISTORY if history is None else history, stride, gens, refine))
+    kernel = kernel_for(scene)
+    args = bundles(scene, x, v, fl, normals if replay else _NO_NORMALS, out, samples,
+                   _NO_HISTORY if history is None else history, stride, gens, refine)
+    if kernel not in _STARTED:  # the first run in this process: compiled by one process at a time
+        compile_once(kernel, args)
+        _STARTED.add(kernel)
+    kernel(*args)
     if final is not None:
         final[0], final[1] = x, v
     return out

@@ -3,10 +3,12 @@ formula that a cached function inlines is compiled afresh, never run stale."""
 
 from __future__ import annotations
 
+import json
 import os
 import shutil
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 from vines_stoch import cache
@@ -73,3 +75,78 @@ def test_a_package_in_a_zip_archive_keeps_numba_s_own_locations(tmp_path):
                            "print(repr(c.key_by_sources()), c.PACKAGE)"], cwd=tmp_path, env=env,
                           capture_output=True, text=True, check=True)
     assert done.stdout.startswith("'' ") and "vs.zip" in done.stdout
+
+
+#: Two processes wait for a go file, then start the same cold cached function (``slow_compile``,
+#: a second or so to compile) through ``cache.compile_once``, or (argument ``unlocked``) straight
+#: through numba; each prints its cache misses and hits.
+RACE = r'''
+import json, pathlib, sys, time
+sys.path.insert(0, sys.argv[1])
+import numpy as np
+from vines_stoch import cache
+from slow_compile import f
+folder = pathlib.Path(sys.argv[1])
+(folder / f"ready-{sys.argv[2]}").touch()
+while not (folder / "go").exists():
+    time.sleep(0.002)
+args = (np.zeros(3),)
+if sys.argv[3] == "unlocked":
+    f.compile(tuple(type(f).typeof_pyval(f, a) for a in args))
+else:
+    cache.compile_once(f, args)
+f(*args)
+print(json.dumps({"misses": sum(f.stats.cache_misses.values()), "hits": sum(f.stats.cache_hits.values())}))
+'''
+
+
+#: Statements of ``slow_compile.f``: about 0.5 s to compile, far longer than the two processes'
+#: start apart.
+STATEMENTS = 60
+
+
+def _race(folder: Path, mode: str) -> list[dict]:
+    """Start the two processes of ``RACE`` together; their outputs."""
+    lines = "\n".join(f"    a[{i % 3}] = a[{(i + 1) % 3}] * {i}.5 + math.sin(a[{(i + 2) % 3}])"
+                      for i in range(STATEMENTS))
+    (folder / "slow_compile.py").write_text(f"import math\nfrom numba import njit\n\n\n@njit(cache=True)\n"
+                                            f"def f(a):\n{lines}\n    return a\n")
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(folder / "numba")}
+    processes = [subprocess.Popen([sys.executable, "-c", RACE, str(folder), str(i), mode], env=env,
+                                  stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                 for i in range(2)]
+    deadline = time.monotonic() + 120
+    while not all((folder / f"ready-{i}").exists() for i in range(2)):
+        assert time.monotonic() < deadline and all(p.poll() is None for p in processes)
+        time.sleep(0.01)
+    (folder / "go").touch()
+    outputs = [p.communicate(timeout=300) for p in processes]
+    assert all(p.returncode == 0 for p in processes), [err[-2000:] for _, err in outputs]
+    return [json.loads(out) for out, _ in outputs]
+
+
+def test_processes_starting_the_same_loop_compile_it_once(tmp_path):
+    """Through ``compile_once`` one process compiles and the other loads its result; straight
+    through numba, both compile (the race the lock removes)."""
+    (tmp_path / "locked").mkdir()
+    (tmp_path / "unlocked").mkdir()
+    locked = _race(tmp_path / "locked", "locked")
+    assert sorted((r["misses"], r["hits"]) for r in locked) == [(0, 1), (1, 0)]
+    unlocked = _race(tmp_path / "unlocked", "unlocked")
+    assert [(r["misses"], r["hits"]) for r in unlocked] == [(1, 0), (1, 0)]
+
+
+def test_the_first_run_of_a_loop_in_a_process_compiles_nothing_more():
+    """``kernels.simulate`` compiles a loop for the very argument types it then runs it with."""
+    import numpy as np
+
+    from tests.helpers import example_data, scene_from
+    from vines_stoch.kernels import _STARTED, kernel_for, simulate
+
+    scene = scene_from(example_data("cubic_nes_impulse"), changes={"simulation.duration": 1.0})
+    kernel = kernel_for(scene)
+    _STARTED.discard(kernel)
+    simulate(scene)
+    count = len(kernel.overloads)
+    simulate(scene, np.random.default_rng(0))
+    assert kernel in _STARTED and len(kernel.overloads) == count
