@@ -79,15 +79,23 @@ def test_the_simulated_threads_find_the_loop_compiled(monkeypatch):
     compiles it."""
     calls = []
 
-    def recording(scene, gpu=False):
-        loop = kernel_for(scene, gpu)
+    class Recording:
+        """The loop, recording each call's thread and the specialisations it compiled."""
 
-        def call(*args):
-            before = len(loop.overloads)
-            loop(*args)
+        def __init__(self, loop):
+            self.loop = loop
+
+        def __getattr__(self, name):
+            return getattr(self.loop, name)
+
+        def __call__(self, *args):
+            before = len(self.loop.overloads)
+            self.loop(*args)
             calls.append((threading.current_thread() is threading.main_thread(),
-                          len(loop.overloads) - before))
-        return call
+                          len(self.loop.overloads) - before))
+
+    def recording(scene, gpu=False):
+        return Recording(kernel_for(scene, gpu))
 
     monkeypatch.setattr(gpu, "kernel_for", recording)
     monkeypatch.setattr(kernels, "kernel_for", recording)
