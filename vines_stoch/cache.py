@@ -105,13 +105,15 @@ def compile_once(dispatcher: Any, args: tuple) -> None:
     func = dispatcher.py_func
     closure = tuple(cell.cell_contents for cell in func.__closure__ or ())
     key = hashlib.sha256(repr((func.__module__, func.__qualname__, closure, signature)).encode()).hexdigest()
-    try:
-        if fcntl is None:
-            raise OSError("no POSIX file locks")
-        folder = Path(dispatcher.stats.cache_path)
-        folder.mkdir(parents=True, exist_ok=True)
-        handle = open(folder / f"compile-{key[:16]}.lock", "a")
-    except (AttributeError, OSError, TypeError):
+    handle = None
+    if fcntl is not None:
+        try:
+            folder = Path(dispatcher.stats.cache_path)
+            folder.mkdir(parents=True, exist_ok=True)
+            handle = open(folder / f"compile-{key[:16]}.lock", "a")
+        except (AttributeError, OSError, TypeError):  # (no cache folder to write)
+            pass
+    if handle is None:
         dispatcher.compile(signature)
         return
     with handle:

@@ -11,7 +11,11 @@ import sys
 import time
 from pathlib import Path
 
+import numpy as np
+
+from tests.helpers import example_data, scene_from
 from vines_stoch import cache
+from vines_stoch.kernels import _STARTED, kernel_for, simulate
 
 #: Stored energy of a primary with one linear absorber (``kernels.common.stored_energy``
 #: inlines ``physics.spring_damper_energy``), printed in full.
@@ -78,7 +82,7 @@ def test_a_package_in_a_zip_archive_keeps_numba_s_own_locations(tmp_path):
 
 
 #: Two processes wait for a go file, then start the same cold cached function (``slow_compile``,
-#: a second or so to compile) through ``cache.compile_once``, or (argument ``unlocked``) straight
+#: ``STATEMENTS`` long) through ``cache.compile_once``, or (argument ``unlocked``) straight
 #: through numba; each prints its cache misses and hits.
 RACE = r'''
 import json, pathlib, sys, time
@@ -138,11 +142,6 @@ def test_processes_starting_the_same_loop_compile_it_once(tmp_path):
 
 def test_the_first_run_of_a_loop_in_a_process_compiles_nothing_more():
     """``kernels.simulate`` compiles a loop for the very argument types it then runs it with."""
-    import numpy as np
-
-    from tests.helpers import example_data, scene_from
-    from vines_stoch.kernels import _STARTED, kernel_for, simulate
-
     scene = scene_from(example_data("cubic_nes_impulse"), changes={"simulation.duration": 1.0})
     kernel = kernel_for(scene)
     _STARTED.discard(kernel)
