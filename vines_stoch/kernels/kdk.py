@@ -155,24 +155,25 @@ def crossing(x, v, length, left, path, dw, off, w_at, sigma, normals, slot, memo
     j = nf + a
     lo, hi = 0.0, length
     g_lo = min(side * (x[j] - x[h]) - wall, 0.0)  # on the wall counts as inside
-    increments(path, dw, off, length, left, w_at, sigma, normals, slot, memo, dws)
-    for k in range(nf):
-        dws[k] *= 0.5
-    kick(v, 0.5 * length, dws, load, ag, force, inv_mass, vt, ground)
-    stick_together(mass, vt, nf, stuck, host, group_mass, group_sum, False, sticking)
-    g_hi = side * (x[j] - x[h] + length * (vt[j] - vt[h])) - wall
+    g_hi = 0.0
     s = hi
     last = 0
-    for _ in range(ROOT_ITERATIONS):
-        s = hi - g_hi * (hi - lo) / (g_hi - g_lo)
-        if not (lo < s < hi):
-            s = 0.5 * (lo + hi)
+    # trial 0 kicks over the whole bracket for ``g_hi``; the others are the Illinois iterates
+    # (one inlined trial kick, not two: the Brownian tree's code is the bulk of each copy)
+    for trial in range(ROOT_ITERATIONS + 1):
+        if trial > 0:
+            s = hi - g_hi * (hi - lo) / (g_hi - g_lo)
+            if not (lo < s < hi):
+                s = 0.5 * (lo + hi)
         increments(path, dw, off, s, left, w_at, sigma, normals, slot, memo, dws)
         for k in range(nf):
             dws[k] *= 0.5
         kick(v, 0.5 * s, dws, load, ag, force, inv_mass, vt, ground)
         stick_together(mass, vt, nf, stuck, host, group_mass, group_sum, False, sticking)
         g = side * (x[j] - x[h] + s * (vt[j] - vt[h])) - wall
+        if trial == 0:
+            g_hi = g
+            continue
         if g > 0.0:
             hi, g_hi = s, g
             if last > 0:
@@ -437,19 +438,24 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
                         capped = True
                     elif has_hertz and any_set(touching):
                         s = min(left, contact_step(x, v, nf, mass, host, rows, touching))
-                    if TREE:
-                        increments(path, dw, off, s, left, w_at, sigma, normals, slot, memo, dws)
-                    else:
-                        for k in range(nf):
-                            dws[k] = dw[k]
-                    for k in range(nf):
-                        dwh[k] = 0.5 * dws[k]
-                    kick(v, 0.5 * s, dwh, load, ag, force, inv_mass, vn, ground)
-                    if has_impact:
-                        stick_together(mass, vn, nf, stuck, host, group_mass, group_sum, True)
-                    # the first impact, contact onset or contact end in the sub-step
+                    # the sub-step's first half kick; again to the first impact, contact onset or
+                    # contact end in the sub-step where one comes first (one inlined kick on the
+                    # Brownian tree for both)
                     hit, side, s_hit, leaves = -1, 0, s, False
-                    if search and ((has_impact and n_impacts < MAX_EVENTS) or has_hertz):
+                    seek = search and ((has_impact and n_impacts < MAX_EVENTS) or has_hertz)
+                    for trial in range(2):
+                        if TREE:
+                            increments(path, dw, off, s, left, w_at, sigma, normals, slot, memo, dws)
+                        else:
+                            for k in range(nf):
+                                dws[k] = dw[k]
+                        for k in range(nf):
+                            dwh[k] = 0.5 * dws[k]
+                        kick(v, 0.5 * s, dwh, load, ag, force, inv_mass, vn, ground)
+                        if has_impact:
+                            stick_together(mass, vn, nf, stuck, host, group_mass, group_sum, trial == 0)
+                        if trial > 0 or not seek:
+                            break
                         for a in range(na):
                             h = host_of(host, a, nf)
                             j = nf + a
@@ -473,15 +479,9 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
                                               vt, dwc, group_mass, group_sum, ground, has_impact)
                                 if hit < 0 or sc < s_hit:
                                     hit, side, s_hit, leaves = a, sq, sc, exits
-                        if hit >= 0:  # the first half kick again, to the event
-                            s = s_hit
-                            if TREE:
-                                increments(path, dw, off, s, left, w_at, sigma, normals, slot, memo, dws)
-                            for k in range(nf):
-                                dwh[k] = 0.5 * dws[k]
-                            kick(v, 0.5 * s, dwh, load, ag, force, inv_mass, vn, ground)
-                            stick_together(mass, vn, nf, stuck, host, group_mass, group_sum, False,
-                                           has_impact)
+                        if hit < 0:
+                            break
+                        s = s_hit
                     if inside:
                         work += 0.5 * impulse_work(load, s, dws, v, vn) - (
                             0.5 * ag * s * momentum(mass, v, vn) if ag != 0.0 else 0.0)
