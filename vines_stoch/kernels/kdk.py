@@ -145,12 +145,16 @@ def increments(path, dw, off, s, left, w_at, sigma, normals, slot, memo, out):
 
 @njit(**INLINE)
 def crossing(x, v, length, left, path, dw, off, w_at, sigma, normals, slot, memo, load, ag, force, mass,
-             inv_mass, nf, stuck, host, a, side, wall, vt, dws, group_mass, group_sum, ground, sticking):
+             inv_mass, stuck, host, a, side, wall, vt, dws, group_mass, group_sum, ground, sticking, tree):
     """Sub-step length in ``(0, length]`` after which absorber ``a`` is exactly at ``wall``
     (side ``side``: the gap ``side (x_a - x_host) - wall`` crosses zero upwards) of its host
     floor, by the Illinois method on the bracket ``[0, length]``; the trial kicks take the
     Wiener increments of the step's Brownian tree (``increments``); ``sticking``: the scene has
-    impact absorbers that may stick (a compile-time flag)."""
+    impact absorbers that may stick, ``tree``: the sub-steps' increments come from the Brownian
+    tree (white noise; without it they are the step's, zero: compile-time flags, so that a loop
+    without noise does not inline the tree's code).  (The floor count is ``load``'s length: a
+    call of 30 arguments or more is compiled through a tuple, which numba does not inline.)"""
+    nf = load.shape[0]
     h = host_of(host, a, nf)
     j = nf + a
     lo, hi = 0.0, length
@@ -165,7 +169,11 @@ def crossing(x, v, length, left, path, dw, off, w_at, sigma, normals, slot, memo
             s = hi - g_hi * (hi - lo) / (g_hi - g_lo)
             if not (lo < s < hi):
                 s = 0.5 * (lo + hi)
-        increments(path, dw, off, s, left, w_at, sigma, normals, slot, memo, dws)
+        if tree:
+            increments(path, dw, off, s, left, w_at, sigma, normals, slot, memo, dws)
+        else:
+            for k in range(nf):
+                dws[k] = dw[k]
         for k in range(nf):
             dws[k] *= 0.5
         kick(v, 0.5 * s, dws, load, ag, force, inv_mass, vt, ground)
@@ -475,8 +483,8 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
                                     sq, wall, exits = -1, -rows[a, WALL_HI], True
                             if sq != 0:
                                 sc = crossing(x, v, s, left, path, dw, off, w_at, sigma, normals, slot, memo,
-                                              load, ag, force, mass, inv_mass, nf, stuck, host, a, sq, wall,
-                                              vt, dwc, group_mass, group_sum, ground, has_impact)
+                                              load, ag, force, mass, inv_mass, stuck, host, a, sq, wall, vt,
+                                              dwc, group_mass, group_sum, ground, has_impact, TREE)
                                 if hit < 0 or sc < s_hit:
                                     hit, side, s_hit, leaves = a, sq, sc, exits
                         if hit < 0:
