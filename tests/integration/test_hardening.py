@@ -245,10 +245,10 @@ def test_lock_refuses_a_live_owner_and_takes_over_a_dead_one(tmp_path):
 
 
 def slow(intensity: float) -> str:
-    """Scenario text of 200 realisations of 10^6 steps, one a chunk, under white noise."""
+    """Scenario text of 200 realisations of 10^5 steps, one a chunk, under white noise."""
     return toml_text({"name": "hardening", **two_dof_data(),
                       "loads": [{"type": "white-noise", "intensity": intensity}],
-                      "simulation": {"duration": 1000.0, "dt": 0.001},
+                      "simulation": {"duration": 100.0, "dt": 0.001},
                       "ensemble": {"realizations": 200, "chunk": 1}})
 
 
@@ -269,13 +269,15 @@ def _wait_for_parts(out: Path, count: int, process: subprocess.Popen) -> None:
 def test_two_runs_into_one_folder_and_a_killed_run_resumed(tmp_path):
     """Two processes: the second run into a folder in use is refused and changes nothing; a run
     killed with SIGKILL leaves its lock, which --resume takes over, and the resumed results
-    equal those of a run never interrupted."""
+    equal those of a run never interrupted.  The first run is paused (SIGSTOP) once it has
+    written two parts: alive and holding its lock, it cannot finish while the second starts."""
     first, second = tmp_path / "first.toml", tmp_path / "second.toml"
     first.write_text(slow(0.1))
     second.write_text(slow(0.2))
     out = tmp_path / "out"
     a = _start(first, out)
     _wait_for_parts(out, 2, a)
+    a.send_signal(signal.SIGSTOP)
     b = _start(second, out)
     _, err = b.communicate(timeout=120)
     assert b.returncode == 2 and "in use by the run of process" in err and str(a.pid) in err, err
