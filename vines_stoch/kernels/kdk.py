@@ -446,24 +446,19 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
                         capped = True
                     elif has_hertz and any_set(touching):
                         s = min(left, contact_step(x, v, nf, mass, host, rows, touching))
-                    # the sub-step's first half kick; again to the first impact, contact onset or
-                    # contact end in the sub-step where one comes first (one inlined kick on the
-                    # Brownian tree for both)
-                    hit, side, s_hit, leaves = -1, 0, s, False
-                    seek = search and ((has_impact and n_impacts < MAX_EVENTS) or has_hertz)
-                    for trial in range(2):
-                        if TREE:
-                            increments(path, dw, off, s, left, w_at, sigma, normals, slot, memo, dws)
-                        else:
-                            for k in range(nf):
-                                dws[k] = dw[k]
+                    if TREE:
+                        increments(path, dw, off, s, left, w_at, sigma, normals, slot, memo, dws)
+                    else:
                         for k in range(nf):
-                            dwh[k] = 0.5 * dws[k]
-                        kick(v, 0.5 * s, dwh, load, ag, force, inv_mass, vn, ground)
-                        if has_impact:
-                            stick_together(mass, vn, nf, stuck, host, group_mass, group_sum, trial == 0)
-                        if trial > 0 or not seek:
-                            break
+                            dws[k] = dw[k]
+                    for k in range(nf):
+                        dwh[k] = 0.5 * dws[k]
+                    kick(v, 0.5 * s, dwh, load, ag, force, inv_mass, vn, ground)
+                    if has_impact:
+                        stick_together(mass, vn, nf, stuck, host, group_mass, group_sum, True)
+                    # the first impact, contact onset or contact end in the sub-step
+                    hit, side, s_hit, leaves = -1, 0, s, False
+                    if search and ((has_impact and n_impacts < MAX_EVENTS) or has_hertz):
                         for a in range(na):
                             h = host_of(host, a, nf)
                             j = nf + a
@@ -487,9 +482,15 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
                                               dwc, group_mass, group_sum, ground, has_impact, TREE)
                                 if hit < 0 or sc < s_hit:
                                     hit, side, s_hit, leaves = a, sq, sc, exits
-                        if hit < 0:
-                            break
-                        s = s_hit
+                        if hit >= 0:  # the first half kick again, to the event
+                            s = s_hit
+                            if TREE:
+                                increments(path, dw, off, s, left, w_at, sigma, normals, slot, memo, dws)
+                            for k in range(nf):
+                                dwh[k] = 0.5 * dws[k]
+                            kick(v, 0.5 * s, dwh, load, ag, force, inv_mass, vn, ground)
+                            stick_together(mass, vn, nf, stuck, host, group_mass, group_sum, False,
+                                           has_impact)
                     if inside:
                         work += 0.5 * impulse_work(load, s, dws, v, vn) - (
                             0.5 * ag * s * momentum(mass, v, vn) if ag != 0.0 else 0.0)
