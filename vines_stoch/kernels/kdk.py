@@ -149,7 +149,8 @@ def crossing(x, v, length, left, path, dw, off, w_at, sigma, normals, slot, memo
     """Sub-step length in ``(0, length]`` after which absorber ``a`` is exactly at ``wall``
     (side ``side``: the gap ``side (x_a - x_host) - wall`` crosses zero upwards) of its host
     floor, by the Illinois method on the bracket ``[0, length]``; the trial kicks take the
-    Wiener increments of the step's Brownian tree (``increments``); ``sticking``: the scene has
+    Wiener increments of the step's Brownian tree (``increments``), and ``vt`` and ``dws`` are left
+    with the trial kick to the root (the velocities and the half increments); ``sticking``: the scene has
     impact absorbers that may stick, ``tree``: the sub-steps' increments come from the Brownian
     tree (white noise; without it they are the step's, zero: compile-time flags, so that a loop
     without noise does not inline the tree's code).  (The floor count is ``load``'s length: a
@@ -162,10 +163,13 @@ def crossing(x, v, length, left, path, dw, off, w_at, sigma, normals, slot, memo
     g_hi = 0.0
     s = hi
     last = 0
-    # trial 0 kicks over the whole bracket for ``g_hi``; the others are the Illinois iterates
-    # (one inlined trial kick, not two: the Brownian tree's code is the bulk of each copy)
-    for trial in range(ROOT_ITERATIONS + 1):
-        if trial > 0:
+    done = False
+    # trial 0 kicks over the whole bracket for ``g_hi``, the next are the Illinois iterates, and
+    # a last trial at the root found (where the last iterate was not the root) leaves its kick in
+    # ``vt`` and its half increments in ``dws`` for the caller's kick to the event: one inlined
+    # trial kick for all (the Brownian tree's code is the bulk of each copy)
+    for trial in range(ROOT_ITERATIONS + 2):
+        if trial > 0 and not done:
             s = hi - g_hi * (hi - lo) / (g_hi - g_lo)
             if not (lo < s < hi):
                 s = 0.5 * (lo + hi)
@@ -178,6 +182,8 @@ def crossing(x, v, length, left, path, dw, off, w_at, sigma, normals, slot, memo
             dws[k] *= 0.5
         kick(v, 0.5 * s, dws, load, ag, force, inv_mass, vt, ground)
         stick_together(mass, vt, nf, stuck, host, group_mass, group_sum, False, sticking)
+        if done:
+            break
         g = side * (x[j] - x[h] + s * (vt[j] - vt[h])) - wall
         if trial == 0:
             g_hi = g
@@ -192,8 +198,11 @@ def crossing(x, v, length, left, path, dw, off, w_at, sigma, normals, slot, memo
             if last < 0:
                 g_hi *= 0.5
             last = -1
-        if hi - lo <= 1e-15 * length or g == 0.0:
-            break
+        if hi - lo <= 1e-15 * length or g == 0.0 or trial == ROOT_ITERATIONS:
+            if s == hi:
+                break
+            done = True
+            s = hi
     return hi
 
 
@@ -282,6 +291,7 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
         x, v, force, vn, vt, inv_mass = (scratch(NB), scratch(NB), scratch(NB), scratch(NB), scratch(NB),
                                          scratch(NB))
         xt = scratch(NB)  # with vt: copies of the state for the out-of-line calls
+        vh = scratch(NB)  # the kick to the first event of a sub-step
         for b in range(nb):
             x[b] = state_x[b]
             v[b] = state_v[b]
@@ -482,15 +492,16 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
                                               dwc, group_mass, group_sum, ground, has_impact, TREE)
                                 if hit < 0 or sc < s_hit:
                                     hit, side, s_hit, leaves = a, sq, sc, exits
-                        if hit >= 0:  # the first half kick again, to the event
+                                    for b in range(nb):  # the root search's kick to its root
+                                        vh[b] = vt[b]
+                                    for k in range(nf):
+                                        dwh[k] = dwc[k]
+                        if hit >= 0:  # the first half kick again, to the event: the search's last
                             s = s_hit
-                            if TREE:
-                                increments(path, dw, off, s, left, w_at, sigma, normals, slot, memo, dws)
                             for k in range(nf):
-                                dwh[k] = 0.5 * dws[k]
-                            kick(v, 0.5 * s, dwh, load, ag, force, inv_mass, vn, ground)
-                            stick_together(mass, vn, nf, stuck, host, group_mass, group_sum, False,
-                                           has_impact)
+                                dws[k] = 2.0 * dwh[k]
+                            for b in range(nb):
+                                vn[b] = vh[b]
                     if inside:
                         work += 0.5 * impulse_work(load, s, dws, v, vn) - (
                             0.5 * ag * s * momentum(mass, v, vn) if ag != 0.0 else 0.0)
