@@ -93,7 +93,7 @@ def compile_once(dispatcher: Any, args: tuple) -> None:
     """Compile ``dispatcher`` (a numba function cached on disk) for the types of ``args``, or load
     it from the cache, one process of this machine at a time: processes that start the same
     loop together (the workers of an ensemble or of a test run) compile it once, the others wait
-    for it and load it (a cold step loop takes 10-25 s to compile; two at once take as long
+    for it and load it (a cold step loop takes 5-20 s to compile; two at once take as long
     each on separate cores, or twice as long on one).  The lock is a file beside the cache,
     named by a hash of the function, its closure and the argument types; where the cache's
     folder cannot be written, or there are no POSIX file locks, it compiles unlocked."""
