@@ -11,6 +11,7 @@ import pytest
 
 from tests.helpers import study_from
 from vines_stoch import ScenarioError, run
+from vines_stoch.validation import stability
 from vines_stoch.validation.stability import CASES, run_case
 
 
@@ -79,3 +80,21 @@ def test_diverging_realisations_are_counted_not_averaged(tmp_path, n, seed, law,
     for m in ("edm", "e1_max", "x1_rms", "energy_integral"):
         assert summary[f"{m}_mean"].iloc[0] == pytest.approx(ok[m].mean(), rel=1e-12)
         assert np.isfinite(summary[f"{m}_std"].iloc[0])
+
+
+def test_the_report_times_each_case_with_its_loops_compiled(monkeypatch):
+    """``section`` (the bench's table) runs each case once before the run it times, so that the
+    time column is the run's own and not the compiling of a cold cache."""
+    calls = []
+    case = CASES[0]
+
+    def timed(c, directory=None):
+        calls.append(c)
+        return stability.Outcome(c, seconds=100.0 if len(calls) == 1 else 0.25, n_ok=1, residual=1e-13,
+                                 edm=(0.5, 0.5))
+
+    monkeypatch.setattr(stability, "CASES", (case,))
+    monkeypatch.setattr(stability, "run_case", timed)
+    text = stability.section()
+    assert calls == [case, case]
+    assert f"| {case.name} | {case.bound_s:.0f} | 0.25 | 1 ok, 0 failed |" in text
