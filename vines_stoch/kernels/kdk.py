@@ -153,7 +153,7 @@ def crossing(x, v, length, left, path, dw, off, w_at, sigma, normals, slot, memo
     with the trial kick to the root (the velocities and the half increments); ``sticking``: the scene has
     impact absorbers that may stick, ``tree``: the sub-steps' increments come from the Brownian
     tree (white noise; without it they are the step's, zero: compile-time flags, so that a loop
-    without noise does not inline the tree's code).  (The floor count is ``load``'s length: a
+    without noise prunes the tree's code before typing it).  (The floor count is ``load``'s length: a
     call of 30 arguments or more is compiled through a tuple, which numba does not inline.)"""
     nf = load.shape[0]
     h = host_of(host, a, nf)
@@ -496,7 +496,7 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
                                         vh[b] = vt[b]
                                     for k in range(nf):
                                         dwh[k] = dwc[k]
-                        if hit >= 0:  # the first half kick again, to the event: the search's last
+                        if hit >= 0:  # the first half kick to the event: the search's last trial
                             s = s_hit
                             for k in range(nf):
                                 dws[k] = 2.0 * dwh[k]
