@@ -49,7 +49,9 @@ def test_deterministic_scenes_give_the_cpu_metrics(name, changes):
     scene = scene_from(example_data(name, "sweep"), changes=changes)
     samples = sample_buffer(scene)
     cpu = simulate(scene, samples=samples)
+    compiled = set(kernel_for(scene).overloads)
     batch = gpu.simulate_many(scene, seed=1, point=0, start=0, stop=3)
+    assert set(kernel_for(scene).overloads) == compiled  # one loop for both (``kernels._UNUSED``)
     for raw, own in zip(batch.raw, batch.samples):
         np.testing.assert_allclose(own, samples, rtol=1e-9, atol=1e-12)  # Poincare samples (NaN where none)
         assert raw[_S["impacts"]] == cpu[_S["impacts"]]

@@ -19,10 +19,15 @@ from .common import POINCARE_SAMPLES, SLOTS, new_metrics
 from .kdk import kdk_kernel
 from .loads import load_path, stationary_start
 from .rk4 import rk4_kernel
+from .rng import STREAM_WORDS
 
 _NO_NORMALS = np.zeros(0)
 #: The generator in the increments' place of a replayed path: never drawn from.
 _UNDRAWN = np.random.default_rng(0)
+#: A stream the kernel has no use for: an empty Philox stream (``rng.philox_stream``), never drawn
+#: from.  The cuda backend passes Philox streams in every place, so a deterministic scene runs
+#: the same loop (the same argument types: one compilation) on the CPU and on the simulator.
+_UNUSED = np.zeros(STREAM_WORDS, np.uint64)
 _NO_HISTORY = np.zeros((0, 2))
 #: The loops this process has run (``cache.compile_once`` saw them first).
 _STARTED: set = set()
@@ -52,7 +57,7 @@ def filter_tuple(scene, generator: np.random.Generator | np.ndarray | None) -> t
     then the next state's and the normals' scratch (``loads.advance_filters``)."""
     f = scene.filters
     z = np.zeros(f["phi"].shape[0])
-    if isinstance(generator, np.ndarray):
+    if isinstance(generator, np.ndarray) and z.shape[0]:
         stationary_start(f["p0"], generator, z, np.zeros(z.shape[0]))
     elif z.shape[0] and f["p0"].any():
         z = f["p0"] @ generator.standard_normal(z.shape[0])
@@ -69,12 +74,13 @@ def needed_streams(scene, replay: bool = False) -> tuple[bool, bool, bool]:
 
 def _streams_for(scene, replay: bool, streams: Streams | np.random.Generator | None) -> tuple:
     """The kernel's generators (increments, bridge, filter).  A numpy Generator is passed only
-    where the kernel draws from it, ``None`` elsewhere (numba's unboxing of a Generator costs
-    about 6 us a call, half the set-up of a short run); a Philox stream (an array,
-    ``rng.philox_stream``, as on the GPU) costs nothing and is passed all the same, so that the
-    loop is the one the cuda backend runs.  A replayed path keeps a generator (``_UNDRAWN``, or
-    the Philox stream given) in the increments' place, so that it runs the kernel a drawn path
-    runs (the same argument types) and not a specialisation of its own."""
+    where the kernel draws from it, an empty Philox stream elsewhere (``_UNUSED``: numba's
+    unboxing of a Generator costs about 6 us a call, half the set-up of a short run, an array's
+    next to nothing); a Philox stream (an array, ``rng.philox_stream``, as on the GPU) is passed
+    all the same, so that the loop is the one the cuda backend runs.  A replayed path keeps a
+    generator (``_UNDRAWN``, or the Philox stream given) in the increments' place, so that it
+    runs the kernel a drawn path runs (the same argument types) and not a specialisation of its
+    own."""
     wanted = needed_streams(scene, replay)
     if isinstance(streams, np.random.Generator):
         streams = Streams.shared(streams)
@@ -86,8 +92,8 @@ def _streams_for(scene, replay: bool, streams: Streams | np.random.Generator | N
     for name, want, gen in zip(("increments", "bridge", "filter"), wanted, chosen):
         if want and gen is None:
             raise ValueError(f"streams: this scene draws from the {name} stream; it is None")
-    gens = [gen if want or isinstance(gen, np.ndarray) else None for want, gen in zip(wanted, chosen)]
-    if replay and scene.has_white_noise and gens[0] is None:
+    gens = [gen if want or isinstance(gen, np.ndarray) else _UNUSED for want, gen in zip(wanted, chosen)]
+    if replay and scene.has_white_noise and gens[0] is _UNUSED:
         gens[0] = _UNDRAWN
     return tuple(gens)
 

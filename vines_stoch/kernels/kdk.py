@@ -239,8 +239,9 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
     ``grid`` (time grid, metrics window, Poincare and history grids), ``outputs`` (metric
     vector, Poincare samples, history rows, the limits whose first passages the metric vector
     records: ``common.first_passages``), then the generators of the step increments, of
-    the Brownian trees' seed and of the filter noise (``None`` where unused; three arguments,
-    not a bundle: numba types a tuple holding a Generator in Python, about 20 us a call).
+    the Brownian trees' seed and of the filter noise (an empty Philox stream where unused;
+    three arguments, not a bundle: numba types a tuple holding a Generator in Python, about
+    20 us a call).
 
     Given ``normals`` (the noise bundle's replayed path: ``refine`` fine normals a step and
     noisy floor, for convergence studies), the step increments are sums of them instead of
