@@ -1,14 +1,23 @@
 """The cuda backend's launchers compile for a real GPU: numba-cuda types the CPU step loops for
 the CUDA target and NVVM turns them into PTX for sm_90 (no GPU needed, only the NVVM library of
 the cuda extra).  The simulator tests run the same loops compiled for the CPU; this is the check
-that the GPU compiler accepts them."""
+that the GPU compiler accepts them.
+
+numba-cuda keeps no on-disk cache of ``compile_ptx`` (11-24 s a launcher), so the test keeps the
+PTX it got in pytest's cache folder, named by a hash of everything the compile reads: the
+package's sources, the scenarios, the test helpers, this script and the versions of the
+compilers.  A run with the same inputs checks that PTX again instead of compiling it anew, as
+numba's cache of the CPU loops does; an edit anywhere in those inputs compiles afresh."""
 
 from __future__ import annotations
 
+import hashlib
 import json
 import os
+import shutil
 import subprocess
 import sys
+from importlib import metadata
 
 import pytest
 
@@ -43,20 +52,65 @@ data.pop("sweep", None)
 scene = scene_from(data, changes={"simulation.duration": 1.0, "simulation.metrics_from": 0.0})
 launch = launcher(kernel_for(scene, gpu=True), scene.mass.shape[0], False)
 ptx, _ = compile_ptx(launch.py_func, launch_types(scene, grid), cc=(9, 0))
-print(json.dumps({"scene": name, "entry": ".entry" in ptx, "sm_90": ".target sm_90" in ptx,
-                  "chars": len(ptx)}))
+with open(sys.argv[2], "w") as f:
+    f.write(ptx)
+print(json.dumps({"scene": name}))
 """
+#: The distributions whose versions decide the PTX (NVVM comes with the nvcc wheel).
+COMPILERS = ("numba", "numba-cuda", "llvmlite", "nvidia-cuda-nvcc-cu12", "cuda-bindings")
+
+
+def inputs_hash(scene: str) -> str:
+    """A hash of what the compile of ``scene``'s launcher reads (see the module's docstring)."""
+    h = hashlib.sha256(f"{SCRIPT}\0{scene}".encode())
+    files = [*(ROOT / "vines_stoch").rglob("*.py"), *(ROOT / "scenarios").glob("*.toml"),
+             ROOT / "tests" / "helpers.py"]
+    for f in sorted(files):
+        h.update(str(f.relative_to(ROOT)).encode() + b"\0" + f.read_bytes())
+    for dist in COMPILERS:
+        try:
+            h.update(f"{dist}={metadata.version(dist)}".encode())
+        except metadata.PackageNotFoundError:
+            h.update(f"{dist}: none".encode())
+    return h.hexdigest()[:20]
 
 
 @pytest.mark.parametrize("scene", ["contact_noise_parallel", "seed003_ds20"])
-def test_the_launchers_compile_to_ptx_for_sm_90(scene):
+def test_the_launchers_compile_to_ptx_for_sm_90(scene, request):
     """One scene a test (a process each), so that the two compiles can run side by side."""
-    env = {**os.environ, "NUMBA_ENABLE_CUDASIM": "0", "PYTHONPATH": str(ROOT)}
-    done = subprocess.run([sys.executable, "-c", SCRIPT, scene], cwd=ROOT, env=env, capture_output=True,
-                          text=True, timeout=1800)
-    assert done.returncode == 0, done.stderr[-3000:]
-    lines = [json.loads(line) for line in done.stdout.splitlines() if line.startswith("{")]
-    if lines and "skip" in lines[0]:
-        pytest.skip(f"no NVVM to compile with: {lines[0]['skip']}")
-    assert [line["scene"] for line in lines] == [scene]
-    assert lines[0]["entry"] and lines[0]["sm_90"] and lines[0]["chars"] > 10_000
+    kept = request.config.cache.mkdir("ptx") / f"{scene}-{inputs_hash(scene)}.ptx"
+    if not kept.exists():
+        env = {**os.environ, "NUMBA_ENABLE_CUDASIM": "0", "PYTHONPATH": str(ROOT)}
+        fresh = kept.with_suffix(f".{os.getpid()}")
+        done = subprocess.run([sys.executable, "-c", SCRIPT, scene, str(fresh)], cwd=ROOT, env=env,
+                              capture_output=True, text=True, timeout=1800)
+        assert done.returncode == 0, done.stderr[-3000:]
+        lines = [json.loads(line) for line in done.stdout.splitlines() if line.startswith("{")]
+        if lines and "skip" in lines[0]:
+            pytest.skip(f"no NVVM to compile with: {lines[0]['skip']}")
+        assert [line["scene"] for line in lines] == [scene]
+        fresh.replace(kept)  # (whole: a run cut off while writing leaves no PTX to trust)
+    ptx = kept.read_text()
+    assert ".entry" in ptx and ".target sm_90" in ptx and len(ptx) > 10_000
+
+
+def test_the_kept_ptx_is_named_by_every_input_of_the_compile(tmp_path, monkeypatch):
+    """Another scene, an edited source or scenario, or another compiler version names another
+    PTX; the same inputs in another folder name the same."""
+    first = inputs_hash("seed003_ds20")
+    assert inputs_hash("contact_noise_parallel") != first
+    copy = tmp_path / "checkout"
+    shutil.copytree(ROOT / "vines_stoch", copy / "vines_stoch", ignore=shutil.ignore_patterns("__pycache__"))
+    shutil.copytree(ROOT / "scenarios", copy / "scenarios", ignore=shutil.ignore_patterns("records"))
+    (copy / "tests").mkdir()
+    shutil.copy(ROOT / "tests" / "helpers.py", copy / "tests")
+    monkeypatch.setattr(sys.modules[__name__], "ROOT", copy)
+    assert inputs_hash("seed003_ds20") == first
+    for edited in (copy / "vines_stoch" / "kernels" / "loads.py", copy / "scenarios" / "seed003_ds20.toml"):
+        text = edited.read_text()
+        edited.write_text(text + "\n")
+        assert inputs_hash("seed003_ds20") != first, edited
+        edited.write_text(text)
+    assert inputs_hash("seed003_ds20") == first
+    monkeypatch.setattr(metadata, "version", lambda dist: "0.0" if dist == "numba-cuda" else "1.0")
+    assert inputs_hash("seed003_ds20") != first
