@@ -1,6 +1,7 @@
 """numba's front end, faster (``vines_stoch.frontend``): one scope copy per copy of an inlined
-IR, live maps on bit sets, SSA on the blocks that name a variable; the same compiled code (for
-the CPU and, through numba-cuda's copy of the front end, PTX), the same live maps, fewer copies."""
+IR, live maps on bit sets, SSA on the blocks that name a variable, call types resolved once;
+the same compiled code (for the CPU and, through numba-cuda's copy of the front end, PTX), the
+same live maps and call types, fewer copies and resolutions."""
 
 from __future__ import annotations
 
@@ -38,6 +39,14 @@ def watch(package):
         return mine
     module.compute_live_map = compared
 watch("numba.core")
+from numba.core.types import functions
+calls = [0]
+resolving = functions.BaseFunction.get_call_type
+def counting(self, context, args, kws):
+    calls[0] += 1
+    return resolving(self, context, args, kws)
+counting.kept = getattr(resolving, "kept", False)  # (installed beneath the count, for numba-cuda's front end)
+functions.BaseFunction.get_call_type = counting
 def counted(self, memo):
     copies[0] += 1
     new = ir.Scope.__new__(ir.Scope)
@@ -87,7 +96,8 @@ except ImportError:
     pass
 print(json.dumps({"llvm": outer.inspect_llvm(outer.signatures[0]), "value": value.hex(),
                   "copies": copies[0], "restored": ic.copy is copy, "checked": checked[0],
-                  "ssa": getattr(ssa._run_ssa, "named_blocks", False), "ptx": ptx}))
+                  "ssa": getattr(ssa._run_ssa, "named_blocks", False), "ptx": ptx, "calls": calls[0],
+                  "kept": len(getattr(resolving, "resolved", ()))}))
 '''
 
 
@@ -107,6 +117,8 @@ def test_the_faster_front_end_compiles_the_same_code_with_the_same_live_maps():
     assert fast["checked"] > 10  # every live map of the compile equals numba's own
     # one copy of the scope per copy of an IR instead of one per block
     assert 0 < fast["copies"] < plain["copies"] / 4
+    # each call type resolved once, then handed out again
+    assert plain["kept"] == 0 and 0 < fast["kept"] < fast["calls"] / 2 and fast["calls"] == plain["calls"]
     if plain["ptx"] is None:
         pytest.skip("numba-cuda is not installed: its front end is not checked")
     assert fast["ptx"] == plain["ptx"] and ".visible .func" in fast["ptx"]
@@ -115,21 +127,53 @@ def test_the_faster_front_end_compiles_the_same_code_with_the_same_live_maps():
 def test_the_kernels_compile_with_the_faster_front_end():
     from numba.core import analysis, ssa
     from numba.core import inline_closurecall as ic
+    from numba.core.types import functions
 
     import vines_stoch.physics  # noqa: F401  (installs it)
 
-    assert frontend.install() == {"inlining": True, "liveness": True, "ssa": True}
+    assert frontend.install() == {"inlining": True, "liveness": True, "ssa": True, "calls": True}
     assert ic.InlineWorker.inline_ir.shares_scope_copies
     assert analysis.compute_live_map.as_bits and ssa._run_ssa.named_blocks
+    assert functions.BaseFunction.get_call_type.kept
+
+
+def test_kept_call_types_are_numba_s_own_and_failures_are_not_kept():
+    """Each kept signature and implementation key is the one numba's own resolution gives; a
+    call that does not type raises numba's error each time and is not kept."""
+    import operator
+
+    from numba.core import errors, types
+    from numba.core.registry import cpu_target
+    from numba.core.types import functions
+
+    import vines_stoch.physics  # noqa: F401  (installs it)
+
+    kept = functions.BaseFunction.get_call_type
+    own, resolved = kept.__wrapped__, kept.resolved
+    context = cpu_target.typing_context
+    context.refresh()
+    cases = [(operator.add, (types.float64, types.float64)), (operator.mul, (types.int64, types.float64)),
+             (operator.lt, (types.float64, types.int64)), (abs, (types.float64,))]
+    for fn, args in cases:
+        fnty = context.resolve_value_type(fn)
+        first = kept(fnty, context, args, {})
+        again = kept(fnty, context, args, {})
+        impl = fnty._impl_keys[again.args]
+        assert first == again == own(fnty, context, args, {}) and fnty._impl_keys[again.args] == impl
+    add = context.resolve_value_type(operator.add)
+    before = len(resolved)
+    for _ in range(2):
+        with pytest.raises(errors.TypingError):
+            kept(add, context, (types.float64, types.unicode_type), {})
+    assert len(resolved) == before
 
 
 def test_other_sources_keep_their_own_passes(monkeypatch):
     """A numba whose passes are not the verified ones keeps them (nothing replaced)."""
     from numba.core import analysis, ssa
+    from numba.core.types import functions
 
-    monkeypatch.setattr(analysis, "compute_live_map", analysis.compute_live_map)
-    monkeypatch.setattr(ssa, "_run_ssa", ssa._run_ssa)
-    monkeypatch.setitem(frontend.VERIFIED, "numba.core", {"live": "0" * 16, "ssa": "0" * 16})
+    monkeypatch.setitem(frontend.VERIFIED, "numba.core", dict.fromkeys(("live", "ssa", "calls"), "0" * 16))
 
     def own_live(cfg, blocks, use, defs):
         return {}
@@ -137,8 +181,13 @@ def test_other_sources_keep_their_own_passes(monkeypatch):
     def own_ssa(blocks):
         return blocks
 
+    def own_calls(self, context, args, kws):
+        return None
+
     monkeypatch.setattr(analysis, "compute_live_map", own_live)
     monkeypatch.setattr(ssa, "_run_ssa", own_ssa)
+    monkeypatch.setattr(functions.BaseFunction, "get_call_type", own_calls)
     installed = frontend.install()
-    assert not installed["liveness"] and not installed["ssa"]
+    assert not installed["liveness"] and not installed["ssa"] and not installed["calls"]
     assert analysis.compute_live_map is own_live and ssa._run_ssa is own_ssa
+    assert functions.BaseFunction.get_call_type is own_calls
