@@ -92,8 +92,9 @@ class _OneMemo:
 
 def share_scope_copies(package: str = "numba.core") -> bool:
     """Install the one-memo deep copy in the inliner of ``package`` (numba's, or numba-cuda's
-    ``numba.cuda.core``) once, and no copy for the IR ``inline_function`` makes (where its
-    source is the verified one); returns whether they are in place."""
+    ``numba.cuda.core``) once, and no copy for the IR ``inline_function`` makes where that
+    method's source is the verified one (``InlineWorker.inline_function.copies_nothing``);
+    returns whether the one-memo copy is in place."""
     ic = importlib.import_module(f"{package}.inline_closurecall")
     worker = getattr(ic, "InlineWorker", None)
     inline_ir = getattr(worker, "inline_ir", None)
@@ -101,8 +102,7 @@ def share_scope_copies(package: str = "numba.core") -> bool:
         return getattr(inline_ir, "shares_scope_copies", False)
     if getattr(inline_ir, "shares_scope_copies", False):
         return True
-    if _source_hash(worker.inline_function) != VERIFIED.get(package, {}).get("inline"):
-        return False
+    verified = _source_hash(worker.inline_function) == VERIFIED.get(package, {}).get("inline")
 
     def inline_function(self, caller_ir, block, i, function, arg_typs=None):
         callee_ir = self.run_untyped_passes(function)
@@ -122,10 +122,11 @@ def share_scope_copies(package: str = "numba.core") -> bool:
 
     shared.shares_scope_copies = True
     shared.__doc__ = inline_ir.__doc__
-    inline_function.copies_nothing = True
-    inline_function.__doc__ = worker.inline_function.__doc__
     worker.inline_ir = shared
-    worker.inline_function = inline_function
+    if verified:
+        inline_function.copies_nothing = True
+        inline_function.__doc__ = worker.inline_function.__doc__
+        worker.inline_function = inline_function
     return True
 
 

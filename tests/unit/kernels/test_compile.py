@@ -216,3 +216,18 @@ def test_other_sources_keep_their_own_passes(monkeypatch):
     assert not installed["liveness"] and not installed["ssa"] and not installed["calls"]
     assert analysis.compute_live_map is own_live and ssa._run_ssa is own_ssa
     assert functions.BaseFunction.get_call_type is own_calls
+
+
+def test_an_unverified_inline_function_keeps_its_copies():
+    """Where numba's ``InlineWorker.inline_function`` is not the verified source, the one-memo
+    copies are installed and ``inline_function`` is left as it is (a process of its own: the
+    front end is installed once a process)."""
+    code = ("from vines_stoch import frontend\n"
+            "frontend.VERIFIED['numba.core']['inline'] = '0' * 16\n"
+            "from numba.core import inline_closurecall as ic\n"
+            "own = ic.InlineWorker.inline_function\n"
+            "assert frontend.install()['inlining']\n"
+            "assert ic.InlineWorker.inline_ir.shares_scope_copies\n"
+            "assert ic.InlineWorker.inline_function is own\n")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr[-2000:]
