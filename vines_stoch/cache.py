@@ -30,20 +30,27 @@ PACKAGE = Path(__file__).resolve().parent
 SOURCES = ("physics.py", "frontend.py", "cache.py", "kernels")
 
 
+def files_digest(root: Path, files: list[Path]) -> str:
+    """A hash of ``files`` in the order given: each one's path relative to ``root``, then its
+    bytes (hex digits; ``OSError`` where one cannot be read)."""
+    h = hashlib.sha256()
+    for f in files:
+        h.update(str(f.relative_to(root)).encode())
+        h.update(f.read_bytes())
+    return h.hexdigest()
+
+
 def digest(package: Path = PACKAGE) -> str | None:
     """A hash of the sources named by ``SOURCES`` (their paths and bytes), 16 hex digits; None
     where they are not files (a package imported from a zip archive)."""
-    h = hashlib.sha256()
+    files = []
+    for name in SOURCES:
+        path = package / name
+        files += sorted(path.glob("*.py")) if path.is_dir() else [path]
     try:
-        for name in SOURCES:
-            path = package / name
-            files = sorted(path.glob("*.py")) if path.is_dir() else [path]
-            for f in files:
-                h.update(str(f.relative_to(package)).encode())
-                h.update(f.read_bytes())
+        return files_digest(package, files)[:16]
     except OSError:
         return None
-    return h.hexdigest()[:16]
 
 
 def key_by_sources() -> str:

@@ -22,6 +22,7 @@ from importlib import metadata
 import pytest
 
 from tests.helpers import ROOT
+from vines_stoch.cache import files_digest
 
 pytestmark = pytest.mark.slow
 
@@ -62,11 +63,9 @@ COMPILERS = ("numba", "numba-cuda", "llvmlite", "nvidia-cuda-nvcc-cu12", "cuda-b
 
 def inputs_hash(scene: str) -> str:
     """A hash of what the compile of ``scene``'s launcher reads (see the module's docstring)."""
-    h = hashlib.sha256(f"{SCRIPT}\0{scene}".encode())
     files = [*(ROOT / "vines_stoch").rglob("*.py"), *(ROOT / "scenarios").glob("*.toml"),
              ROOT / "tests" / "helpers.py"]
-    for f in sorted(files):
-        h.update(str(f.relative_to(ROOT)).encode() + b"\0" + f.read_bytes())
+    h = hashlib.sha256(f"{SCRIPT}\0{scene}\0{files_digest(ROOT, sorted(files))}".encode())
     for dist in COMPILERS:
         try:
             h.update(f"{dist}={metadata.version(dist)}".encode())
