@@ -134,11 +134,14 @@ try:
     main()
 except SystemExit as exc:
     assert not exc.code, exc.code
-print(sorted(name for name in ("sdeint", "matplotlib", "vines_stoch.validation") if name in sys.modules))
+unwanted = ("sdeint", "matplotlib", "vines_stoch.validation", "distributed")
+print(sorted(name for name in unwanted if name in sys.modules))
 """
 
 
 def test_a_run_imports_neither_sdeint_nor_matplotlib(tmp_path):
+    """A run on the embedded scheduler imports neither the bench's peers, nor the validation
+    floor, nor dask.distributed."""
     scenario = ROOT / "scenarios/cubic_nes_impulse.toml"
     done = subprocess.run([sys.executable, "-c", RUN, str(scenario), str(tmp_path)],
                           cwd=ROOT, capture_output=True, text=True, timeout=600)
