@@ -117,6 +117,35 @@ def int_scratch(typingctx, size):
     return _stack_array(types.int64, size)
 
 
+@intrinsic
+def _copy_items(typingctx, dst, src):
+    """Copy ``src``'s items into ``dst`` (1-D C arrays of one dtype, lengths equal)."""
+    arrays = (dst, src)
+    if not all(isinstance(a, types.Array) and a.ndim == 1 and a.layout == "C" for a in arrays) \
+            or dst.dtype != src.dtype:
+        return None
+
+    def codegen(context, builder, signature, args):
+        to, of = (make_array(t)(context, builder, a) for t, a in zip(signature.args, args))
+        # a loop, which LLVM unrolls (a call of memcpy for three items took 6.5 ns against 3.6)
+        with cgutils.for_range(builder, of.nitems) as loop:
+            item = builder.load(builder.gep(of.data, [loop.index]))
+            builder.store(item, builder.gep(to.data, [loop.index]))
+        return context.get_dummy_value()
+
+    return types.none(dst, src), codegen
+
+
+@njit(**INLINE)
+def copy_into(dst, src) -> None:
+    """``dst[:] = src`` for 1-D C arrays of one length, one item at a time.  The slice assignment
+    compiles numba's shape-mismatch error, which formats the shapes into its message: integer
+    and string formatting, 1.9 s of the first Runge-Kutta loop a process compiled (12.2 s)."""
+    if dst.shape[0] != src.shape[0]:
+        raise ValueError("copy_into: arrays of different lengths")
+    _copy_items(dst, src)
+
+
 @njit(**INLINE)
 def pick(a, j: int) -> float:
     """``a[j]`` for a run-time ``j``, as a scan over constant indices: an array on the stack

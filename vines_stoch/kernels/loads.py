@@ -36,6 +36,7 @@ import numpy as np
 from numba import njit
 
 from ..physics import INLINE, KERNEL
+from .common import copy_into
 from .rng import normal
 
 #: Kinds of closed-form force rows, their width and the column of their floor.
@@ -291,11 +292,11 @@ def load_path(ex, fl, dt: float, n_steps: int, gen, force, ground):
     the step loops (``fl`` as the kernels take it; ``gen``: the filter stream)."""
     phi, chol, envelopes, c_force, c_ground, z, zn, draws = fl
     forces, series_t, series_v, series_ptr, series_target = ex
-    zn[:] = z
+    copy_into(zn, z)
     for i in range(n_steps + 1):
         t = i * dt
         ground[i] = excitation(t, t, 0.0, forces, series_t, series_v, series_ptr, series_target, True,
                                c_force, c_ground, zn, zn, zn, False, True, force[i])
         if z.shape[0] > 0 and i < n_steps:
-            z[:] = zn
+            copy_into(z, zn)
             advance_filters(z, zn, t, dt, phi, chol, envelopes, gen, draws)
