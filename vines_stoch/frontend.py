@@ -25,6 +25,12 @@ call resolutions:
   rewriting those blocks and keeping the others (in a private copy of the block map) makes the
   same blocks, with the same fresh names in the same order.
 
+* Variable lists (``list_vars_once``).  Every analysis lists a statement's variables through
+  ``Inst._rec_list_vars``, which tests each value against numba's classes in turn; the use-def
+  maps (computed at every liveness analysis) list an assignment's value twice.  Telling the
+  IR's plain containers and leaves apart by their exact type, and listing an assignment once,
+  gives the same lists and maps.  numba's front end only: numba-cuda's lists the variables of
+  its own and of numba's IR classes through helpers of its own.
 * Call types (``memo_call_types``).  Type inference resolves each call site (every operator
   and indexing is one) again on every pass of its fixed point, and each resolution tries the
   function's typing templates in turn, literal arguments first, formatting an error for each
@@ -36,11 +42,13 @@ call resolutions:
 Measured on the contact-under-noise kernel (its 23 compiled functions, 2-core machine): 49.5 s
 cold with the shared scope copies alone, 30.6 s with the bit-set live maps, 21.8 s with SSA on
 named blocks too, and 17.2 s against 20.4 s with the kept call types (type inference 2.5 s
-against 5.1 s).  The last three replace numba functions whose source they were checked against
+against 5.1 s); the variable lists took it from 14.2 s to 13.8 s (means of three alternating
+compiles; the use-def maps 0.70 s against 0.40-0.51 s).  The last four replace numba functions
+whose source they were checked against
 (``VERIFIED``: a hash of that source); another release keeps its own.  ``install`` puts them
 in numba's CPU compiler (``physics.py``, before any kernel compiles) or in numba-cuda's copy of
 the front end (``kernels/launch.py``).  ``tests/unit/kernels/test_compile.py`` compares the LLVM
-IR, the PTX and every live map with and without them.
+IR, the PTX, every live map and every use-def map with and without them.
 """
 
 from __future__ import annotations
@@ -59,10 +67,12 @@ import numpy as np
 #: resolution and the inliner's ``inline_function``; of numba 0.68 and of numba-cuda 0.30's copy.
 VERIFIED = {
     "numba.core": {"live": "713c4c094977e93b", "ssa": "9c0b3d5f348635ea", "calls": "6559c167bfc0ad36",
-                   "inline": "1b53f183258e659d"},
+                   "inline": "1b53f183258e659d", "vars": "b7264500be4efae6"},
     "numba.cuda.core": {"live": "cdb51290c1658e92", "ssa": "0ad27c8ec5b7b4fd", "calls": "6559c167bfc0ad36",
                         "inline": "69a1df109038391f"},
 }
+#: The modules of each front end that import ``compute_use_defs`` by name.
+USE_DEFS_IMPORTERS = ("inline_closurecall", "ir_utils", "lowering", "transforms", "untyped_passes")
 #: The module of each front end's function types (numba-cuda's is numba's where numba is
 #: installed: the same classes).
 FUNCTION_TYPES = {"numba.core": "numba.core.types.functions", "numba.cuda.core": "numba.cuda.types.functions"}
@@ -324,8 +334,120 @@ def memo_call_types(package: str = "numba.core") -> bool:
     return True
 
 
+def _variable_lister(ir: Any):
+    """``Inst._rec_list_vars`` of the IR module ``ir``: the variables in a value, depth first,
+    with the containers and leaves the IR holds most told apart by their exact type first."""
+    var, inst = ir.Var, ir.Inst
+    leaves = frozenset({str, int, float, bool, type(None), ir.Loc})
+
+    def collect(val: Any, out: list) -> None:
+        t = type(val)
+        if t is var:
+            out.append(val)
+        elif t is list or t is tuple:
+            for v in val:
+                collect(v, out)
+        elif t is dict:
+            for v in val.values():
+                collect(v, out)
+        elif t in leaves:
+            return
+        elif isinstance(val, var):  # (numba's own order of tests, for subclasses)
+            out.append(val)
+        elif isinstance(val, inst):
+            out.extend(val.list_vars())
+        elif isinstance(val, (list, tuple)):
+            for v in val:
+                collect(v, out)
+        elif isinstance(val, dict):
+            for v in val.values():
+                collect(v, out)
+
+    def _rec_list_vars(self, val):
+        out: list = []
+        collect(val, out)
+        return out
+
+    _rec_list_vars.__wrapped__ = ir.Inst._rec_list_vars
+    return _rec_list_vars
+
+
+def _use_defs_once(ir: Any, analysis: Any):
+    """``analysis.compute_use_defs`` listing a plain assignment's variables once: numba lists
+    its value's variables, then the statement's (the value's again and the target).  Other
+    statements as numba does."""
+    assign, inst, var = ir.Assign, ir.Inst, ir.Var
+    atoms = (ir.Arg, ir.Const, ir.Global, ir.FreeVar)
+
+    def rhs_names(value: Any) -> list:
+        if isinstance(value, inst):
+            return [v.name for v in value.list_vars()]
+        if isinstance(value, var):
+            return [value.name]
+        if isinstance(value, atoms):
+            return []
+        raise AssertionError('unreachable', type(value))
+
+    def compute_use_defs(blocks):
+        var_use_map, var_def_map = {}, {}
+        extensions = analysis.ir_extension_usedefs
+        for offset, ir_block in blocks.items():
+            var_use_map[offset] = use_set = set()
+            var_def_map[offset] = def_set = set()
+            for stmt in ir_block.body:
+                if type(stmt) in extensions:
+                    extensions[type(stmt)](stmt, use_set, def_set)
+                    continue
+                if type(stmt) is assign and len(stmt.__dict__) == 3:  # (value, target, loc)
+                    rhs = rhs_names(stmt.value)
+                    target = stmt.target.name
+                    if target not in rhs:
+                        def_set.add(target)
+                    for name in rhs:  # the statement's variables: the value's, then the target
+                        if name not in def_set:
+                            use_set.add(name)
+                    if target not in def_set:
+                        use_set.add(target)
+                    continue
+                if isinstance(stmt, assign) and stmt.target.name not in rhs_names(stmt.value):
+                    def_set.add(stmt.target.name)
+                for v in stmt.list_vars():
+                    if v.name not in def_set:
+                        use_set.add(v.name)
+        return analysis._use_defs_result(usemap=var_use_map, defmap=var_def_map)
+
+    return compute_use_defs
+
+
+def list_vars_once(package: str = "numba.core") -> bool:
+    """Install in ``package`` the faster ``Inst._rec_list_vars`` and ``compute_use_defs`` (where
+    their sources are the verified ones); returns whether they are in place."""
+    ir = importlib.import_module(f"{package}.ir")
+    analysis = importlib.import_module(f"{package}.analysis")
+    own = analysis.compute_use_defs
+    if getattr(own, "lists_once", False):
+        return True
+    if _source_hash(ir.Inst._rec_list_vars, own) != VERIFIED.get(package, {}).get("vars"):
+        return False
+    ir.Inst._rec_list_vars = _variable_lister(ir)
+    fast = _use_defs_once(ir, analysis)
+    fast.lists_once = True
+    fast.__wrapped__ = own
+    fast.__doc__ = own.__doc__
+    analysis.compute_use_defs = fast
+    for name in USE_DEFS_IMPORTERS:
+        try:
+            module = importlib.import_module(f"{package}.{name}")
+        except ImportError:
+            continue
+        if getattr(module, "compute_use_defs", None) is own:
+            module.compute_use_defs = fast
+    return True
+
+
 def install(package: str = "numba.core") -> dict[str, bool]:
-    """Install the four in ``package`` (numba's front end, or numba-cuda's
+    """Install the five in ``package`` (numba's front end, or numba-cuda's
     ``numba.cuda.core``); returns which are in place."""
     return {"inlining": share_scope_copies(package), "liveness": _live_maps(package),
-            "ssa": ssa_on_named_blocks(package), "calls": memo_call_types(package)}
+            "variables": list_vars_once(package), "ssa": ssa_on_named_blocks(package),
+            "calls": memo_call_types(package)}

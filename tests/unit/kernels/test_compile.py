@@ -25,13 +25,30 @@ import numpy as np
 from numba import njit
 from numba.core import ir, ssa
 from vines_stoch import frontend
-copies, checked = [0], [0]
+copies, checked, used = [0], [0], [0]
 def watch(package):
-    """Check every live map of ``package``'s front end against its own function."""
+    """Check every live map of ``package``'s front end, and (fast) every use-def map, against
+    its own functions."""
     module = __import__(f"{package}.analysis", fromlist=["analysis"])
     own = module.compute_live_map
-    if sys.argv[1] == "fast":
-        assert all(frontend.install(package).values())
+    installed = frontend.install(package) if sys.argv[1] == "fast" else {}
+    assert all(on for part, on in installed.items() if part != "variables")
+    if installed:  # (numba's front end only: numba-cuda's lists the variables of two IR modules)
+        assert installed["variables"] == (package == "numba.core")
+    if installed.get("variables"):
+        inst = __import__(f"{package}.ir", fromlist=["ir"]).Inst
+        fast_defs, fast_vars = module.compute_use_defs, inst._rec_list_vars
+        def use_defs(blocks):
+            mine = fast_defs(blocks)
+            inst._rec_list_vars = fast_vars.__wrapped__  # (numba's own, all through)
+            try:
+                theirs = fast_defs.__wrapped__(blocks)
+            finally:
+                inst._rec_list_vars = fast_vars
+            assert (mine.usemap, mine.defmap) == (theirs.usemap, theirs.defmap), "use-def maps differ"
+            used[0] += 1
+            return mine
+        module.compute_use_defs = use_defs
     installed = module.compute_live_map
     def compared(cfg, blocks, use, defs):
         mine = installed(cfg, blocks, use, defs)
@@ -112,7 +129,7 @@ try:
 except ImportError:
     pass
 print(json.dumps({"llvm": [f.inspect_llvm(f.signatures[0]) for f in (outer, typed)], "value": value.hex(),
-                  "copies": copies[0], "restored": ic.copy is copy, "checked": checked[0],
+                  "copies": copies[0], "restored": ic.copy is copy, "checked": checked[0], "used": used[0],
                   "ssa": getattr(ssa._run_ssa, "named_blocks", False), "ptx": ptx, "calls": calls[0],
                   "kept": len(getattr(resolving, "resolved", ()))}))
 '''
@@ -140,6 +157,7 @@ def test_the_faster_front_end_compiles_the_same_code_with_the_same_live_maps():
     assert fast["value"] == plain["value"]
     assert fast["restored"]
     assert fast["checked"] > 10  # every live map of the compile equals numba's own
+    assert fast["used"] > 10 and plain["used"] == 0  # and every use-def map
     # one copy of the scope per copy of an IR instead of one per block
     assert 0 < fast["copies"] < plain["copies"] / 4
     # each call type resolved once, then handed out again
@@ -150,15 +168,17 @@ def test_the_faster_front_end_compiles_the_same_code_with_the_same_live_maps():
 
 
 def test_the_kernels_compile_with_the_faster_front_end():
-    from numba.core import analysis, ssa
+    from numba.core import analysis, ir_utils, ssa
     from numba.core import inline_closurecall as ic
     from numba.core.types import functions
 
     import vines_stoch.physics  # noqa: F401  (installs it)
 
-    assert frontend.install() == {"inlining": True, "liveness": True, "ssa": True, "calls": True}
+    assert frontend.install() == {"inlining": True, "liveness": True, "variables": True, "ssa": True,
+                                  "calls": True}
     assert ic.InlineWorker.inline_ir.shares_scope_copies and ic.InlineWorker.inline_function.copies_nothing
     assert analysis.compute_live_map.as_bits and ssa._run_ssa.named_blocks
+    assert analysis.compute_use_defs.lists_once and ir_utils.compute_use_defs is analysis.compute_use_defs
     assert functions.BaseFunction.get_call_type.kept
 
 
@@ -198,7 +218,8 @@ def test_other_sources_keep_their_own_passes(monkeypatch):
     from numba.core import analysis, ssa
     from numba.core.types import functions
 
-    monkeypatch.setitem(frontend.VERIFIED, "numba.core", dict.fromkeys(("live", "ssa", "calls"), "0" * 16))
+    wrong = dict.fromkeys(("live", "ssa", "calls", "vars"), "0" * 16)
+    monkeypatch.setitem(frontend.VERIFIED, "numba.core", wrong)
 
     def own_live(cfg, blocks, use, defs):
         return {}
@@ -209,11 +230,16 @@ def test_other_sources_keep_their_own_passes(monkeypatch):
     def own_calls(self, context, args, kws):
         return None
 
+    def own_use_defs(blocks):
+        return None
+
     monkeypatch.setattr(analysis, "compute_live_map", own_live)
+    monkeypatch.setattr(analysis, "compute_use_defs", own_use_defs)
     monkeypatch.setattr(ssa, "_run_ssa", own_ssa)
     monkeypatch.setattr(functions.BaseFunction, "get_call_type", own_calls)
     installed = frontend.install()
     assert not installed["liveness"] and not installed["ssa"] and not installed["calls"]
+    assert not installed["variables"] and analysis.compute_use_defs is own_use_defs
     assert analysis.compute_live_map is own_live and ssa._run_ssa is own_ssa
     assert functions.BaseFunction.get_call_type is own_calls
 
