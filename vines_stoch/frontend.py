@@ -20,6 +20,11 @@ call resolutions:
   rewrite; it iterates reaching definitions and then liveness to their least fixed points on
   Python sets, each union copying sets of thousands of names.  The same fixed points on integer
   bit sets (one machine-word OR per 64 names) are the same live maps.
+* Dead maps (``dead_maps_as_bits``, ``live_variables_as_bits``).  After each liveness
+  analysis numba finds where each variable dies and which are available at each block's entry,
+  on the same Python sets, each union copying them.  The live map on bit sets keeps its bits;
+  the dead maps and the available variables are made from them, the same maps with the same
+  labels in the same order.  numba's front end only.
 * SSA reconstruction (``ssa_on_named_blocks``).  ``ssa._run_ssa`` rewrites every block twice
   for each variable that has several definitions, though only the blocks that name it change;
   rewriting those blocks and keeping the others (in a private copy of the block map) makes the
@@ -42,13 +47,14 @@ call resolutions:
 Measured on the contact-under-noise kernel (its 23 compiled functions, 2-core machine): 49.5 s
 cold with the shared scope copies alone, 30.6 s with the bit-set live maps, 21.8 s with SSA on
 named blocks too, and 17.2 s against 20.4 s with the kept call types (type inference 2.5 s
-against 5.1 s); the variable lists took it from 14.2 s to 13.8 s (means of three alternating
-compiles; the use-def maps 0.70 s against 0.40-0.51 s).  The last four replace numba functions
-whose source they were checked against
+against 5.1 s); the variable lists took it from 14.2 s to 13.8 s and the dead maps from 13.7 s
+to 13.3 s (means of three alternating compiles; the use-def maps 0.70 s against 0.40-0.51 s, the
+dead maps 0.47 s against 0.22 s).  All but the first replace numba functions whose source they
+were checked against
 (``VERIFIED``: a hash of that source); another release keeps its own.  ``install`` puts them
 in numba's CPU compiler (``physics.py``, before any kernel compiles) or in numba-cuda's copy of
 the front end (``kernels/launch.py``).  ``tests/unit/kernels/test_compile.py`` compares the LLVM
-IR, the PTX, every live map and every use-def map with and without them.
+IR, the PTX, every live map, use-def map and dead map with and without them.
 """
 
 from __future__ import annotations
@@ -67,7 +73,7 @@ import numpy as np
 #: resolution and the inliner's ``inline_function``; of numba 0.68 and of numba-cuda 0.30's copy.
 VERIFIED = {
     "numba.core": {"live": "713c4c094977e93b", "ssa": "9c0b3d5f348635ea", "calls": "6559c167bfc0ad36",
-                   "inline": "1b53f183258e659d", "vars": "b7264500be4efae6"},
+                   "inline": "1b53f183258e659d", "vars": "b7264500be4efae6", "dead": "89d45f0cc5106279"},
     "numba.cuda.core": {"live": "cdb51290c1658e92", "ssa": "0ad27c8ec5b7b4fd", "calls": "6559c167bfc0ad36",
                         "inline": "69a1df109038391f"},
 }
@@ -199,12 +205,163 @@ def live_map_as_bits(cfg, blocks: dict, var_use_map: dict, var_def_map: dict, fo
                     live[p], changed = t, True
     width = max((len(names) + 7) // 8, 1)
     table = np.array(names, dtype=object)
-    out = {}
+    out = _LiveMap()
     for o, m in live.items():
         on = np.flatnonzero(np.unpackbits(np.frombuffer(m.to_bytes(width, "little"), np.uint8),
                                           bitorder="little"))
         out[o] = set(table[on].tolist())
+    out.index, out.names, out.live, out.defs, out.var_def_map = index, names, live, defs, var_def_map
+    out.table = table
     return out
+
+
+class _LiveMap(dict):
+    """A live map (label -> names) that keeps the bit sets it was made of: ``live`` and ``defs``
+    (label -> int) over ``names`` (bit i: ``names[i]``, also as the array ``table``; ``index``
+    the other way), for the definitions ``var_def_map``."""
+
+    index: dict
+    names: list
+    table: np.ndarray
+    live: dict
+    defs: dict
+    var_def_map: dict
+
+
+class _DeadMap(dict):
+    """The combined dead map (label -> names) with its bit sets (``bits``) and the live map
+    whose names they index (``live_map``)."""
+
+    bits: dict
+    live_map: _LiveMap
+
+
+def _names(m: int, live_map: _LiveMap) -> set:
+    """The names of the bits set in ``m``: bit by bit for a few, else through numpy."""
+    names = live_map.names
+    if m.bit_count() <= 32:
+        out = set()
+        while m:
+            low = m & -m
+            out.add(names[low.bit_length() - 1])
+            m ^= low
+        return out
+    if live_map.table.shape[0] != len(names):
+        live_map.table = np.array(names, dtype=object)
+    on = np.flatnonzero(np.unpackbits(np.frombuffer(m.to_bytes((len(names) + 7) // 8, "little"), np.uint8),
+                                      bitorder="little"))
+    return set(live_map.table[on].tolist())
+
+
+def _bits(vs, live_map: _LiveMap) -> int:
+    """The bit set of the names ``vs`` (new names take new bits)."""
+    m = 0
+    for n in vs:
+        i = live_map.index.get(n)
+        if i is None:
+            i = live_map.index[n] = len(live_map.names)
+            live_map.names.append(n)
+        m |= 1 << i
+    return m
+
+
+def dead_maps_as_bits(cfg, blocks: dict, live_map: _LiveMap, own: Any):
+    """numba's ``compute_dead_maps`` (``own``: its result type and the error it raises) on the
+    live map's bit sets: the variables to delete inside each block (``internal``: live in it and
+    in none of its successors nor its terminator), at the start of each successor
+    (``escaping``) and at the exit, checked to cover every live variable; ``combined`` keeps
+    its bit sets for ``live_variables_as_bits``."""
+    live, defs = live_map.live, live_map.defs
+    internal: defaultdict = defaultdict(int)
+    escaping: defaultdict = defaultdict(int)
+    exits = 0
+    every = 0
+    for offset, ir_block in blocks.items():
+        here = live[offset] | defs[offset]
+        successors = dict.fromkeys(s for s, _ in cfg.successors(offset))
+        terminator = _bits((v.name for v in ir_block.terminator.list_vars()), live_map)
+        kept = terminator
+        for s in successors:
+            kept |= live[s]
+        internal[offset] = inside = here & ~kept
+        leaving = here & ~inside
+        for s in successors:
+            escaping[s] |= leaving & ~(live[s] | defs[s])
+        if not successors:
+            exits |= terminator
+    for m in live.values():
+        every |= m
+    dead = exits
+    for m in internal.values():
+        dead |= m
+    for m in escaping.values():
+        dead |= m
+    missing = every & ~dead
+    if missing and cfg.exit_points():
+        raise RuntimeError(f"liveness info missing for vars: {_names(missing, live_map)}")
+    combined = _DeadMap()
+    combined.bits = {}
+    for k in blocks:
+        combined.bits[k] = m = internal[k] | escaping[k]
+        combined[k] = _names(m, live_map)
+    combined.live_map = live_map
+    as_sets = defaultdict(set)
+    as_sets.update((k, _names(m, live_map)) for k, m in internal.items())
+    leaving_sets = defaultdict(set)
+    leaving_sets.update((k, _names(m, live_map)) for k, m in escaping.items())
+    return own(internal=as_sets, escaping=leaving_sets, combined=combined)
+
+
+def live_variables_as_bits(cfg, var_def_map: dict, dead: _DeadMap) -> defaultdict:
+    """numba's ``compute_live_variables`` on bit sets: the variables available at each block's
+    entry (defined on some path to it and not deleted since), to the least fixed point of a
+    sweep in the CFG's topological order."""
+    live_map = dead.live_map
+    defs, gone = live_map.defs, dead.bits
+    entry: defaultdict = defaultdict(int)
+    order = cfg.topo_order()
+    successors = {o: [s for s, _ in cfg.successors(o)] for o in order}
+    changed = True
+    while changed:
+        changed = False
+        for o in order:
+            avail = (entry[o] | defs[o]) & ~gone[o]
+            for s in successors[o]:
+                t = entry[s] | avail
+                if t != entry[s]:
+                    entry[s], changed = t, True
+    out = defaultdict(set)
+    out.update((k, _names(m, live_map)) for k, m in entry.items())
+    return out
+
+
+def _dead_maps(package: str) -> bool:
+    """Install ``dead_maps_as_bits`` and ``live_variables_as_bits`` in ``package`` (numba's front
+    end, where their sources are the verified ones), each used where its inputs are the bit
+    sets' own maps (a live map of ``live_map_as_bits``, the dead map made from it) and numba's
+    own function otherwise; returns whether they are in place."""
+    analysis = importlib.import_module(f"{package}.analysis")
+    own_dead, own_live = analysis.compute_dead_maps, analysis.compute_live_variables
+    if getattr(own_dead, "as_bits", False):
+        return True
+    if _source_hash(own_dead, own_live) != VERIFIED.get(package, {}).get("dead"):
+        return False
+    result = analysis._dead_maps_result
+
+    def compute_dead_maps(cfg, blocks, live_map, var_def_map):
+        if isinstance(live_map, _LiveMap) and live_map.var_def_map is var_def_map:
+            return dead_maps_as_bits(cfg, blocks, live_map, result)
+        return own_dead(cfg, blocks, live_map, var_def_map)
+
+    def compute_live_variables(cfg, blocks, var_def_map, var_dead_map):
+        if isinstance(var_dead_map, _DeadMap) and var_dead_map.live_map.var_def_map is var_def_map:
+            return live_variables_as_bits(cfg, var_def_map, var_dead_map)
+        return own_live(cfg, blocks, var_def_map, var_dead_map)
+
+    for new, own in ((compute_dead_maps, own_dead), (compute_live_variables, own_live)):
+        new.as_bits, new.__wrapped__, new.__doc__ = True, own, own.__doc__
+    analysis.compute_dead_maps, analysis.compute_live_variables = compute_dead_maps, compute_live_variables
+    return True
 
 
 def _live_maps(package: str) -> bool:
@@ -446,8 +603,8 @@ def list_vars_once(package: str = "numba.core") -> bool:
 
 
 def install(package: str = "numba.core") -> dict[str, bool]:
-    """Install the five in ``package`` (numba's front end, or numba-cuda's
+    """Install the six in ``package`` (numba's front end, or numba-cuda's
     ``numba.cuda.core``); returns which are in place."""
     return {"inlining": share_scope_copies(package), "liveness": _live_maps(package),
-            "variables": list_vars_once(package), "ssa": ssa_on_named_blocks(package),
-            "calls": memo_call_types(package)}
+            "variables": list_vars_once(package), "dead": _dead_maps(package),
+            "ssa": ssa_on_named_blocks(package), "calls": memo_call_types(package)}

@@ -1,7 +1,8 @@
 """numba's front end, faster (``vines_stoch.frontend``): one scope copy per copy of an inlined
-IR, live maps on bit sets, SSA on the blocks that name a variable, call types resolved once;
-the same compiled code (for the CPU and, through numba-cuda's copy of the front end, PTX), the
-same live maps and call types, fewer copies and resolutions."""
+IR, live maps on bit sets, variable lists by exact type, dead maps from the live maps' bits,
+SSA on the blocks that name a variable, call types resolved once; the same compiled code (for
+the CPU and, through numba-cuda's copy of the front end, PTX), the same live, use-def and dead
+maps and call types, fewer copies and resolutions."""
 
 from __future__ import annotations
 
@@ -25,16 +26,16 @@ import numpy as np
 from numba import njit
 from numba.core import ir, ssa
 from vines_stoch import frontend
-copies, checked, used = [0], [0], [0]
+copies, checked, used, dead = [0], [0], [0], [0]
 def watch(package):
     """Check every live map of ``package``'s front end, and (fast) every use-def map, against
     its own functions."""
     module = __import__(f"{package}.analysis", fromlist=["analysis"])
     own = module.compute_live_map
     installed = frontend.install(package) if sys.argv[1] == "fast" else {}
-    assert all(on for part, on in installed.items() if part != "variables")
+    assert all(on for part, on in installed.items() if part not in ("variables", "dead"))
     if installed:  # (numba's front end only: numba-cuda's lists the variables of two IR modules)
-        assert installed["variables"] == (package == "numba.core")
+        assert installed["variables"] == installed["dead"] == (package == "numba.core")
     if installed.get("variables"):
         inst = __import__(f"{package}.ir", fromlist=["ir"]).Inst
         fast_defs, fast_vars = module.compute_use_defs, inst._rec_list_vars
@@ -49,6 +50,20 @@ def watch(package):
             used[0] += 1
             return mine
         module.compute_use_defs = use_defs
+        fast_dead, fast_live = module.compute_dead_maps, module.compute_live_variables
+        def dead_maps(cfg, blocks, live_map, defs):
+            args = (cfg, blocks, live_map, defs)
+            mine, theirs = fast_dead(*args), fast_dead.__wrapped__(*args)
+            assert tuple(map(dict, mine)) == tuple(map(dict, theirs)), "dead maps differ"
+            assert [list(d) for d in mine] == [list(d) for d in theirs]  # (the same labels in the same order)
+            dead[0] += 1
+            return mine
+        def live_variables(cfg, blocks, defs, dead_map):
+            args = (cfg, blocks, defs, dead_map)
+            mine, theirs = fast_live(*args), fast_live.__wrapped__(*args)
+            assert dict(mine) == dict(theirs) and list(mine) == list(theirs), "live variables differ"
+            return mine
+        module.compute_dead_maps, module.compute_live_variables = dead_maps, live_variables
     installed = module.compute_live_map
     def compared(cfg, blocks, use, defs):
         mine = installed(cfg, blocks, use, defs)
@@ -130,6 +145,7 @@ except ImportError:
     pass
 print(json.dumps({"llvm": [f.inspect_llvm(f.signatures[0]) for f in (outer, typed)], "value": value.hex(),
                   "copies": copies[0], "restored": ic.copy is copy, "checked": checked[0], "used": used[0],
+                  "dead": dead[0],
                   "ssa": getattr(ssa._run_ssa, "named_blocks", False), "ptx": ptx, "calls": calls[0],
                   "kept": len(getattr(resolving, "resolved", ()))}))
 '''
@@ -158,6 +174,7 @@ def test_the_faster_front_end_compiles_the_same_code_with_the_same_live_maps():
     assert fast["restored"]
     assert fast["checked"] > 10  # every live map of the compile equals numba's own
     assert fast["used"] > 10 and plain["used"] == 0  # and every use-def map
+    assert fast["dead"] > 10 and plain["dead"] == 0  # and every dead map, on the bit sets
     # one copy of the scope per copy of an IR instead of one per block
     assert 0 < fast["copies"] < plain["copies"] / 4
     # each call type resolved once, then handed out again
@@ -174,11 +191,12 @@ def test_the_kernels_compile_with_the_faster_front_end():
 
     import vines_stoch.physics  # noqa: F401  (installs it)
 
-    assert frontend.install() == {"inlining": True, "liveness": True, "variables": True, "ssa": True,
-                                  "calls": True}
+    assert frontend.install() == {"inlining": True, "liveness": True, "variables": True, "dead": True,
+                                  "ssa": True, "calls": True}
     assert ic.InlineWorker.inline_ir.shares_scope_copies and ic.InlineWorker.inline_function.copies_nothing
     assert analysis.compute_live_map.as_bits and ssa._run_ssa.named_blocks
     assert analysis.compute_use_defs.lists_once and ir_utils.compute_use_defs is analysis.compute_use_defs
+    assert analysis.compute_dead_maps.as_bits and analysis.compute_live_variables.as_bits
     assert functions.BaseFunction.get_call_type.kept
 
 
@@ -218,7 +236,7 @@ def test_other_sources_keep_their_own_passes(monkeypatch):
     from numba.core import analysis, ssa
     from numba.core.types import functions
 
-    wrong = dict.fromkeys(("live", "ssa", "calls", "vars"), "0" * 16)
+    wrong = dict.fromkeys(("live", "ssa", "calls", "vars", "dead"), "0" * 16)
     monkeypatch.setitem(frontend.VERIFIED, "numba.core", wrong)
 
     def own_live(cfg, blocks, use, defs):
@@ -233,13 +251,18 @@ def test_other_sources_keep_their_own_passes(monkeypatch):
     def own_use_defs(blocks):
         return None
 
+    def own_dead(cfg, blocks, live_map, defs):
+        return None
+
     monkeypatch.setattr(analysis, "compute_live_map", own_live)
     monkeypatch.setattr(analysis, "compute_use_defs", own_use_defs)
+    monkeypatch.setattr(analysis, "compute_dead_maps", own_dead)
     monkeypatch.setattr(ssa, "_run_ssa", own_ssa)
     monkeypatch.setattr(functions.BaseFunction, "get_call_type", own_calls)
     installed = frontend.install()
     assert not installed["liveness"] and not installed["ssa"] and not installed["calls"]
     assert not installed["variables"] and analysis.compute_use_defs is own_use_defs
+    assert not installed["dead"] and analysis.compute_dead_maps is own_dead
     assert analysis.compute_live_map is own_live and ssa._run_ssa is own_ssa
     assert functions.BaseFunction.get_call_type is own_calls
 
