@@ -29,7 +29,6 @@ call resolutions:
   for each variable that has several definitions, though only the blocks that name it change;
   rewriting those blocks and keeping the others (in a private copy of the block map) makes the
   same blocks, with the same fresh names in the same order.
-
 * Variable lists (``list_vars_once``).  Every analysis lists a statement's variables through
   ``Inst._rec_list_vars``, which tests each value against numba's classes in turn; the use-def
   maps (computed at every liveness analysis) list an assignment's value twice.  Telling the
@@ -50,11 +49,11 @@ named blocks too, and 17.2 s against 20.4 s with the kept call types (type infer
 against 5.1 s); the variable lists took it from 14.2 s to 13.8 s and the dead maps from 13.7 s
 to 13.3 s (means of three alternating compiles; the use-def maps 0.70 s against 0.40-0.51 s, the
 dead maps 0.47 s against 0.22 s).  All but the first replace numba functions whose source they
-were checked against
-(``VERIFIED``: a hash of that source); another release keeps its own.  ``install`` puts them
-in numba's CPU compiler (``physics.py``, before any kernel compiles) or in numba-cuda's copy of
-the front end (``kernels/launch.py``).  ``tests/unit/kernels/test_compile.py`` compares the LLVM
-IR, the PTX, every live map, use-def map and dead map with and without them.
+were checked against (``VERIFIED``: a hash of that source); another release keeps its own.
+``install`` puts them in numba's CPU compiler (``physics.py``, before any kernel compiles) or
+in numba-cuda's copy of the front end (``kernels/launch.py``).
+``tests/unit/kernels/test_compile.py`` compares the LLVM IR, the PTX, every live map, use-def
+map and dead map with and without them.
 """
 
 from __future__ import annotations
@@ -166,19 +165,8 @@ def live_map_as_bits(cfg, blocks: dict, var_use_map: dict, var_def_map: dict, fo
     and the predecessor does not define it), on integer bit sets."""
     index: dict[str, int] = {}
     names: list[str] = []
-
-    def bits(vs) -> int:
-        m = 0
-        for n in vs:
-            i = index.get(n)
-            if i is None:
-                i = index[n] = len(names)
-                names.append(n)
-            m |= 1 << i
-        return m
-
-    use = {k: bits(v) for k, v in var_use_map.items()}
-    defs = {k: bits(v) for k, v in var_def_map.items()}
+    use = {k: _bits(v, index, names) for k, v in var_use_map.items()}
+    defs = {k: _bits(v, index, names) for k, v in var_def_map.items()}
     reach: defaultdict[Any, int] = defaultdict(int)
     succ = {o: [s for s, _ in cfg.successors(o)] for o in forward}
     changed = True
@@ -203,13 +191,10 @@ def live_map_as_bits(cfg, blocks: dict, var_use_map: dict, var_def_map: dict, fo
                 t = live[p] | (here & reach[p] & ~defs[p])
                 if t != live[p]:
                     live[p], changed = t, True
-    width = max((len(names) + 7) // 8, 1)
     table = np.array(names, dtype=object)
     out = _LiveMap()
     for o, m in live.items():
-        on = np.flatnonzero(np.unpackbits(np.frombuffer(m.to_bytes(width, "little"), np.uint8),
-                                          bitorder="little"))
-        out[o] = set(table[on].tolist())
+        out[o] = _by_table(m, table)
     out.index, out.names, out.live, out.defs, out.var_def_map = index, names, live, defs, var_def_map
     out.table = table
     return out
@@ -236,6 +221,27 @@ class _DeadMap(dict):
     live_map: _LiveMap
 
 
+def _bits(vs, index: dict, names: list) -> int:
+    """The bit set of the names ``vs`` (bit i: ``names[i]``; ``index`` the other way; new names
+    take new bits)."""
+    m = 0
+    for n in vs:
+        i = index.get(n)
+        if i is None:
+            i = index[n] = len(names)
+            names.append(n)
+        m |= 1 << i
+    return m
+
+
+def _by_table(m: int, table: np.ndarray) -> set:
+    """The names of the bits set in ``m`` (bit i: ``table[i]``), through numpy."""
+    width = max((table.shape[0] + 7) // 8, 1)
+    on = np.flatnonzero(np.unpackbits(np.frombuffer(m.to_bytes(width, "little"), np.uint8),
+                                      bitorder="little"))
+    return set(table[on].tolist())
+
+
 def _names(m: int, live_map: _LiveMap) -> set:
     """The names of the bits set in ``m``: bit by bit for a few, else through numpy."""
     names = live_map.names
@@ -248,21 +254,7 @@ def _names(m: int, live_map: _LiveMap) -> set:
         return out
     if live_map.table.shape[0] != len(names):
         live_map.table = np.array(names, dtype=object)
-    on = np.flatnonzero(np.unpackbits(np.frombuffer(m.to_bytes((len(names) + 7) // 8, "little"), np.uint8),
-                                      bitorder="little"))
-    return set(live_map.table[on].tolist())
-
-
-def _bits(vs, live_map: _LiveMap) -> int:
-    """The bit set of the names ``vs`` (new names take new bits)."""
-    m = 0
-    for n in vs:
-        i = live_map.index.get(n)
-        if i is None:
-            i = live_map.index[n] = len(live_map.names)
-            live_map.names.append(n)
-        m |= 1 << i
-    return m
+    return _by_table(m, live_map.table)
 
 
 def dead_maps_as_bits(cfg, blocks: dict, live_map: _LiveMap, own: Any):
@@ -279,7 +271,7 @@ def dead_maps_as_bits(cfg, blocks: dict, live_map: _LiveMap, own: Any):
     for offset, ir_block in blocks.items():
         here = live[offset] | defs[offset]
         successors = dict.fromkeys(s for s, _ in cfg.successors(offset))
-        terminator = _bits((v.name for v in ir_block.terminator.list_vars()), live_map)
+        terminator = _bits((v.name for v in ir_block.terminator.list_vars()), live_map.index, live_map.names)
         kept = terminator
         for s in successors:
             kept |= live[s]
