@@ -118,6 +118,20 @@ def int_scratch(typingctx, size):
 
 
 @intrinsic
+def runtime_value(typingctx, value):
+    """``value`` typed as a run-time value: a constant (a kernel factory's floor count, a flag
+    written in the call) loses its literal type.  An out-of-line function called with literal
+    arguments compiles once for each set of constants; called with these, it compiles once for
+    every loop (``rk4.wall_accelerations``: once a process instead of twice a loop)."""
+    plain = types.unliteral(value)
+
+    def codegen(context, builder, signature, args):
+        return context.cast(builder, args[0], value, plain)
+
+    return plain(value), codegen
+
+
+@intrinsic
 def _copy_items(typingctx, dst, src):
     """Copy ``src``'s items into ``dst`` (1-D C arrays of one dtype, lengths equal)."""
     arrays = (dst, src)

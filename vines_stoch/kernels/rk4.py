@@ -73,6 +73,7 @@ from .common import (
     record_history,
     record_sample,
     resolve_impact,
+    runtime_value,
     scratch,
     start_history,
     stick_together,
@@ -120,12 +121,25 @@ def accelerations(x, v, t, tm, nf, mass, inv_mass, storey_k, storey_c, floor_c, 
             primary_energy(mass, storey_k, x, v, nf), ag)
 
 
-@njit(**KERNEL)
+@njit(**INLINE)
 def wall_accelerations(x, v, t, nf, mass, inv_mass, storey_k, storey_c, floor_c, kind, host, rows, forces,
                        series_t, series_v, series_ptr, series_target, stuck, release, acc, load, group_mass,
                        group_sum, sticking, contact):
     """``accelerations`` at an instant (an impact, the end of a step with stuck absorbers),
-    out of line: rare work that need not grow the step loop."""
+    out of line: rare work that need not grow the step loop.  The floor count and the flags
+    reach it as run-time values (``common.runtime_value``), so that it compiles once, not once
+    for each floor count and set of flags of the loops that call it."""
+    _wall_accelerations(x, v, t, runtime_value(nf), mass, inv_mass, storey_k, storey_c, floor_c, kind, host,
+                        rows, forces, series_t, series_v, series_ptr, series_target, stuck,
+                        runtime_value(release), acc, load, group_mass, group_sum, runtime_value(sticking),
+                        runtime_value(contact))
+
+
+@njit(**KERNEL)
+def _wall_accelerations(x, v, t, nf, mass, inv_mass, storey_k, storey_c, floor_c, kind, host, rows, forces,
+                        series_t, series_v, series_ptr, series_target, stuck, release, acc, load, group_mass,
+                        group_sum, sticking, contact):
+    """``accelerations`` at ``t`` (the out-of-line body of ``wall_accelerations``)."""
     accelerations(x, v, t, t, nf, mass, inv_mass, storey_k, storey_c, floor_c, kind, host, rows, forces,
                   series_t, series_v, series_ptr, series_target, stuck, release, acc, load, group_mass,
                   group_sum, sticking, contact)

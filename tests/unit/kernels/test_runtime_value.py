@@ -1,0 +1,85 @@
+"""``common.runtime_value``: constants passed to an out-of-line function as run-time values, so
+that it compiles once (``rk4.wall_accelerations``), with the numbers of its inlined form."""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from tests.helpers import scene_from
+from vines_stoch.kernels.common import runtime_value
+from vines_stoch.kernels.rk4 import _wall_accelerations, accelerations, wall_accelerations
+from vines_stoch.physics import KERNEL, WALL_LO
+
+
+@njit
+def _typed(value):
+    return value
+
+
+@njit
+def _literal_then_plain():
+    return _typed(3) + _typed(runtime_value(4)) + _typed(runtime_value(True))
+
+
+def test_a_constant_reaches_a_call_as_a_plain_value():
+    assert _literal_then_plain() == 8
+    kinds = sorted(str(sig[0]) for sig in _typed.signatures)
+    assert kinds == ["Literal[int](3)", "bool", "int64"]  # the literal one is the call without
+
+
+#: Two storeys; a Hertz absorber on the first floor pressed into its left wall and an impact
+#: absorber stuck to the roof's right wall (its constraint checked with ``release``).
+BUILDING = {
+    "name": "wall accelerations",
+    "primary": {"masses": [1.0, 0.8], "stiffnesses": [2.0, 1.5], "dampings": [0.02, 0.01]},
+    "absorbers": [
+        {"type": "hertz", "geometry": "double-sided", "floor": 1, "mass": 0.05, "stiffness": 0.2,
+         "damping": 0.01, "offset": 0.0, "gap": 0.02, "contact_left": {"k": 1e4},
+         "contact_right": {"k": 1e4}},
+        {"type": "impact", "floor": 2, "mass": 0.04, "clearance": 0.02, "restitution": 0.5},
+    ],
+    "loads": [{"type": "harmonic", "amplitude": 0.3, "frequency": 1.1}],
+    "simulation": {"duration": 1.0, "dt": 1e-3},
+}
+
+
+@njit(**{k: v for k, v in KERNEL.items() if k != "cache"})  # the loops' options (fused multiply-adds)
+def _at_the_wall(x, v, mass, inv_mass, storey_k, storey_c, floor_c, kind, host, rows, ex, stuck, out, inline):
+    """Both calls of the RK4 loop (literal floor count and flags) and their inlined form."""
+    forces, series_t, series_v, series_ptr, series_target = ex
+    for call in range(2):
+        release, contact = call == 1, call == 0
+        o, r = out[call], inline[call]
+        load, gm, gs = np.zeros(2), np.zeros(2), np.zeros(2)
+        own, theirs = stuck.copy(), stuck.copy()  # (a release may change them)
+        if release:
+            wall_accelerations(x, v, 0.3, 2, mass, inv_mass, storey_k, storey_c, floor_c, kind, host, rows,
+                               forces, series_t, series_v, series_ptr, series_target, own, True, o, load,
+                               gm, gs, True, False)
+            accelerations(x, v, 0.3, 0.3, 2, mass, inv_mass, storey_k, storey_c, floor_c, kind, host, rows,
+                          forces, series_t, series_v, series_ptr, series_target, theirs, True, r, load,
+                          gm, gs, True, False)
+        elif contact:
+            wall_accelerations(x, v, 0.3, 2, mass, inv_mass, storey_k, storey_c, floor_c, kind, host, rows,
+                               forces, series_t, series_v, series_ptr, series_target, own, False, o, load,
+                               gm, gs, True, True)
+            accelerations(x, v, 0.3, 0.3, 2, mass, inv_mass, storey_k, storey_c, floor_c, kind, host, rows,
+                          forces, series_t, series_v, series_ptr, series_target, theirs, False, r, load, gm,
+                          gs, True, True)
+
+
+def test_the_wall_accelerations_compile_once_and_equal_their_inlined_form():
+    scene = scene_from(BUILDING)
+    x = np.array([0.01, -0.02, 0.0, -0.02 + 0.02])  # the impact absorber at the roof's right wall
+    x[2] = x[0] + scene.rows[0, WALL_LO] - 0.002  # the Hertz absorber 2 mm into its left wall
+    v = np.array([0.1, -0.05, 0.3, 0.2])
+    stuck = np.array([0, 1])
+    out, inline = np.zeros((2, 4)), np.zeros((2, 4))
+    _at_the_wall(x, v, scene.mass, 1.0 / scene.mass, scene.storey_k, scene.storey_c, scene.floor_c,
+                 scene.kind, scene.host, scene.rows, scene.excitation, stuck, out, inline)
+    assert out.tobytes() == inline.tobytes()  # bitwise
+    assert np.all(np.isfinite(out)) and not np.array_equal(out[0], out[1])
+    signatures = _wall_accelerations.signatures
+    assert len(signatures) == 1  # one compile for the floor count 2 and both sets of flags
+    assert not any("Literal" in str(t) for t in signatures[0])
