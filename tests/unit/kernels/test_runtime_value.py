@@ -1,5 +1,5 @@
 """``common.runtime_value``: constants passed to an out-of-line function as run-time values, so
-that it compiles once (``rk4.wall_accelerations``), with the numbers of its inlined form."""
+that it compiles once (``rk4.wall_accelerations``)."""
 
 from __future__ import annotations
 
@@ -8,8 +8,8 @@ from numba import njit
 
 from tests.helpers import scene_from
 from vines_stoch.kernels.common import runtime_value
-from vines_stoch.kernels.rk4 import _wall_accelerations, accelerations, wall_accelerations
-from vines_stoch.physics import KERNEL, WALL_LO
+from vines_stoch.kernels.rk4 import _wall_accelerations, wall_accelerations
+from vines_stoch.physics import WALL_LO
 
 
 @njit
@@ -44,41 +44,30 @@ BUILDING = {
 }
 
 
-@njit(**{k: v for k, v in KERNEL.items() if k != "cache"})  # the loops' options (fused multiply-adds)
-def _at_the_wall(x, v, mass, inv_mass, storey_k, storey_c, floor_c, kind, host, rows, ex, stuck, out, inline):
-    """Both calls of the RK4 loop (literal floor count and flags) and their inlined form."""
+@njit
+def _at_the_wall(x, v, mass, inv_mass, storey_k, storey_c, floor_c, kind, host, rows, ex, stuck, out):
+    """Both calls of the RK4 loop, each with its literal floor count and flags."""
     forces, series_t, series_v, series_ptr, series_target = ex
-    for call in range(2):
-        release, contact = call == 1, call == 0
-        o, r = out[call], inline[call]
-        load, gm, gs = np.zeros(2), np.zeros(2), np.zeros(2)
-        own, theirs = stuck.copy(), stuck.copy()  # (a release may change them)
-        if release:
-            wall_accelerations(x, v, 0.3, 2, mass, inv_mass, storey_k, storey_c, floor_c, kind, host, rows,
-                               forces, series_t, series_v, series_ptr, series_target, own, True, o, load,
-                               gm, gs, True, False)
-            accelerations(x, v, 0.3, 0.3, 2, mass, inv_mass, storey_k, storey_c, floor_c, kind, host, rows,
-                          forces, series_t, series_v, series_ptr, series_target, theirs, True, r, load,
-                          gm, gs, True, False)
-        elif contact:
-            wall_accelerations(x, v, 0.3, 2, mass, inv_mass, storey_k, storey_c, floor_c, kind, host, rows,
-                               forces, series_t, series_v, series_ptr, series_target, own, False, o, load,
-                               gm, gs, True, True)
-            accelerations(x, v, 0.3, 0.3, 2, mass, inv_mass, storey_k, storey_c, floor_c, kind, host, rows,
-                          forces, series_t, series_v, series_ptr, series_target, theirs, False, r, load, gm,
-                          gs, True, True)
+    load, gm, gs = np.zeros(2), np.zeros(2), np.zeros(2)
+    wall_accelerations(x, v, 0.3, 2, mass, inv_mass, storey_k, storey_c, floor_c, kind, host, rows, forces,
+                       series_t, series_v, series_ptr, series_target, stuck, False, out[0], load, gm, gs,
+                       True, True)
+    wall_accelerations(x, v, 0.3, 2, mass, inv_mass, storey_k, storey_c, floor_c, kind, host, rows, forces,
+                       series_t, series_v, series_ptr, series_target, stuck, True, out[1], load, gm, gs,
+                       True, False)
 
 
-def test_the_wall_accelerations_compile_once_and_equal_their_inlined_form():
+def test_the_wall_accelerations_compile_once():
+    """Called with two literal sets of flags, the out-of-line body has one signature, of plain
+    types; the two calls give two finite sets of accelerations."""
     scene = scene_from(BUILDING)
     x = np.array([0.01, -0.02, 0.0, -0.02 + 0.02])  # the impact absorber at the roof's right wall
     x[2] = x[0] + scene.rows[0, WALL_LO] - 0.002  # the Hertz absorber 2 mm into its left wall
     v = np.array([0.1, -0.05, 0.3, 0.2])
     stuck = np.array([0, 1])
-    out, inline = np.zeros((2, 4)), np.zeros((2, 4))
+    out = np.zeros((2, 4))
     _at_the_wall(x, v, scene.mass, 1.0 / scene.mass, scene.storey_k, scene.storey_c, scene.floor_c,
-                 scene.kind, scene.host, scene.rows, scene.excitation, stuck, out, inline)
-    assert out.tobytes() == inline.tobytes()  # bitwise
+                 scene.kind, scene.host, scene.rows, scene.excitation, stuck, out)
     assert np.all(np.isfinite(out)) and not np.array_equal(out[0], out[1])
     signatures = _wall_accelerations.signatures
     assert len(signatures) == 1  # one compile for the floor count 2 and both sets of flags
