@@ -4,14 +4,12 @@ noise, its output files, and the validation of ``[optimize]`` tables."""
 from __future__ import annotations
 
 import math
-import subprocess
-import sys
 import tomllib
 
 import pandas as pd
 import pytest
 
-from tests.helpers import study_from, toml_text
+from tests.helpers import cli, study_from, toml_text
 from vines_stoch import ScenarioError
 from vines_stoch.optimize import from_unit, to_unit
 from vines_stoch.scenario import Bound
@@ -47,9 +45,8 @@ def warburton() -> tuple[float, float]:
 def test_finds_the_closed_form_tmd_tuning_within_two_percent(write, tmp_path):
     path = write(toml_text(TMD | {"optimize": OPTIMIZE}))
     out = tmp_path / "opt"
-    done = subprocess.run([sys.executable, "-m", "vines_stoch.cli", "optimize", str(path), "--out", str(out)],
-                          capture_output=True, text=True)
-    assert done.returncode == 0, done.stderr
+    code, err = cli("optimize", path, "--out", out)
+    assert code == 0, err
     optimum = tomllib.loads((out / "optimum.toml").read_text())["absorbers"][0]
     f = math.sqrt(optimum["stiffness"] / MU)            # absorber frequency / primary frequency
     zeta = optimum["damping"] / (2 * MU * f)
@@ -111,6 +108,5 @@ def test_unknown_objective_lists_the_allowed_ones():
 
 
 def test_optimize_without_table_is_refused(write):
-    done = subprocess.run([sys.executable, "-m", "vines_stoch.cli", "optimize", str(write(toml_text(TMD)))],
-                          capture_output=True, text=True)
-    assert done.returncode == 2 and "no [optimize] table" in done.stderr
+    code, err = cli("optimize", write(toml_text(TMD)))
+    assert code == 2 and "no [optimize] table" in err
