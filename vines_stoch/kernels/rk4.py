@@ -316,7 +316,7 @@ def rk4_kernel(n_bodies: int, n_floors: int, has_impact: bool, has_hertz: bool, 
             start = i
             for i in range(start, end):
                 if sampling:
-                    if GPU:  # (on the CPU this loop ran 6 % slower than a slice copy)
+                    if GPU:  # (on the CPU this loop ran 6 % slower than a slice copy; copy_into matches one)
                         for b in range(nb):
                             xp[b] = x[b]
                             vp[b] = v[b]
