@@ -7,8 +7,16 @@ a force on a floor (``filtered-noise``, Wei et al. eq. 23) or a ground accelerat
 
 Kernels advance the filter states by the exact Gaussian transition of a step,
 ``z(t + dt) = Phi z(t) + e(t + dt/2) L n`` with ``Phi = exp(A dt)``, ``L L^T`` the covariance
-``int_0^dt exp(A s) b b^T exp(A^T s) ds`` (Van Loan) and ``n`` standard normals, so the
+``Q(dt) = int_0^dt exp(A s) b b^T exp(A^T s) ds`` and ``n`` standard normals, so the
 filtered load has its exact law on the grid whatever ``dt``.
+
+``Q(dt)`` is built by scaling and squaring: Van Loan's block exponential (Van Loan 1978, IEEE
+Trans. Autom. Control 23(3), DOI 10.1109/TAC.1978.1101743) at ``h = dt / 2^k`` with
+``||A h||_1 <= 1/2``, then ``k`` doublings ``Q(2h) = Q(h) + Phi(h) Q(h) Phi(h)^T``.  The
+doublings add positive semi-definite terms, so nothing cancels and ``Q`` keeps its relative
+accuracy for any ``|pole| dt``; Van Loan's exponential at the whole ``dt`` holds entries near
+``exp(|pole| dt)`` and leaves ``Q`` to the rounding of their difference (at ``|pole| dt`` about
+50 that rounding is larger than ``Q`` and depends on the host's BLAS kernels).
 """
 
 from __future__ import annotations
@@ -65,19 +73,58 @@ def clough_penzien(intensity: float, wg: float, zg: float, wf: float,
     return a, np.concatenate([b, [0.0, 0.0]]), a[3].copy()
 
 
+#: Largest ``||A h||_1`` of the step at which Van Loan's block exponential is evaluated.
+VAN_LOAN_NORM = 0.5
+#: Largest componentwise residual of the covariance check (``_check_covariance``) accepted, as a
+#: fraction of the magnitudes of its terms (the rounding of the build is about 1e-15 of them).
+COVARIANCE_CHECK = 1e-9
+
+
 def transition(a: np.ndarray, b: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
     """``(Phi, L)``: the exact one-step transition matrix and a square root of the step's
-    noise covariance (Van Loan's block exponential)."""
+    noise covariance ``Q(dt)`` (scaling and squaring of Van Loan's block exponential, module
+    docstring), checked against the identity ``A Q + Q A^T + b b^T = Phi b b^T Phi^T``."""
     n = a.shape[0]
+    norm = float(np.linalg.norm(a, 1)) * dt
+    k = int(np.ceil(np.log2(norm / VAN_LOAN_NORM))) if norm > VAN_LOAN_NORM else 0
     block = np.zeros((2 * n, 2 * n))
     block[:n, :n] = -a
     block[:n, n:] = np.outer(b, b)
     block[n:, n:] = a.T
-    e = expm(block * dt)
-    phi = e[n:, n:].T
-    cov = phi @ e[:n, n:]
-    cov = 0.5 * (cov + cov.T)
+    e = expm(block * (dt / 2**k))
+    step = e[n:, n:].T  # Phi(h)
+    cov = _symmetric(step @ e[:n, n:])
+    for _ in range(k):
+        cov = _symmetric(cov + step @ cov @ step.T)
+        step = step @ step
+    phi = expm(a * dt)
+    _check_covariance(a, b, phi, cov, dt)
     return phi, _sqrt_psd(cov)
+
+
+def _symmetric(m: np.ndarray) -> np.ndarray:
+    return 0.5 * (m + m.T)
+
+
+def _check_covariance(a: np.ndarray, b: np.ndarray, phi: np.ndarray, cov: np.ndarray, dt: float) -> None:
+    """Refuse a step covariance that is not symmetric positive semi-definite or breaks
+    ``A Q + Q A^T + b b^T - (Phi b)(Phi b)^T = 0`` (``dQ/dt`` two ways) by more than
+    ``COVARIANCE_CHECK`` of its terms' magnitudes entry by entry (``|Q_ij|`` bounded by
+    ``D_i D_j``, ``D`` the standard deviations)."""
+    pb = phi @ b
+    residual = a @ cov + cov @ a.T + np.outer(b, b) - np.outer(pb, pb)
+    d = _scales(cov)
+    bound = np.outer(d, d)  # |Q_ij| <= D_i D_j for a covariance
+    scale = (np.abs(a) @ bound + bound @ np.abs(a).T + np.outer(np.abs(b), np.abs(b))
+             + np.outer(np.abs(pb), np.abs(pb)))
+    lowest = np.linalg.eigvalsh(cov / bound)[0] if cov.size else 0.0
+    bad = np.abs(residual) > COVARIANCE_CHECK * scale
+    if not np.all(np.isfinite(cov)) or bad.any() or lowest < -COVARIANCE_CHECK:
+        poles = np.abs(np.linalg.eigvals(a))
+        raise FloatingPointError(
+            f"filter step covariance failed its check at dt = {dt:g} (largest |pole| dt = "
+            f"{poles.max() * dt:.3g}): lowest correlation eigenvalue {lowest:.3g}, "
+            f"{int(bad.sum())} entries off the identity A Q + Q A^T + b b^T = Phi b b^T Phi^T")
 
 
 def stationary_covariance(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -85,10 +132,20 @@ def stationary_covariance(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return solve_continuous_lyapunov(a, -np.outer(b, b))
 
 
+def _scales(cov: np.ndarray) -> np.ndarray:
+    """Square roots of the diagonal of ``cov`` (1 where it is not positive)."""
+    d = np.sqrt(np.clip(np.diag(cov), 0.0, None))
+    return np.where(d > 0.0, d, 1.0)
+
+
 def _sqrt_psd(cov: np.ndarray) -> np.ndarray:
-    """A matrix ``L`` with ``L L^T = cov`` for a symmetric positive semi-definite ``cov``."""
-    w, q = np.linalg.eigh(cov)
-    return q * np.sqrt(np.clip(w, 0.0, None))
+    """A matrix ``L`` with ``L L^T = cov`` for a symmetric positive semi-definite ``cov``, from
+    the eigen-decomposition of its correlation matrix ``D^-1 cov D^-1`` (``D`` the standard
+    deviations): every entry of ``L L^T`` is right to rounding relative to ``D_i D_j``, however
+    far apart the variances lie (position and velocity of a stiff filter over a short step)."""
+    d = _scales(cov)
+    w, q = np.linalg.eigh(cov / np.outer(d, d))
+    return d[:, None] * (q * np.sqrt(np.clip(w, 0.0, None)))
 
 
 def block_diagonal(filters: list[Filter], dt: float, n_floors: int = 1) -> dict[str, np.ndarray]:
