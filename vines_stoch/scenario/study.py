@@ -16,6 +16,7 @@ import numpy as np
 from .. import schemes
 from ..records import RecordError, read_record
 from ..textfile import TextFileError, read_text
+from . import accuracy
 from .distributions import REACH, LognormalDistribution
 from .errors import MISSING, Mistakes, ScenarioError, format_error, validate
 from .fields import LARGEST, MAX_DEPTH
@@ -103,7 +104,9 @@ def _with_value(node: Any, parts: list[str], value: float) -> Any:
 
 
 class Study:
-    """A validated scenario file: the base scenario and its sweep points."""
+    """A validated scenario file: the base scenario and its sweep points; ``warnings``: one line
+    for each thing the run would do that the file may not expect (a coarse ``dt``, realisations
+    that would all be the same), which ``run`` and ``validate`` print before anything runs."""
 
     def __init__(self, source: str, text: str, data: dict[str, Any], directory: Path = Path("."),
                  records: dict[tuple[Any, ...], tuple[np.ndarray, np.ndarray]] | None = None):
@@ -171,6 +174,7 @@ class Study:
                                             "the bound {end:g}{point} is not allowed: {rule}")
         mistakes.raise_any()
         self._check_work(source)
+        self.warnings = accuracy.warnings(self)
 
     def _integer(self, key: str) -> bool:
         """True when the (numeric) field at dotted ``key`` holds integers."""
