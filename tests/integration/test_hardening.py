@@ -237,15 +237,15 @@ def test_the_smallest_mass_keeps_the_frequencies_finite():
     ('[optimize]\nparameters = { "simulation.dt" = { low = 0.01, high = 3.0 } }\n',
      ("optimize.parameters.simulation.dt", "the bound 3 is not allowed: simulation.dt = 3 is past the "
       "stability limit")),
-    ('[uncertain]\n"primary.stiffness" = { distribution = "lognormal", median = 1.0, cov = 1.0 }\n'
-     '[sweep]\n"simulation.dt" = [0.01, 1.0]\n',
-     ("uncertain.primary.stiffness", "lognormal draws reach", "(at sweep point {'simulation.dt': 1.0})",
-      "past the stability limit")),
+    ('[uncertain]\n"simulation.dt" = { distribution = "uniform", low = 0.01, high = 2.0 }\n'
+     '[sweep]\n"primary.stiffness" = [1.0, 4.0]\n',
+     ("uncertain.simulation.dt", "uniform draws reach 2 (at sweep point {'primary.stiffness': 4.0}), where "
+      "simulation.dt = 2 is past the stability limit", "dt < 2.828 / omega = 1.414")),
 ])
 def test_uncertain_and_optimised_ranges_stay_within_the_stability_limit(write, extra, fragments):
     text = BASE.replace("duration = 2.0", "duration = 10.0")
     refused(write(scenario(text + extra)), *fragments)
-    within = extra.replace("high = 3.0", "high = 2.0").replace("[0.01, 1.0]", "[0.01, 0.02]")
+    within = extra.replace("high = 3.0", "high = 2.0").replace("[1.0, 4.0]", "[1.0, 1.5]")
     assert cli("validate", write(scenario(text + within), "within.toml"))[0] == 0
 
 

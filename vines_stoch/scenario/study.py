@@ -81,26 +81,16 @@ def _stability(scenario: Scenario) -> str | None:
             f"{limit / omega:.4g} (use about a tenth of that for accuracy)")
 
 
+#: The time step: where it is uncertain or optimised, every value it may take must be stable
+#: (a physical parameter drawn past the limit makes a diverged realisation instead).
+STEP = "simulation.dt"
+
+
 def _check_stability(scenario: Scenario, source: str) -> None:
     """Refuse a ``dt`` past the linear stability limit of the scheme that would run."""
     why = _stability(scenario)
     if why is not None:
         raise ScenarioError(format_error(source, "simulation.dt", scenario.simulation.dt, why))
-
-
-def _with_value(node: Any, parts: list[str], value: float) -> Any:
-    """A copy of a validated ``node`` (a model, list or table) with the field at the dotted path
-    ``parts`` set to ``value``, unvalidated; only the nodes on the path are copied."""
-    if not parts:
-        return value
-    head, rest = parts[0], parts[1:]
-    if isinstance(node, list):
-        out = list(node)
-        out[int(head)] = _with_value(node[int(head)], rest, value)
-        return out
-    if isinstance(node, dict):
-        return {**node, head: _with_value(node[head], rest, value)}
-    return node.model_copy(update={head: _with_value(getattr(node, head), rest, value)})
 
 
 class Study:
@@ -162,19 +152,20 @@ class Study:
             with mistakes.kept():
                 self.points.append(self._read_records(_validate(variant, where), source))
                 _check_stability(self.points[-1], where)
-        if not mistakes:
-            for key, dist in self.base.uncertain.items():
-                with mistakes.kept():
-                    self._check_ends_stable(key, dist.reach(), f"uncertain.{key}", uncertain[key],
-                                            dist.distribution + " draws reach {end:g}{point}, where {rule}")
-            for key, bound in self.base.optimize.parameters.items() if self.base.optimize else ():
-                with mistakes.kept():
-                    self._check_ends_stable(key, (bound.low, bound.high), f"optimize.parameters.{key}",
-                                            parameters[key],
-                                            "the bound {end:g}{point} is not allowed: {rule}")
+        if not mistakes and STEP in self.uncertain_keys:
+            dist = self.base.uncertain[STEP]
+            with mistakes.kept():
+                self._check_steps(dist.reach(), f"uncertain.{STEP}", uncertain[STEP],
+                                  dist.distribution + " draws reach {end:g}{point}, where {rule}")
+        optimize = self.base.optimize if not mistakes else None
+        if optimize is not None and STEP in optimize.parameters:
+            bound = optimize.parameters[STEP]
+            with mistakes.kept():
+                self._check_steps((bound.low, bound.high), f"optimize.parameters.{STEP}", parameters[STEP],
+                                  "the bound {end:g}{point} is not allowed: {rule}")
         mistakes.raise_any()
         self._check_work(source)
-        self.warnings = accuracy.warnings(self)
+        self.warnings = accuracy.warnings(source, self.points, self.grid, self.base.ensemble.realizations)
 
     def _integer(self, key: str) -> bool:
         """True when the (numeric) field at dotted ``key`` holds integers."""
@@ -242,17 +233,17 @@ class Study:
         _check_values(data, key, (bound.low, bound.high), where, spec, source,
                       "the bound {end:g} is not allowed: the value {rule}")
 
-    def _check_ends_stable(self, key: str, ends: tuple[float, float], where: str, spec: Any,
-                           message: str) -> None:
-        """The ``dt`` of every sweep point must stay stable with ``key`` at either of ``ends``
-        (``message``, formatted with ``end``, ``point`` and the stability ``rule``, says why not)."""
+    def _check_steps(self, ends: tuple[float, float], where: str, spec: Any, message: str) -> None:
+        """``dt`` at either of ``ends`` must be stable at every sweep point (``message``, formatted
+        with ``end``, ``point`` and the stability ``rule``, says why not)."""
         for values, point in zip(self.grid, self.points):
             for end in ends:
-                variant = _with_value(point, key.split("."), end)
+                simulation = point.simulation.model_copy(update={"dt": end})
+                variant = point.model_copy(update={"simulation": simulation})
                 why = _stability(variant)
                 if why is not None:
                     at = f" (at sweep point {values})" if values else ""
-                    rule = f"simulation.dt = {variant.simulation.dt:g} {why}"
+                    rule = f"{STEP} = {end:g} {why}"
                     raise ScenarioError(format_error(self.source, where, spec,
                                                      message.format(end=end, point=at, rule=rule)))
 
