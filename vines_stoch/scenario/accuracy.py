@@ -6,15 +6,16 @@ line (``Study.warnings``); nothing is refused.
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING
+from collections.abc import Callable
+from typing import Any
 
 from .bodies import ImpactAbsorber
 from .errors import format_error
 from .loads import ChirpLoad, FilteredNoiseLoad, GroundMotionLoad, HalfSineLoad, HarmonicLoad, WindLoad
 from .model import Scenario
 
-if TYPE_CHECKING:
-    from .study import Study
+#: A scene's time scales: ``(omega, what)`` pairs.
+Scales = Callable[[Scenario], list[tuple[float, str]]]
 
 #: Steps a period below which ``dt`` is coarse: for the highest mode, a forcing or a filter's
 #: fastest pole (RK4 at 20 steps a period loses 3e-4 of an undamped oscillator's energy a
@@ -61,11 +62,11 @@ def load_frequencies(scenario: Scenario) -> list[tuple[float, str]]:
     return found
 
 
-def _coarsest(study: Study, scales) -> tuple[float, str, int] | None:
+def _coarsest(points: list[Scenario], scales: Scales) -> tuple[float, str, int] | None:
     """``(omega dt, what, point)`` of the time scale with the fewest steps a period over the
-    sweep points (``scales(scenario)`` lists a point's ``(omega, what)``), or None."""
+    sweep points, or None."""
     worst = None
-    for p, point in enumerate(study.points):
+    for p, point in enumerate(points):
         for omega, what in scales(point):
             ratio = omega * point.simulation.dt
             if worst is None or ratio > worst[0]:
@@ -73,20 +74,18 @@ def _coarsest(study: Study, scales) -> tuple[float, str, int] | None:
     return worst
 
 
-def _where(study: Study, p: int) -> str:
-    return f"{study.source} (sweep point {study.grid[p]})" if study.sweep_keys else study.source
-
-
-def _coarse(study: Study, scales, steps: int, topic: str, why: str) -> list[str]:
+def _coarse(source: str, points: list[Scenario], grid: list[dict[str, Any]], scales: Scales, steps: int,
+            topic: str, why: str) -> list[str]:
     """The warning when the time scale with the fewest steps a period (``_coarsest``) has fewer
     than ``steps``: ``topic`` says for what, ``why`` (formatted with ``ratio``, ``omega dt``)
     what goes wrong."""
-    worst = _coarsest(study, scales)
+    worst = _coarsest(points, scales)
     if worst is None or worst[0] <= 2.0 * math.pi / steps:
         return []
     ratio, what, p = worst
-    dt, have = study.points[p].simulation.dt, 2.0 * math.pi / worst[0]
-    return [format_error(_where(study, p), "simulation.dt", dt,
+    dt, have = points[p].simulation.dt, 2.0 * math.pi / worst[0]
+    where = f"{source} (sweep point {grid[p]})" if grid[p] else source
+    return [format_error(where, "simulation.dt", dt,
                          f"coarse{topic}: {have:.3g} steps a period of {what}; {why.format(ratio=ratio)}: "
                          f"use dt <= {dt * have / steps:.3g} ({steps} steps a period) or less")]
 
@@ -104,18 +103,18 @@ def _dominant(scenario: Scenario) -> list[tuple[float, str]]:
         load_frequencies(scenario)
 
 
-def warnings(study: Study) -> list[str]:
-    """The accuracy guard's warnings on a validated study, one line each."""
-    found = _coarse(study, _modes, STEPS_PER_PERIOD, "",
+def warnings(source: str, points: list[Scenario], grid: list[dict[str, Any]], realizations: int) -> list[str]:
+    """The accuracy guard's warnings on the validated sweep ``points`` (their values in ``grid``)
+    of the file ``source`` that asks for ``realizations`` each, one line each."""
+    found = _coarse(source, points, grid, _modes, STEPS_PER_PERIOD, "",
                     "results (energy balance, peaks, EDM) may be wrong without other sign")
-    found += _coarse(study, _dominant, IMPACT_STEPS_PER_PERIOD, " for impact absorbers",
+    found += _coarse(source, points, grid, _dominant, IMPACT_STEPS_PER_PERIOD, " for impact absorbers",
                      "an impact slower than the relative velocity the loads add in one step (about "
                      "omega dt = {ratio:.2g} of the speed scale) is plastic and starts sticking, so chatter "
                      "ends sooner and 'impacts' counts fewer")
-    ens = study.base.ensemble
-    if ens.realizations > 1 and not any(p.is_random for p in study.points):
+    if realizations > 1 and not any(p.is_random for p in points):
         found.append(format_error(
-            study.source, "ensemble.realizations", ens.realizations,
+            source, "ensemble.realizations", realizations,
             "the scene has neither noise nor uncertain parameters, so every realisation would be the "
             "same: one runs a sweep point"))
     return found

@@ -22,9 +22,9 @@ IMPACT = {"name": "impacts", "primary": {"mass": 1.0, "stiffness": 1.0, "damping
 
 def test_rk4_at_two_and_a_half_steps_a_period_is_coarse():
     warnings = study_from(PRIMARY).warnings
-    assert warnings == ["<test scenario>: simulation.dt = 2.5: coarse: 2.51 steps a period of the highest mode, "
-                        "1 rad/s; results (energy balance, peaks, EDM) may be wrong without other sign: use "
-                        "dt <= 0.314 (20 steps a period) or less"]
+    assert warnings == ["<test scenario>: simulation.dt = 2.5: coarse: 2.51 steps a period of the highest "
+                        "mode, 1 rad/s; results (energy balance, peaks, EDM) may be wrong without other "
+                        "sign: use dt <= 0.314 (20 steps a period) or less"]
     assert study_from(PRIMARY, {"simulation.dt": 0.3}).warnings == []
 
 
@@ -45,7 +45,8 @@ def test_the_coarse_step_loses_the_energy_and_the_advised_one_keeps_it():
      "loads.1 (half-sine (a period twice its duration)), 62.83 rad/s"),
     ({"type": "filtered-noise", "intensity": 0.1, "frequency": 10.0, "damping": 2.0},
      "loads.1 (filter's fastest pole), 37.32 rad/s"),
-    ({"type": "ground-motion", "soil": "firm", "intensity": 0.1}, "loads.1 (filter's fastest pole), 15 rad/s"),
+    ({"type": "ground-motion", "soil": "firm", "intensity": 0.1},
+     "loads.1 (filter's fastest pole), 15 rad/s"),
 ])
 def test_a_load_faster_than_the_structure_sets_the_time_scale(load, what):
     data = {**PRIMARY, "loads": PRIMARY["loads"] + [load], "simulation": {"duration": 20.0, "dt": 0.05}}
@@ -56,18 +57,19 @@ def test_a_load_faster_than_the_structure_sets_the_time_scale(load, what):
 def test_a_swept_dt_names_the_coarsest_point():
     warnings = study_from({**PRIMARY, "sweep": {"simulation.dt": [0.01, 1.0, 2.5]}}).warnings
     assert len(warnings) == 1
-    assert warnings[0].startswith("<test scenario> (sweep point {'simulation.dt': 2.5}): simulation.dt = 2.5:")
+    assert warnings[0].startswith("<test scenario> (sweep point {'simulation.dt': 2.5}): "
+                                  "simulation.dt = 2.5: coarse")
 
 
 def test_impact_absorbers_at_a_tenth_of_a_second():
     """The reported scene: at dt = 0.1 an impact slower than a tenth of the speed scale sticks,
     so chatter sequences stop sooner; the guard asks for 100 steps a period."""
     warnings = study_from(IMPACT).warnings
-    assert warnings == ["<test scenario>: simulation.dt = 0.1: coarse for impact absorbers: 62.8 steps a period "
-                        "of the primary's fundamental mode, 1 rad/s; an impact slower than the relative "
-                        "velocity the loads add in one step (about omega dt = 0.1 of the speed scale) is "
-                        "plastic and starts sticking, so chatter ends sooner and 'impacts' counts fewer: use "
-                        "dt <= 0.0628 (100 steps a period) or less"]
+    assert warnings == ["<test scenario>: simulation.dt = 0.1: coarse for impact absorbers: 62.8 steps a "
+                        "period of the primary's fundamental mode, 1 rad/s; an impact slower than the "
+                        "relative velocity the loads add in one step (about omega dt = 0.1 of the speed "
+                        "scale) is plastic and starts sticking, so chatter ends sooner and 'impacts' counts "
+                        "fewer: use dt <= 0.0628 (100 steps a period) or less"]
     assert study_from(IMPACT, {"simulation.dt": 1e-3}).warnings == []
 
 
@@ -82,17 +84,20 @@ def test_chatter_counts_fewer_impacts_at_the_coarse_step():
 def test_realisations_of_a_deterministic_scene_say_one_runs():
     data = {**PRIMARY, "simulation": {"duration": 20.0, "dt": 0.01}, "ensemble": {"realizations": 50}}
     assert study_from(data).warnings == [
-        "<test scenario>: ensemble.realizations = 50: the scene has neither noise nor uncertain parameters, so "
-        "every realisation would be the same: one runs a sweep point"]
+        "<test scenario>: ensemble.realizations = 50: the scene has neither noise nor uncertain parameters, "
+        "so every realisation would be the same: one runs a sweep point"]
     noisy = {**data, "loads": data["loads"] + [{"type": "white-noise", "intensity": 0.1}]}
-    uncertain = {**data, "uncertain": {"primary.damping": {"distribution": "uniform", "low": 0.0, "high": 0.1}}}
+    law = {"distribution": "uniform", "low": 0.0, "high": 0.1}
+    uncertain = {**data, "uncertain": {"primary.damping": law}}
     swept = {**noisy, "sweep": {"loads.1.intensity": [0.0, 0.1]}}  # one point without noise: no warning
     for quiet in (noisy, uncertain, swept, {**data, "ensemble": {"realizations": 1}}):
         assert study_from(quiet).warnings == []
 
 
-@pytest.mark.parametrize("path", sorted(p for p in (ROOT / "scenarios").glob("*.toml") if p.name != "elcentro.toml"),
-                         ids=lambda p: p.stem)
+EXAMPLES = sorted(p for p in (ROOT / "scenarios").glob("*.toml") if p.name != "elcentro.toml")
+
+
+@pytest.mark.parametrize("path", EXAMPLES, ids=lambda p: p.stem)
 def test_example_scenarios_raise_no_warning(path):
     assert load_scenario(path).warnings == []
 
