@@ -34,7 +34,7 @@ def _validate(data: dict[str, Any], source: str) -> Scenario:
 
 
 def _require_numeric(data: dict[str, Any], key: str, where: str, spec: Any, source: str,
-                     text: bool = False, refused: list[str] = ()) -> None:
+                     text: bool = False, refused: tuple[str, ...] = ()) -> None:
     """``key`` must address an existing numeric field of the file (``text``: a text field),
     unless it lies at or inside one of the ``refused`` keys (whose mistake is reported)."""
     if any(key == k or key.startswith(k + ".") for k in refused):
@@ -112,7 +112,7 @@ class Study:
         except ScenarioError as exc:
             mistakes.lines += str(exc).split("\n")
             invalid = exc.keys
-        refused = [k for k in invalid if k]  # (keys at or inside these are not named again)
+        refused = tuple(k for k in invalid if k)  # (keys at or inside these are not named again)
         sweep = dict(data["sweep"]) if isinstance(data.get("sweep"), dict) else {}
         zipped: list[str] = []
         with mistakes.kept():
@@ -157,9 +157,9 @@ class Study:
             with mistakes.kept():
                 self._check_steps(dist.reach(), f"uncertain.{STEP}", uncertain[STEP],
                                   dist.distribution + " draws reach {end:g}{point}, where {rule}")
-        optimize = self.base.optimize if not mistakes else None
-        if optimize is not None and STEP in optimize.parameters:
-            bound = optimize.parameters[STEP]
+        tuned = self.base.optimize if not mistakes else None
+        if tuned is not None and STEP in tuned.parameters:
+            bound = tuned.parameters[STEP]
             with mistakes.kept():
                 self._check_steps((bound.low, bound.high), f"optimize.parameters.{STEP}", parameters[STEP],
                                   "the bound {end:g}{point} is not allowed: {rule}")
@@ -186,8 +186,8 @@ class Study:
                 f"{ens.realizations} realisation(s) x duration / dt), past ensemble.max_path_steps = "
                 f"{ens.max_path_steps:.3g}: raise that if the run is meant"))
 
-    def _check_uncertain(self, data: dict[str, Any], key: str, base: Scenario | None, refused: list[str],
-                         source: str) -> None:
+    def _check_uncertain(self, data: dict[str, Any], key: str, base: Scenario | None,
+                         refused: tuple[str, ...], source: str) -> None:
         """An uncertain parameter: an existing real field, not swept, valid over the support of its
         law (the last two once the file's tables are valid)."""
         where, spec = f"uncertain.{key}", data["uncertain"][key]
@@ -216,7 +216,7 @@ class Study:
                                                  f"past the largest magnitude {LARGEST:g}"))
 
     def _check_parameter(self, data: dict[str, Any], key: str, spec: Any, base: Scenario | None,
-                         refused: list[str], source: str) -> None:
+                         refused: tuple[str, ...], source: str) -> None:
         """An optimised parameter: an existing real field, neither swept nor uncertain, valid at both
         bounds (the last once the file's tables are valid)."""
         where = f"optimize.parameters.{key}"
