@@ -9,7 +9,7 @@ from pathlib import Path
 
 import typer
 
-from .scenario import ScenarioError, load_scenario
+from .scenario import ScenarioError, Study, load_scenario
 
 app = typer.Typer(add_completion=False, no_args_is_help=True, pretty_exceptions_enable=False,
                   help="Stochastic Monte Carlo response analysis of vibration absorbers.")
@@ -18,6 +18,13 @@ app = typer.Typer(add_completion=False, no_args_is_help=True, pretty_exceptions_
 def _fail(message: str) -> None:
     typer.echo(f"error: {message}", err=True)
     raise typer.Exit(2)
+
+
+def _warn(study: Study) -> None:
+    """The study's warnings (``Study.warnings``: a coarse ``dt``, realisations that would all be
+    the same), one ``warning:`` line each on standard error."""
+    for line in study.warnings:
+        typer.echo(f"warning: {line}", err=True)
 
 
 def _check_backend(backend: str) -> None:
@@ -69,6 +76,7 @@ def run(
         study = load_scenario(scenario)
     except ScenarioError as exc:
         _fail(str(exc))
+    _warn(study)
     if scheduler_file is not None:
         if scheduler is not None:
             _fail("give --scheduler or --scheduler-file, not both")
@@ -118,6 +126,7 @@ def validate(scenario: Path = typer.Argument(..., help="Scenario TOML file.")) -
         study = load_scenario(scenario)
     except ScenarioError as exc:
         _fail(str(exc))
+    _warn(study)
     typer.echo(f"{scenario}: ok ({len(study.points)} sweep point(s))")
 
 

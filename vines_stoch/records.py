@@ -29,13 +29,13 @@ RECORD_BYTES = 256 * 2**20
 
 
 class RecordError(ValueError):
-    """A record file that cannot be read; the message names the file and line (never its content)."""
+    """A record file that cannot be read; the message names the file and line, never its content."""
 
 
 def _token(text: str) -> str:
-    """The offending token as quoted in a message: short ones as they are, long ones by length
-    (a long token is likely a line of some other file: it is not echoed)."""
-    return repr(text) if len(text) <= 24 and text.isprintable() else f"a token of {len(text)} characters"
+    """The offending token as named in a message: by its length alone (the path may name any
+    file, whose content is never echoed)."""
+    return f"a {len(text)}-character token"
 
 
 def _number(text: str, path: Path, line: int) -> float:
@@ -58,8 +58,7 @@ def _at2_header(lines: list[str], path: Path) -> tuple[int, float, int] | None:
         if npts and dt:
             n = _number(npts.group(1).rstrip(",."), path, k + 1)
             if n != int(n):
-                raise RecordError(f"{path}: line {k + 1}: NPTS = {_token(npts.group(1))} "
-                                  "is not a whole number")
+                raise RecordError(f"{path}: line {k + 1}: NPTS is not a whole number")
             return int(n), _number(dt.group(1).rstrip(","), path, k + 1), k + 1
     return None
 

@@ -16,11 +16,13 @@ import sys
 import time
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 import pytest
 
 from tests.helpers import ROOT, cli, toml_text, two_dof_data
 from vines_stoch import parse_scenario
+from vines_stoch.scenario.bodies import eigenfrequencies
 from vines_stoch.store import LOCK, FolderInUse, lock_folder
 
 #: Scenario text (the cases below change its lines): the primary with a cubic NES under an impulse.
@@ -70,7 +72,7 @@ def scenario(text: str) -> str:
     ("realizations = 2", "realizations = 100000000000",
      ("ensemble.realizations", "must be in [1, 10000000]")),
     ("duration = 2.0", "duration = 1e12", ("simulation.dt = 0.01", "steps a path", "at most")),
-    ("mass = 1.0", "mass = 1e308", ("primary.mass = 1e+308", "<= 1e+15 (use other units)")),
+    ("mass = 1.0", "mass = 1e308", ("primary.mass = 1e+308: must be in [1e-15, 1e+15] (use other units)",)),
     ("velocity = 0.5", "velocity = nan", ("loads.0.velocity = nan: must be a finite number",)),
     ("realizations = 2", "realizations = 2\nseed = 1.5", ("ensemble.seed = 1.5: must be an integer",)),
     ("realizations = 2", "realizations = 2\nmax_path_steps = 10.0",
@@ -179,7 +181,7 @@ RECORD = '[[loads]]\ntype = "force-record"\nfile = "{file}"\ndt = 0.01\n'
 @pytest.mark.parametrize("file, fragments", [
     ("missing.txt", ("loads.1.file", "no such file")),
     ("records", ("is a folder, not a file",)),
-    ("secret.txt", ("line 1", "a token of 39 characters is not a number")),
+    ("secret.txt", ("line 1", "a 39-character token is not a number")),
     ("empty.AT2", ("NPTS = 0: must be >= 1",)),
     ("loop.txt", ("a loop of symbolic links",)),
     ("nul\\u0000.txt", ("holds a NUL byte",)),
@@ -194,6 +196,88 @@ def test_record_files_are_checked_and_never_echoed(tmp_path, file, fragments):
     path.write_text(scenario(BASE + RECORD.format(file=file)))
     err = refused(path, *fragments)
     assert "root:" not in err
+
+
+# ------------------------------------------------------------------------------------ reported cases
+
+@pytest.mark.parametrize("line, replacement, key", [
+    ("mass = 1.0", "mass = 1e-320", "primary.mass = 1e-320"),
+    ("mass = 1.0", "mass = 5e-324", "primary.mass = 5e-324"),
+    ("mass = 0.05", "mass = 1e-320", "absorbers.0.mass = 1e-320"),
+    ("mass = 0.05", "mass = 5e-324", "absorbers.0.mass = 5e-324"),
+    ("mass = 1.0", "masses = [1.0, 1e-320]\nstiffnesses = [1.0, 1.0]", "primary.masses.1 = 1e-320"),
+])
+def test_masses_below_the_smallest_are_refused(write, line, replacement, key):
+    text = BASE.replace(line, replacement, 1)
+    if "masses" in replacement:
+        text = text.replace("stiffness = 1.0\ndamping = 0.02\n", "", 1)
+    refused(write(scenario(text)), f"{key}: must be in [1e-15, 1e+15] (use other units)")
+
+
+def test_the_smallest_mass_keeps_the_frequencies_finite():
+    """At the bounds (mass 1e-15 beside the largest stiffness, a free absorber of 1e-15) the
+    frequencies are finite; far below, the eigenproblem's ratios k / m overflow."""
+    text = (BASE.replace("mass = 1.0", "mass = 1e-15", 1).replace("stiffness = 1.0", "stiffness = 1e15", 1)
+            .replace("mass = 0.05\nstiffness = 1.0", "mass = 1e-15\nstiffness = 0.0")
+            .replace("dt = 0.01", "dt = 1e-16").replace("duration = 2.0", "duration = 1e-9"))
+    study = parse_scenario(scenario(text))
+    assert np.all(np.isfinite(study.base.natural_frequencies()))
+    try:
+        with np.errstate(all="ignore"):
+            finite = np.all(np.isfinite(eigenfrequencies(np.array([1.0, 1e-320]), np.eye(2))))
+    except np.linalg.LinAlgError:  # (where LAPACK refuses the overflowed matrix)
+        finite = False
+    assert not finite
+
+
+@pytest.mark.parametrize("extra, fragments", [
+    ('[uncertain]\n"simulation.dt" = { distribution = "uniform", low = 0.01, high = 3.0 }\n',
+     ("uncertain.simulation.dt", "uniform draws reach 3, where simulation.dt = 3 is past the stability "
+      "limit of the rk4 scheme", "dt < 2.828")),
+    ('[optimize]\nparameters = { "simulation.dt" = { low = 0.01, high = 3.0 } }\n',
+     ("optimize.parameters.simulation.dt", "the bound 3 is not allowed: simulation.dt = 3 is past the "
+      "stability limit")),
+    ('[uncertain]\n"simulation.dt" = { distribution = "uniform", low = 0.01, high = 2.0 }\n'
+     '[sweep]\n"primary.stiffness" = [1.0, 4.0]\n',
+     ("uncertain.simulation.dt", "uniform draws reach 2 (at sweep point {'primary.stiffness': 4.0}), where "
+      "simulation.dt = 2 is past the stability limit", "dt < 2.828 / omega = 1.414")),
+])
+def test_uncertain_and_optimised_ranges_stay_within_the_stability_limit(write, extra, fragments):
+    text = BASE.replace("duration = 2.0", "duration = 10.0")
+    refused(write(scenario(text + extra)), *fragments)
+    within = extra.replace("high = 3.0", "high = 2.0").replace("[1.0, 4.0]", "[1.0, 1.5]")
+    assert cli("validate", write(scenario(text + within), "within.toml"))[0] == 0
+
+
+def test_a_record_shorter_than_a_step_is_refused(tmp_path):
+    (tmp_path / "tiny.AT2").write_text("title\ndate\nunits\nNPTS=    4, DT=   1e-300 SEC\n1.0 2.0 3.0 4.0\n")
+    path = tmp_path / "s.toml"
+    path.write_text(scenario(BASE + RECORD.format(file="tiny.AT2").replace("dt = 0.01\n", "")))
+    refused(path, "loads.1.file = 'tiny.AT2'", "the record spans 3e-300 s (4 samples), less than one step "
+            "of the run (simulation.dt = 0.01)")
+
+
+def test_every_mistake_of_a_file_is_reported_at_once(write):
+    text = scenario(BASE.replace("damping = 0.01", "dampnig = 0.01")
+                    + '[sweep]\n"absorbers.0.stifness" = [1.0, 2.0]\n'
+                    + '[uncertain]\n"loads.0.velocty" = { distribution = "uniform", low = 0.1, high = 1.0 }\n'
+                    + '[optimize]\nparameters = { "loads.5.velocity" = { low = 0.1, high = 1.0 } }\n')
+    err = refused(write(text), "absorbers.0.dampnig = 0.01: unknown key",
+                  "sweep.absorbers.0.stifness = [1.0, 2.0]: must name an existing numeric field",
+                  "uncertain.loads.0.velocty = ", "optimize.parameters.loads.5.velocity = ")
+    assert len(err.strip().splitlines()) == 4, err
+
+
+def test_record_files_of_the_system_are_never_quoted(tmp_path):
+    """A record path at a system file: the message names the file and line, never its content
+    (the first token of /etc/hostname or /proc/self/status)."""
+    (tmp_path / "hostname").write_text("vm\n")
+    status = Path("/proc/self/status")
+    for file, token in [(tmp_path / "hostname", "vm")] + ([(status, "Name:")] if status.exists() else []):
+        path = tmp_path / "s.toml"
+        path.write_text(scenario(BASE + RECORD.format(file=file)))
+        err = refused(path, f"{file}: line 1: a {len(token)}-character token is not a number")
+        assert repr(token) not in err, err
 
 
 # ------------------------------------------------------------------------------------ runs

@@ -9,7 +9,7 @@ import numpy as np
 from pydantic import Field, model_validator
 
 from .errors import FieldError
-from .fields import MAX_FLOORS, Floor, NonNegative, Positive, Real, _Model
+from .fields import MAX_FLOORS, Floor, Mass, NonNegative, Positive, Real, _Model
 
 
 class Rayleigh(_Model):
@@ -27,10 +27,10 @@ class Primary(_Model):
     ``rayleigh``, floors from the lowest to the roof; storey ``k`` joins floor ``k - 1``, the
     ground for ``k = 1``, to floor ``k``)."""
 
-    mass: Positive | None = None
+    mass: Mass | None = None
     stiffness: NonNegative | None = None
     damping: NonNegative | None = None
-    masses: Annotated[list[Positive], Field(min_length=1, max_length=MAX_FLOORS)] | None = None
+    masses: Annotated[list[Mass], Field(min_length=1, max_length=MAX_FLOORS)] | None = None
     stiffnesses: list[NonNegative] | None = None
     dampings: list[NonNegative] | None = None
     rayleigh: Rayleigh | None = None
@@ -132,7 +132,7 @@ class LinearAbsorber(_Model):
 
     type: Literal["linear"]
     floor: Floor | None = None
-    mass: Positive
+    mass: Mass
     stiffness: NonNegative = 0.0
     damping: NonNegative = 0.0
 
@@ -142,7 +142,7 @@ class CubicAbsorber(_Model):
 
     type: Literal["cubic"]
     floor: Floor | None = None
-    mass: Positive
+    mass: Mass
     stiffness: NonNegative = 0.0
     damping: NonNegative = 0.0
     linear_stiffness: NonNegative = 0.0
@@ -153,7 +153,7 @@ class ImpactAbsorber(_Model):
 
     type: Literal["impact"]
     floor: Floor | None = None
-    mass: Positive
+    mass: Mass
     clearance: Positive
     restitution: Annotated[float, Field(ge=0, le=1)]
     stiffness: NonNegative = 0.0
@@ -203,7 +203,7 @@ class HertzAbsorber(_Model):
     type: Literal["hertz"]
     geometry: Literal["single-sided", "double-sided"]
     floor: Floor | None = None
-    mass: Positive
+    mass: Mass
     stiffness: NonNegative = 0.0
     damping: NonNegative = 0.0
     offset: NonNegative

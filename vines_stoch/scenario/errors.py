@@ -6,12 +6,14 @@ The translator walks the error locations through the root model it is given (``v
 
 from __future__ import annotations
 
+from collections.abc import Iterator
+from contextlib import contextmanager
 from typing import Any, TypeVar
 
 from annotated_types import Ge, Gt, Le, Lt
 from pydantic import BaseModel, ValidationError
 
-from .fields import LARGEST
+from .fields import LARGEST, SMALLEST_MASS
 
 ModelT = TypeVar("ModelT", bound=BaseModel)
 
@@ -21,7 +23,35 @@ _SIZED = object()
 
 
 class ScenarioError(ValueError):
-    """A scenario file that cannot be run; the message names file, key, value and rule."""
+    """A scenario file that cannot be run; the message names file, key, value and rule
+    (``keys``: the dotted keys it names, where they are known)."""
+
+    def __init__(self, message: str, keys: tuple[str, ...] = ()):
+        super().__init__(message)
+        self.keys = keys
+
+
+class Mistakes:
+    """The mistakes of one file, collected so that all of them are reported at once."""
+
+    def __init__(self) -> None:
+        self.lines: list[str] = []
+
+    @contextmanager
+    def kept(self) -> Iterator[None]:
+        """Run a block of checks; a ScenarioError ends the block and its lines are kept."""
+        try:
+            yield
+        except ScenarioError as exc:
+            self.lines.extend(str(exc).split("\n"))
+
+    def __bool__(self) -> bool:
+        return bool(self.lines)
+
+    def raise_any(self) -> None:
+        """Raise ScenarioError with one line per mistake kept (each once), if there are any."""
+        if self.lines:
+            raise ScenarioError("\n".join(dict.fromkeys(self.lines)))
 
 
 class FieldError(ValueError):
@@ -51,6 +81,9 @@ def _interval(metadata: list[Any], value: Any) -> str | None:
         elif isinstance(m, Lt):
             hi, hi_open = m.lt, True
     number = isinstance(value, (int, float)) and not isinstance(value, bool)
+    if lo == SMALLEST_MASS and hi == LARGEST:
+        units = " (use other units)" if number and value > 0 else ""
+        return f"must be in [{SMALLEST_MASS:g}, {LARGEST:g}]{units}"
     if hi == LARGEST and lo == -LARGEST and number and abs(value) > LARGEST:
         return f"its magnitude must be <= {LARGEST:g} (use other units)"
     if hi == LARGEST and not (number and value > hi):
@@ -255,9 +288,9 @@ def validate(root: type[ModelT], data: dict[str, Any], source: str) -> ModelT:
     try:
         return root.model_validate(data)
     except ValidationError as exc:
-        errors = exc.errors(include_url=False)
-        lines = [format_error(source, *_describe(root, e, data)) for e in errors]
-        raise ScenarioError("\n".join(dict.fromkeys(lines))) from None
+        described = [_describe(root, e, data) for e in exc.errors(include_url=False)]
+        lines = [format_error(source, *d) for d in described]
+        raise ScenarioError("\n".join(dict.fromkeys(lines)), tuple(d[0] for d in described)) from None
 
 
 

@@ -15,7 +15,13 @@ class _Model(BaseModel):
 #: overflow in the energy sums (use other units past it).
 LARGEST = 1e15
 
+#: The smallest mass, ``1 / LARGEST``: with every stiffness at most ``LARGEST``, the ratios
+#: ``k / m`` of the eigenproblem and the accelerations stay below 1e30 (below about 1e-293 they can
+#: overflow: the frequencies are then not defined, and every realisation diverges).
+SMALLEST_MASS = 1.0 / LARGEST
+
 Positive = Annotated[float, Field(gt=0, le=LARGEST, allow_inf_nan=False)]
+Mass = Annotated[float, Field(ge=SMALLEST_MASS, le=LARGEST, allow_inf_nan=False)]
 NonNegative = Annotated[float, Field(ge=0, le=LARGEST, allow_inf_nan=False)]
 Real = Annotated[float, Field(ge=-LARGEST, le=LARGEST, allow_inf_nan=False)]
 

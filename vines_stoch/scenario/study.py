@@ -16,8 +16,9 @@ import numpy as np
 from .. import schemes
 from ..records import RecordError, read_record
 from ..textfile import TextFileError, read_text
+from . import accuracy
 from .distributions import REACH, LognormalDistribution
-from .errors import MISSING, ScenarioError, format_error, validate
+from .errors import MISSING, Mistakes, ScenarioError, format_error, validate
 from .fields import LARGEST, MAX_DEPTH
 from .loads import _RecordLoad
 from .model import Scenario
@@ -33,8 +34,11 @@ def _validate(data: dict[str, Any], source: str) -> Scenario:
 
 
 def _require_numeric(data: dict[str, Any], key: str, where: str, spec: Any, source: str,
-                     text: bool = False) -> None:
-    """``key`` must address an existing numeric field of the file (``text``: a text field)."""
+                     text: bool = False, refused: tuple[str, ...] = ()) -> None:
+    """``key`` must address an existing numeric field of the file (``text``: a text field),
+    unless it lies at or inside one of the ``refused`` keys (whose mistake is reported)."""
+    if any(key == k or key.startswith(k + ".") for k in refused):
+        return
     try:
         current = get_path(data, key)
     except (KeyError, IndexError, ValueError, TypeError):
@@ -66,20 +70,33 @@ def _check_values(data: dict[str, Any], key: str, ends: tuple[float, float], whe
                                              message.format(end=end, rule=rule))) from None
 
 
-def _check_stability(scenario: Scenario, source: str) -> None:
-    """Refuse a ``dt`` past the linear stability limit of the scheme that would run."""
+def _stability(scenario: Scenario) -> str | None:
+    """Why ``dt`` is past the linear stability limit of the scheme that would run (None: it is not)."""
     omega, dt = scenario.highest_frequency(), scenario.simulation.dt
     limit = schemes.SCHEMES[scenario.scheme].stability
-    if omega * dt >= limit:
-        raise ScenarioError(format_error(
-            source, "simulation.dt", dt,
-            f"is past the stability limit of the {scenario.scheme} scheme: the highest linear natural "
+    if omega * dt < limit:
+        return None
+    return (f"is past the stability limit of the {scenario.scheme} scheme: the highest linear natural "
             f"frequency of the scene is {omega:.6g} rad/s, which needs dt < {limit:.4g} / omega = "
-            f"{limit / omega:.4g} (use about a tenth of that for accuracy)"))
+            f"{limit / omega:.4g} (use about a tenth of that for accuracy)")
+
+
+#: The time step: where it is uncertain or optimised, every value it may take must be stable
+#: (a physical parameter drawn past the limit makes a diverged realisation instead).
+STEP = "simulation.dt"
+
+
+def _check_stability(scenario: Scenario, source: str) -> None:
+    """Refuse a ``dt`` past the linear stability limit of the scheme that would run."""
+    why = _stability(scenario)
+    if why is not None:
+        raise ScenarioError(format_error(source, "simulation.dt", scenario.simulation.dt, why))
 
 
 class Study:
-    """A validated scenario file: the base scenario and its sweep points."""
+    """A validated scenario file: the base scenario and its sweep points; ``warnings``: one line
+    for each thing the run would do that the file may not expect (a coarse ``dt``, realisations
+    that would all be the same), which ``run`` and ``validate`` print before anything runs."""
 
     def __init__(self, source: str, text: str, data: dict[str, Any], directory: Path = Path("."),
                  records: dict[tuple[Any, ...], tuple[np.ndarray, np.ndarray]] | None = None):
@@ -88,29 +105,39 @@ class Study:
         self.data = data
         self.directory = directory
         self._records = {} if records is None else records  # record files read so far, shared by variants
-        self.base = self._read_records(_validate(data, source), source)
-        sweep = dict(self.base.sweep)
-        zipped = _zipped(sweep.pop("zip", []), sweep, source)
+        mistakes = Mistakes()  # every mistake of the file, reported at once
+        base, invalid = None, ()
+        try:
+            base = self.base = self._read_records(_validate(data, source), source)
+        except ScenarioError as exc:
+            mistakes.lines += str(exc).split("\n")
+            invalid = exc.keys
+        refused = tuple(k for k in invalid if k)  # (keys at or inside these are not named again)
+        sweep = dict(data["sweep"]) if isinstance(data.get("sweep"), dict) else {}
+        zipped: list[str] = []
+        with mistakes.kept():
+            zipped = _zipped(sweep.pop("zip", []), sweep, source)
         self.sweep_keys = list(sweep)
-        grids = {k: _grid(k, sweep[k], source) for k in self.sweep_keys}
+        grids: dict[str, list] = {}
         for key in self.sweep_keys:
-            text = isinstance(grids[key][0], str)
-            _require_numeric(data, key, f"sweep.{key}", sweep[key], source, text)
-            if not text and self._integer(key):
-                grids[key] = _whole(grids[key], f"sweep.{key}", sweep[key], source)
-        self.uncertain_keys = list(self.base.uncertain)
-        for key, dist in self.base.uncertain.items():
-            _require_numeric(data, key, f"uncertain.{key}", data["uncertain"][key], source)
-            if self._integer(key):
-                raise ScenarioError(format_error(source, f"uncertain.{key}", data["uncertain"][key],
-                                                 "names an integer field, and distributions draw real "
-                                                 "numbers: sweep it instead"))
-            if key in self.sweep_keys:
-                raise ScenarioError(format_error(source, f"uncertain.{key}", data["uncertain"][key],
-                                            "is also swept: a parameter is either swept or uncertain"))
-            self._check_support(data, key, dist, source)
-        if self.base.optimize is not None:
-            self._check_optimize(data, source)
+            with mistakes.kept():
+                grid = _grid(key, sweep[key], source)
+                text = isinstance(grid[0], str)
+                _require_numeric(data, key, f"sweep.{key}", sweep[key], source, text, refused)
+                if base is not None and not text and self._integer(key):
+                    grid = _whole(grid, f"sweep.{key}", sweep[key], source)
+                grids[key] = grid
+        uncertain = data["uncertain"] if isinstance(data.get("uncertain"), dict) else {}
+        self.uncertain_keys = list(uncertain)
+        for key in self.uncertain_keys:
+            with mistakes.kept():
+                self._check_uncertain(data, key, base, refused, source)
+        optimize = data.get("optimize")
+        parameters = optimize.get("parameters") if isinstance(optimize, dict) else None
+        for key in parameters if isinstance(parameters, dict) else ():
+            with mistakes.kept():
+                self._check_parameter(data, key, parameters[key], base, refused, source)
+        mistakes.raise_any()
         self.grid = _product(grids, zipped, source)
         self.points: list[Scenario] = []
         self._point_data: list[dict[str, Any]] = []
@@ -120,9 +147,25 @@ class Study:
                 set_path(variant, key, value)
             self._point_data.append(variant)
             where = f"{source} (sweep point {values})" if values else source
-            self.points.append(self._read_records(_validate(variant, where), source))
-            _check_stability(self.points[-1], where)
+            if mistakes:  # (the first sweep point that fails is reported)
+                continue
+            with mistakes.kept():
+                self.points.append(self._read_records(_validate(variant, where), source))
+                _check_stability(self.points[-1], where)
+        if not mistakes and STEP in self.uncertain_keys:
+            dist = self.base.uncertain[STEP]
+            with mistakes.kept():
+                self._check_steps(dist.reach(), f"uncertain.{STEP}", uncertain[STEP],
+                                  dist.distribution + " draws reach {end:g}{point}, where {rule}")
+        tuned = self.base.optimize if not mistakes else None
+        if tuned is not None and STEP in tuned.parameters:
+            bound = tuned.parameters[STEP]
+            with mistakes.kept():
+                self._check_steps((bound.low, bound.high), f"optimize.parameters.{STEP}", parameters[STEP],
+                                  "the bound {end:g}{point} is not allowed: {rule}")
+        mistakes.raise_any()
         self._check_work(source)
+        self.warnings = accuracy.warnings(source, self.points, self.grid, self.base.ensemble.realizations)
 
     def _integer(self, key: str) -> bool:
         """True when the (numeric) field at dotted ``key`` holds integers."""
@@ -143,13 +186,25 @@ class Study:
                 f"{ens.realizations} realisation(s) x duration / dt), past ensemble.max_path_steps = "
                 f"{ens.max_path_steps:.3g}: raise that if the run is meant"))
 
-    def _check_support(self, data: dict[str, Any], key: str, dist: Any, source: str) -> None:
-        """Every value ``dist`` can draw must be valid for ``key``: check both ends of its support."""
+    def _check_uncertain(self, data: dict[str, Any], key: str, base: Scenario | None,
+                         refused: tuple[str, ...], source: str) -> None:
+        """An uncertain parameter: an existing real field, not swept, valid over the support of its
+        law (the last two once the file's tables are valid)."""
         where, spec = f"uncertain.{key}", data["uncertain"][key]
+        _require_numeric(data, key, where, spec, source, refused=refused)
+        if key in self.sweep_keys:
+            raise ScenarioError(format_error(source, where, spec,
+                                             "is also swept: a parameter is either swept or uncertain"))
+        if base is None:
+            return
+        if self._integer(key):
+            raise ScenarioError(format_error(source, where, spec, "names an integer field, and distributions "
+                                             "draw real numbers: sweep it instead"))
+        dist = base.uncertain[key]
         lo, hi = dist.support()
-        lo = lo if math.isfinite(lo) else -LARGEST
-        lo = lo if lo != 0.0 or not isinstance(dist, LognormalDistribution) else 2.2e-308
-        _check_values(data, key, (lo, hi if math.isfinite(hi) else LARGEST), where, spec, source,
+        lo = dist.reach()[0] if isinstance(dist, LognormalDistribution) else lo  # (its support starts at 0)
+        ends = (lo if math.isfinite(lo) else -LARGEST, hi if math.isfinite(hi) else LARGEST)
+        _check_values(data, key, ends, where, spec, source,
                       f"{dist.distribution} draws reach {{end:g}}, but the value {{rule}}; choose a "
                       "distribution whose support fits (lognormal for positive values, uniform or "
                       "truncated-normal within bounds)")
@@ -160,21 +215,37 @@ class Study:
                                                  f"({REACH:g} standard deviations), "
                                                  f"past the largest magnitude {LARGEST:g}"))
 
-    def _check_optimize(self, data: dict[str, Any], source: str) -> None:
-        """Optimised parameters: numeric fields, neither swept nor uncertain, valid at both bounds."""
-        for key, bound in self.base.optimize.parameters.items():
-            where = f"optimize.parameters.{key}"
-            spec = data["optimize"]["parameters"][key]
-            _require_numeric(data, key, where, spec, source)
-            if self._integer(key):
-                raise ScenarioError(format_error(source, where, spec,
-                                                 "names an integer field, and the optimiser moves "
-                                                 "parameters continuously: sweep it instead"))
-            if key in self.sweep_keys or key in self.uncertain_keys:
-                raise ScenarioError(format_error(source, where, spec, "is swept or uncertain: "
-                                                 "an optimised parameter must be neither"))
-            _check_values(data, key, (bound.low, bound.high), where, spec, source,
-                          "the bound {end:g} is not allowed: the value {rule}")
+    def _check_parameter(self, data: dict[str, Any], key: str, spec: Any, base: Scenario | None,
+                         refused: tuple[str, ...], source: str) -> None:
+        """An optimised parameter: an existing real field, neither swept nor uncertain, valid at both
+        bounds (the last once the file's tables are valid)."""
+        where = f"optimize.parameters.{key}"
+        _require_numeric(data, key, where, spec, source, refused=refused)
+        if key in self.sweep_keys or key in self.uncertain_keys:
+            raise ScenarioError(format_error(source, where, spec, "is swept or uncertain: "
+                                             "an optimised parameter must be neither"))
+        if base is None:
+            return
+        if self._integer(key):
+            raise ScenarioError(format_error(source, where, spec, "names an integer field, and the optimiser "
+                                             "moves parameters continuously: sweep it instead"))
+        bound = base.optimize.parameters[key]
+        _check_values(data, key, (bound.low, bound.high), where, spec, source,
+                      "the bound {end:g} is not allowed: the value {rule}")
+
+    def _check_steps(self, ends: tuple[float, float], where: str, spec: Any, message: str) -> None:
+        """``dt`` at either of ``ends`` must be stable at every sweep point (``message``, formatted
+        with ``end``, ``point`` and the stability ``rule``, says why not)."""
+        for values, point in zip(self.grid, self.points):
+            for end in ends:
+                simulation = point.simulation.model_copy(update={"dt": end})
+                variant = point.model_copy(update={"simulation": simulation})
+                why = _stability(variant)
+                if why is not None:
+                    at = f" (at sweep point {values})" if values else ""
+                    rule = f"{STEP} = {end:g} {why}"
+                    raise ScenarioError(format_error(self.source, where, spec,
+                                                     message.format(end=end, point=at, rule=rule)))
 
     def realise(self, point: int, values: dict[str, float]) -> Scenario:
         """Sweep point ``point`` with its uncertain parameters set to ``values``."""
@@ -200,9 +271,16 @@ class Study:
                     try:
                         self._records[key] = read_record(path, load.format, load.dt)
                     except RecordError as exc:
-                        raise ScenarioError(format_error(source, f"loads.{i}.file", load.file,
-                                                         str(exc))) from None
+                        raise ScenarioError(format_error(source, f"loads.{i}.file", load.file, str(exc)),
+                                            (f"loads.{i}.file",)) from None
                 load._times, load._values = self._records[key]
+                span, dt = load._times[-1] - load._times[0], scenario.simulation.dt
+                if not span >= dt:
+                    raise ScenarioError(format_error(
+                        source, f"loads.{i}.file", load.file,
+                        f"the record spans {span:.3g} s ({len(load._times)} samples), less than one step "
+                        f"of the run (simulation.dt = {dt:g}): check its time step (DT) or time column"),
+                        (f"loads.{i}.file",))
         return scenario
 
     @property

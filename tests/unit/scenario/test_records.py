@@ -62,12 +62,12 @@ def test_column_files(tmp_path):
 
 @pytest.mark.parametrize("content, kwargs, message", [
     (AT2_NEW.replace("NPTS=    7", "NPTS=    8"), {}, "NPTS = 8, the file has 7 values"),
-    (AT2_NEW.replace(".4000000E-01", "abc"), {}, "line 5: 'abc' is not a number"),
+    (AT2_NEW.replace(".4000000E-01", "abc"), {}, "line 5: a 3-character token is not a number"),
     (AT2_NEW.replace("DT=   .0100", "DT=  -.0100"), {}, "line 4: DT = -0.01: must be > 0"),
     ("0.0 1.0\n0.1 2.0\n0.1 3.0\n", {}, "line 3: time 0.1 does not increase"),
     ("0.0 1.0\n0.1 2.0 5.0\n", {}, "line 2: 3 columns; expected 2"),
     ("1.0\n2.0\n", {}, "the scenario must give dt"),
-    ("1.0\nnan\n", {"dt": 0.1}, "line 2: 'nan' is not a finite number"),
+    ("1.0\nnan\n", {"dt": 0.1}, "line 2: a 3-character token is not a finite number"),
     (AT2_NEW, {"fmt": "two-column"}, "line 1: 6 columns; expected 2"),
     ("0.0 1.0\n", {"fmt": "at2"}, "no AT2 header"),
 ])

@@ -45,7 +45,7 @@ CASES = [
     ("wrong type", GOOD.replace("mass = 1.0", 'mass = "heavy"'),
      "primary.mass = 'heavy': must be a number"),
     ("negative mass", GOOD.replace("mass = 1.0", "mass = -1.0"),
-     "primary.mass = -1.0: must be > 0"),
+     "primary.mass = -1.0: must be in [1e-15, 1e+15]"),
     ("restitution", GOOD.replace("restitution = 0.6", "restitution = 1.4"),
      "absorbers.1.restitution = 1.4: must be in [0, 1]"),
     ("missing section", GOOD.replace("[simulation]\nduration = 10.0\ndt = 1e-3\n", ""),
