@@ -15,10 +15,12 @@ from __future__ import annotations
 
 import math
 import os
+import signal
 import sys
+import threading
 import time
 from collections.abc import Iterator
-from contextlib import ExitStack, contextmanager
+from contextlib import ExitStack, closing, contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -336,6 +338,37 @@ class _Checkpoint:
         self.folded = {c for state in states for c in state.chunks[:state.folded]}
 
 
+class Interrupted(KeyboardInterrupt):
+    """A run stopped by Ctrl-C: ``kept`` of its ``total`` chunks are in its folder for ``--resume``."""
+
+    def __init__(self, kept: int, total: int):
+        super().__init__(f"interrupted: {kept} of {total} chunks kept; finish with --resume")
+        self.kept, self.total = kept, total
+
+
+@contextmanager
+def _noting_interrupts() -> Iterator[threading.Event]:
+    """While a run in the main thread runs its chunks: Ctrl-C raises ``KeyboardInterrupt`` as
+    always and is also noted in the event yielded, so that one lost on its way (raised inside a
+    finaliser or a library's broad handler, where it is dropped) still stops the run.  Elsewhere
+    (another thread; SIGINT handled or ignored by the caller) the event stays clear."""
+    noted = threading.Event()
+    if (threading.current_thread() is not threading.main_thread()
+            or signal.getsignal(signal.SIGINT) is not signal.default_int_handler):
+        yield noted
+        return
+
+    def note(signum: int, frame: object) -> None:
+        noted.set()
+        signal.default_int_handler(signum, frame)
+
+    signal.signal(signal.SIGINT, note)
+    try:
+        yield noted
+    finally:
+        signal.signal(signal.SIGINT, signal.default_int_handler)
+
+
 def output_directory(study: Study, directory: str | Path | None = None) -> Path:
     """Where a run writes: ``directory``, else the scenario's ``[output] directory``, else
     ``results/<name>``."""
@@ -369,7 +402,8 @@ def run(study: Study, directory: str | Path | None = None, *, workers: int | Non
     another live run writes is refused with ``store.FolderInUse``.  Every file the run writes
     carries its run key (``store.prepare_folder``): a new run deletes what earlier runs left and
     refuses (``store.ForeignFiles``) a folder holding files this program did not write; a resumed
-    run refuses parts, results or a checkpoint of another run.
+    run refuses parts, results or a checkpoint of another run.  Ctrl-C raises ``Interrupted``
+    (a ``KeyboardInterrupt``) saying how many chunks are kept.
     """
     if backend not in BACKENDS:
         raise ValueError(f"backend {backend!r}: must be one of {', '.join(BACKENDS)}")
@@ -443,42 +477,58 @@ def _run(study: Study, directory: Path, workers: int | None, chunk: int | None, 
     def skip(c: tuple[int, int, int]) -> bool:
         return states[c[0]].done
 
-    with ExitStack() as stack:
-        fold_ready()
-        bar = stack.enter_context(Progress(total, done, enabled=progress))
-        if scheduler:
-            client = stack.enter_context(_client(scheduler, progress))
-            where = f"dask.distributed at {client.scheduler.address}"
-            results = schedulers.distributed(client, todo, call, skip)
-        else:  # (one GPU: its chunks one after the other)
-            threads = 1 if backend == "cuda" else workers or os.cpu_count() or 1
-            where, results = "embedded", schedulers.embedded(todo, call, skip, threads)
-        if backend == "cuda":  # (the workers' GPUs of a cluster are theirs to name)
-            from . import gpu
+    def kept() -> int:
+        """Chunks of this run that a resumed run does not run again."""
+        def held(c: tuple[int, int, int]) -> bool:
+            return c in checkpoint.folded if spec else part_path(directory, *c).exists()
 
-            where = f"{where}, cuda" + ("" if scheduler else f" ({gpu.device_name()})")
-        folding = False
-        try:
-            for c, (frame, paths) in results:
-                _label(frame, study, c[0])
-                write_table(frame, part_path(directory, *c), {KEY: key})
-                ready[c] = (frame, paths)
-                folding = True
-                fold_ready()
-                folding = False
-                for rc in [rc for rc in ready if states[rc[0]].done]:
-                    ready.pop(rc)
-                if spec:
-                    checkpoint.save(states)
-                bar.advance(c[2] - c[1])
-        except BaseException:
-            if spec and not folding:  # keep what was folded, unless interrupted mid-fold
-                checkpoint.save(states, force=True)
-            raise
-    if shard is not None:
-        return None
-    meta = provenance(study.text, study.source, seed, where, backend, key)
-    return _consolidate(study, the_plan, states, directory, meta, grids, spec)
+        return sum(held(c) or (states[c[0]].stop is not None and c[1] >= states[c[0]].stop) for c in mine)
+
+    try:
+        with ExitStack() as stack:
+            interrupted = stack.enter_context(_noting_interrupts())
+            fold_ready()
+            bar = stack.enter_context(Progress(total, done, enabled=progress))
+            if scheduler:
+                client = stack.enter_context(_client(scheduler, progress))
+                where = f"dask.distributed at {client.scheduler.address}"
+                results = schedulers.distributed(client, todo, call, skip)
+            else:  # (one GPU: its chunks one after the other)
+                threads = 1 if backend == "cuda" else workers or os.cpu_count() or 1
+                where, results = "embedded", schedulers.embedded(todo, call, skip, threads)
+            stack.enter_context(closing(results))  # (its threads or futures stop before the client goes)
+            if backend == "cuda":  # (the workers' GPUs of a cluster are theirs to name)
+                from . import gpu
+
+                where = f"{where}, cuda" + ("" if scheduler else f" ({gpu.device_name()})")
+            folding = False
+            try:
+                for c, (frame, paths) in results:
+                    _label(frame, study, c[0])
+                    write_table(frame, part_path(directory, *c), {KEY: key})
+                    ready[c] = (frame, paths)
+                    folding = True
+                    fold_ready()
+                    folding = False
+                    for rc in [rc for rc in ready if states[rc[0]].done]:
+                        ready.pop(rc)
+                    if spec:
+                        checkpoint.save(states)
+                    bar.advance(c[2] - c[1])
+                    if interrupted.is_set():
+                        raise KeyboardInterrupt
+            except BaseException:
+                if spec and not folding:  # keep what was folded, unless interrupted mid-fold
+                    checkpoint.save(states, force=True)
+                raise
+            if interrupted.is_set():
+                raise KeyboardInterrupt
+        if shard is not None:
+            return None
+        meta = provenance(study.text, study.source, seed, where, backend, key)
+        return _consolidate(study, the_plan, states, directory, meta, grids, spec)
+    except KeyboardInterrupt as exc:
+        raise Interrupted(kept(), len(mine)) from exc
 
 
 def _consolidate(study: Study, the_plan: Plan, states: list[PointState], directory: Path,

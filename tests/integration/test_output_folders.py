@@ -1,9 +1,10 @@
 """Output folders: nothing found in one is executed, another run's parts or results are never
-taken, files the program did not write are never deleted (each case with two processes or a
-planted file)."""
+taken, files the program did not write are never deleted, and Ctrl-C says what it kept (each
+case with two processes or a planted file)."""
 
 from __future__ import annotations
 
+import os
 import pickle
 import shutil
 import signal
@@ -17,7 +18,7 @@ import pandas as pd
 import pytest
 
 from tests.helpers import ROOT, cli, study_from, toml_text, two_dof_data
-from vines_stoch import history, load_scenario, run
+from vines_stoch import ensemble, history, load_scenario, run
 from vines_stoch.store import KEY, ForeignFiles, png_text, read_arrays, read_metadata, write_arrays
 
 
@@ -219,6 +220,54 @@ def test_files_the_program_did_not_write_are_never_deleted(tmp_path):
     code, err = cli("run", scenario, "--out", out, "--quiet", "--workers", "1")
     assert code == 2 and "(summary.parquet)" in err, err
     assert pd.read_parquet(out / "summary.parquet").columns.tolist() == ["x"]
+
+
+def test_ctrl_c_exits_130_and_says_how_many_chunks_are_kept(tmp_path):
+    """SIGINT to a real run: exit status 130, "interrupted: N of M chunks kept; finish with
+    --resume" with N the parts on disk; the resume keeps them."""
+    scenario = write(tmp_path, "a", noisy(0.1))
+    out = tmp_path / "out"
+    process = start(scenario, out)
+    wait_for_parts(out, 3, process)
+    process.send_signal(signal.SIGINT)
+    _, err = process.communicate(timeout=120)
+    kept = parts_of(out)
+    assert process.returncode == 130, err
+    assert f"interrupted: {len(kept)} of 200 chunks kept; finish with --resume" in err, err
+    assert 3 <= len(kept) < 200
+    stamps = {p: p.stat().st_mtime_ns for p in kept}
+    assert cli("run", scenario, "--out", out, "--quiet", "--workers", "1", "--resume")[0] == 0
+    assert {p: p.stat().st_mtime_ns for p in kept} == stamps
+    assert len(pd.read_parquet(out / "realizations.parquet")) == 200
+
+
+def test_a_ctrl_c_lost_on_its_way_still_stops_the_run(tmp_path, monkeypatch):
+    """A KeyboardInterrupt dropped where Ctrl-C landed (a finaliser, a library's broad handler:
+    here one around the writing of the third part) still ends the run after that chunk: exit
+    status 130 and what is kept."""
+    scenario = write(tmp_path, "a", noisy(0.1, 20))
+    out = tmp_path / "out"
+    real_write = ensemble.write_table
+    written = []
+
+    def write_and_drop_a_ctrl_c(frame, path, meta=None):
+        real_write(frame, path, meta)
+        written.append(path)
+        if len(written) == 3:
+            try:
+                os.kill(os.getpid(), signal.SIGINT)
+                time.sleep(5)  # (the signal's KeyboardInterrupt is raised here...)
+            except KeyboardInterrupt:
+                pass  # (... and dropped)
+
+    monkeypatch.setattr(ensemble, "write_table", write_and_drop_a_ctrl_c)
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)  # (as in a command's process)
+    try:
+        code, err = cli("run", scenario, "--out", out, "--quiet", "--workers", "1")
+    finally:
+        signal.signal(signal.SIGINT, previous)
+    assert code == 130 and "interrupted: 3 of 20 chunks kept; finish with --resume" in err, err
+    assert len(parts_of(out)) == 3 and not (out / "realizations.parquet").exists()
 
 
 def test_a_checkpoint_is_data_with_its_key_and_checksum(tmp_path, monkeypatch):
