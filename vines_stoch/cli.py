@@ -68,7 +68,7 @@ def run(
                                      "one realisation a thread; its own random streams)."),
 ) -> None:
     """Run a scenario and write realizations.parquet and summary.parquet."""
-    from .ensemble import output_directory
+    from .ensemble import Interrupted, output_directory
     from .ensemble import run as run_study
 
     _check_backend(backend)
@@ -94,9 +94,8 @@ def run(
     try:
         result = run_study(study, directory, workers=workers, chunk=chunk, resume=resume, scheduler=scheduler,
                            progress=not quiet, shard=share, backend=backend)
-    except KeyboardInterrupt:
-        typer.echo(f"\ninterrupted: finished chunks are kept in {directory}/parts; "
-                   f"run again with --resume to complete", err=True)
+    except KeyboardInterrupt as exc:  # (Interrupted says how many chunks are kept)
+        typer.echo(f"\n{exc if isinstance(exc, Interrupted) else 'interrupted'}", err=True)
         raise typer.Exit(130) from None
     except (OSError, ValueError, TimeoutError) as exc:
         _fail(str(exc))

@@ -13,14 +13,14 @@ finished first.
 
 from __future__ import annotations
 
-import json
 import math
 import os
-import pickle
+import signal
 import sys
+import threading
 import time
 from collections.abc import Iterator
-from contextlib import ExitStack, contextmanager
+from contextlib import ExitStack, closing, contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -35,7 +35,20 @@ from .metrics import METRICS, finish_table, ground_intensity, summarise
 from .progress import Progress
 from .scenario import History, Study
 from .scene import Scene, build_scene
-from .store import lock_folder, part_path, provenance, read_results, run_key, write_table
+from .store import (
+    CHECKPOINT,
+    KEY,
+    ForeignFiles,
+    lock_folder,
+    part_path,
+    prepare_folder,
+    provenance,
+    read_arrays,
+    read_results,
+    run_key,
+    write_arrays,
+    write_table,
+)
 from .streams import FILTER, PARAMETERS, generator, streams
 
 #: Target work of one chunk, in path-steps (about 0.1-0.3 s of compute).
@@ -235,6 +248,26 @@ class PointState:
             self.tree.add(paths[:, :, :keep], ok[:keep])
         self.folded += 1
 
+    def to_arrays(self) -> dict[str, np.ndarray]:
+        """What a checkpoint keeps of the point, as named arrays (``restore`` takes it back)."""
+        out = {"folded": np.array(self.folded), "stop": np.array(-1 if self.stop is None else self.stop),
+               "edm": np.concatenate(self.edm) if self.edm else np.empty(0)}
+        if self.tree is not None:
+            out.update({f"tree.{name}": a for name, a in self.tree.to_arrays().items()})
+        return out
+
+    def restore(self, arrays: dict[str, np.ndarray]) -> None:
+        """Take back what ``to_arrays`` gave (the EDM of the folded chunks joined into one: the
+        same values in the same order)."""
+        self.folded, stop = int(arrays["folded"]), int(arrays["stop"])
+        if not 0 <= self.folded <= len(self.chunks):
+            raise ValueError(f"{self.folded} chunks folded of {len(self.chunks)}")
+        self.stop = None if stop < 0 else stop
+        self.edm = [arrays["edm"]] if arrays["edm"].size else []
+        if self.tree is not None:
+            self.tree = hist.Tree.from_arrays({name.removeprefix("tree."): a for name, a in arrays.items()
+                                               if name.startswith("tree.")})
+
 
 def _stopping_count(edm: np.ndarray, start: int, target: float) -> int | None:
     """Smallest multiple ``n > start`` of ``TARGET_STEP`` within ``edm`` whose first ``n``
@@ -267,28 +300,73 @@ def _client(scheduler: str, announce: bool = False) -> Iterator[object]:
 
 
 class _Checkpoint:
-    """History statistics folded so far, saved atomically now and then (a resumed run takes
-    them up; chunks finished after the last save are run again for their paths)."""
+    """History statistics folded so far, saved atomically now and then as data
+    (``store.write_arrays``: numeric arrays with the run key and their checksum, never pickles): a
+    resumed run takes them up; chunks finished after the last save are run again for their paths."""
 
     def __init__(self, path: Path, key: str, every: float):
         self.path, self.key, self.every = path, key, every
         self.saved = time.monotonic()
+        self.folded: set[tuple[int, int, int]] = set()  # the chunks the file holds
 
-    def load(self) -> list[PointState] | None:
+    def load(self, states: list[PointState]) -> None:
+        """Restore ``states`` from the file, where there is one; ``ForeignFiles`` where it is
+        another run's, damaged or not a checkpoint."""
         if not self.path.exists():
-            return None
-        with self.path.open("rb") as fh:
-            key, states = pickle.load(fh)
-        return states if key == self.key else None
+            return
+        key, arrays = read_arrays(self.path)
+        if key != self.key:
+            raise ForeignFiles(f"{self.path}: the history statistics of another run; remove it (the chunks "
+                               "of this run then run again for their paths), or use another --out folder")
+        try:
+            for p, state in enumerate(states):
+                state.restore({name.split(".", 1)[1]: a for name, a in arrays.items()
+                               if name.split(".", 1)[0] == str(p)})
+        except (KeyError, ValueError, TypeError, IndexError) as exc:
+            raise ForeignFiles(f"{self.path}: does not fit this run's chunks ({exc}); remove it") from None
+        self._saved(states)
 
     def save(self, states: list[PointState], force: bool = False) -> None:
         if not force and time.monotonic() - self.saved < self.every:
             return
-        tmp = self.path.with_name(self.path.name + ".tmp")
-        with tmp.open("wb") as fh:
-            pickle.dump((self.key, states), fh, protocol=pickle.HIGHEST_PROTOCOL)
-        os.replace(tmp, self.path)
+        write_arrays(self.path, {f"{p}.{name}": a for p, state in enumerate(states)
+                                 for name, a in state.to_arrays().items()}, self.key)
         self.saved = time.monotonic()
+        self._saved(states)
+
+    def _saved(self, states: list[PointState]) -> None:
+        self.folded = {c for state in states for c in state.chunks[:state.folded]}
+
+
+class Interrupted(KeyboardInterrupt):
+    """A run stopped by Ctrl-C: ``kept`` of its ``total`` chunks are in its folder for ``--resume``."""
+
+    def __init__(self, kept: int, total: int):
+        super().__init__(f"interrupted: {kept} of {total} chunks kept; finish with --resume")
+        self.kept, self.total = kept, total
+
+
+@contextmanager
+def _noting_interrupts() -> Iterator[threading.Event]:
+    """While a run in the main thread runs its chunks: Ctrl-C raises ``KeyboardInterrupt`` as
+    always and is also noted in the event yielded, so that one lost on its way (raised inside a
+    finaliser or a library's broad handler, where it is dropped) still stops the run.  Elsewhere
+    (another thread; SIGINT handled or ignored by the caller) the event stays clear."""
+    noted = threading.Event()
+    if (threading.current_thread() is not threading.main_thread()
+            or signal.getsignal(signal.SIGINT) is not signal.default_int_handler):
+        yield noted
+        return
+
+    def note(signum: int, frame: object) -> None:
+        noted.set()
+        signal.default_int_handler(signum, frame)
+
+    signal.signal(signal.SIGINT, note)
+    try:
+        yield noted
+    finally:
+        signal.signal(signal.SIGINT, signal.default_int_handler)
 
 
 def output_directory(study: Study, directory: str | Path | None = None) -> Path:
@@ -321,7 +399,11 @@ def run(study: Study, directory: str | Path | None = None, *, workers: int | Non
     GPU is, ``gpu.GPUUnavailable`` says why).
 
     The directory is owned by one run at a time (``store.lock_folder``): a run into a folder
-    another live run writes is refused with ``store.FolderInUse``.
+    another live run writes is refused with ``store.FolderInUse``.  Every file the run writes
+    carries its run key (``store.prepare_folder``): a new run deletes what earlier runs left and
+    refuses (``store.ForeignFiles``) a folder holding files this program did not write; a resumed
+    run refuses parts, results or a checkpoint of another run.  Ctrl-C raises ``Interrupted``
+    (a ``KeyboardInterrupt``) saying how many chunks are kept.
     """
     if backend not in BACKENDS:
         raise ValueError(f"backend {backend!r}: must be one of {', '.join(BACKENDS)}")
@@ -356,30 +438,16 @@ def _run(study: Study, directory: Path, workers: int | None, chunk: int | None, 
     seed, target, spec = base.ensemble.seed, base.ensemble.target_sem, base.simulation.history
     grids = [hist.grid(scene.n_steps, spec.points) if spec else None for scene in the_plan.scenes]
     key = run_key(study.text, the_plan.chunks, backend)
-    parts = directory / "parts"
-    parts.mkdir(parents=True, exist_ok=True)
-    manifest = parts / "manifest.json"
-    keep = resume or shard is not None  # the parts already there are this study's
-    if keep and manifest.exists() and json.loads(manifest.read_text()).get("key") != key:
-        raise ValueError(f"{directory}: --{'resume' if resume else 'shard'} found parts of a different "
-                         "scenario or chunk plan; use another --out directory"
-                         f"{'' if shard else ' or run without --resume'}")
-    if not keep:
-        for old in parts.glob("*"):
-            old.unlink()
-    tmp = manifest.with_name(f"manifest.json.{os.getpid()}")  # (shards write it side by side)
-    tmp.write_text(json.dumps({"key": key, "chunks": len(the_plan.chunks)}))
-    os.replace(tmp, manifest)
-    checkpoint = _Checkpoint(parts / "history.pickle", key, checkpoint_seconds)
-
-    states = checkpoint.load() if (resume and spec) else None
-    if states is None:
-        states = [PointState([c for c in the_plan.chunks if c[0] == p]) for p in range(len(the_plan.scenes))]
-        for state in states:
-            state.tree = hist.Tree() if spec else None
+    keep = "--resume" if resume else "--shard" if shard is not None else None
+    found = prepare_folder(directory, key, len(the_plan.chunks), study.source, keep)
+    checkpoint = _Checkpoint(directory / "parts" / CHECKPOINT, key, checkpoint_seconds)
+    states = [PointState([c for c in the_plan.chunks if c[0] == p], tree=hist.Tree() if spec else None)
+              for p in range(len(the_plan.scenes))]
+    if resume and spec:
+        checkpoint.load(states)
     folded_chunks = {c for s in states for c in s.chunks[:s.folded]}
     # a part on disk is reused unless its history paths are still needed
-    on_disk = {c for c in the_plan.chunks if part_path(directory, *c).exists()}
+    on_disk = {c for c in the_plan.chunks if part_path(directory, *c) in found}
     reusable = folded_chunks if spec else on_disk
     ready: dict[tuple[int, int, int], tuple[pd.DataFrame, np.ndarray | None]] = {}
 
@@ -395,7 +463,6 @@ def _run(study: Study, directory: Path, workers: int | None, chunk: int | None, 
                     break
                 state.fold(frame, paths, target)
 
-    fold_ready()
     mine = the_plan.chunks if shard is None else the_plan.chunks[shard[0]::shard[1]]
     todo = [c for c in mine if c not in reusable]
     total = sum(c[2] - c[1] for c in mine)
@@ -410,41 +477,58 @@ def _run(study: Study, directory: Path, workers: int | None, chunk: int | None, 
     def skip(c: tuple[int, int, int]) -> bool:
         return states[c[0]].done
 
-    with ExitStack() as stack:
-        bar = stack.enter_context(Progress(total, done, enabled=progress))
-        if scheduler:
-            client = stack.enter_context(_client(scheduler, progress))
-            where = f"dask.distributed at {client.scheduler.address}"
-            results = schedulers.distributed(client, todo, call, skip)
-        else:  # (one GPU: its chunks one after the other)
-            threads = 1 if backend == "cuda" else workers or os.cpu_count() or 1
-            where, results = "embedded", schedulers.embedded(todo, call, skip, threads)
-        if backend == "cuda":  # (the workers' GPUs of a cluster are theirs to name)
-            from . import gpu
+    def kept() -> int:
+        """Chunks of this run that a resumed run does not run again."""
+        def held(c: tuple[int, int, int]) -> bool:
+            return c in checkpoint.folded if spec else part_path(directory, *c).exists()
 
-            where = f"{where}, cuda" + ("" if scheduler else f" ({gpu.device_name()})")
-        folding = False
-        try:
-            for c, (frame, paths) in results:
-                _label(frame, study, c[0])
-                write_table(frame, part_path(directory, *c))
-                ready[c] = (frame, paths)
-                folding = True
-                fold_ready()
-                folding = False
-                for rc in [rc for rc in ready if states[rc[0]].done]:
-                    ready.pop(rc)
-                if spec:
-                    checkpoint.save(states)
-                bar.advance(c[2] - c[1])
-        except BaseException:
-            if spec and not folding:  # keep what was folded, unless interrupted mid-fold
-                checkpoint.save(states, force=True)
-            raise
-    if shard is not None:
-        return None
-    meta = provenance(study.text, study.source, seed, where)
-    return _consolidate(study, the_plan, states, directory, meta, grids, spec)
+        return sum(held(c) or (states[c[0]].stop is not None and c[1] >= states[c[0]].stop) for c in mine)
+
+    try:
+        with ExitStack() as stack:
+            interrupted = stack.enter_context(_noting_interrupts())
+            fold_ready()
+            bar = stack.enter_context(Progress(total, done, enabled=progress))
+            if scheduler:
+                client = stack.enter_context(_client(scheduler, progress))
+                where = f"dask.distributed at {client.scheduler.address}"
+                results = schedulers.distributed(client, todo, call, skip)
+            else:  # (one GPU: its chunks one after the other)
+                threads = 1 if backend == "cuda" else workers or os.cpu_count() or 1
+                where, results = "embedded", schedulers.embedded(todo, call, skip, threads)
+            stack.enter_context(closing(results))  # (its threads or futures stop before the client goes)
+            if backend == "cuda":  # (the workers' GPUs of a cluster are theirs to name)
+                from . import gpu
+
+                where = f"{where}, cuda" + ("" if scheduler else f" ({gpu.device_name()})")
+            folding = False
+            try:
+                for c, (frame, paths) in results:
+                    _label(frame, study, c[0])
+                    write_table(frame, part_path(directory, *c), {KEY: key})
+                    ready[c] = (frame, paths)
+                    folding = True
+                    fold_ready()
+                    folding = False
+                    for rc in [rc for rc in ready if states[rc[0]].done]:
+                        ready.pop(rc)
+                    if spec:
+                        checkpoint.save(states)
+                    bar.advance(c[2] - c[1])
+                    if interrupted.is_set():
+                        raise KeyboardInterrupt
+            except BaseException:
+                if spec and not folding:  # keep what was folded, unless interrupted mid-fold
+                    checkpoint.save(states, force=True)
+                raise
+            if interrupted.is_set():
+                raise KeyboardInterrupt
+        if shard is not None:
+            return None
+        meta = provenance(study.text, study.source, seed, where, backend, key)
+        return _consolidate(study, the_plan, states, directory, meta, grids, spec)
+    except KeyboardInterrupt as exc:
+        raise Interrupted(kept(), len(mine)) from exc
 
 
 def _consolidate(study: Study, the_plan: Plan, states: list[PointState], directory: Path,
@@ -473,8 +557,6 @@ def _consolidate(study: Study, the_plan: Plan, states: list[PointState], directo
             rows.append(rows_p)
         write_table(pd.concat(rows, ignore_index=True), directory / "history.parquet",
                     {**meta, "vines_stoch.history_block": str(hist.BLOCK)})
-    elif (directory / "history.parquet").exists():
-        (directory / "history.parquet").unlink()
     return read_results(directory)
 
 

@@ -27,7 +27,7 @@ from scipy.special import log_ndtr, ndtr, ndtri
 
 from .metrics import exceedance, limit_names
 from .plotting import pyplot
-from .store import read_results
+from .store import KEY, ForeignFiles, png_text, read_metadata, read_results, write_table
 
 #: Fisher-scoring iterations (a fit converges in well under 20; separated stripes never do).
 ITERATIONS = 60
@@ -215,7 +215,12 @@ def fragility(directory: str | Path, limit: str, im: str, diverged: str = "exclu
     rows of an earlier fit of the same limit and intensity) and ``fragility_<limit>.png`` (where
     matplotlib is installed); returns the rows written."""
     directory = Path(directory)
-    realizations, _ = read_results(directory)
+    realizations, _ = read_results(directory)  # (and fragility.parquet, if there, is this run's)
+    meta = read_metadata(directory / "summary.parquet")
+    figure = directory / f"fragility_{limit}.png"
+    if plot and figure.exists() and KEY not in png_text(figure):
+        raise ForeignFiles(f"{figure}: not a plot vines-stoch wrote; move it out of the folder to fit "
+                           f"{limit}")
     table = stripes(realizations, limit, im, diverged)
     result = fit(table, samples, seed)
     policy = "counted as exceedances" if diverged == "exceed" else "excluded"
@@ -228,17 +233,15 @@ def fragility(directory: str | Path, limit: str, im: str, diverged: str = "exclu
     if path.is_file():
         old = pd.read_parquet(path)
         rows = pd.concat([old[(old["limit"] != limit) | (old["im_key"] != im)], rows], ignore_index=True)
-    tmp = path.with_suffix(".parquet.tmp")
-    rows.to_parquet(tmp, index=False)
-    tmp.replace(path)
+    write_table(rows, path, meta)  # (the run's provenance and key: fitted to this run)
     if plot:
-        _plot(table, result, limit, im, policy, directory / f"fragility_{limit}.png")
+        _plot(table, result, limit, im, policy, figure, meta[KEY])
     return rows[(rows["limit"] == limit) & (rows["im_key"] == im)].reset_index(drop=True)
 
 
-def _plot(table: pd.DataFrame, result: dict, limit: str, im: str, policy: str, path: Path) -> None:
+def _plot(table: pd.DataFrame, result: dict, limit: str, im: str, policy: str, path: Path, key: str) -> None:
     """The stripes' fractions with their intervals and the fitted curve (where matplotlib is
-    installed)."""
+    installed), the run ``key`` among the PNG's text entries."""
     plt = pyplot(str(path))
     if plt is None:
         return
@@ -267,5 +270,5 @@ def _plot(table: pd.DataFrame, result: dict, limit: str, im: str, policy: str, p
     ax.set_ylim(-0.02, 1.02)
     ax.legend(fontsize=8)
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
+    fig.savefig(path, dpi=120, metadata={KEY: key})
     plt.close(fig)

@@ -17,6 +17,7 @@ rank, and the bound on the accumulated rank error is reported (``rank_error``, a
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -137,6 +138,30 @@ class Tree:
             if self.seen % BLOCK == 0:
                 self._carry(Node.leaf(np.concatenate(self.pending, axis=2)))
                 self.pending = []
+
+    def to_arrays(self) -> dict[str, np.ndarray]:
+        """The tree as named numeric arrays (a checkpoint's content); ``from_arrays`` gives it
+        back exactly (the open leaf's pieces joined into one: the same values in the same
+        order)."""
+        out = {"seen": np.array(self.seen), "pieces": np.array(len(self.pending)),
+               "levels": np.array(sorted(self.levels), dtype=np.int64)}
+        if self.pending:
+            out["pending"] = np.concatenate(self.pending, axis=2)
+        for level, node in self.levels.items():
+            out[f"{level}.counts"] = np.array([node.count, node.weight])
+            out[f"{level}.rank_error"] = np.array(node.rank_error)
+            out[f"{level}.mean"], out[f"{level}.m2"], out[f"{level}.values"] = node.mean, node.m2, node.values
+        return out
+
+    @classmethod
+    def from_arrays(cls, arrays: Mapping[str, np.ndarray]) -> Tree:
+        """The tree ``to_arrays`` wrote."""
+        levels = {}
+        for level in arrays["levels"].tolist():
+            count, weight = arrays[f"{level}.counts"].tolist()
+            levels[level] = Node(count, arrays[f"{level}.mean"], arrays[f"{level}.m2"],
+                                 arrays[f"{level}.values"], weight, float(arrays[f"{level}.rank_error"]))
+        return cls(int(arrays["seen"]), [arrays["pending"]] if int(arrays["pieces"]) else [], levels)
 
     def _carry(self, node: Node) -> None:
         level = 0

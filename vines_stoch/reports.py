@@ -38,9 +38,7 @@ class Run:
     @classmethod
     def read(cls, directory: str | Path, label: str | None = None) -> Run:
         directory = Path(directory)
-        if not (directory / "summary.parquet").is_file():
-            raise FileNotFoundError(f"{directory}: no summary.parquet (not a finished vines-stoch run)")
-        realizations, summary = read_results(directory)
+        realizations, summary = read_results(directory)  # (refuses results of two runs, fragility's too)
         meta = read_metadata(directory / "summary.parquet")
         scenario = tomllib.loads(meta["vines_stoch.scenario"])
         history = directory / "history.parquet"

@@ -1,4 +1,14 @@
-"""Parquet results: atomic part files per chunk, consolidation, provenance metadata."""
+"""Parquet results: atomic part files per chunk, consolidation, provenance metadata, and the
+identity of an output folder's files.
+
+Every file a run writes into its folder carries the run's key (``run_key``: scenario text, seed,
+chunk plan, backend): part files and result files in their Parquet metadata, the checkpoint of
+the history statistics among its arrays.  Nothing in a folder is trusted for being there: a run
+reuses only parts with its own key, a report reads only results whose keys agree, and no file
+is read in a format that can execute code (Parquet, JSON, npz without pickles).  A new run
+deletes only files this program wrote (recognised by their metadata) and refuses, naming them,
+to start beside files it did not write.
+"""
 
 from __future__ import annotations
 
@@ -6,14 +16,18 @@ import hashlib
 import json
 import os
 import platform
+import re
 import socket
+import struct
 import time
-from collections.abc import Iterator
+import zipfile
+from collections.abc import Iterator, Mapping
 from contextlib import contextmanager
 from functools import lru_cache
 from importlib import metadata as importlib_metadata
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 import pyarrow as pa
 import pyarrow.parquet as pq
@@ -37,15 +51,37 @@ def _dependency_versions() -> str:
     return json.dumps(versions, sort_keys=True)
 
 
-def provenance(scenario_text: str, source: str, seed: int, scheduler: str) -> dict[str, str]:
-    """Key-value metadata stored in both result files."""
+#: Metadata key of the run key, in every part and result file.
+KEY = "vines_stoch.run_key"
+#: The result files a run (or ``vines-stoch fragility``) writes into its folder.
+RESULTS = ("summary.parquet", "realizations.parquet", "history.parquet", "fragility.parquet")
+#: The parts' manifest (the run key and the number of chunks) and the history statistics'
+#: checkpoint, in ``DIR/parts``.
+MANIFEST, CHECKPOINT = "manifest.json", "history.npz"
+#: Names of the files in ``DIR/parts`` that only a run writes: parts, and temporary files of an
+#: atomic write that a killed run can leave (``write_table``, ``write_arrays``, the manifest).
+_PART = re.compile(r"point\d{5}_r\d{8}-\d{8}\.parquet")
+_LEFT_BEHIND = re.compile(r"(point\d{5}_r\d{8}-\d{8}\.parquet|history\.npz)\.tmp|manifest\.json\.\d+")
+#: Marker of a checkpoint file (its format, should it ever change).
+_ARRAYS_FORMAT = "vines-stoch arrays 1"
+
+
+class ForeignFiles(ValueError):
+    """An output folder holds files of another run, or files this program did not write."""
+
+
+def provenance(scenario_text: str, source: str, seed: int, scheduler: str, backend: str = "cpu",
+               key: str | None = None) -> dict[str, str]:
+    """Key-value metadata stored in every result file (``key``: the run key, ``run_key``)."""
     return {
         "vines_stoch.version": __version__,
         "vines_stoch.scenario": scenario_text,
         "vines_stoch.source": source,
         "vines_stoch.seed": str(seed),
+        "vines_stoch.backend": backend,
         "vines_stoch.scheduler": scheduler,
         "vines_stoch.dependencies": _dependency_versions(),
+        **({KEY: key} if key else {}),
     }
 
 
@@ -174,8 +210,8 @@ def _take_over(path: Path, stale: str | None) -> None:
 
 
 def run_key(scenario_text: str, plan: list[tuple[int, int, int]], backend: str = "cpu") -> str:
-    """Fingerprint of a run (scenario text, chunk plan and, other than the CPU, the backend,
-    whose streams differ): parts of another run are never reused."""
+    """Fingerprint of a run (scenario text, seed included, chunk plan and, other than the CPU, the
+    backend, whose streams differ): parts of another run are never reused."""
     digest = hashlib.sha256(scenario_text.encode())
     digest.update(json.dumps(plan).encode())
     if backend != "cpu":
@@ -194,8 +230,220 @@ def read_metadata(path: str | Path) -> dict[str, str]:
     return {k.decode(): v.decode() for k, v in raw.items() if k.startswith(b"vines_stoch.")}
 
 
+def _parquet_metadata(path: Path) -> dict[str, str] | None:
+    """``read_metadata`` of a file, None where it is not a Parquet file that can be read."""
+    try:
+        return read_metadata(path)
+    except (OSError, ValueError, pa.ArrowException):
+        return None
+
+
+def png_text(path: Path) -> dict[str, str]:
+    """The text entries (``tEXt`` chunks) of a PNG file before its image data; {} for any other
+    file."""
+    found: dict[str, str] = {}
+    try:
+        with path.open("rb") as stream:
+            if stream.read(8) != b"\x89PNG\r\n\x1a\n":
+                return found
+            while len(head := stream.read(8)) == 8:
+                length, kind = struct.unpack(">I4s", head)
+                if kind == b"IDAT" or length > 1 << 20:
+                    break
+                data = stream.read(length + 4)[:length]  # (and the chunk's CRC)
+                if kind == b"tEXt":
+                    name, _, text = data.partition(b"\0")
+                    found[name.decode("latin-1")] = text.decode("latin-1")
+    except OSError:
+        pass
+    return found
+
+
+def _digest(arrays: Mapping[str, np.ndarray]) -> str:
+    """sha256 of named arrays: each one's name, type, shape and bytes, in name order."""
+    h = hashlib.sha256()
+    for name in sorted(arrays):
+        a = np.ascontiguousarray(arrays[name])
+        h.update(json.dumps([name, a.dtype.str, a.shape]).encode())
+        h.update(a.tobytes())
+    return h.hexdigest()
+
+
+def write_arrays(path: Path, arrays: Mapping[str, np.ndarray], key: str) -> None:
+    """Write numeric arrays, the run ``key`` and their checksum as an ``.npz`` file, atomically
+    (the checkpoint of the history statistics: data that ``read_arrays`` loads without pickles)."""
+    header = json.dumps({"format": _ARRAYS_FORMAT, "key": key, "sha256": _digest(arrays)})
+    tmp = path.with_name(path.name + ".tmp")
+    with tmp.open("wb") as stream:
+        np.savez(stream, header=np.array(header), **arrays)
+    os.replace(tmp, path)
+
+
+def read_arrays(path: Path) -> tuple[str, dict[str, np.ndarray]]:
+    """``(key, arrays)`` of a file ``write_arrays`` wrote; ``ForeignFiles`` where it is not such a
+    file or its arrays do not match their checksum (nothing in it is ever unpickled)."""
+    try:
+        with np.load(path, allow_pickle=False) as npz:
+            arrays = {name: npz[name] for name in npz.files}
+        header = json.loads(str(arrays.pop("header")))
+        if header.get("format") != _ARRAYS_FORMAT:
+            raise ValueError("not a checkpoint")
+    except (OSError, ValueError, KeyError, TypeError, AttributeError, EOFError, zipfile.BadZipFile):
+        raise ForeignFiles(f"{path}: not a checkpoint vines-stoch wrote; remove it (a resumed run then runs "
+                           "the chunks it would have kept again) or use another --out folder") from None
+    if header.get("sha256") != _digest(arrays):
+        raise ForeignFiles(f"{path}: damaged (its arrays do not match their checksum); remove it (a "
+                           "resumed run then runs the chunks it would have kept again)")
+    return str(header.get("key")), arrays
+
+
+def _manifest(directory: Path) -> dict | None:
+    """The parts' manifest of a folder (``{"key", "chunks", "source"}``), None where there is none or
+    it is not one a run wrote."""
+    try:
+        found = json.loads((directory / "parts" / MANIFEST).read_text())
+    except (OSError, ValueError):
+        return None
+    return found if isinstance(found, dict) and isinstance(found.get("key"), str) else None
+
+
+def _written_here(path: Path) -> bool:
+    """Whether this program wrote ``path``, a result file (its metadata, of any version) or a
+    fragility plot (its text entries hold a run key)."""
+    if not path.is_file() or path.is_symlink():
+        return False
+    return KEY in png_text(path) if path.suffix == ".png" else bool(_parquet_metadata(path))
+
+
+def _written_in_parts(path: Path) -> bool:
+    """Whether this program wrote ``path``, a file in ``DIR/parts``: a part (its metadata holds a
+    run key), the manifest, the checkpoint, or a temporary file an interrupted atomic write left
+    (known by its name alone)."""
+    if not path.is_file() or path.is_symlink():
+        return False
+    if _LEFT_BEHIND.fullmatch(path.name):
+        return True
+    if path.name == MANIFEST:
+        return _manifest(path.parent.parent) is not None
+    if path.name == CHECKPOINT:
+        try:
+            read_arrays(path)
+        except ForeignFiles:
+            return False
+        return True
+    return path.suffix == ".parquet" and KEY in (_parquet_metadata(path) or {})
+
+
+def _named(paths: list[Path], directory: Path) -> str:
+    """Up to five paths relative to ``directory``, and how many more."""
+    names = [str(p.relative_to(directory)) for p in sorted(paths)]
+    return ", ".join(names[:5]) + (f" and {len(names) - 5} more" if len(names) > 5 else "")
+
+
+def prepare_folder(directory: Path, key: str, chunks: int, source: str,
+                   keep: str | None = None) -> set[Path]:
+    """Make ``directory`` the folder of the run ``key`` (of ``chunks`` chunks, scenario file
+    ``source``) and return the part files of that run already in it.
+
+    A new run (``keep`` None) first deletes what earlier runs of this program left: the parts,
+    the result files and the fragility plots; it refuses (``ForeignFiles``, naming them) where
+    ``parts/`` or a result file's name holds a file this program did not write.  A run that
+    keeps the parts (``keep``: the option that asks it, ``"--resume"`` or ``"--shard"``) refuses
+    a folder whose parts or results belong to another run, manifest or not."""
+    parts = directory / "parts"
+    parts.mkdir(parents=True, exist_ok=True)
+    results = [directory / name for name in RESULTS if (directory / name).exists()]
+    if keep is None:
+        entries = sorted(parts.iterdir())
+        foreign = ([p for p in entries if not _written_in_parts(p)]
+                   + [p for p in results if not _written_here(p)])
+        if foreign:
+            raise ForeignFiles(f"{directory}: holds files vines-stoch did not write "
+                               f"({_named(foreign, directory)}); a run never reads or deletes them: move "
+                               "them out of the folder, or use another --out folder")
+        plots = [p for p in directory.glob("fragility_*.png") if _written_here(p)]
+        for path in entries + results + plots:
+            path.unlink()
+        mine = set()
+    else:
+        option = f"{keep}: "
+        manifest = _manifest(directory)
+        if manifest is None and (parts / MANIFEST).exists():
+            raise ForeignFiles(f"{directory}: {option}parts/{MANIFEST} is not a manifest vines-stoch wrote; "
+                               "move it out of the folder, or use another --out folder")
+        if manifest is not None and manifest["key"] != key:
+            raise _another_run(directory, option, keep,
+                               f"its parts are those of {manifest.get('source', 'another run')}")
+        mine, other = set(), []
+        for path in parts.glob("point*.parquet"):
+            found = (_parquet_metadata(path) or {}).get(KEY)
+            if found == key:
+                mine.add(path)
+            elif found is not None or _PART.fullmatch(path.name):
+                other.append(path)
+        if other:
+            raise _another_run(directory, option, keep, f"{_named(other, directory)} belong to another run "
+                               "or were not written by vines-stoch")
+        other = [p for p in results if (_parquet_metadata(p) or {}).get(KEY) != key]
+        if other:
+            raise _another_run(directory, option, keep, f"{_named(other, directory)} belong to another run "
+                               "or carry no run key")
+    tmp = parts / f"{MANIFEST}.{os.getpid()}"  # (shards write it side by side)
+    tmp.write_text(json.dumps({"key": key, "chunks": chunks, "source": source}))
+    os.replace(tmp, parts / MANIFEST)
+    return mine
+
+
+def _another_run(directory: Path, option: str, keep: str, what: str) -> ForeignFiles:
+    return ForeignFiles(f"{directory}: {option}{what} (a different scenario or chunk plan, or another "
+                        "backend); finish that run with its own scenario file, "
+                        + ("run without --resume to replace them, " if keep == "--resume" else "")
+                        + "or use another --out folder")
+
+
+def check_folder(directory: Path) -> str:
+    """The run key of the results in ``directory``; ``ForeignFiles`` where a result file (or the
+    parts' manifest) belongs to another run than ``summary.parquet`` or carries no run key,
+    ``FileNotFoundError`` where there is no ``summary.parquet`` (saying so if an unfinished run
+    is in ``parts/``)."""
+    summary = directory / "summary.parquet"
+    manifest = _manifest(directory)
+    if not summary.is_file():
+        unfinished = ""
+        if manifest is not None:
+            kept = len(list((directory / "parts").glob("point*.parquet")))
+            unfinished = (f"; its parts hold an unfinished run of {manifest.get('source', 'a scenario')} "
+                          f"({kept} of {manifest.get('chunks', '?')} chunks): finish it with "
+                          f"vines-stoch run SCENARIO --out {directory} --resume")
+        raise FileNotFoundError(f"{directory}: no summary.parquet (not a finished vines-stoch run)"
+                                f"{unfinished}")
+    key = None
+    for name in RESULTS:
+        path = directory / name
+        if not path.exists():
+            continue
+        found = (_parquet_metadata(path) or {}).get(KEY)
+        if found is None:
+            raise ForeignFiles(f"{path}: carries no run key (written by another program or an earlier "
+                               "version of vines-stoch), so it cannot be checked against its run: run the "
+                               f"scenario again into {directory}, or remove {name}")
+        if key is None:
+            key = found
+        elif found != key:
+            raise ForeignFiles(f"{path}: belongs to another run than {summary} (the folder mixes two runs): "
+                               f"run the scenario again into {directory}"
+                               + (f", or remove {name}" if name == "fragility.parquet" else ""))
+    if manifest is not None and manifest["key"] != key:
+        raise ForeignFiles(f"{directory}: its results and its parts belong to two runs (parts of "
+                           f"{manifest.get('source', 'another scenario')}): finish that run with --resume, "
+                           "or run the results' scenario again into the folder")
+    return key
+
+
 def read_results(directory: str | Path) -> tuple[pd.DataFrame, pd.DataFrame]:
-    """``(realizations, summary)`` of a finished run as pandas DataFrames."""
+    """``(realizations, summary)`` of a finished run as pandas DataFrames (after ``check_folder``:
+    never the results of two runs)."""
     directory = Path(directory)
+    check_folder(directory)
     return (pd.read_parquet(directory / "realizations.parquet"),
             pd.read_parquet(directory / "summary.parquet"))

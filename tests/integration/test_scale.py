@@ -146,7 +146,7 @@ def test_interrupted_run_resumes_history_from_its_checkpoint(tmp_path, monkeypat
     with pytest.raises(KeyboardInterrupt):
         run(study, tmp_path / "cut", workers=2, checkpoint_seconds=0.0)
     monkeypatch.setattr(ensemble, "write_table", real_write)
-    assert (tmp_path / "cut" / "parts" / "history.pickle").exists()
+    assert (tmp_path / "cut" / "parts" / "history.npz").exists()
     assert not (tmp_path / "cut" / "realizations.parquet").exists()
     resumed = run(study, tmp_path / "cut", workers=2, resume=True)
     pd.testing.assert_frame_equal(reference[0], resumed[0], check_exact=True)
