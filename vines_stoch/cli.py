@@ -6,10 +6,14 @@ from __future__ import annotations
 import os
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import typer
 
 from .scenario import ScenarioError, Study, load_scenario
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 app = typer.Typer(add_completion=False, no_args_is_help=True, pretty_exceptions_enable=False,
                   help="Stochastic Monte Carlo response analysis of vibration absorbers.")
@@ -25,6 +29,21 @@ def _warn(study: Study) -> None:
     the same), one ``warning:`` line each on standard error."""
     for line in study.warnings:
         typer.echo(f"warning: {line}", err=True)
+
+
+def _warn_residuals(realizations: pd.DataFrame, study: Study) -> None:
+    """One ``warning:`` line per sweep point with realisations whose energy balance does not
+    close (``metrics.residual_notes``, the same words as the summary's ``notes``)."""
+    from .metrics import residual_notes
+
+    tolerance = study.base.simulation.residual_tolerance
+    points = realizations.groupby("point", sort=True)
+    for point, group in points:
+        note = residual_notes(group[group["status"] == "ok"], tolerance)
+        if note:
+            where = f"sweep point {point}: " if len(points) > 1 else ""
+            typer.echo(f"warning: {study.source}: {where}{note} (simulation.residual_tolerance = "
+                       f"{tolerance:g})", err=True)
 
 
 def _check_backend(backend: str) -> None:
@@ -104,9 +123,10 @@ def run(
             typer.echo(f"shard {shard}: its chunks are in {directory}/parts; once every shard has finished, "
                        "run again with --resume (no --shard) to write the results", err=True)
         return
+    realizations, summary = result
+    _warn_residuals(realizations, study)
     if quiet:
         return
-    realizations, summary = result
     typer.echo(f"results: {directory}/realizations.parquet ({len(realizations)} rows), "
                f"{directory}/summary.parquet ({len(summary)} rows)"
                + (f", {directory}/history.parquet" if study.base.simulation.history else ""))

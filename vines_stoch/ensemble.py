@@ -543,7 +543,7 @@ def _consolidate(study: Study, the_plan: Plan, states: list[PointState], directo
             frame = pd.read_parquet(part_path(directory, *c))
             frames.append(frame if state.stop is None else frame[frame["realization"] < state.stop])
     realizations_df = pd.concat(frames, ignore_index=True)
-    summary_df = summarise(realizations_df, study.sweep_keys)
+    summary_df = summarise(realizations_df, study.sweep_keys, study.base.simulation.residual_tolerance)
     write_table(realizations_df, directory / "realizations.parquet", meta)
     write_table(summary_df, directory / "summary.parquet", meta)
     if spec:

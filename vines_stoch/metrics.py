@@ -192,6 +192,20 @@ def undefined_notes(ok: pd.DataFrame, metrics: list[str]) -> str:
     return "; ".join(notes)
 
 
+def residual_notes(ok: pd.DataFrame, tolerance: float) -> str:
+    """The realisations ended ok whose energy balance does not close: ``|energy_residual|``
+    above ``tolerance`` ("" if none), their count and the largest (MODEL.md section 4)."""
+    if "energy_residual" not in ok or len(ok) == 0:
+        return ""
+    residual = ok["energy_residual"].abs()
+    over = residual > tolerance
+    if not over.any():
+        return ""
+    return (f"{int(over.sum())} of {len(ok)} realisation(s) with |energy_residual| above {tolerance:g} "
+            f"(largest {residual.max():.2g}): their energy balance does not close; a smaller "
+            "simulation.dt makes it")
+
+
 def limit_names(frame: pd.DataFrame) -> list[str]:
     """The limits of a realisations table (its ``first_passage_NAME`` columns), in order."""
     return [c[len("first_passage_"):] for c in frame.columns if c.startswith("first_passage_")]
@@ -210,9 +224,11 @@ def exceedance(passed: int, n: int) -> tuple[float, float, float]:
     return passed / n, float(ci.low), float(ci.high)
 
 
-def summarise(realizations: pd.DataFrame, parameters: list[str]) -> pd.DataFrame:
+def summarise(realizations: pd.DataFrame, parameters: list[str],
+              residual_tolerance: float = 1e-3) -> pd.DataFrame:
     """One row per sweep point: parameters, ``n_ok``, ``n_failed``, ``notes`` (why statistics
-    are undefined: ``undefined_notes``) and ``M_<stat>`` per metric
+    are undefined: ``undefined_notes``; realisations whose energy residual is above
+    ``residual_tolerance``: ``residual_notes``) and ``M_<stat>`` per metric
     (``STATISTICS``; ``sem`` is the standard error of the mean and ``ci95_lo``, ``ci95_hi`` its
     95 % Student-t confidence interval); per limit (``first_passage_NAME`` columns) ``p_NAME``,
     ``p_NAME_lo``, ``p_NAME_hi``: the fraction of the realisations ended ok whose peak exceeded
@@ -228,7 +244,8 @@ def summarise(realizations: pd.DataFrame, parameters: list[str]) -> pd.DataFrame
             row[p] = group[p].iloc[0]
         row["n_ok"] = len(ok)
         row["n_failed"] = len(group) - len(ok)
-        row["notes"] = undefined_notes(ok, metric_columns(realizations))
+        notes = (undefined_notes(ok, metric_columns(realizations)), residual_notes(ok, residual_tolerance))
+        row["notes"] = "; ".join(n for n in notes if n)
         for m in metric_columns(realizations):
             values = ok[m].to_numpy(dtype=float)
             n = values.size

@@ -47,13 +47,16 @@ def quantile_name(q: float) -> str:
 
 class Simulation(_Model):
     """Time grid and scheme; ``metrics_from`` opens the metrics window ``[t0, T]``; ``history``
-    asks for ensemble statistics of time histories (``true``: the default grid and quantiles)."""
+    asks for ensemble statistics of time histories (``true``: the default grid and quantiles);
+    ``residual_tolerance``: the largest ``|energy_residual|`` a realisation may end with
+    unflagged (``metrics.residual_notes``)."""
 
     duration: Positive
     dt: Positive
     scheme: Literal["auto", "euler-maruyama", "rk4", "sra"] = "auto"
     history: History | None = None
     metrics_from: NonNegative = 0.0
+    residual_tolerance: Annotated[float, Field(gt=0, le=1, allow_inf_nan=False)] = 1e-3
 
     @field_validator("history", mode="before")
     @classmethod

@@ -12,11 +12,12 @@ references that share nothing with the build.
 Errors are measured entry by entry relative to ``D_i D_j`` (``D`` the reference's standard
 deviations, the bound a covariance entry has): a state whose variance is 1e12 times another's
 (position against velocity over a short step) is held to the same relative accuracy.  The
-references agree with a 80-digit evaluation to about 1e-14 in that measure; the build (Van Loan's exponential at a
-small step, then doublings that add positive terms) to 3e-12 or better; the tolerance 1e-9 leaves
-three decades for hosts' BLAS kernels.  Van Loan's exponential over the whole step, which this
-build replaced, missed by 1e-4 at ``|pole| dt`` = 52 on the Clough-Penzien filter, by 1e218 at
-1e3, and on some hosts by 4e4 on the Davenport cascade at 52.
+references agree with an 80-digit evaluation to about 1e-14 in that measure; the build (Van
+Loan's exponential at a small step, then doublings that add positive terms) to 3e-12 or
+better; the tolerance 1e-9 leaves three decades for hosts' BLAS kernels.  Van Loan's
+exponential over the whole step, which this build replaced, missed by 1e-4 at ``|pole| dt`` = 52
+on the Clough-Penzien filter, by 1e218 at 1e3, and on some hosts by 4e4 on the Davenport
+cascade at 52.
 """
 
 from __future__ import annotations
@@ -28,8 +29,13 @@ from scipy.linalg import expm
 
 from tests.unit.loads.test_wind import the_load
 from vines_stoch import filters
-from vines_stoch.filters import (clough_penzien, filtered_noise, kanai_tajimi, stationary_covariance,
-                                 transition)
+from vines_stoch.filters import (
+    clough_penzien,
+    filtered_noise,
+    kanai_tajimi,
+    stationary_covariance,
+    transition,
+)
 from vines_stoch.scene import wind_load
 
 #: The ``|pole| dt`` of the largest pole, from a tiny step to a thousand time constants.
