@@ -188,7 +188,7 @@ def crossing(x, v, length, left, path, dw, off, w_at, sigma, normals, slot, memo
         if trial == 0:
             g_hi = g
             continue
-        if g > 0.0:
+        if g >= 0.0:  # (a trial exactly on the wall is the root: the bracket's end returned)
             hi, g_hi = s, g
             if last > 0:
                 g_lo *= 0.5
