@@ -202,7 +202,7 @@ def residual_notes(ok: pd.DataFrame, tolerance: float) -> str:
     if not over.any():
         return ""
     return (f"{int(over.sum())} of {len(ok)} realisation(s) with |energy_residual| above {tolerance:g} "
-            f"(largest {residual.max():.2g}): their energy balance does not close; a smaller "
+            f"(largest {residual.max():.3g}): their energy balance does not close; a smaller "
             "simulation.dt makes it")
 
 
