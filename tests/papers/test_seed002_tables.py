@@ -1,0 +1,72 @@
+"""Seed 002 (Lizunov, Pogorelova, Postnikova 2023, "Selection of the optimal design for a
+vibro-impact nonlinear energy sink"): the four seven-parameter SSVI NES designs
+(``scenarios/seed002_*.toml``, obstacle at C from the primary), Table 3 (the wane of the primary's
+steady E1max with the 39.7 kg and 62.0 kg designs) and the regimes nT,k,m of Tables 1-2.
+
+Tolerances.  The paper solves with MATLAB at an unstated tolerance, over an unstated window, and
+prints E1max wane to three digits.  We assume its E1max carries up to about 1 % of solver and
+window error (its primary alone at 6.3 rad/s, seed 003, is 1557 J; ours over [100, 400] s is
+1559.4 J, +0.15 %).  The wane ``w = 100 (1 - E / E0)`` moves by ``(100 - w) (dE / E - dE0 / E0)``:
+1 % in each of E and E0 moves it by at most 1.7 points (w = 13.7), so the wane is tested within
+2 points (measured: within 0.8 point at all twelve entries).  The ``from-rest`` obstacle misses
+the 39.7 kg design at 6.2 rad/s by 9 points.  A regime is a label (period, impact counts) and is
+tested exactly; chaotic and "chatter" entries read as ``aperiodic`` (no period up to 8T within
+1e-3 of the amplitude, ``metrics.regime``).  At dt = 5e-4 s and over a 2000 s run (window
+[1700, 2000] s) the labels tested here stay the same and the wanes move by under 0.1 point.
+
+Not reproduced, so not tested: the 22.7 kg design at 6.4 rad/s (paper 4T,8,8; here 2T,4,4, the
+same impacts a period with half the period); the 37.9 kg design at 6.4 rad/s (paper transient
+chaos then T,2,3; here aperiodic through 2000 s) and at 7.0 rad/s (paper chaotic; here aperiodic
+through the scenario's 1000 s but 5T,5,10 by 2000 s, so a match would hang on the run's length);
+the 62.0 kg design at 7.0 rad/s (paper T,2,1; here aperiodic)."""
+
+from __future__ import annotations
+
+from functools import cache
+
+import pytest
+
+from vines_stoch import load_scenario
+from vines_stoch.ensemble import run_chunk
+from vines_stoch.scene import build_scene
+
+#: The forcing frequencies (rad/s) of Tables 1-3, the sweep of every seed 002 scenario.
+FREQUENCIES = (6.2, 6.3, 6.4, 6.5, 6.7, 7.0)
+
+#: Table 3: E1max wane (%) at each frequency.
+WANE = {"seed002_m40": (13.7, 44.1, 50.8, 49.0, 41.2, 31.4),
+        "seed002_m62": (20.1, 54.2, 61.9, 61.4, 53.9, 42.5)}
+#: Wane agreement in percentage points (module docstring).
+WANE_POINTS = 2.0
+
+#: Tables 1-2, rows "with 7 optimized parameters" (chaotic, chatter: ``aperiodic``; transient chaos
+#: then a periodic regime: that regime); None where the paper's regime is not reproduced.
+REGIMES = {
+    "seed002_m22": ("aperiodic", "aperiodic", None, "T,1,2", "T,1,2", "T,1,2"),
+    "seed002_m38": ("T,3,3", "aperiodic", None, "aperiodic", "T,2,2", None),
+    "seed002_m40": ("T,1,2", "T,1,2", "T,0,2", "T,0,1", "T,0,1", "T,0,1"),
+    "seed002_m62": ("aperiodic", "T,3,3", "aperiodic", "T,2,2", "T,2,2", None),
+}
+
+
+@cache
+def steady(name: str, index: int) -> tuple[float, str]:
+    """Steady ``e1_max`` and regime of sweep point ``index`` of ``scenarios/<name>.toml``."""
+    point = load_scenario(f"scenarios/{name}.toml").points[index]
+    assert point.loads[0].frequency == FREQUENCIES[index]
+    row = run_chunk(build_scene(point), 0, 0, 0, 1)[0].iloc[0]
+    return float(row["e1_max"]), str(row["regime"])
+
+
+@pytest.mark.parametrize("name, index", [(name, i) for name in WANE for i in range(len(FREQUENCIES))])
+def test_table_3_wane_within_two_points(name, index):
+    alone, _ = steady("seed002_primary", index)
+    with_damper, _ = steady(name, index)
+    wane = 100.0 * (1.0 - with_damper / alone)
+    assert wane == pytest.approx(WANE[name][index], abs=WANE_POINTS)
+
+
+@pytest.mark.parametrize("name, index", [(name, i) for name, row in REGIMES.items()
+                                         for i, regime in enumerate(row) if regime is not None])
+def test_tables_1_and_2_regimes(name, index):
+    assert steady(name, index)[1] == REGIMES[name][index]
