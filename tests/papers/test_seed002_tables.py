@@ -26,6 +26,7 @@ from functools import cache
 
 import pytest
 
+from tests.helpers import ROOT
 from vines_stoch import load_scenario
 from vines_stoch.ensemble import run_chunk
 from vines_stoch.scene import build_scene
@@ -52,7 +53,7 @@ REGIMES = {
 @cache
 def steady(name: str, index: int) -> tuple[float, str]:
     """Steady ``e1_max`` and regime of sweep point ``index`` of ``scenarios/<name>.toml``."""
-    point = load_scenario(f"scenarios/{name}.toml").points[index]
+    point = load_scenario(ROOT / "scenarios" / f"{name}.toml").points[index]
     assert point.loads[0].frequency == FREQUENCIES[index]
     row = run_chunk(build_scene(point), 0, 0, 0, 1)[0].iloc[0]
     return float(row["e1_max"]), str(row["regime"])
