@@ -1,0 +1,106 @@
+"""Seed 003 (Lizunov, Pogorelova, Postnikova, Gerashchenko 2024): Table 1 (double-sided designs
+of 40, 49.3 and 66.1 kg from the five-parameter optimisation), the double-sided rows of Table 5
+(m2 = 10 kg), SS-4(60) of Table 2 read with D = 0.0759 m, and Table 6 (the "normal" 10 kg
+designs), each on the seed 003 primary under 800 cos(6.3 t) N from rest, steady E1max over
+[100, 400] s.  The designs are the Table 2 and 4 scenarios with the printed parameters set.
+
+Tolerances.  The paper solves with MATLAB's ode23s at unstated tolerances and prints E1max to
+three digits (0.5 % at most).  Our RK4 values are converged: halving dt or running 2000 s (window
+[1700, 2000] s) moves every value tested here by under 1e-5 relative.  Ours sit above the paper's
+at every design that reproduces, the 15 of Tables 2 and 4 (+0.3 % to +4.9 %) and the 8 here
+(+0.9 % to +4.8 %), but only +0.15 % for the primary alone, whose energy hardly swings within a
+period at resonance: we assume the paper's E1max reads up to 5 % low where an impacting absorber
+makes the primary's energy swing within a period (a maximum taken at a variable-step solver's
+steps falls short of the peak), plus the 0.5 % rounding, so E1max is tested within 6 % (measured:
+within 4.8 %).  Table 6 prints no E1max; its text says the mitigation by the "normal" designs is
+"very weak, almost non-existent", tested as E1max at least 80 % of the primary alone's (measured
+91 % and 88 %).  It places narrow bands of bilateral impacts near the resonance, symmetric for the
+double-sided design and asymmetric for the single-sided one: tested at 6.3 rad/s on the regime
+nT,k,m (k == m > 0, and k, m > 0 with k != m).
+
+Not reproduced, so not tested: Table 5 prints one E1max row (428, 603, 411, 560 J) under both the
+single-sided and the double-sided designs; it is the double-sided designs' (tested below), the
+single-sided ones give 949, 571, 818 and 621 J (+122 %, -5.3 %, +99 %, +10.8 %; with the obstacle
+from the primary 1105, 764, 993 and 929 J).  SS-4(60) as printed (D = 0.759 m) gives 1071 J against
+145 J, SS-1(20) 727 J against 586 J (+24 %) and SS-4(20) 1240 J against 526 J
+(``reports/seed-tables.md``)."""
+
+from __future__ import annotations
+
+import re
+from functools import cache
+
+import pytest
+
+from tests.helpers import example_data, study_from
+from vines_stoch.ensemble import run_chunk
+from vines_stoch.scene import build_scene
+from vines_stoch.validation.reproduce import PRIMARY_E1MAX
+
+#: Agreement of E1max with the printed value (module docstring).
+REL = 0.06
+#: The least E1max, as a fraction of the primary alone's, of a design whose mitigation is "very
+#: weak, almost non-existent" (Table 6, module docstring).
+WEAK = 0.80
+
+#: Table 1 (double-sided): m2 (kg), k2 (N/m), c2 (N s/m), V (m), C (m), printed E1max (J).
+TABLE_1 = {"40.0 kg": (40.0, 217.0, 64.8, 0.496, 0.238, 517.0),
+           "49.3 kg": (49.3, 196.0, 70.2, 0.416, 0.256, 282.0),
+           "66.1 kg": (66.1, 223.0, 71.9, 0.154, 0.250, 101.0)}
+#: Table 5, double-sided rows (m2 = 10 kg), and the E1max row printed under them.
+TABLE_5 = {"DS-1(10)": (10.0, 354.0, 7.14, 0.0194, 1.037, 428.0),
+           "DS-2(10)": (10.0, 414.0, 14.8, 0.185, 0.735, 603.0),
+           "DS-3(10)": (10.0, 387.0, 8.57, 0.149, 0.985, 411.0),
+           "DS-4(10)": (10.0, 428.0, 12.6, 0.0276, 0.799, 560.0)}
+#: Table 2, SS-4(60) with D = 0.0759 m for the printed 0.759 m (the other 60 kg designs have
+#: D = 0.06-0.07 m; with 0.759 m the absorber never reaches the primary: T,0,0, 1071 J).
+SS_4_60 = (60.0, 203.0, 83.6, 0.0759, 0.435, 145.0)
+#: Table 6, the "normal" 10 kg designs: scenario the geometry comes from, m2, k2, c2, D (V), C.
+TABLE_6 = {"SS-5(10)": ("seed003_ss20", 10.0, 215.0, 250.0, 0.01, 0.1),
+           "DS-5(10)": ("seed003_ds20", 10.0, 215.0, 132.0, 0.1, 0.1)}
+
+REGIME = re.compile(r"(\d*)T,(\d+),(\d+)")
+
+
+@cache
+def steady(scenario: str, mass: float, stiffness: float, damping: float, offset: float,
+           gap: float) -> tuple[float, str]:
+    """Steady ``e1_max`` and regime of ``scenarios/<scenario>.toml`` (its first design) with the
+    absorber's parameters set."""
+    changes = {"absorbers.0.mass": mass, "absorbers.0.stiffness": stiffness, "absorbers.0.damping": damping,
+               "absorbers.0.offset": offset, "absorbers.0.gap": gap}
+    point = study_from(example_data(scenario, "sweep"), changes).points[0]
+    assert point.loads[0].frequency == 6.3
+    row = run_chunk(build_scene(point), 0, 0, 0, 1)[0].iloc[0]
+    return float(row["e1_max"]), str(row["regime"])
+
+
+@pytest.mark.parametrize("label", list(TABLE_1))
+def test_table_1_double_sided_designs(label):
+    *design, paper = TABLE_1[label]
+    assert steady("seed003_ds60", *design)[0] == pytest.approx(paper, rel=REL)
+
+
+@pytest.mark.parametrize("label", list(TABLE_5))
+def test_table_5_double_sided_designs(label):
+    *design, paper = TABLE_5[label]
+    assert steady("seed003_ds20", *design)[0] == pytest.approx(paper, rel=REL)
+
+
+def test_table_2_ss_4_60_with_the_decimal_point_moved():
+    *design, paper = SS_4_60
+    assert steady("seed003_ss60", *design)[0] == pytest.approx(paper, rel=REL)
+
+
+@pytest.mark.parametrize("label", list(TABLE_6))
+def test_table_6_normal_designs_mitigate_little(label):
+    assert steady(*TABLE_6[label])[0] >= WEAK * PRIMARY_E1MAX
+
+
+@pytest.mark.parametrize("label", list(TABLE_6))
+def test_table_6_normal_designs_impact_both_sides_at_resonance(label):
+    match = REGIME.fullmatch(steady(*TABLE_6[label])[1])
+    assert match is not None
+    left, right = int(match[2]), int(match[3])
+    assert left > 0 and right > 0
+    assert (left == right) == label.startswith("DS")
