@@ -53,7 +53,7 @@ TABLE_5 = {"DS-1(10)": (10.0, 354.0, 7.14, 0.0194, 1.037, 428.0),
            "DS-3(10)": (10.0, 387.0, 8.57, 0.149, 0.985, 411.0),
            "DS-4(10)": (10.0, 428.0, 12.6, 0.0276, 0.799, 560.0)}
 #: Table 2, SS-4(60) with D = 0.0759 m for the printed 0.759 m (the other 60 kg designs have
-#: D = 0.06-0.07 m; with 0.759 m the absorber never reaches the primary: T,0,0, 1071 J).
+#: D = 0.06-0.07 m; with 0.759 m it impacts neither side: T,0,0, 1071 J).
 SS_4_60 = (60.0, 203.0, 83.6, 0.0759, 0.435, 145.0)
 #: Table 6, the "normal" 10 kg designs: scenario the geometry comes from, m2, k2, c2, D (V), C.
 TABLE_6 = {"SS-5(10)": ("seed003_ss20", 10.0, 215.0, 250.0, 0.01, 0.1),
