@@ -1,0 +1,263 @@
+"""Seed 001 (Lizunov, Pogorelova, Postnikova, "Choice of the model for vibro-impact nonlinear
+sink"): its three frames, the scenarios ``seed001_two_storey_ssvi`` (Fig. 4a), ``seed001_three_
+storey_frame`` (Tables 3-5) and ``seed001_nine_storey_ssvi`` (section 4.1, Table 1), run and checked
+against references built here.  Seed 001 prints no response of any frame (no table or figure value
+to reproduce), so the checks are physics with independent references:
+
+- natural frequencies of each primary against ``scipy.linalg.eigh(K, M)`` of the matrices written
+  here from Table 3 (three storeys) and from the assumed values of the scenario headers (two and
+  nine storeys), and the frequencies the headers print;
+- each bare frame (absorbers removed) against an exact linear solution of the same load: the
+  closed-form steady frequency response for harmonic forces (two and three storeys), the exact
+  state-transition solution of the piecewise-linear record (nine storeys);
+- the energy balance of each frame with its absorbers;
+- the absorbers reducing the roof's response: seed 001 calls the SSVI NES "the most effective and
+  efficient" (two and nine storeys) and Tables 4-5 list "optimal control devices" (three storeys).
+"""
+
+from __future__ import annotations
+
+from functools import cache
+
+import numpy as np
+import pytest
+from scipy.linalg import eigh, expm
+
+from tests.helpers import ROOT, example_data, study_from
+from vines_stoch.ensemble import sample
+
+SCENARIOS = ROOT / "scenarios"
+
+
+def storey_matrix(values) -> np.ndarray:
+    """Tridiagonal matrix of storey springs or dashpots (storey ``k`` joins floor ``k-1``, the
+    ground for ``k = 1``, to floor ``k``)."""
+    n = len(values)
+    a = np.diag(np.asarray(values, float) + np.append(np.asarray(values[1:], float), 0.0))
+    for k in range(1, n):
+        a[k - 1, k] = a[k, k - 1] = -values[k]
+    return a
+
+
+def rayleigh(m: np.ndarray, k: np.ndarray, ratio: float = 0.02) -> np.ndarray:
+    """Rayleigh damping ``alpha M + beta K`` with ``ratio`` at modes 1 and 2."""
+    w1, w2 = np.sqrt(eigh(k, m, eigvals_only=True)[:2])
+    return 2 * ratio * w1 * w2 / (w1 + w2) * m + 2 * ratio / (w1 + w2) * k
+
+
+#: The primaries: masses (kg) and storey stiffnesses (N/m), lowest floor first.  Three storeys:
+#: seed 001 Table 3 (six-column frame; the four-column one below).  Two and nine storeys: the
+#: scenario headers' assumptions (seed 001 prints neither frame's floors).
+FRAMES = {
+    "seed001_two_storey_ssvi": ([1000.0, 1000.0], [1.0341e5, 1.0341e5]),
+    "seed001_three_storey_frame": ([29.61, 29.61, 32.40], [2.62e4, 2.40e4, 2.55e4]),
+    "seed001_nine_storey_ssvi": ([1222.2] * 9, [7.08e6] * 9),
+}
+FOUR_COLUMN = [1.55e4, 1.47e4, 1.62e4]
+#: The frequencies the headers print (rad/s, 5 significant digits).
+PRINTED = {
+    "seed001_two_storey_ssvi": [6.285, 16.454],
+    "seed001_three_storey_frame": [12.687, 36.111, 51.857],
+    "seed001_nine_storey_ssvi": [12.570, 37.368, 61.147, 83.257, 103.097, 120.124, 133.875, 143.974,
+                                 150.145],
+}
+
+
+def frequencies(name: str, stiffnesses=None) -> np.ndarray:
+    masses, springs = FRAMES[name]
+    return np.sqrt(eigh(storey_matrix(stiffnesses or springs), np.diag(masses), eigvals_only=True))
+
+
+@pytest.mark.parametrize("name", list(FRAMES))
+def test_frame_frequencies_against_eigh(name):
+    expected = frequencies(name)
+    data = example_data(name, "absorbers", "sweep")
+    got = np.asarray(study_from(data, directory=SCENARIOS).points[0].natural_frequencies(), float)
+    # 1e-10: the same well-conditioned symmetric eigenproblem, round-off ~1e-15
+    np.testing.assert_allclose(got, expected, rtol=1e-10)
+    # the header's figures, printed to 5 significant digits (half a unit of the last: 4e-4)
+    np.testing.assert_allclose(PRINTED[name], expected, rtol=4e-4)
+
+
+def test_header_figures_of_the_three_and_nine_storey_frames():
+    # four-column frame of Table 3 (not run): 9.861, 28.351, 40.773 rad/s
+    np.testing.assert_allclose(frequencies("seed001_three_storey_frame", FOUR_COLUMN),
+                               [9.861, 28.351, 40.773], rtol=4e-4)
+    # nine storeys: mode 1 effective mass 9369 kg (85 % of 11,000 kg)
+    masses, springs = FRAMES["seed001_nine_storey_ssvi"]
+    m = np.diag(masses)
+    _, modes = eigh(storey_matrix(springs), m)
+    phi = modes[:, 0]
+    effective = (phi @ m @ np.ones(9)) ** 2 / (phi @ m @ phi)
+    assert effective == pytest.approx(9369.0, abs=0.5)
+
+
+def steady_amplitudes(masses, k, c, floor: int, amplitude: float, omega: float) -> np.ndarray:
+    """Steady floor amplitudes under ``amplitude cos(omega t)`` on ``floor``: ``|(K - w^2 M +
+    i w C)^-1 F|``."""
+    force = np.zeros(len(masses))
+    force[floor - 1] = amplitude
+    return np.abs(np.linalg.solve(k - omega**2 * np.diag(masses) + 1j * omega * c, force))
+
+
+# ----------------------------------------------------------------------------- two storeys
+
+TWO = "seed001_two_storey_ssvi"
+
+
+@cache
+def two_storey(with_absorber: bool):
+    data = example_data(TWO) if with_absorber else example_data(TWO, "absorbers")
+    return sample(study_from(data), workers=1)
+
+
+def test_two_storey_bare_frame_matches_the_frequency_response():
+    masses, springs = FRAMES[TWO]
+    dashpots = example_data(TWO)["primary"]["dampings"]
+    frame = two_storey(False)
+    for omega, (_, row) in zip([5.8, 6.3, 6.8], frame.iterrows()):
+        exact = steady_amplitudes(masses, storey_matrix(springs), storey_matrix(dashpots), 2, 800.0, omega)
+        # window [100, 200] s: the slowest transient (mode 1, 3.6 %) has decayed by exp(-22.6);
+        # the peak sampled every 0.01 s falls short by at most 1 - cos(omega dt / 2) = 6e-5;
+        # RK4 at omega dt = 0.068 adds ~1e-7: band 1e-4 (measured within 1.6e-5)
+        for floor in (1, 2):
+            assert row[f"x_max_{floor}"] == pytest.approx(exact[floor - 1], rel=1e-4), (omega, floor)
+    # the header's figures: 0.091, 0.203, 0.077 m
+    np.testing.assert_allclose(frame["x_max_2"], [0.091, 0.203, 0.077], atol=5e-4)
+
+
+def test_two_storey_ssvi_reduces_the_roof_response_at_resonance():
+    bare, nes = two_storey(False), two_storey(True)
+    assert (nes["status"] == "ok").all()
+    # RK4 with sub-stepped Hertz contacts: the balance closes to ~2e-7 (measured), 1e-6 allowed
+    assert (nes["energy_residual"].abs() < 1e-6).all()
+    # at 6.3 rad/s (mode 1) the NES impacts and cuts the roof's steady peak (measured 24 %)
+    assert nes["impacts"].iloc[1] > 0
+    assert nes["x_max_2"].iloc[1] < 0.85 * bare["x_max_2"].iloc[1]
+
+
+# ----------------------------------------------------------------------------- three storeys
+
+THREE = "seed001_three_storey_frame"
+#: Harmonic force on the roof at mode 1 (the bare frame's resonance): the same for both.
+ROOF_FORCE = 1.0
+
+
+@cache
+def three_storey_harmonic(with_devices: bool):
+    """The frame (Table 4 devices or none) under ``ROOF_FORCE cos(w1 t)`` N on floor 3, window
+    [45, 60] s: mode 1 (2 %, 0.254 1/s) has decayed by exp(-11.4) at 45 s."""
+    data = example_data(THREE, "sweep") if with_devices else example_data(THREE, "sweep", "absorbers")
+    changes = {"loads": [{"type": "harmonic", "floor": 3, "amplitude": ROOF_FORCE,
+                          "frequency": float(frequencies(THREE)[0])}],
+               "simulation.duration": 60.0, "simulation.metrics_from": 45.0, "ensemble.realizations": 1}
+    return sample(study_from(data, changes), workers=1).iloc[0]
+
+
+def test_three_storey_bare_frame_matches_the_frequency_response():
+    masses, springs = FRAMES[THREE]
+    m, k = np.diag(masses), storey_matrix(springs)
+    exact = steady_amplitudes(masses, k, rayleigh(m, k), 3, ROOF_FORCE, frequencies(THREE)[0])
+    row = three_storey_harmonic(False)
+    # 2e-4: the left transient exp(-11.4) = 1e-5, peak sampling 1 - cos(w1 dt / 2) = 8e-5, the
+    # kick-drift-kick amplitude error at w1 dt = 0.025 ~1e-6 (measured within 7.4e-7)
+    for floor in (1, 2, 3):
+        assert row[f"x_max_{floor}"] == pytest.approx(exact[floor - 1], rel=2e-4), floor
+
+
+def test_three_storey_table_4_devices_reduce_the_resonant_roof_response():
+    bare, devices = three_storey_harmonic(False), three_storey_harmonic(True)
+    assert devices["impacts"] == 0  # Table 4's TMD: stops out of reach
+    # the TMD and the DM's linear half are tuned near mode 1 (12.36, 12.13 rad/s): a large cut
+    assert devices["x_max_3"] < 0.5 * bare["x_max_3"]
+
+
+@cache
+def three_storey_ground_motion(dt: float):
+    """The scenario's frame and devices, ground motion of intensity 0.1, 4 realisations a point."""
+    data = example_data(THREE)
+    data["sweep"]["loads.0.intensity"] = [0.1]
+    return sample(study_from(data, {"ensemble.realizations": 4, "simulation.dt": dt}), workers=1)
+
+
+@pytest.mark.parametrize("point", [0, 1], ids=["table-4", "table-5"])
+def test_three_storey_under_ground_motion_balances_energy(point):
+    frame = three_storey_ground_motion(2e-3)
+    rows = frame[frame["point"] == point]
+    assert (rows["status"] == "ok").all()
+    assert (rows["impacts"] > 0).all() == (point == 1)  # the VITMD's 1.5 mm stops are hit
+    # kick-drift-kick at w_max dt = 0.104: the residual is the scheme's own error (the bare frame
+    # alone leaves up to 4.2e-5), measured up to 3.2e-5 (Table 4) and 6.4e-5 (Table 5): 1e-4
+    assert rows["energy_residual"].abs().max() < 1e-4
+    # and it is discretisation error: at dt / 2 it falls at least 3-fold (measured 4- and 8-fold)
+    finer = three_storey_ground_motion(1e-3)
+    finer = finer[finer["point"] == point]
+    assert finer["energy_residual"].abs().max() < rows["energy_residual"].abs().max() / 3
+
+
+# ----------------------------------------------------------------------------- nine storeys
+
+NINE = "seed001_nine_storey_ssvi"
+
+
+def record_path(dt: float, duration: float) -> tuple[np.ndarray, np.ndarray]:
+    """Exact floor displacements of the bare nine-storey frame (Rayleigh 2 %) at ``t = j dt``
+    under the shipped record, read here from the AT2 file (units g) and interpolated linearly,
+    zero after its end: the state-transition map of ``x' = A x + b a(t)`` with ``a`` linear on
+    each step (augmented matrix exponential); ``dt`` divides the record's 0.01 s."""
+    lines = (SCENARIOS / "records/synthetic_cp_medium.AT2").read_text().splitlines()
+    npts, step = (float(part.split("=")[1].split()[0]) for part in lines[3].split(","))
+    values = np.array(" ".join(lines[4:]).split(), float) * 9.80665
+    assert values.size == int(npts)
+    masses, springs = FRAMES[NINE]
+    m, k = np.diag(masses), storey_matrix(springs)
+    n = len(masses)
+    minv = np.linalg.inv(m)
+    a = np.zeros((2 * n + 2, 2 * n + 2))
+    a[:n, n:2 * n] = np.eye(n)
+    a[n:2 * n, :n] = -minv @ k
+    a[n:2 * n, n:2 * n] = -minv @ rayleigh(m, k)
+    a[n:2 * n, 2 * n] = -1.0          # x'' = ... - 1 a_g (every floor, through its mass)
+    a[2 * n, 2 * n + 1] = 1.0         # a_g' = slope (constant on a step)
+    phi = expm(a * dt)
+    steps = int(round(duration / dt))
+    times = np.arange(steps + 1) * dt
+    ground = np.interp(times, np.arange(values.size) * step, values, right=0.0)
+    state = np.zeros(2 * n + 2)
+    x = np.zeros((steps + 1, n))
+    for j in range(steps):
+        state[2 * n], state[2 * n + 1] = ground[j], (ground[j + 1] - ground[j]) / dt
+        state = phi @ state
+        x[j + 1] = state[:n]
+    return times, x
+
+
+@cache
+def nine_storey(with_nes: bool):
+    data = example_data(NINE, "sweep") if with_nes else example_data(NINE, "sweep", "absorbers")
+    return sample(study_from(data, directory=SCENARIOS), workers=1).iloc[0]
+
+
+def test_nine_storey_bare_frame_matches_the_exact_record_response():
+    sim = study_from(example_data(NINE), directory=SCENARIOS).base.simulation
+    times, x = record_path(sim.dt, sim.duration)
+    row = nine_storey(False)
+    drift = np.diff(np.hstack([np.zeros((times.size, 1)), x]), axis=1)
+    for floor in range(1, 10):
+        # both on the same 1e-3 s grid (the same sampling of the peak); RK4 at w_max dt = 0.150
+        # with the record's slope jumping every 0.01 s: ~1e-7 on the response of modes 1-3 that
+        # makes the peaks; band 1e-6 (measured within 6e-9 for x_max, 9e-8 for the drifts)
+        assert row[f"x_max_{floor}"] == pytest.approx(np.abs(x[:, floor - 1]).max(), rel=1e-6), floor
+        assert row[f"drift_max_{floor}"] == pytest.approx(np.abs(drift[:, floor - 1]).max(), rel=1e-6), floor
+
+
+def test_nine_storey_table_1_nes_reduce_the_roof_response():
+    bare, nes = nine_storey(False), nine_storey(True)
+    assert nes["status"] == "ok" and nes["impacts_left"] > 0 and nes["impacts_right"] == 0
+    # RK4 with sub-stepped preloaded Hertz contact: the bound of the Hertz path tests
+    # (tests/unit/kernels/test_contact.py); measured 4.7e-7 (the bare frame: 9e-10)
+    assert abs(nes["energy_residual"]) < 1e-6
+    # optimised Table 1 parameters, record at scale 1: roof peak 0.048 against 0.062 m, RMS 0.0112
+    # against 0.0148 m (measured): a cut of at least 15 % each
+    assert nes["x1_max"] < 0.85 * bare["x1_max"]
+    assert nes["x1_rms"] < 0.85 * bare["x1_rms"]
