@@ -50,7 +50,7 @@ elcentro: $(STAMP)
 		$(VENV)/quakeio/quakeio-0.1.21-py3-none-any.whl scenarios/records/elcentro_1940_ns.txt
 
 # numba's on-disk cache of the kernels lives in folders named by a hash of the physics and
-# kernel sources (vines_stoch/cache.py): edits compile afresh; this removes every such folder.
+# kernel sources (vines_stoch/jit/cache.py): edits compile afresh; this removes every such folder.
 clean-cache:
 	find vines_stoch -depth -type d -name 'vines-stoch-*' -exec rm -rf {} +
 	find vines_stoch -name '*.nbi' -delete -o -name '*.nbc' -delete

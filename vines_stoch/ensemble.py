@@ -30,8 +30,8 @@ import pandas as pd
 from . import history as hist
 from . import schedulers
 from .kernels import needed_streams, sample_buffer, simulate
-from .kernels.common import POINCARE_SAMPLES
 from .metrics import METRICS, finish_table, ground_intensity, summarise
+from .outputs import POINCARE_SAMPLES
 from .progress import Progress
 from .scenario import History, Study
 from .scene import Scene, build_scene

@@ -28,8 +28,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from .kernels import kernel_for, simulate
-from .kernels.common import POINCARE_SAMPLES, new_metrics
 from .kernels.rng import philox_stream, stream_key, stream_place
+from .outputs import POINCARE_SAMPLES, new_metrics
 from .scene import Scene
 from .streams import BRIDGE, FILTER, INCREMENTS, Streams
 

@@ -9,7 +9,7 @@ import numpy as np
 import pandas as pd
 from scipy.special import stdtrit
 
-from .kernels.common import ACC_MAX_K, DRIFT_MAX_K, SLOTS, STATUS_DIVERGED, X_MAX_K, X_SQ_INT_K, passage_slots
+from .outputs import ACC_MAX_K, DRIFT_MAX_K, SLOTS, STATUS_DIVERGED, X_MAX_K, X_SQ_INT_K, passage_slots
 from .scene import Scene
 
 #: Metric columns of realizations.parquet, in order (then the per-floor columns of
@@ -163,7 +163,7 @@ def ground_intensity(scene: Scene, streams) -> dict[str, float]:
     of the ground acceleration of a realisation on the scene's time grid, from its streams (a
     fresh copy of those it ran with: ``kernels.load_history`` gives the same path)."""
     from .kernels import load_history
-    from .spectra import peak, pseudo_acceleration
+    from .physics.spectra import peak, pseudo_acceleration
 
     _, _, ground = load_history(scene, streams)
     return {"sa": pseudo_acceleration(ground, scene.dt, scene.im_period, scene.im_damping),

@@ -8,20 +8,9 @@ from functools import cached_property
 
 import numpy as np
 
-from . import filters, wind
-from .kernels.common import ACC_MAX_K, DRIFT_MAX_K, LIMIT_E1, POINCARE_SAMPLES, X_MAX_K
-from .kernels.loads import (
-    CHIRP,
-    FORCE_ROW,
-    GROUND,
-    HALF_SINE,
-    HARMONIC,
-    JENNINGS,
-    PULSE_TRAIN,
-    SARAGONI_HART,
-    STATIONARY,
-)
-from .physics import (
+from .outputs import ACC_MAX_K, DRIFT_MAX_K, LIMIT_E1, POINCARE_SAMPLES, X_MAX_K
+from .physics import filters, wind
+from .physics.absorbers import (
     CLEARANCE,
     DAMPING,
     HERTZ,
@@ -36,6 +25,17 @@ from .physics import (
     ROW,
     WALL_HI,
     WALL_LO,
+)
+from .physics.loads import (
+    CHIRP,
+    FORCE_ROW,
+    GROUND,
+    HALF_SINE,
+    HARMONIC,
+    JENNINGS,
+    PULSE_TRAIN,
+    SARAGONI_HART,
+    STATIONARY,
 )
 from .scenario import (
     ChirpLoad,

@@ -22,7 +22,7 @@ from importlib import metadata
 import pytest
 
 from tests.helpers import ROOT
-from vines_stoch.cache import files_digest
+from vines_stoch.jit.cache import files_digest
 
 pytestmark = pytest.mark.slow
 

@@ -1,7 +1,7 @@
 """numba's on-disk cache of the kernels, keyed by the sources of the physics and the kernels.
 
 numba checks a cached function against its own source file only: a kernel that inlines a
-formula of ``physics.py`` or ``kernels/common.py`` would load its stale machine code after that
+formula of ``physics/`` or ``kernels/common.py`` would load its stale machine code after that
 formula was edited.  ``key_by_sources`` puts the cache of every compiled function of this
 package in a folder named by a hash of all those sources (``vines-stoch-<hash>`` under the
 package's ``__pycache__`` folders, or under ``NUMBA_CACHE_DIR`` where that is set), so an edit
@@ -24,10 +24,10 @@ except ImportError:  # (no POSIX file locks: each process compiles on its own)
     fcntl = None
 
 #: The package's folder.
-PACKAGE = Path(__file__).resolve().parent
+PACKAGE = Path(__file__).resolve().parent.parent
 #: The sources compiled functions are built from: the formulas, the step loops and what they
 #: inline, and the compiler settings.
-SOURCES = ("physics.py", "frontend.py", "cache.py", "kernels")
+SOURCES = ("physics", "jit", "outputs.py", "kernels")
 
 
 def files_digest(root: Path, files: list[Path]) -> str:

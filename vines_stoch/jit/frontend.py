@@ -50,7 +50,7 @@ against 5.1 s); the variable lists took it from 14.2 s to 13.8 s and the dead ma
 to 13.3 s (means of three alternating compiles; the use-def maps 0.70 s against 0.40-0.51 s, the
 dead maps 0.47 s against 0.22 s).  All but the first replace numba functions whose source they
 were checked against (``VERIFIED``: a hash of that source); another release keeps its own.
-``install`` puts them in numba's CPU compiler (``physics.py``, before any kernel compiles) or
+``install`` puts them in numba's CPU compiler (``vines_stoch.jit``, before any kernel compiles) or
 in numba-cuda's copy of the front end (``kernels/launch.py``).
 ``tests/unit/kernels/test_compile.py`` compares the LLVM IR, the PTX, every live map, use-def
 map and dead map with and without them.

@@ -12,10 +12,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..cache import compile_once
+from ..jit.cache import compile_once
+from ..outputs import POINCARE_SAMPLES, SLOTS, new_metrics
 from ..schemes import SCHEMES
 from ..streams import Streams
-from .common import POINCARE_SAMPLES, SLOTS, new_metrics
 from .kdk import kdk_kernel
 from .loads import load_path, stationary_start
 from .rk4 import rk4_kernel

@@ -27,7 +27,7 @@ import math
 import numpy as np
 from numba import njit
 
-from ..physics import INLINE
+from ..jit.flags import INLINE
 
 #: Levels of bisection below a (fine) step; the path is linear between the leaves.
 TREE_DEPTH = 14

@@ -11,61 +11,30 @@ registers too, at several times the compile time of every kernel).
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
-from llvmlite import ir
-from numba import njit, types
-from numba.core import cgutils
-from numba.extending import intrinsic
-from numba.np.arrayobj import make_array, populate_array
+from numba import njit
 
-from ..physics import (
+from ..jit.flags import INLINE, KERNEL
+from ..jit.intrinsics import pick, put
+from ..outputs import ACC_MAX_K, DRIFT_MAX_K, SLOTS, X1_MAX, X1_SQ_INT, X_MAX_K, X_SQ_INT_K, passage_slots
+from ..physics.absorbers import (
     CLEARANCE,
     DAMPING,
     HERTZ,
     IMPACT,
-    INLINE,
     K_CUBIC,
     K_LEFT,
     K_LIN,
     K_RIGHT,
-    KERNEL,
     REST,
     WALL_HI,
     WALL_LO,
-    contact_energy,
-    contact_force_law,
-    hertz_force,
-    primary_energy,
-    restitution_impact,
     spring_damper_energy,
     spring_damper_force,
 )
-
-#: Slots of the raw metric vector a kernel fills; ``metrics.finish_table`` turns it into columns.
-SLOTS = (
-    "input_energy", "primary_dissipation", "absorber_dissipation", "impact_loss",
-    "energy_integral", "e1_max", "x1_max", "x1_square_integral", "impacts",
-    "final_energy", "status", "capped_steps", "impacts_left", "impacts_right", "peak_force",
-    "contact_time",
-)
-(INPUT, PRIMARY_DISS, ABSORBER_DISS, IMPACT_LOSS, ENERGY_INT, E1_MAX, X1_MAX, X1_SQ_INT,
- IMPACTS, FINAL_ENERGY, STATUS, CAPPED, IMPACTS_LEFT, IMPACTS_RIGHT, PEAK_FORCE,
- CONTACT_TIME) = range(len(SLOTS))
-
-#: Per-floor blocks after the slots above, ``n_floors`` entries each (block ``b``, floor ``k``
-#: at ``len(SLOTS) + b n_floors + k``): peak
-#: displacement, peak drift, peak absolute acceleration, integral of ``x_k^2``.
-FLOOR_SLOTS = ("x_max", "drift_max", "acc_max", "x_square_integral")
-X_MAX_K, DRIFT_MAX_K, ACC_MAX_K, X_SQ_INT_K = range(len(FLOOR_SLOTS))
-#: A limit's code for the peak of the structure's energy ``E1`` (the others use the floor
-#: blocks' codes ``X_MAX_K .. ACC_MAX_K``).  After the floor blocks, one slot per limit holds
-#: its first-passage time (NaN until it passes: ``first_passages``).
-LIMIT_E1 = len(FLOOR_SLOTS)
-
-#: Status codes written into the ``status`` slot.
-STATUS_OK, STATUS_DIVERGED = 0, 1
+from ..physics.hertz import CONTACT_STEPS, contact_energy, contact_force_law, contact_substep, hertz_force
+from ..physics.impact import restitution_impact, sticks
+from ..physics.structure import host_of, primary_energy, structure_forces
 
 #: Impacts resolved inside one outer step before the rest of the step ignores the walls.
 MAX_EVENTS = 64
@@ -80,132 +49,10 @@ CHECK_EVERY = 1024
 #: A displacement beyond this counts as divergence.
 DIVERGED = 1e100
 
-#: Poincare samples (one per forcing period) kept at the end of the window for the regime.
-POINCARE_SAMPLES = 32
 
 
-def _stack_array(dtype, size):
-    """Typing and code of a zeroed 1-D ``dtype`` array of ``size`` (a literal) on the stack."""
-    if not isinstance(size, types.IntegerLiteral):
-        return None
-    n = size.literal_value
-    array_type = types.Array(dtype, 1, "C")
-
-    def codegen(context, builder, signature, args):
-        data = cgutils.alloca_once(builder, context.get_data_type(dtype), size=max(n, 1))
-        cgutils.memset(builder, data, ir.Constant(cgutils.intp_t, 8 * max(n, 1)), 0)
-        array = make_array(array_type)(context, builder)
-        populate_array(array, data=data, shape=[cgutils.intp_t(n)], strides=[cgutils.intp_t(8)],
-                       itemsize=8, meminfo=None)
-        return array._getvalue()
-
-    return array_type(size), codegen
 
 
-@intrinsic
-def scratch(typingctx, size):
-    """``np.zeros(size)`` on the kernel's stack, for a compile-time constant ``size`` (a kernel
-    factory's body count): the compiler then knows these arrays alias nothing else and, with
-    the loops over bodies unrolled, keeps the state in registers across steps.  (The same loop
-    on heap arrays ran at 0.65-0.7x.)  The array must not outlive the kernel that makes it."""
-    return _stack_array(types.float64, size)
-
-
-@intrinsic
-def int_scratch(typingctx, size):
-    """``np.zeros(size, np.int64)`` on the kernel's stack (as ``scratch``): per-absorber flags."""
-    return _stack_array(types.int64, size)
-
-
-@intrinsic
-def runtime_value(typingctx, value):
-    """``value`` typed as a run-time value: a constant (a kernel factory's floor count, a flag
-    written in the call) loses its literal type.  An out-of-line function called with literal
-    arguments compiles once for each set of constants; called with these, it compiles once for
-    every loop (``rk4.wall_accelerations``: once a process instead of twice a loop)."""
-    plain = types.unliteral(value)
-
-    def codegen(context, builder, signature, args):
-        return context.cast(builder, args[0], value, plain)
-
-    return plain(value), codegen
-
-
-@intrinsic
-def _copy_items(typingctx, dst, src):
-    """Copy ``src``'s items into ``dst`` (1-D C arrays of one dtype, lengths equal)."""
-    arrays = (dst, src)
-    if not all(isinstance(a, types.Array) and a.ndim == 1 and a.layout == "C" for a in arrays) \
-            or dst.dtype != src.dtype:
-        return None
-
-    def codegen(context, builder, signature, args):
-        to, of = (make_array(t)(context, builder, a) for t, a in zip(signature.args, args))
-        # a loop, which LLVM unrolls (a call of memcpy for three items took 6.5 ns against 3.6)
-        with cgutils.for_range(builder, of.nitems) as loop:
-            item = builder.load(builder.gep(of.data, [loop.index]))
-            builder.store(item, builder.gep(to.data, [loop.index]))
-        return context.get_dummy_value()
-
-    return types.none(dst, src), codegen
-
-
-@njit(**INLINE)
-def copy_into(dst, src) -> None:
-    """``dst[:] = src`` for 1-D C arrays of one length, one item at a time.  The slice assignment
-    compiles numba's shape-mismatch error, which formats the shapes into its message: integer
-    and string formatting, 1.9 s of the first Runge-Kutta loop a process compiled (12.2 s)."""
-    if dst.shape[0] != src.shape[0]:
-        raise ValueError("copy_into: arrays of different lengths")
-    _copy_items(dst, src)
-
-
-@njit(**INLINE)
-def pick(a, j: int) -> float:
-    """``a[j]`` for a run-time ``j``, as a scan over constant indices: an array on the stack
-    (``scratch``) indexed only at constant positions stays in registers, one indexed at a
-    run-time position is kept in memory, where every access waits on a store."""
-    value = a[0]
-    for b in range(1, a.shape[0]):
-        if b == j:
-            value = a[b]
-    return value
-
-
-@njit(**INLINE)
-def put(a, j: int, value: float) -> None:
-    """``a[j] = value`` for a run-time ``j`` (see ``pick``)."""
-    for b in range(a.shape[0]):
-        if b == j:
-            a[b] = value
-
-
-@njit(**INLINE)
-def host_of(host, a: int, nf: int) -> int:
-    """Host floor of absorber ``a`` (the constant 0 on a one-storey primary, so the compiler
-    keeps every index into the state constant there)."""
-    return host[a] if nf > 1 else 0
-
-
-@njit(**INLINE)
-def structure_forces(x, v, nf: int, storey_k, storey_c, floor_c, force):
-    """``force[k]``, ``k < nf``: the forces of the storey springs and dashpots and of the
-    mass-proportional (Rayleigh) damping on each floor, ``-(K x + C v)`` of MODEL.md 1a;
-    storey ``k`` joins floor ``k - 1`` (the ground for ``k = 0``) to floor ``k``.  (Rayleigh
-    damping needs two modes, so a one-storey primary has no mass-proportional term: it is
-    left out there, about 5 % of a smooth scene's step.)"""
-    for k in range(nf):
-        d = x[k] - x[k - 1] if k > 0 else x[k]
-        dv = v[k] - v[k - 1] if k > 0 else v[k]
-        # written as the one-storey -k1 x1 - c1 v1: the negated coefficients are loop
-        # invariants, so the force is one multiply and one fused multiply-add on the step's
-        # critical path (negating a sum would add an operation there)
-        force[k] = -storey_k[k] * d - storey_c[k] * dv
-        if k > 0:
-            force[k - 1] += storey_k[k] * d + storey_c[k] * dv
-    if nf > 1:
-        for k in range(nf):
-            force[k] -= floor_c[k] * v[k]
 
 
 @njit(**INLINE)
@@ -256,31 +103,8 @@ def contact_force(x, nf: int, a: int, host, rows) -> float:
             + hertz_force(u - rows[a, WALL_HI], rows[a, K_RIGHT]))
 
 
-#: Sub-steps per Hertz contact duration (MODEL.md section 2 asks for at least about 20).
-CONTACT_STEPS = 80
 
 
-@njit(**INLINE)
-def contact_substep(x, v, nf: int, mass, host, rows, a: int, side: int, steps: int) -> float:
-    """Sub-step for Hertz absorber ``a`` in contact on side ``side`` (-1 left, +1 right): about
-    ``steps`` per contact duration.
-
-    A Hertz contact with relative energy ``E`` compresses to ``z_max = (E / (0.4 K))^0.4`` and
-    lasts about ``4 / omega`` with ``omega = sqrt(1.5 K z_max^0.5 / m_eff)`` (the contact's
-    stiffness at ``z_max``; Johnson, *Contact Mechanics*, section 11.4).  ``inf`` for a contact at
-    rest with no approach (it asks for no sub-steps)."""
-    hf = host_of(host, a, nf)
-    j = nf + a
-    m_eff = mass[hf] * mass[j] / (mass[hf] + mass[j])
-    u = x[j] - x[hf]
-    w = v[j] - v[hf]
-    k = rows[a, K_LEFT] if side < 0 else rows[a, K_RIGHT]
-    z = max(rows[a, WALL_LO] - u if side < 0 else u - rows[a, WALL_HI], 0.0)
-    energy = 0.5 * m_eff * w * w + 0.4 * k * z * z * math.sqrt(z)
-    z_ref = max(z, (energy / (0.4 * k)) ** 0.4)
-    if z_ref <= 0.0:
-        return np.inf
-    return 4.0 / (steps * math.sqrt(1.5 * k * math.sqrt(z_ref) / m_eff))
 
 
 @njit(**KERNEL)
@@ -321,15 +145,6 @@ def momentum(mass, v, vn) -> float:
     return p
 
 
-@njit(**INLINE)
-def structure_power(v, nf: int, storey_c, floor_c) -> float:
-    """Power dissipated by the structure's dashpots, ``v^T C v``."""
-    p = 0.0
-    for k in range(nf):
-        dv = v[k] - v[k - 1] if k > 0 else v[k]
-        term = storey_c[k] * dv * dv + (floor_c[k] * v[k] * v[k] if nf > 1 else 0.0)
-        p = term if k == 0 else p + term  # (no ``0.0 +`` to fold: see ``structure_dissipation``)
-    return p
 
 
 @njit(**INLINE)
@@ -469,15 +284,6 @@ def write_floor_metrics(out, nf: int, x_max, drift_max, acc_max, x2_integral):
 
 
 @njit(**INLINE)
-def any_set(a) -> bool:
-    """True if any entry of ``a`` is not zero (``a.any()``, which the GPU target lacks)."""
-    for j in range(a.shape[0]):
-        if a[j] != 0:
-            return True
-    return False
-
-
-@njit(**INLINE)
 def diverged(x) -> bool:
     """True if any coordinate is not finite or beyond ``DIVERGED``."""
     for b in range(x.shape[0]):
@@ -486,25 +292,6 @@ def diverged(x) -> bool:
     return False
 
 
-@njit(**INLINE)
-def sticks(side: int, w_in: float, w_gain: float) -> bool:
-    """Sticking rule: an impact slower than the relative velocity the loads add in one step,
-    with the loads pressing into the wall, is plastic and starts a sticking phase."""
-    return side * w_gain > 0.0 and abs(w_in) <= side * w_gain
-
-
-@njit(**INLINE)
-def passage_slots(nf: int) -> int:
-    """Index of the first limit's first-passage slot (after the per-floor blocks of ``nf`` floors)."""
-    return len(SLOTS) + len(FLOOR_SLOTS) * nf
-
-
-def new_metrics(n_floors: int = 1, n_limits: int = 0) -> np.ndarray:
-    """A raw metric vector of a primary with ``n_floors`` floors: zeros, then NaN in the
-    first-passage slots of ``n_limits`` limits."""
-    out = np.zeros(passage_slots(n_floors) + n_limits)
-    out[passage_slots(n_floors):] = np.nan
-    return out
 
 
 @njit(**INLINE)

@@ -45,23 +45,11 @@ from functools import cache
 import numpy as np
 from numba import njit
 
-from ..physics import (
-    CLEARANCE,
-    HERTZ,
-    IMPACT,
-    KERNEL,
-    RESTITUTION,
-    WALL_HI,
-    WALL_LO,
-    contact_energy,
-    contact_force_law,
-    primary_energy,
-)
-from .brownian import MEMO, path_value
-from .common import (
+from ..jit.flags import INLINE, KERNEL
+from ..jit.intrinsics import any_set, int_scratch, scratch
+from ..outputs import (
     ABSORBER_DISS,
     CAPPED,
-    CHECK_EVERY,
     CONTACT_TIME,
     E1_MAX,
     ENERGY_INT,
@@ -70,16 +58,21 @@ from .common import (
     IMPACTS,
     IMPACTS_LEFT,
     IMPACTS_RIGHT,
-    INLINE,
     INPUT,
-    MAX_EVENTS,
-    MAX_SUBSTEPS,
     PEAK_FORCE,
     PRIMARY_DISS,
     STATUS,
     STATUS_DIVERGED,
+)
+from ..physics.absorbers import CLEARANCE, HERTZ, IMPACT, RESTITUTION, WALL_HI, WALL_LO
+from ..physics.hertz import contact_energy, contact_force_law
+from ..physics.structure import host_of, primary_energy
+from .brownian import MEMO, path_value
+from .common import (
+    CHECK_EVERY,
+    MAX_EVENTS,
+    MAX_SUBSTEPS,
     absorber_dissipation,
-    any_set,
     attachment_forces,
     block_end,
     contact_force,
@@ -88,14 +81,11 @@ from .common import (
     diverged,
     first_passages,
     floor_peaks,
-    host_of,
-    int_scratch,
     keep_in_cavities,
     momentum,
     pin_to_walls,
     record_history,
     resolve_impact,
-    scratch,
     start_history,
     stick_together,
     stored_energy,

@@ -10,11 +10,11 @@ from functools import cache
 import numpy as np
 from numba import cuda, float64, njit, uint64
 
-from ..frontend import install
+from ..jit.frontend import install
 from .loads import stationary_start
 from .rng import STREAM_WORDS, open_stream
 
-install("numba.cuda.core")  # numba-cuda's copy of the front end, as physics.py does numba's
+install("numba.cuda.core")  # numba-cuda's copy of the front end, as vines_stoch.jit does numba's
 
 
 def _plain(array):

@@ -22,21 +22,11 @@ from functools import cache
 import numpy as np
 from numba import njit
 
-from ..physics import (
-    CLEARANCE,
-    DAMPING,
-    HERTZ,
-    IMPACT,
-    KERNEL,
-    RESTITUTION,
-    WALL_HI,
-    WALL_LO,
-    primary_energy,
-)
-from .common import (
+from ..jit.flags import INLINE, KERNEL
+from ..jit.intrinsics import any_set, copy_into, int_scratch, pick, put, runtime_value, scratch
+from ..outputs import (
     ABSORBER_DISS,
     CAPPED,
-    CHECK_EVERY,
     CONTACT_TIME,
     E1_MAX,
     ENERGY_INT,
@@ -45,40 +35,35 @@ from .common import (
     IMPACTS,
     IMPACTS_LEFT,
     IMPACTS_RIGHT,
-    INLINE,
     INPUT,
-    MAX_EVENTS,
-    MAX_SUBSTEPS,
     PEAK_FORCE,
     PRIMARY_DISS,
     STATUS,
     STATUS_DIVERGED,
+)
+from ..physics.absorbers import CLEARANCE, DAMPING, HERTZ, IMPACT, RESTITUTION, WALL_HI, WALL_LO
+from ..physics.structure import host_of, primary_energy, structure_power
+from .common import (
+    CHECK_EVERY,
+    MAX_EVENTS,
+    MAX_SUBSTEPS,
     accelerate,
-    any_set,
     attachment_forces,
     block_end,
     contact_force,
     contact_forces,
     contact_step,
-    copy_into,
     diverged,
     first_passages,
     floor_peaks,
-    host_of,
-    int_scratch,
     keep_in_cavities,
-    pick,
     pin_to_walls,
-    put,
     record_history,
     record_sample,
     resolve_impact,
-    runtime_value,
-    scratch,
     start_history,
     stick_together,
     stored_energy,
-    structure_power,
     write_floor_metrics,
 )
 from .loads import applied, has_breaks, next_break

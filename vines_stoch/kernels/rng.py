@@ -23,7 +23,7 @@ import numpy as np
 from numba import njit, types
 from numba.extending import overload
 
-from ..physics import INLINE
+from ..jit.flags import INLINE
 
 #: Words of a Philox stream: key, place, blocks drawn.
 STREAM_WORDS = 3

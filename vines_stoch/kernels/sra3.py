@@ -14,8 +14,10 @@ from __future__ import annotations
 
 from numba import njit
 
-from ..physics import DAMPING, INLINE
-from .common import accelerate, attachment_forces, host_of, momentum
+from ..jit.flags import INLINE
+from ..physics.absorbers import DAMPING
+from ..physics.structure import host_of
+from .common import accelerate, attachment_forces, momentum
 
 
 @njit(**INLINE)

@@ -188,7 +188,7 @@ class Contact(_Model):
         """``K`` of ``F = K z^1.5``."""
         if self.k is not None:
             return float(self.k)
-        from ..physics import hertz_constant  # (not at import: it brings in numba)
+        from ..physics.hertz import hertz_constant  # (not at import: it brings in numba)
 
         return hertz_constant(self.young, self.poisson, self.radius, self.q)
 

@@ -8,8 +8,8 @@ from typing import Annotated, Literal
 import numpy as np
 from pydantic import Field, PrivateAttr, model_validator
 
+from ..physics.wind import BANDS, DAVENPORT_LENGTH, OPEN_COUNTRY_DRAG, VON_KARMAN, mean_speed
 from ..records import G
-from ..wind import BANDS, DAVENPORT_LENGTH, OPEN_COUNTRY_DRAG, VON_KARMAN, mean_speed
 from .errors import FieldError
 from .fields import Floor, NonNegative, Positive, Real, _Model
 
@@ -89,7 +89,7 @@ Envelope = Annotated[JenningsEnvelope | SaragoniHartEnvelope, Field(discriminato
 
 
 class _FilteredLoad(_Model):
-    """Shared fields of loads made by filtering white noise (``filters.py``)."""
+    """Shared fields of loads made by filtering white noise (``physics/filters.py``)."""
 
     intensity: NonNegative
     envelope: Envelope | None = None
@@ -329,7 +329,7 @@ class RecordLoad(_RecordLoad):
         """The record's scale: ``scale``, or ``sa.value / Sa`` of the record as read."""
         if self.sa is None:
             return self.scale
-        from ..spectra import pseudo_acceleration, uniform
+        from ..physics.spectra import pseudo_acceleration, uniform
 
         if self._times is None:
             raise RuntimeError(f"record {self.file!r} was not read (use load_scenario)")

@@ -37,9 +37,10 @@ import numpy as np
 from numba import njit
 
 from ..ensemble import run
+from ..jit.flags import KERNEL
 from ..kernels import load_history, simulate
-from ..kernels.common import ABSORBER_DISS, E1_MAX, FINAL_ENERGY, IMPACT_LOSS, INPUT, PRIMARY_DISS
-from ..physics import KERNEL, hertz_constant
+from ..outputs import ABSORBER_DISS, E1_MAX, FINAL_ENERGY, IMPACT_LOSS, INPUT, PRIMARY_DISS
+from ..physics.hertz import hertz_constant
 from ..records import G, write_at2
 from . import precision, scenes, stability
 from .bench_gpu import replace_section, section_of

@@ -27,8 +27,8 @@ import numpy as np
 from .. import gpu
 from ..ensemble import run
 from ..kernels import needed_streams, simulate
-from ..kernels.common import E1_MAX, STATUS, STATUS_OK
 from ..kernels.rng import stream_key
+from ..outputs import E1_MAX, STATUS, STATUS_OK
 from ..scene import Scene
 from ..streams import INCREMENTS, streams
 from . import scenes

@@ -20,8 +20,8 @@ from pathlib import Path
 import numpy as np
 
 from ..kernels import simulate
-from ..kernels.common import X1_SQ_INT
 from ..metrics import finish, finish_table
+from ..outputs import X1_SQ_INT
 from ..plotting import REPORT_EXTRA, pyplot
 from . import scenes
 from .reference import parallel_nes_reference

@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from tests.helpers import example_data, scene_from
-from vines_stoch import cache
+from vines_stoch.jit import cache
 from vines_stoch.kernels import _STARTED, kernel_for, simulate
 
 #: Stored energy of a primary with one linear absorber (``kernels.common.stored_energy``
@@ -42,7 +42,7 @@ def test_an_edited_formula_is_compiled_afresh(tmp_path):
     numba_cache = tmp_path / "numba"
     before = _run(root, numba_cache)
     assert before == _run(root, numba_cache)  # (now from the cache)
-    physics = root / "vines_stoch" / "physics.py"
+    physics = root / "vines_stoch" / "physics" / "absorbers.py"
     text = physics.read_text()
     start = text.index("def spring_damper_energy")
     body = text.index("return", start)
@@ -59,7 +59,8 @@ def test_the_digest_follows_every_source(tmp_path):
     shutil.copytree(cache.PACKAGE, root, ignore=shutil.ignore_patterns("__pycache__"))
     first = cache.digest(root)
     assert first == cache.digest(cache.PACKAGE)
-    for name in ("physics.py", "kernels/loads.py", "kernels/common.py"):
+    for name in ("physics/absorbers.py", "jit/intrinsics.py", "outputs.py", "kernels/loads.py",
+                 "kernels/common.py"):
         path = root / name
         path.write_text(path.read_text() + "\n# edited\n")
         assert cache.digest(root) != first, name
@@ -75,7 +76,7 @@ def test_a_package_in_a_zip_archive_keeps_numba_s_own_locations(tmp_path):
         for f in cache.PACKAGE.rglob("*.py"):
             z.write(f, f.relative_to(cache.PACKAGE.parent))
     env = {**os.environ, "PYTHONPATH": str(archive)}
-    done = subprocess.run([sys.executable, "-c", "import vines_stoch.physics, vines_stoch.cache as c; "
+    done = subprocess.run([sys.executable, "-c", "import vines_stoch.jit, vines_stoch.jit.cache as c; "
                            "print(repr(c.key_by_sources()), c.PACKAGE)"], cwd=tmp_path, env=env,
                           capture_output=True, text=True, check=True)
     assert done.stdout.startswith("'' ") and "vs.zip" in done.stdout

@@ -14,7 +14,7 @@ import sys
 
 import pytest
 
-from vines_stoch import frontend
+from vines_stoch.jit import frontend
 
 #: Nested ``inline="always"`` functions with loops, branches and reassigned variables (many
 #: blocks, SSA violators), compiled without the on-disk cache; prints the LLVM IR, the result,
@@ -25,7 +25,7 @@ import copy, json, sys
 import numpy as np
 from numba import njit
 from numba.core import ir, ssa
-from vines_stoch import frontend
+from vines_stoch.jit import frontend
 copies, checked, used, dead = [0], [0], [0], [0]
 def watch(package):
     """Check every live map of ``package``'s front end, and (fast) every use-def map, against
@@ -189,7 +189,7 @@ def test_the_kernels_compile_with_the_faster_front_end():
     from numba.core import inline_closurecall as ic
     from numba.core.types import functions
 
-    import vines_stoch.physics  # noqa: F401  (installs it)
+    import vines_stoch.jit  # noqa: F401  (installs it)
 
     assert frontend.install() == {"inlining": True, "liveness": True, "variables": True, "dead": True,
                                   "ssa": True, "calls": True}
@@ -209,7 +209,7 @@ def test_kept_call_types_are_numba_s_own_and_failures_are_not_kept():
     from numba.core.registry import cpu_target
     from numba.core.types import functions
 
-    import vines_stoch.physics  # noqa: F401  (installs it)
+    import vines_stoch.jit  # noqa: F401  (installs it)
 
     kept = functions.BaseFunction.get_call_type
     own, resolved = kept.__wrapped__, kept.resolved
@@ -271,7 +271,7 @@ def test_an_unverified_inline_function_keeps_its_copies():
     """Where numba's ``InlineWorker.inline_function`` is not the verified source, the one-memo
     copies are installed and ``inline_function`` is left as it is (a process of its own: the
     front end is installed once a process)."""
-    code = ("from vines_stoch import frontend\n"
+    code = ("from vines_stoch.jit import frontend\n"
             "frontend.VERIFIED['numba.core']['inline'] = '0' * 16\n"
             "from numba.core import inline_closurecall as ic\n"
             "own = ic.InlineWorker.inline_function\n"

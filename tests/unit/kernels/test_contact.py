@@ -13,7 +13,7 @@ from tests.helpers import changed, raw_metrics, scene_from
 from vines_stoch import load_scenario
 from vines_stoch.kernels import simulate
 from vines_stoch.metrics import finish, regime
-from vines_stoch.physics import hertz_constant
+from vines_stoch.physics.hertz import hertz_constant
 from vines_stoch.scene import build_scene
 from vines_stoch.validation.reference import hertz_reference
 

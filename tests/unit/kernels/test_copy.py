@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from numba import njit
 
-from vines_stoch.kernels.common import copy_into
+from vines_stoch.jit.intrinsics import copy_into
 
 
 @njit

@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 from tests.helpers import raw_metrics, scene_from
-from vines_stoch.physics import restitution_impact
+from vines_stoch.physics.impact import restitution_impact
 
 
 def two_body(stiffness: float, r: float, clearance: float, v1: float, duration: float, dt: float = 1e-3,

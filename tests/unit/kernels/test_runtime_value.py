@@ -7,9 +7,9 @@ import numpy as np
 from numba import njit
 
 from tests.helpers import scene_from
-from vines_stoch.kernels.common import runtime_value
+from vines_stoch.jit.intrinsics import runtime_value
 from vines_stoch.kernels.rk4 import _wall_accelerations, wall_accelerations
-from vines_stoch.physics import WALL_LO
+from vines_stoch.physics.absorbers import WALL_LO
 
 
 @njit

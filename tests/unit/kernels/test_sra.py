@@ -27,7 +27,7 @@ import pytest
 
 from vines_stoch import ScenarioError
 from vines_stoch.kernels import simulate
-from vines_stoch.kernels.common import (
+from vines_stoch.outputs import (
     ABSORBER_DISS,
     ENERGY_INT,
     FINAL_ENERGY,

@@ -28,8 +28,8 @@ from scipy.integrate import quad_vec
 from scipy.linalg import expm
 
 from tests.unit.loads.test_wind import the_load
-from vines_stoch import filters
-from vines_stoch.filters import (
+from vines_stoch.physics import filters
+from vines_stoch.physics.filters import (
     clough_penzien,
     filtered_noise,
     kanai_tajimi,

@@ -21,10 +21,12 @@ from scipy.integrate import solve_ivp
 from scipy.signal import welch
 
 from tests.helpers import raw_metrics, scene_from, study_from
-from vines_stoch.filters import oscillator, stationary_covariance
 from vines_stoch.kernels import load_history, simulate
-from vines_stoch.kernels.common import CHECK_EVERY, INPUT
-from vines_stoch.kernels.loads import HARMONIC, phasors, rotations, turn
+from vines_stoch.kernels.common import CHECK_EVERY
+from vines_stoch.kernels.loads import phasors, rotations, turn
+from vines_stoch.outputs import INPUT
+from vines_stoch.physics.filters import oscillator, stationary_covariance
+from vines_stoch.physics.loads import HARMONIC
 from vines_stoch.scenario.loads import SOILS
 
 M, K, C = 2.0, 50.0, 0.3
@@ -245,7 +247,7 @@ def test_ground_motion_response_variance(model):
             "start": "stationary"}
     data = primary_data([load], 300.0, dt=0.005, metrics_from=200.0)
     mean, se = stationary_mean(data, 300, window_variance)
-    from vines_stoch.filters import clough_penzien, kanai_tajimi
+    from vines_stoch.physics.filters import clough_penzien, kanai_tajimi
 
     rows, noise, readout = (kanai_tajimi(sigma, wg, zg) if model == "kanai-tajimi"
                             else clough_penzien(sigma, wg, zg, wf, zf))

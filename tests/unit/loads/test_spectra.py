@@ -13,9 +13,9 @@ from scipy.integrate import solve_ivp
 
 from tests.helpers import ROOT, changed, study_from, toml_text
 from vines_stoch.ensemble import sample
+from vines_stoch.physics.spectra import displacement, pseudo_acceleration, uniform
 from vines_stoch.records import G
 from vines_stoch.scenario import ScenarioError, load_scenario
-from vines_stoch.spectra import displacement, pseudo_acceleration, uniform
 
 RECORDS = ROOT / "scenarios" / "records"
 

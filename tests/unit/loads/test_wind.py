@@ -32,8 +32,9 @@ from scipy.signal import get_window, welch
 from scipy.stats import chi2
 
 from tests.helpers import study_from, toml_text
-from vines_stoch import ScenarioError, parse_scenario, wind
-from vines_stoch.filters import block_diagonal, stationary_covariance, transition
+from vines_stoch import ScenarioError, parse_scenario
+from vines_stoch.physics import wind
+from vines_stoch.physics.filters import block_diagonal, stationary_covariance, transition
 from vines_stoch.scenario.bodies import shear_stiffness
 from vines_stoch.scene import build_scene, wind_load
 

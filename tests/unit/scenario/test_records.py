@@ -7,7 +7,7 @@ import pytest
 
 from tests.helpers import ROOT, toml_text
 from vines_stoch import ScenarioError, load_scenario
-from vines_stoch.kernels.loads import GROUND
+from vines_stoch.physics.loads import GROUND
 from vines_stoch.records import G, RecordError, read_record
 from vines_stoch.scene import build_scene
 

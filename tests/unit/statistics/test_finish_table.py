@@ -21,7 +21,8 @@ import pytest
 from tests.helpers import example_data, scene_from, study_from, two_dof_data
 from vines_stoch.ensemble import draw_parameters, run_chunk
 from vines_stoch.kernels import needed_streams, sample_buffer, simulate
-from vines_stoch.kernels.common import (
+from vines_stoch.metrics import finish, finish_table, ground_intensity, regime
+from vines_stoch.outputs import (
     ACC_MAX_K,
     DRIFT_MAX_K,
     POINCARE_SAMPLES,
@@ -31,7 +32,6 @@ from vines_stoch.kernels.common import (
     X_SQ_INT_K,
     passage_slots,
 )
-from vines_stoch.metrics import finish, finish_table, ground_intensity, regime
 from vines_stoch.scene import build_scene
 from vines_stoch.streams import streams
 

@@ -12,7 +12,7 @@ import numpy as np
 from tests.helpers import study_from
 from vines_stoch.ensemble import sample
 from vines_stoch.kernels import simulate
-from vines_stoch.kernels.common import IMPACTS
+from vines_stoch.outputs import IMPACTS
 from vines_stoch.scene import build_scene
 from vines_stoch.streams import BRIDGE, FILTER, INCREMENTS, generator, streams
 

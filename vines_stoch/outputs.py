@@ -1,0 +1,51 @@
+"""What a run records of each realisation: the raw metric vector's slots (filled by the step
+loops, turned into columns by ``metrics.finish_table``), the per-floor blocks, the codes of
+limits and status, and the Poincare samples kept for the regime."""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from .jit.flags import INLINE
+
+#: Slots of the raw metric vector a kernel fills; ``metrics.finish_table`` turns it into columns.
+SLOTS = (
+    "input_energy", "primary_dissipation", "absorber_dissipation", "impact_loss",
+    "energy_integral", "e1_max", "x1_max", "x1_square_integral", "impacts",
+    "final_energy", "status", "capped_steps", "impacts_left", "impacts_right", "peak_force",
+    "contact_time",
+)
+(INPUT, PRIMARY_DISS, ABSORBER_DISS, IMPACT_LOSS, ENERGY_INT, E1_MAX, X1_MAX, X1_SQ_INT,
+ IMPACTS, FINAL_ENERGY, STATUS, CAPPED, IMPACTS_LEFT, IMPACTS_RIGHT, PEAK_FORCE,
+ CONTACT_TIME) = range(len(SLOTS))
+
+#: Per-floor blocks after the slots above, ``n_floors`` entries each (block ``b``, floor ``k``
+#: at ``len(SLOTS) + b n_floors + k``): peak
+#: displacement, peak drift, peak absolute acceleration, integral of ``x_k^2``.
+FLOOR_SLOTS = ("x_max", "drift_max", "acc_max", "x_square_integral")
+X_MAX_K, DRIFT_MAX_K, ACC_MAX_K, X_SQ_INT_K = range(len(FLOOR_SLOTS))
+#: A limit's code for the peak of the structure's energy ``E1`` (the others use the floor
+#: blocks' codes ``X_MAX_K .. ACC_MAX_K``).  After the floor blocks, one slot per limit holds
+#: its first-passage time (NaN until it passes: ``first_passages``).
+LIMIT_E1 = len(FLOOR_SLOTS)
+
+#: Status codes written into the ``status`` slot.
+STATUS_OK, STATUS_DIVERGED = 0, 1
+
+#: Poincare samples (one per forcing period) kept at the end of the window for the regime.
+POINCARE_SAMPLES = 32
+
+
+@njit(**INLINE)
+def passage_slots(nf: int) -> int:
+    """Index of the first limit's first-passage slot (after the per-floor blocks of ``nf`` floors)."""
+    return len(SLOTS) + len(FLOOR_SLOTS) * nf
+
+
+def new_metrics(n_floors: int = 1, n_limits: int = 0) -> np.ndarray:
+    """A raw metric vector of a primary with ``n_floors`` floors: zeros, then NaN in the
+    first-passage slots of ``n_limits`` limits."""
+    out = np.zeros(passage_slots(n_floors) + n_limits)
+    out[passage_slots(n_floors):] = np.nan
+    return out
