@@ -11,20 +11,11 @@ import numpy as np
 from .outputs import ACC_MAX_K, DRIFT_MAX_K, LIMIT_E1, POINCARE_SAMPLES, X_MAX_K
 from .physics import filters, wind
 from .physics.absorbers import (
-    CLEARANCE,
-    DAMPING,
+    COLUMNS,
     HERTZ,
     IMPACT,
-    K_CUBIC,
-    K_LEFT,
-    K_LIN,
-    K_RIGHT,
     LAWS,
-    REST,
-    RESTITUTION,
     ROW,
-    WALL_HI,
-    WALL_LO,
 )
 from .physics.loads import (
     CHIRP,
@@ -39,14 +30,12 @@ from .physics.loads import (
 )
 from .scenario import (
     ChirpLoad,
-    CubicAbsorber,
     FilteredNoiseLoad,
     ForceRecordLoad,
     GroundMotionLoad,
     HalfSineLoad,
     HarmonicLoad,
     HertzAbsorber,
-    ImpactAbsorber,
     ImpulseLoad,
     InitialLoad,
     JenningsEnvelope,
@@ -141,19 +130,11 @@ class Scene:
 
 
 def absorber_row(a) -> np.ndarray:
-    """The parameter row of one absorber (columns ``physics.K_LIN .. WALL_HI``)."""
+    """The parameter row of one absorber (columns ``physics.absorbers.COLUMNS``, named by the
+    absorber's ``parameters``; zero where its law has none)."""
     row = np.zeros(ROW)
-    row[DAMPING] = a.damping
-    if isinstance(a, CubicAbsorber):
-        row[K_CUBIC], row[K_LIN] = a.stiffness, a.linear_stiffness
-    else:
-        row[K_LIN] = a.stiffness
-    if isinstance(a, ImpactAbsorber):
-        row[CLEARANCE], row[RESTITUTION] = a.clearance, a.restitution
-    if isinstance(a, HertzAbsorber):
-        row[REST] = a.spring_rest
-        row[K_LEFT], row[K_RIGHT] = a.contact_left.constant, a.contact_right.constant
-        row[WALL_LO], row[WALL_HI] = a.walls
+    for name, value in a.parameters().items():
+        row[COLUMNS[name]] = value
     return row
 
 

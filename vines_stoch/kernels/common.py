@@ -22,15 +22,13 @@ from ..physics.absorbers import (
     DAMPING,
     HERTZ,
     IMPACT,
-    K_CUBIC,
     K_LEFT,
-    K_LIN,
     K_RIGHT,
     REST,
     WALL_HI,
     WALL_LO,
-    spring_damper_energy,
-    spring_damper_force,
+    coupling_energy,
+    coupling_force,
 )
 from ..physics.hertz import CONTACT_STEPS, contact_energy, contact_force_law, contact_substep, hertz_force
 from ..physics.impact import restitution_impact, sticks
@@ -58,14 +56,13 @@ DIVERGED = 1e100
 @njit(**INLINE)
 def attachment_forces(x, v, nf: int, storey_k, storey_c, floor_c, host, rows, force):
     """``force[b]``: force on body ``b`` from the structure and every absorber attachment
-    (MODEL.md sections 1, 1a, 2; ``physics.spring_damper_force``); loads and contact forces are
-    added by the caller."""
+    (MODEL.md sections 1, 1a, 2; ``physics.absorbers.coupling_force``); loads and contact forces
+    are added by the caller."""
     structure_forces(x, v, nf, storey_k, storey_c, floor_c, force)
     for a in range(x.shape[0] - nf):
         h = host_of(host, a, nf)
         j = nf + a
-        f = spring_damper_force(x[j] - x[h] - rows[a, REST], v[j] - v[h], rows[a, K_LIN],
-                                rows[a, K_CUBIC], rows[a, DAMPING])
+        f = coupling_force(rows, a, x[j] - x[h] - rows[a, REST], v[j] - v[h])
         force[j] = f
         force[h] -= f
 
@@ -130,7 +127,7 @@ def stored_energy(x, v, mass, nf: int, storey_k, kind, host, rows) -> float:
         e += 0.5 * mass[b] * v[b] * v[b]
     for a in range(x.shape[0] - nf):
         u = x[nf + a] - x[host_of(host, a, nf)]
-        e += spring_damper_energy(u - rows[a, REST], rows[a, K_LIN], rows[a, K_CUBIC])
+        e += coupling_energy(rows, a, u - rows[a, REST])
         if kind[a] == HERTZ:
             e += contact_energy(rows, a, u)
     return e

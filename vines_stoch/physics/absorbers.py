@@ -5,40 +5,109 @@ Bodies are numbered ``0 .. n_floors - 1`` (the primary's floors, lowest first; t
 roof) and then one per absorber.  Absorber ``a`` hangs on its host floor ``h``: its relative
 motion is ``u = x_a - x_h``, ``w = v_a - v_h``; ``f`` is the force the host exerts on it.
 
-Absorbers reach the kernels as kind-coded rows (``LAWS``, the columns ``K_LIN .. WALL_HI``):
-every law has the spring-damper attachment of ``spring_damper_force`` (its coefficients zero
-where a law has none); an ``IMPACT`` row adds rigid walls at ``+-CLEARANCE`` (Newton
-restitution, ``impact.restitution_impact``), a ``HERTZ`` row finite-duration contact forces
+Absorbers reach the kernels as kind-coded rows (``LAWS``, the columns ``K_LIN .. LENGTH``).
+The attachment force of every law is one sum, ``coupling_force``: the polynomial spring-damper
+of ``spring_damper_force`` (linear, cubic, bistable; its coefficients zero where a law has
+none) plus the geometric term of ``geometric_force`` (two inclined springs; evaluated only on rows
+whose spring constant ``K_GEO`` is not zero).  An
+``IMPACT`` row adds rigid walls at ``+-CLEARANCE`` (Newton restitution,
+``impact.restitution_impact``), a ``HERTZ`` row finite-duration contact forces
 (``hertz.contact_force_law``).
+
+A new law is a formula here (with its term in ``coupling_force`` and ``coupling_energy`` where
+it is not a polynomial), its code in ``LAWS``, and its schema class in
+``scenario/bodies.py``, which gives its row (``parameters``).
 """
 
 from __future__ import annotations
+
+import math
 
 from numba import njit
 
 from ..jit.flags import INLINE
 
 #: Kind codes of absorber rows (MODEL.md section 2), by the ``type`` of a scenario's absorber.
-LINEAR, CUBIC, IMPACT, HERTZ = 0, 1, 2, 3
-LAWS = {"linear": LINEAR, "cubic": CUBIC, "impact": IMPACT, "hertz": HERTZ}
+LINEAR, CUBIC, IMPACT, HERTZ, BISTABLE, GEOMETRIC = 0, 1, 2, 3, 4, 5
+LAWS = {"linear": LINEAR, "cubic": CUBIC, "impact": IMPACT, "hertz": HERTZ, "bistable": BISTABLE,
+        "geometric": GEOMETRIC}
 #: Columns of an absorber row: attachment (linear and cubic stiffness, damping, spring rest
 #: offset), impact walls (clearance, restitution), Hertz contact (constants ``K`` and contact
-#: surfaces ``z_L = WALL_LO - u``, ``z_R = u - WALL_HI``).
-K_LIN, K_CUBIC, DAMPING, REST, CLEARANCE, RESTITUTION, K_LEFT, K_RIGHT, WALL_LO, WALL_HI = range(10)
-ROW = 10
+#: surfaces ``z_L = WALL_LO - u``, ``z_R = u - WALL_HI``), geometric attachment (each inclined
+#: spring's stiffness, its free length and its installed length).
+(K_LIN, K_CUBIC, DAMPING, REST, CLEARANCE, RESTITUTION, K_LEFT, K_RIGHT, WALL_LO, WALL_HI, K_GEO, FREE_LENGTH,
+ LENGTH) = range(13)
+ROW = 13
+#: The columns by name (the schema classes name the values of their rows: ``parameters``).
+COLUMNS = {"k_lin": K_LIN, "k_cubic": K_CUBIC, "damping": DAMPING, "rest": REST, "clearance": CLEARANCE,
+           "restitution": RESTITUTION, "k_left": K_LEFT, "k_right": K_RIGHT, "wall_lo": WALL_LO,
+           "wall_hi": WALL_HI, "k_geo": K_GEO, "free_length": FREE_LENGTH, "length": LENGTH}
 
 @njit(**INLINE)
 def spring_damper_force(u: float, w: float, k_lin: float, k_cubic: float, c: float) -> float:
     """Force on an absorber from its attachment (MODEL.md section 2).
 
     ``linear``: ``f = -k u - c w``; ``cubic`` (Wei et al., Appl. Math. Mech. (Engl. Ed.) 40(5)
-    2019, eq. 1): ``f = -k u^3 - k_lin u - c w``.
+    2019, eq. 1): ``f = -k u^3 - k_lin u - c w``; ``bistable``: the cubic law with ``k_lin < 0``
+    (Romeo, Sigalov, Bergman and Vakakis, J. Comput. Nonlinear Dyn. 10 (2015) 011007; Habib and
+    Romeo, Nonlinear Dyn. 89 (2017)): stable at ``u = +-sqrt(-k_lin / k)``.
     """
     return -(k_lin + k_cubic * u * u) * u - c * w
 
 
 @njit(**INLINE)
 def spring_damper_energy(u: float, k_lin: float, k_cubic: float) -> float:
-    """Potential energy of an absorber attachment: ``k_lin u^2 / 2 + k_cubic u^4 / 4``."""
+    """Potential energy of a polynomial attachment: ``k_lin u^2 / 2 + k_cubic u^4 / 4`` (zero at
+    ``u = 0``, the bistable law's barrier top included)."""
     u2 = u * u
     return 0.5 * k_lin * u2 + 0.25 * k_cubic * u2 * u2
+
+
+@njit(**INLINE)
+def geometric_stretch(u: float, free: float, length: float) -> tuple[float, float]:
+    """``(s, d)``: each inclined spring's length ``s = sqrt(u^2 + l^2)`` and its stretch
+    ``d = s - l0``, written ``(l - l0) + u^2 / (s + l)`` so that a spring installed at its free
+    length keeps the relative accuracy of its small stretch ``u^2 / (2 l)``."""
+    s = math.sqrt(u * u + length * length)
+    return s, (length - free) + u * u / (s + length)
+
+
+@njit(**INLINE)
+def geometric_force(u: float, k: float, free: float, length: float) -> float:
+    """Force of two transverse linear springs (stiffness ``k`` each, free length ``l0``, installed
+    length ``l``) on a mass moved ``u`` across them: ``-2 k u (1 - l0 / sqrt(u^2 + l^2))``
+    (MODEL.md section 2; McFarland, Bergman and Vakakis, Int. J. Non-Linear Mech. 40 (2005) 891).
+    For ``l = l0`` and small ``u`` it is the cubic law ``-k u^3 / l0^2``."""
+    s, d = geometric_stretch(u, free, length)
+    return -2.0 * k * u * (d / s)
+
+
+@njit(**INLINE)
+def geometric_energy(u: float, k: float, free: float, length: float) -> float:
+    """Potential energy of the geometric attachment counted from ``u = 0``:
+    ``k (sqrt(u^2 + l^2) - l0)^2 - k (l - l0)^2``, written ``k (d - d0) (d + d0)`` with
+    ``d - d0 = u^2 / (s + l)`` (``geometric_stretch``)."""
+    s, d = geometric_stretch(u, free, length)
+    return k * (u * u / (s + length)) * (d + (length - free))
+
+
+@njit(**INLINE)
+def coupling_force(rows, a: int, u: float, w: float) -> float:
+    """Attachment force on absorber row ``a`` at relative position ``u`` (spring rest offset
+    taken off) and velocity ``w``: the polynomial spring-damper, plus the geometric term on rows
+    that have one (``K_GEO`` not zero: one well-predicted test elsewhere).  (Rows are indexed in
+    place: a row view would cost reference counting in the step loops.)"""
+    f = spring_damper_force(u, w, rows[a, K_LIN], rows[a, K_CUBIC], rows[a, DAMPING])
+    if rows[a, K_GEO] != 0.0:
+        f += geometric_force(u, rows[a, K_GEO], rows[a, FREE_LENGTH], rows[a, LENGTH])
+    return f
+
+
+@njit(**INLINE)
+def coupling_energy(rows, a: int, u: float) -> float:
+    """Potential energy of absorber row ``a``'s attachment at ``u`` (spring rest offset taken off;
+    ``coupling_force``)."""
+    e = spring_damper_energy(u, rows[a, K_LIN], rows[a, K_CUBIC])
+    if rows[a, K_GEO] != 0.0:
+        e += geometric_energy(u, rows[a, K_GEO], rows[a, FREE_LENGTH], rows[a, LENGTH])
+    return e

@@ -12,8 +12,10 @@ expanded).  It imports neither numba, dask nor pandas: ``vines-stoch validate`` 
 
 from .bodies import (
     Absorber,
+    BistableAbsorber,
     Contact,
     CubicAbsorber,
+    GeometricAbsorber,
     HertzAbsorber,
     ImpactAbsorber,
     LinearAbsorber,
@@ -64,8 +66,10 @@ from .study import Study, load_scenario, parse_scenario
 from .sweeps import get_path, set_path
 
 __all__ = [
-    "OBJECTIVES", "Absorber", "Bound", "ChirpLoad", "Contact", "CubicAbsorber", "Distribution", "Ensemble",
-    "FilteredNoiseLoad", "ForceRecordLoad", "GroundMotionLoad", "HalfSineLoad", "HarmonicLoad",
+    "OBJECTIVES", "Absorber", "BistableAbsorber", "Bound", "ChirpLoad", "Contact", "CubicAbsorber",
+    "Distribution", "Ensemble", "FilteredNoiseLoad", "ForceRecordLoad", "GeometricAbsorber",
+    "GroundMotionLoad",
+    "HalfSineLoad", "HarmonicLoad",
     "HertzAbsorber", "History", "ImpactAbsorber", "IntensityMeasures", "ImpulseLoad", "InitialLoad",
     "JenningsEnvelope", "Limit", "LinearAbsorber", "Load", "LognormalDistribution", "NormalDistribution",
     "Optimize", "Output", "Primary", "PulseTrainLoad", "Rayleigh", "RecordLoad", "SaragoniHartEnvelope",

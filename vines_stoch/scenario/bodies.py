@@ -9,7 +9,10 @@ import numpy as np
 from pydantic import Field, model_validator
 
 from .errors import FieldError
-from .fields import MAX_FLOORS, Floor, Mass, NonNegative, Positive, Real, _Model
+from .fields import LARGEST, MAX_FLOORS, Floor, Mass, NonNegative, Positive, Real, _Model
+
+#: A negative finite number (the bistable law's linear stiffness).
+Negative = Annotated[float, Field(lt=0, ge=-LARGEST, allow_inf_nan=False)]
 
 
 class Rayleigh(_Model):
@@ -136,6 +139,16 @@ class LinearAbsorber(_Model):
     stiffness: NonNegative = 0.0
     damping: NonNegative = 0.0
 
+    def parameters(self) -> dict[str, float]:
+        """The absorber's row by column name (``physics.absorbers.COLUMNS``)."""
+        return {"k_lin": self.stiffness, "damping": self.damping}
+
+    @property
+    def spring(self) -> float:
+        """Stiffness of the attachment linearised about its stable rest position (the frequency
+        estimate of the ``dt`` checks, ``Scenario.natural_frequencies``)."""
+        return self.stiffness
+
 
 class CubicAbsorber(_Model):
     """Cubic NES: ``f = -k u^3 - k_lin u - c w`` (MODEL.md section 2, Wei et al. eq. 1)."""
@@ -146,6 +159,78 @@ class CubicAbsorber(_Model):
     stiffness: NonNegative = 0.0
     damping: NonNegative = 0.0
     linear_stiffness: NonNegative = 0.0
+
+    def parameters(self) -> dict[str, float]:
+        """The absorber's row by column name (``physics.absorbers.COLUMNS``)."""
+        return {"k_cubic": self.stiffness, "k_lin": self.linear_stiffness, "damping": self.damping}
+
+    @property
+    def spring(self) -> float:
+        """Stiffness of the attachment linearised about ``u = 0`` (see ``LinearAbsorber.spring``)."""
+        return self.linear_stiffness
+
+
+class BistableAbsorber(_Model):
+    """Bistable NES: the cubic law with a negative linear stiffness, ``f = -k u^3 - k_lin u - c w``,
+    ``k_lin < 0 < k``, stable at ``u = +-sqrt(-k_lin / k)`` (MODEL.md section 2; Romeo, Sigalov,
+    Bergman and Vakakis, J. Comput. Nonlinear Dyn. 10 (2015) 011007; Habib and Romeo, Nonlinear
+    Dyn. 89 (2017)).  It starts at ``u = 0``, the top of the barrier, unless an ``initial`` load
+    places it."""
+
+    type: Literal["bistable"]
+    floor: Floor | None = None
+    mass: Mass
+    stiffness: Positive
+    linear_stiffness: Negative
+    damping: NonNegative = 0.0
+
+    def parameters(self) -> dict[str, float]:
+        """The absorber's row by column name (``physics.absorbers.COLUMNS``): the cubic law's."""
+        return {"k_cubic": self.stiffness, "k_lin": self.linear_stiffness, "damping": self.damping}
+
+    @property
+    def spring(self) -> float:
+        """Stiffness at the two stable positions, ``k_lin + 3 k u^2 = -2 k_lin``."""
+        return -2.0 * self.linear_stiffness
+
+    @property
+    def wells(self) -> float:
+        """The stable positions' distance from the barrier, ``sqrt(-k_lin / k)``."""
+        return float(np.sqrt(-self.linear_stiffness / self.stiffness))
+
+
+class GeometricAbsorber(_Model):
+    """Geometrically nonlinear NES: two transverse linear springs of stiffness ``stiffness`` each,
+    free length ``free_length``, installed length ``length >= free_length``,
+    ``f = -2 k u (1 - l0 / sqrt(u^2 + l^2)) - c w`` (MODEL.md section 2; the physical cubic NES of
+    McFarland, Bergman and Vakakis, Int. J. Non-Linear Mech. 40 (2005) 891): for ``l = l0`` and
+    small ``u`` the cubic law with ``k / l0^2``."""
+
+    type: Literal["geometric"]
+    floor: Floor | None = None
+    mass: Mass
+    stiffness: Positive
+    free_length: Positive
+    length: Positive
+    damping: NonNegative = 0.0
+
+    @model_validator(mode="after")
+    def _pretension(self) -> GeometricAbsorber:
+        if self.length < self.free_length:
+            raise FieldError("length", self.length, f"must be >= free_length ({self.free_length:g}): "
+                             "springs installed in compression make a bistable absorber, not this law")
+        return self
+
+    def parameters(self) -> dict[str, float]:
+        """The absorber's row by column name (``physics.absorbers.COLUMNS``)."""
+        return {"k_geo": self.stiffness, "free_length": self.free_length, "length": self.length,
+                "damping": self.damping}
+
+    @property
+    def spring(self) -> float:
+        """Stiffness of the attachment at ``u = 0``, ``2 k (1 - l0 / l)`` (it stiffens towards ``2 k``
+        as ``|u|`` grows, as the cubic law's does without bound)."""
+        return 2.0 * self.stiffness * (1.0 - self.free_length / self.length)
 
 
 class ImpactAbsorber(_Model):
@@ -158,6 +243,16 @@ class ImpactAbsorber(_Model):
     restitution: Annotated[float, Field(ge=0, le=1)]
     stiffness: NonNegative = 0.0
     damping: NonNegative = 0.0
+
+    def parameters(self) -> dict[str, float]:
+        """The absorber's row by column name (``physics.absorbers.COLUMNS``)."""
+        return {"k_lin": self.stiffness, "damping": self.damping, "clearance": self.clearance,
+                "restitution": self.restitution}
+
+    @property
+    def spring(self) -> float:
+        """Stiffness of the attachment's spring (see ``LinearAbsorber.spring``)."""
+        return self.stiffness
 
 
 class Contact(_Model):
@@ -244,7 +339,20 @@ class HertzAbsorber(_Model):
         """Rest offset of the linear spring."""
         return self.start if self.rest is None else self.rest
 
+    def parameters(self) -> dict[str, float]:
+        """The absorber's row by column name (``physics.absorbers.COLUMNS``)."""
+        lo, hi = self.walls
+        return {"k_lin": self.stiffness, "damping": self.damping, "rest": self.spring_rest,
+                "k_left": self.contact_left.constant, "k_right": self.contact_right.constant,
+                "wall_lo": lo, "wall_hi": hi}
+
+    @property
+    def spring(self) -> float:
+        """Stiffness of the attachment's spring (see ``LinearAbsorber.spring``)."""
+        return self.stiffness
+
 
 Absorber = Annotated[
-    LinearAbsorber | CubicAbsorber | ImpactAbsorber | HertzAbsorber, Field(discriminator="type")
+    LinearAbsorber | CubicAbsorber | ImpactAbsorber | HertzAbsorber | BistableAbsorber | GeometricAbsorber,
+    Field(discriminator="type"),
 ]

@@ -11,7 +11,6 @@ from pydantic import Field, model_validator
 from .. import schemes
 from .bodies import (
     Absorber,
-    CubicAbsorber,
     HertzAbsorber,
     ImpactAbsorber,
     Primary,
@@ -132,14 +131,15 @@ class Scenario(_Model):
 
     def natural_frequencies(self) -> np.ndarray:
         """Natural frequencies (rad/s, ascending) of the linear structure: the floors and every
-        absorber on the linear part of its attachment to its host floor (cubic terms, impacts and
-        contacts left out; an absorber without a linear spring is a free mass, frequency 0)."""
+        absorber on its attachment linearised about its stable rest position (``spring``: cubic
+        terms, impacts and contacts left out; an absorber without a linear spring is a free mass,
+        frequency 0)."""
         n = self.primary.n_floors
         mass = np.array(self.primary.floor_masses + [a.mass for a in self.absorbers])
         k = np.zeros((mass.shape[0], mass.shape[0]))
         k[:n, :n] = shear_stiffness(self.primary.storey_stiffnesses)
         for j, a in enumerate(self.absorbers, start=n):
-            spring = a.linear_stiffness if isinstance(a, CubicAbsorber) else a.stiffness
+            spring = a.spring
             h = (a.floor or n) - 1
             k[[h, j], [h, j]] += spring
             k[[h, j], [j, h]] -= spring
