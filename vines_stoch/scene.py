@@ -14,6 +14,7 @@ from .physics.absorbers import (
     COLUMNS,
     HERTZ,
     IMPACT,
+    K_GEO,
     LAWS,
     ROW,
 )
@@ -122,6 +123,11 @@ class Scene:
     @property
     def has_hertz(self) -> bool:
         return bool((self.kind == HERTZ).any())
+
+    @property
+    def has_geometric(self) -> bool:
+        """True when an absorber has the geometric attachment (its spring constant ``K_GEO``)."""
+        return bool((self.rows[:, K_GEO] != 0.0).any())
 
     @property
     def window(self) -> float:

@@ -38,9 +38,9 @@ def kernel_for(scene, gpu: bool = False):
     loop the cuda backend compiles, ``kdk.kdk_kernel``)."""
     nb, nf = scene.mass.shape[0], scene.n_floors
     if SCHEMES[scene.scheme].kernel == "rk4":
-        return rk4_kernel(nb, nf, scene.has_impact, scene.has_hertz, gpu)
+        return rk4_kernel(nb, nf, scene.has_impact, scene.has_hertz, gpu, scene.has_geometric)
     return kdk_kernel(nb, nf, scene.forces.shape[0], scene.has_white_noise, scene.has_impact, scene.has_hertz,
-                      scene.has_filters, scene.has_ground, scene.scheme == "sra", gpu)
+                      scene.has_filters, scene.has_ground, scene.scheme == "sra", gpu, scene.has_geometric)
 
 
 def sample_buffer(scene) -> np.ndarray:

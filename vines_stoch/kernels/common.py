@@ -20,15 +20,21 @@ from ..outputs import ACC_MAX_K, DRIFT_MAX_K, SLOTS, X1_MAX, X1_SQ_INT, X_MAX_K,
 from ..physics.absorbers import (
     CLEARANCE,
     DAMPING,
+    FREE_LENGTH,
     HERTZ,
     IMPACT,
+    K_CUBIC,
+    K_GEO,
     K_LEFT,
+    K_LIN,
     K_RIGHT,
+    LENGTH,
     REST,
     WALL_HI,
     WALL_LO,
     coupling_energy,
-    coupling_force,
+    geometric_force,
+    spring_damper_force,
 )
 from ..physics.hertz import CONTACT_STEPS, contact_energy, contact_force_law, contact_substep, hertz_force
 from ..physics.impact import restitution_impact, sticks
@@ -56,13 +62,14 @@ DIVERGED = 1e100
 @njit(**INLINE)
 def attachment_forces(x, v, nf: int, storey_k, storey_c, floor_c, host, rows, force):
     """``force[b]``: force on body ``b`` from the structure and every absorber attachment
-    (MODEL.md sections 1, 1a, 2; ``physics.absorbers.coupling_force``); loads and contact forces
-    are added by the caller."""
+    (MODEL.md sections 1, 1a, 2; ``physics.absorbers.spring_damper_force``); loads, contact
+    forces and geometric springs (``geometric_forces``) are added by the caller."""
     structure_forces(x, v, nf, storey_k, storey_c, floor_c, force)
     for a in range(x.shape[0] - nf):
         h = host_of(host, a, nf)
         j = nf + a
-        f = coupling_force(rows, a, x[j] - x[h] - rows[a, REST], v[j] - v[h])
+        f = spring_damper_force(x[j] - x[h] - rows[a, REST], v[j] - v[h], rows[a, K_LIN],
+                                rows[a, K_CUBIC], rows[a, DAMPING])
         force[j] = f
         force[h] -= f
 
@@ -88,6 +95,22 @@ def contact_forces(x, nf: int, kind, host, rows, force, active=True):
             h = host_of(host, a, nf)
             j = nf + a
             f = contact_force_law(rows, a, x[j] - x[h])
+            force[j] += f
+            force[h] -= f
+
+
+@njit(**INLINE)
+def geometric_forces(x, nf: int, host, rows, force, active=True):
+    """Add the geometric attachment's spring force (``physics.absorbers.geometric_force``) on each
+    absorber row that has one (``K_GEO`` not zero), the opposite on its host floor; nothing
+    unless ``active`` (a compile-time flag: the scene holds such a row.  Tested at run time on
+    every row, it halved the smooth scene's speed)."""
+    for a in range(x.shape[0] - nf if active else 0):
+        if rows[a, K_GEO] != 0.0:
+            h = host_of(host, a, nf)
+            j = nf + a
+            f = geometric_force(x[j] - x[h] - rows[a, REST], rows[a, K_GEO], rows[a, FREE_LENGTH],
+                                rows[a, LENGTH])
             force[j] += f
             force[h] -= f
 

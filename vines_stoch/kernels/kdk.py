@@ -81,6 +81,7 @@ from .common import (
     diverged,
     first_passages,
     floor_peaks,
+    geometric_forces,
     keep_in_cavities,
     momentum,
     pin_to_walls,
@@ -296,7 +297,7 @@ def contact_sides(x, nf, kind, host, rows, touching):
 
 @cache
 def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_impact: bool, has_hertz: bool,
-               filtered: bool, ground: bool, sra: bool = False, gpu: bool = False):
+               filtered: bool, ground: bool, sra: bool = False, gpu: bool = False, geometric: bool = False):
     """The kick-drift-kick Euler-Maruyama loop specialised to a scene's structure: the numbers
     of bodies, of floors and of closed-form force rows (the sizes of its arrays on the stack),
     white noise, impact and Hertz absorbers, filtered loads, ground acceleration
@@ -326,6 +327,9 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
     stochastic Runge-Kutta step of ``sra3.sra3_step`` instead of the kick-drift-kick one; it
     draws two normals a step and noisy floor (replayed: all floors' first normals, then their
     second).
+
+    ``geometric``: the scene has absorbers with the geometric attachment
+    (``common.geometric_forces``).
 
     ``gpu``: the loop the cuda backend compiles (``kernels/launch.py``), whose per-absorber
     flags live on the stack (a GPU thread has no heap); on the CPU they are heap arrays (on the
@@ -437,6 +441,7 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
                 e1_max = e1_prev
                 e_sum = 0.5 * e1_prev
                 attachment_forces(x, v, nf, storey_k, storey_c, floor_c, host, rows, force)
+                geometric_forces(x, nf, host, rows, force, geometric)
                 for k in range(nf):
                     x2_integral[k] = 0.5 * x[k] * x[k]
                     acc[k] = force[k] + load_next[k]  # (the floors' forces: see ``acc_max`` below)
@@ -505,7 +510,7 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
                     dwork, dprimary, dabsorber = sra3_step(x, v, vn, force, a1, a2, a3, xs, v2, v3, load,
                                                            load_next, load3, ag, ag_next, ag3, dw, dz, dt,
                                                            mass, inv_mass, storey_k, storey_c, floor_c, host,
-                                                           rows, inside, ground)
+                                                           rows, inside, ground, geometric)
                     work += dwork
                     d_primary += dprimary
                     d_absorber += dabsorber
@@ -525,6 +530,7 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
                         break
                     attachment_forces(x, v, nf, storey_k, storey_c, floor_c, host, rows, force)
                     contact_forces(x, nf, kind, host, rows, force, has_hertz)
+                    geometric_forces(x, nf, host, rows, force, geometric)
                     # the sub-step: the rest of the step, or a Hertz contact's share of it; the
                     # last pass a step allows takes the rest at once, with no events
                     search = event < EVENTS - 1
@@ -606,6 +612,7 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
                             load_end[k] = load_next[k]
                     attachment_forces(x, v, nf, storey_k, storey_c, floor_c, host, rows, force)
                     contact_forces(x, nf, kind, host, rows, force, has_hertz)
+                    geometric_forces(x, nf, host, rows, force, geometric)
                     kick(v, 0.5 * s, dwh, load_end, ag_end, force, inv_mass, vn, ground)
                     if has_hertz:
                         contact_closing(x, v, vn, s, nf, inv_mass, host, rows, touching, held, owed)

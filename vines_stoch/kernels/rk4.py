@@ -56,6 +56,7 @@ from .common import (
     diverged,
     first_passages,
     floor_peaks,
+    geometric_forces,
     keep_in_cavities,
     pin_to_walls,
     record_history,
@@ -69,6 +70,10 @@ from .common import (
 from .loads import applied, has_breaks, next_break
 
 NEWTON_ITERATIONS = 12
+#: Bits of the ``contact`` argument of ``accelerations``: Hertz contact forces (at run time:
+#: absorbers in contact), geometric attachments (a compile-time constant of the loop:
+#: ``common.geometric_forces``).  One argument for both: ``rk4_step`` has numba's 30.
+HERTZ_FORCES, GEOMETRIC_FORCES = 1, 2
 #: Event kinds.
 NONE, IMPACT_EVENT, ONSET, EXIT = 0, 1, 2, 3
 
@@ -84,11 +89,13 @@ def accelerations(x, v, t, tm, nf, mass, inv_mass, storey_k, storey_c, floor_c, 
     The scene's arrays come one by one (``forces .. series_target``: the loads of
     kernels/loads.py, piecewise loads on the piece of ``tm``): unpacking a tuple of arrays
     costs reference counting at every call.  ``sticking`` applies the contact constraint of
-    stuck impact absorbers, ``contact`` the Hertz contact forces (flags, not branches around
-    the calls: see ``physics.INLINE``).
+    stuck impact absorbers; ``contact`` (bits ``HERTZ_FORCES``, ``GEOMETRIC_FORCES``) adds the
+    Hertz contact forces and the geometric attachments' (flags, not branches around the calls:
+    see ``jit.flags.INLINE``).
     """
     attachment_forces(x, v, nf, storey_k, storey_c, floor_c, host, rows, acc)
-    contact_forces(x, nf, kind, host, rows, acc, contact)
+    contact_forces(x, nf, kind, host, rows, acc, (contact & HERTZ_FORCES) != 0)
+    geometric_forces(x, nf, host, rows, acc, (contact & GEOMETRIC_FORCES) != 0)
     ag = applied(t, tm, forces, series_t, series_v, series_ptr, series_target, series_t, False, load)
     accelerate(acc, load, ag, inv_mass, acc)
     power = 0.0
@@ -233,7 +240,8 @@ def next_event(x, xn, h, nf, kind, host, rows, stuck, touching):
 
 
 @cache
-def rk4_kernel(n_bodies: int, n_floors: int, has_impact: bool, has_hertz: bool, gpu: bool = False):
+def rk4_kernel(n_bodies: int, n_floors: int, has_impact: bool, has_hertz: bool, gpu: bool = False,
+               geometric: bool = False):
     """The RK4 loop specialised to a scene's structure (the numbers of bodies and of floors, impact
     absorbers, Hertz absorbers); Poincare sampling for the regime (a period), loads with kinks or
     jumps (``loads.has_breaks``) and limits to watch are run-time values.  It takes the arguments
@@ -244,6 +252,7 @@ def rk4_kernel(n_bodies: int, n_floors: int, has_impact: bool, has_hertz: bool, 
     NF = n_floors
     NA = n_bodies - n_floors
     GPU = gpu
+    GEO = GEOMETRIC_FORCES if geometric else 0
 
     @njit(**KERNEL)
     def kernel(bodies, absorbers, ex, fl, noise, grid, outputs, gen, gen_bridge, gen_filter):
@@ -335,7 +344,7 @@ def rk4_kernel(n_bodies: int, n_floors: int, has_impact: bool, has_hertz: bool, 
                     inc = rk4_step(x, v, t, tau, xn, vn, acc, xs, vs, x2, a0, mass, inv_mass, storey_k,
                                    storey_c, floor_c, kind, host, rows, forces, series_t, series_v,
                                    series_ptr, series_target, stuck, load, group_mass, group_sum, sticking,
-                                   contact)
+                                   (HERTZ_FORCES if contact else 0) | GEO)
                     if phase == 0:
                         event_kind, q, side, j, hf, sign, wall = NONE, -1, 0, 0, 0, 0, 0.0
                         if (has_impact or has_hertz) and not capped:
@@ -390,7 +399,8 @@ def rk4_kernel(n_bodies: int, n_floors: int, has_impact: bool, has_hertz: bool, 
                         put(x, j, x[hf] + side * rows[q, CLEARANCE])
                         wall_accelerations(x, v, t, nf, mass, inv_mass, storey_k, storey_c, floor_c, kind,
                                            host, rows, forces, series_t, series_v, series_ptr, series_target,
-                                           stuck, False, acc_wall, load_wall, gm_wall, gs_wall, True, contact)
+                                           stuck, False, acc_wall, load_wall, gm_wall, gs_wall, True,
+                                           (HERTZ_FORCES if contact else 0) | GEO)
                         # the last impact a step may resolve ends a chatter sequence: inelastic collapse
                         gain = (pick(acc_wall, j) - acc_wall[hf]) * dt
                         loss = resolve_impact(mass, v, nf, q, side, gain, rows[q, RESTITUTION],
@@ -411,7 +421,7 @@ def rk4_kernel(n_bodies: int, n_floors: int, has_impact: bool, has_hertz: bool, 
                     # release contacts the wall would have to pull (checked at step ends)
                     wall_accelerations(x, v, t, nf, mass, inv_mass, storey_k, storey_c, floor_c, kind, host,
                                        rows, forces, series_t, series_v, series_ptr, series_target, stuck,
-                                       True, acc_wall, load_wall, gm_wall, gs_wall, True, False)
+                                       True, acc_wall, load_wall, gm_wall, gs_wall, True, GEO)
                 if sampling:
                     next_sample = record_sample(samples, next_sample, sample_from, period, i * dt, dt,
                                                 xp, vp, x, v, out[IMPACTS_LEFT], out[IMPACTS_RIGHT])

@@ -17,12 +17,12 @@ from numba import njit
 from ..jit.flags import INLINE
 from ..physics.absorbers import DAMPING
 from ..physics.structure import host_of
-from .common import accelerate, attachment_forces, momentum
+from .common import accelerate, attachment_forces, geometric_forces, momentum
 
 
 @njit(**INLINE)
 def sra3_step(x, v, vn, force, a1, a2, a3, xs, v2, v3, load, load_next, load3, ag, ag_next, ag3, dw, dz, dt,
-              mass, inv_mass, storey_k, storey_c, floor_c, host, rows, inside, ground):
+              mass, inv_mass, storey_k, storey_c, floor_c, host, rows, inside, ground, geometric):
     """One SRA3 step of length ``dt`` from ``(x, v)``, in place.
 
     ``load``, ``load_next``, ``load3`` (and ``ag``, ``ag_next``, ``ag3``): the floors' loads
@@ -32,16 +32,19 @@ def sra3_step(x, v, vn, force, a1, a2, a3, xs, v2, v3, load, load_next, load3, a
     increments of the input work, the structure's and the absorbers' dissipation (zero unless
     ``inside`` the metrics window), with the mean of the step's end velocities, for which the
     kinetic energy change equals the work of the step's impulses exactly.  ``ground``: the
-    scene has a ground acceleration (a compile-time flag).
+    scene has a ground acceleration, ``geometric``: geometric attachments
+    (``common.geometric_forces``; compile-time flags).
     """
     nb = x.shape[0]
     nf = load.shape[0]
     attachment_forces(x, v, nf, storey_k, storey_c, floor_c, host, rows, force)
+    geometric_forces(x, nf, host, rows, force, geometric)
     accelerate(force, load, ag, inv_mass, a1)
     for b in range(nb):
         xs[b] = x[b] + dt * v[b]
         v2[b] = v[b] + dt * a1[b]
     attachment_forces(xs, v2, nf, storey_k, storey_c, floor_c, host, rows, force)
+    geometric_forces(xs, nf, host, rows, force, geometric)
     accelerate(force, load_next, ag_next, inv_mass, a2)
     for b in range(nb):
         xs[b] = x[b] + 0.25 * dt * (v[b] + v2[b])
@@ -49,6 +52,7 @@ def sra3_step(x, v, vn, force, a1, a2, a3, xs, v2, v3, load, load_next, load3, a
     for k in range(nf):
         v3[k] += 1.5 * dz[k] / mass[k]
     attachment_forces(xs, v3, nf, storey_k, storey_c, floor_c, host, rows, force)
+    geometric_forces(xs, nf, host, rows, force, geometric)
     accelerate(force, load3, ag3, inv_mass, a3)
     for b in range(nb):
         vn[b] = v[b] + dt * (a1[b] / 6.0 + a2[b] / 6.0 + 2.0 / 3.0 * a3[b])

@@ -6,17 +6,19 @@ roof) and then one per absorber.  Absorber ``a`` hangs on its host floor ``h``: 
 motion is ``u = x_a - x_h``, ``w = v_a - v_h``; ``f`` is the force the host exerts on it.
 
 Absorbers reach the kernels as kind-coded rows (``LAWS``, the columns ``K_LIN .. LENGTH``).
-The attachment force of every law is one sum, ``coupling_force``: the polynomial spring-damper
-of ``spring_damper_force`` (linear, cubic, bistable; its coefficients zero where a law has
-none) plus the geometric term of ``geometric_force`` (two inclined springs; evaluated only on rows
-whose spring constant ``K_GEO`` is not zero).  An
+The attachment force of every law is one sum: the polynomial spring-damper of
+``spring_damper_force`` (linear, cubic, bistable; its coefficients zero where a law has none)
+plus the geometric term of ``geometric_force`` (two inclined springs, on rows whose spring
+constant ``K_GEO`` is not zero; the step loops of scenes without such a row leave it out at
+compile time: ``kernels.common.geometric_forces``); ``coupling_energy`` is its potential.  An
 ``IMPACT`` row adds rigid walls at ``+-CLEARANCE`` (Newton restitution,
 ``impact.restitution_impact``), a ``HERTZ`` row finite-duration contact forces
 (``hertz.contact_force_law``).
 
-A new law is a formula here (with its term in ``coupling_force`` and ``coupling_energy`` where
-it is not a polynomial), its code in ``LAWS``, and its schema class in
-``scenario/bodies.py``, which gives its row (``parameters``).
+A new law is its code in ``LAWS`` and its schema class in ``scenario/bodies.py``, which gives its
+row (``parameters``) and linearised stiffness (``spring``); where it is not a polynomial, also
+its formula here, its term in ``coupling_energy`` and its force in the loops' force assembly
+(``kernels.common.geometric_forces`` is the model).
 """
 
 from __future__ import annotations
@@ -92,21 +94,9 @@ def geometric_energy(u: float, k: float, free: float, length: float) -> float:
 
 
 @njit(**INLINE)
-def coupling_force(rows, a: int, u: float, w: float) -> float:
-    """Attachment force on absorber row ``a`` at relative position ``u`` (spring rest offset
-    taken off) and velocity ``w``: the polynomial spring-damper, plus the geometric term on rows
-    that have one (``K_GEO`` not zero: one well-predicted test elsewhere).  (Rows are indexed in
-    place: a row view would cost reference counting in the step loops.)"""
-    f = spring_damper_force(u, w, rows[a, K_LIN], rows[a, K_CUBIC], rows[a, DAMPING])
-    if rows[a, K_GEO] != 0.0:
-        f += geometric_force(u, rows[a, K_GEO], rows[a, FREE_LENGTH], rows[a, LENGTH])
-    return f
-
-
-@njit(**INLINE)
 def coupling_energy(rows, a: int, u: float) -> float:
-    """Potential energy of absorber row ``a``'s attachment at ``u`` (spring rest offset taken off;
-    ``coupling_force``)."""
+    """Potential energy of absorber row ``a``'s attachment at ``u`` (spring rest offset taken off):
+    the polynomial spring's and, on rows that have one, the geometric term's."""
     e = spring_damper_energy(u, rows[a, K_LIN], rows[a, K_CUBIC])
     if rows[a, K_GEO] != 0.0:
         e += geometric_energy(u, rows[a, K_GEO], rows[a, FREE_LENGTH], rows[a, LENGTH])
