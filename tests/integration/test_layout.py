@@ -180,3 +180,39 @@ def test_bench_without_sdeint_names_the_extra(monkeypatch, tmp_path):
     code, err = cli("bench", "--out", tmp_path / "bench.md")
     assert code == 2 and err.count("\n") == 1 and 'pip install "vines-stoch[bench]"' in err
     assert not (tmp_path / "bench.md").exists()
+
+
+def _reach(start: str) -> set[str]:
+    """The modules importing ``start`` loads: its module-level imports, each one's parent
+    packages (Python runs a package's ``__init__`` before its modules), and so on."""
+    graph = _imports()
+    seen: set[str] = set()
+    todo = [start]
+    while todo:
+        module = todo.pop()
+        if module in seen:
+            continue
+        seen.add(module)
+        parts = module.split(".")
+        todo += [".".join(parts[:k]) for k in range(2, len(parts)) if ".".join(parts[:k]) in MODULES]
+        todo += [target for target, top in graph.get(module, ()) if top]
+    return seen - {start}
+
+
+FLOORS = {
+    # the physics floor: formulae only, on the compile options; no step loop, no front end
+    "vines_stoch.physics": ("vines_stoch.kernels", "vines_stoch.jit.frontend"),
+    # the scene and the scenario files: codes from the physics floor and outputs, never the loops
+    "vines_stoch.scene": ("vines_stoch.kernels",),
+    "vines_stoch.scenario": ("vines_stoch.kernels", "vines_stoch.jit"),
+}
+
+
+@pytest.mark.parametrize("floor", sorted(FLOORS))
+def test_the_floors_stand_on_what_is_below_them(floor):
+    modules = [m for m in MODULES if m == floor or m.startswith(floor + ".")]
+    assert modules
+    for module in modules:
+        reached = _reach(module)
+        banned = [m for m in reached for b in FLOORS[floor] if m == b or m.startswith(b + ".")]
+        assert banned == [], (module, banned)
