@@ -29,6 +29,7 @@ import pandas as pd
 
 from . import history as hist
 from . import schedulers
+from .binding import binding
 from .kernels import needed_streams, sample_buffer, simulate
 from .metrics import METRICS, finish_table, ground_intensity, summarise
 from .outputs import POINCARE_SAMPLES
@@ -83,16 +84,18 @@ def run_chunk(scene: Scene, seed: int, point: int, start: int, stop: int,
     """Realisations ``start..stop-1`` of one sweep point: one metric row each and, when a
     history ``grid = (stride, size)`` is asked for, the paths of the history ``signals``
     ``(len(signals), size, stop - start)``.  With ``study`` (a study with uncertain parameters) each
-    realisation runs its own scene, its drawn values in columns named by their keys.
+    realisation runs its own scene (``binding``: the point's scene with the drawn values set), its
+    drawn values in columns named by their keys.
     ``common``: common random numbers across sweep points (see ``generator``)."""
     raws, scenes, samples_rows, drawn_rows, intensities = [], [], [], [], []
     paths = None if grid is None else np.full((len(signals), grid[1], stop - start), np.nan)
     columns = len(hist.SIGNALS) + (scene.n_floors if hist.needs_floors(signals) else 0)
     path = None if grid is None else np.full((grid[1], columns), np.nan)
+    bound = binding(study, point) if study is not None else None
     for r in range(start, stop):
         drawn = draw_parameters(study, seed, point, r, common) if study is not None else {}
         if drawn:
-            scene = build_scene(study.realise(point, drawn))
+            scene = bound.scene(drawn)
         samples = sample_buffer(scene)
         if path is not None:
             path.fill(np.nan)
@@ -125,7 +128,7 @@ def run_chunk_cuda(scene: Scene, seed: int, point: int, start: int, stop: int,
     n = stop - start
     drawn_rows = [draw_parameters(study, seed, point, r, common) if study is not None else {}
                   for r in range(start, stop)]
-    scenes = [build_scene(study.realise(point, d)) for d in drawn_rows] if study is not None else [scene] * n
+    scenes = [binding(study, point).scene(d) for d in drawn_rows] if study is not None else [scene] * n
     columns = len(hist.SIGNALS) + (scene.n_floors if hist.needs_floors(signals) else 0)
     batch = gpu.simulate_many(scenes if study is not None else scene, seed, point, start, stop, common, grid,
                               columns)

@@ -157,6 +157,19 @@ def limit_row(metric: str, value: float, n_floors: int) -> tuple[float, float, f
     return codes[name], int(floor) - 1, value
 
 
+def poincare_samples(scheme: str, forces, metrics_from: float, n_steps: int,
+                     dt: float) -> tuple[float, float]:
+    """``(period, sample_from)`` of a scene's Poincare samples, at multiples of the forcing
+    period in the last periods of the window: rk4 under one harmonic force row (``forces``) of
+    frequency > 0; ``(0, 0)`` otherwise."""
+    frequencies = [f[2] for f in forces if f[0] == HARMONIC]
+    if not (scheme == "rk4" and len(frequencies) == 1 and frequencies[0] > 0):
+        return 0.0, 0.0
+    period = 2.0 * math.pi / frequencies[0]
+    first = max(metrics_from, n_steps * dt - POINCARE_SAMPLES * period)
+    return period, math.ceil(first / period - 1e-9) * period
+
+
 def build_scene(scenario: Scenario) -> Scene:
     """Arrays of one scenario (one sweep point)."""
     absorbers = scenario.absorbers
@@ -209,13 +222,7 @@ def build_scene(scenario: Scenario) -> Scene:
     sim = scenario.simulation
     n_steps = max(1, math.ceil(sim.duration / sim.dt - 1e-9))
     scheme = scenario.scheme
-    period = sample_from = 0.0
-    frequencies = [f[2] for f in forces if f[0] == HARMONIC]
-    if scheme == "rk4" and len(frequencies) == 1 and frequencies[0] > 0:
-        # Poincare samples at multiples of the forcing period, in the last periods of the window
-        period = 2.0 * math.pi / frequencies[0]
-        first = max(sim.metrics_from, n_steps * sim.dt - POINCARE_SAMPLES * period)
-        sample_from = math.ceil(first / period - 1e-9) * period
+    period, sample_from = poincare_samples(scheme, forces, sim.metrics_from, n_steps, sim.dt)
     return Scene(
         mass=mass, storey_k=np.array(primary.storey_stiffnesses, dtype=float),
         storey_c=np.array(storey_c, dtype=float), floor_c=np.array(floor_c, dtype=float),

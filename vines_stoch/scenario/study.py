@@ -8,17 +8,30 @@ import math
 import os
 import re
 import tomllib
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+from annotated_types import Ge, Gt, Le, Lt
+from pydantic import BaseModel
+from pydantic.fields import FieldInfo
 
 from .. import schemes
 from ..records import RecordError, read_record
 from ..textfile import TextFileError, read_text
 from . import accuracy
 from .distributions import REACH, LognormalDistribution
-from .errors import MISSING, Mistakes, ScenarioError, format_error, validate
+from .errors import (
+    MISSING,
+    FieldError,
+    Mistakes,
+    ScenarioError,
+    _constraints,
+    _interval,
+    format_error,
+    validate,
+)
 from .fields import LARGEST, MAX_DEPTH
 from .loads import _RecordLoad
 from .model import Scenario
@@ -93,6 +106,109 @@ def _check_stability(scenario: Scenario, source: str) -> None:
         raise ScenarioError(format_error(source, "simulation.dt", scenario.simulation.dt, why))
 
 
+@dataclass(frozen=True)
+class FieldRange:
+    """The values a numeric field of a scenario allows by its type (``Mass``, ``NonNegative``, the
+    items of ``primary.masses``...): its bounds (None: none) and whether it must be finite."""
+
+    constraints: tuple[Any, ...]
+    low: float | None = None
+    high: float | None = None
+    low_open: bool = False
+    high_open: bool = False
+    finite: bool = False
+
+    @classmethod
+    def of(cls, info: FieldInfo) -> FieldRange:
+        """The range of a field (of its items, for a list of numbers)."""
+        constraints = tuple(_constraints(info))
+        bounds: dict[str, Any] = {}
+        for m in constraints:
+            if isinstance(m, (Ge, Gt)):
+                bounds.update(low=m.ge if isinstance(m, Ge) else m.gt, low_open=isinstance(m, Gt))
+            elif isinstance(m, (Le, Lt)):
+                bounds.update(high=m.le if isinstance(m, Le) else m.lt, high_open=isinstance(m, Lt))
+            elif getattr(m, "allow_inf_nan", True) is False:
+                bounds.update(finite=True)
+        return cls(constraints, **bounds)
+
+    def refusal(self, value: float) -> str | None:
+        """Why the field cannot hold ``value``, worded as validation words it (None: it can)."""
+        if self.finite and not math.isfinite(value):
+            return "must be a finite number"
+        low_ok = self.low is None or (value > self.low if self.low_open else value >= self.low)
+        high_ok = self.high is None or (value < self.high if self.high_open else value <= self.high)
+        if low_ok and high_ok:
+            return None
+        return _interval(list(self.constraints), value) or "is out of the field's range"
+
+
+def _step(node: Any, part: str) -> Any:
+    """The node one part of a dotted key below ``node`` (a model, list or table), or MISSING."""
+    if isinstance(node, BaseModel):
+        return getattr(node, part) if part in type(node).model_fields else MISSING
+    if isinstance(node, list):
+        return node[int(part)] if part.isdigit() and int(part) < len(node) else MISSING
+    if isinstance(node, dict):
+        return node.get(part, MISSING)
+    return MISSING
+
+
+def _walk(root: BaseModel, key: str) -> tuple[list[str], FieldInfo | None]:
+    """The keys (relative to ``root``, ``""`` for ``root``) of the models dotted ``key`` passes
+    through, and the field the key names (None: no field of a model)."""
+    node: Any = root
+    models: list[str] = []
+    info = None
+    parts = key.split(".")
+    for i, part in enumerate(parts):
+        if isinstance(node, BaseModel):
+            models.append(".".join(parts[:i]))
+            info = type(node).model_fields.get(part)
+        node = _step(node, part)
+        if node is MISSING:
+            return models, None
+    return models, info
+
+
+def _model_at(root: BaseModel, where: str) -> BaseModel:
+    """The model at dotted ``where`` below ``root`` (``""``: ``root``)."""
+    node: Any = root
+    for part in where.split(".") if where else ():
+        node = _step(node, part)
+    return node
+
+
+def field_range(root: BaseModel, key: str) -> FieldRange | None:
+    """The range of the numeric field dotted ``key`` names below ``root`` (None: no field)."""
+    info = _walk(root, key)[1]
+    return None if info is None else FieldRange.of(info)
+
+
+def checked_models(root: BaseModel, key: str) -> list[str]:
+    """Keys (relative to ``root``, ``""`` for ``root``) of the models dotted ``key`` passes
+    through whose fields are checked against each other (model validators: ``cross_check``)."""
+    return [where for where in _walk(root, key)[0]
+            if type(_model_at(root, where)).__pydantic_decorators__.model_validators]
+
+
+def cross_check(root: BaseModel, wheres: list[str], prefix: str, source: str) -> None:
+    """Run the checks of fields against each other (the model validators) of the models at
+    ``wheres`` below ``root`` (``checked_models``; ``prefix``: the dotted key of ``root`` in the
+    file) as validation runs them; a ScenarioError worded as validation words it."""
+    for where in wheres:
+        model = _model_at(root, where)
+        for decorator in type(model).__pydantic_decorators__.model_validators.values():
+            if decorator.info.mode != "after":
+                continue
+            try:
+                decorator.func(model)
+            except FieldError as exc:
+                key = ".".join(k for k in (prefix, where, exc.key) if k)
+                raise ScenarioError(format_error(source, key, MISSING if exc.value is None else exc.value,
+                                                 exc.rule), (key,)) from None
+
+
 class Study:
     """A validated scenario file: the base scenario and its sweep points; ``warnings``: one line
     for each thing the run would do that the file may not expect (a coarse ``dt``, realisations
@@ -105,6 +221,7 @@ class Study:
         self.data = data
         self.directory = directory
         self._records = {} if records is None else records  # record files read so far, shared by variants
+        self.bindings: dict[int, Any] = {}  # vines_stoch.binding.Binding of each sweep point, once made
         mistakes = Mistakes()  # every mistake of the file, reported at once
         base, invalid = None, ()
         try:
@@ -248,7 +365,8 @@ class Study:
                                                      message.format(end=end, point=at, rule=rule)))
 
     def realise(self, point: int, values: dict[str, float]) -> Scenario:
-        """Sweep point ``point`` with its uncertain parameters set to ``values``."""
+        """Sweep point ``point`` with its uncertain parameters set to ``values``, the whole file
+        validated again (``vines_stoch.binding`` sets most keys in the point's scene instead)."""
         variant = copy.deepcopy(self._point_data[point])
         for key, value in values.items():
             set_path(variant, key, value)
