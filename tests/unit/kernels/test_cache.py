@@ -89,7 +89,7 @@ RACE = r'''
 import json, pathlib, sys, time
 sys.path.insert(0, sys.argv[1])
 import numpy as np
-from vines_stoch import cache
+from vines_stoch.jit import cache
 from slow_compile import f
 folder = pathlib.Path(sys.argv[1])
 (folder / f"ready-{sys.argv[2]}").touch()
