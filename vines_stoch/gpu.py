@@ -225,6 +225,7 @@ def simulate_many(scenes: Scene | list[Scene], seed: int, point: int, start: int
     require()
     from numba import cuda
 
+    from .jit.cache import compile_once
     from .kernels.launch import launcher
 
     scenes = [scenes] if isinstance(scenes, Scene) else list(scenes)
@@ -246,8 +247,10 @@ def simulate_many(scenes: Scene | list[Scene], seed: int, point: int, start: int
         m = _batch_size(inputs.row_bytes(), n - done)
         params = device or {k: cuda.to_device(a[done:done + m]) for k, a in inputs.stacked.items()}
         outputs = inputs.outputs(m, cuda.device_array)
-        launch[math.ceil(m / THREADS), THREADS](
-            *inputs.arguments(start + done, m, params, shared, normals, keys, template, outputs))
+        args = inputs.arguments(start + done, m, params, shared, normals, keys, template, outputs)
+        if not simulating():  # (once a process: from the disk cache, or compiled with the faster front end)
+            compile_once(launch, args, "numba.cuda.core")
+        launch[math.ceil(m / THREADS), THREADS](*args)
         raw[done:done + m] = outputs[0].copy_to_host()
         if inputs.n_samples:
             samples[done:done + m] = outputs[1].copy_to_host()

@@ -1,7 +1,8 @@
 """The compile floor: the options the step loops are compiled with (``flags``), the intrinsics
 they use (``intrinsics``), numba's on-disk cache keyed by the package's sources and one process
-compiling a loop at a time (``cache``), and the faster front end (``frontend``, which the step
-loops' package installs: the physics floor, compiled with these options, does not load it).
+compiling a loop at a time (``cache``), and the faster front end it compiles them with
+(``frontend``: in place only while a loop of the package compiles, and loaded only then: the
+physics floor, compiled with these options, does not load it).
 
 Nothing here knows the model: the physics floor (``vines_stoch.physics``) and the step loops
 (``vines_stoch.kernels``) stand on it.

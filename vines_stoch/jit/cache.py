@@ -8,15 +8,24 @@ package's ``__pycache__`` folders, or under ``NUMBA_CACHE_DIR`` where that is se
 anywhere in them compiles afresh, and going back to earlier sources finds their cache again.
 Functions outside the package keep numba's own locations.  ``make clean-cache`` removes the
 folders of earlier sources.  ``compile_once`` lets one process of a machine at a time compile a
-loop, so that processes starting the same loop together compile it once.
+loop, so that processes starting the same loop together compile it once, with the faster front
+end (``frontend.compiling``).  ``cache_on_disk`` caches the cuda backend's launchers in the same
+folders (numba-cuda's own ``cache=True`` would miss in every new process: see there).
 """
 
 from __future__ import annotations
 
 import hashlib
+import importlib
+import inspect
 import os
+import types
+from functools import cache
 from pathlib import Path
 from typing import Any
+
+import numpy as np
+
 
 try:
     import fcntl
@@ -53,24 +62,26 @@ def digest(package: Path = PACKAGE) -> str | None:
         return None
 
 
-def key_by_sources() -> str:
-    """Make numba cache this package's compiled functions in a folder named by ``digest``
-    (once); returns that folder's name ("" where the sources cannot be read: numba's own
-    locations, and a zip archive cannot be edited anyway)."""
-    from numba.core import caching, config
-
+def key_by_sources(package: str = "numba.core") -> str:
+    """Make numba (``package``: ``numba.core``; numba-cuda's cache, ``numba.cuda.core``) cache
+    this package's compiled functions in a folder named by ``digest`` (once); returns that
+    folder's name ("" where the sources cannot be read: numba's own locations, and a zip
+    archive cannot be edited anyway)."""
+    caching = importlib.import_module(f"{package}.caching")
+    config = importlib.import_module(f"{package}.config")
     key = digest()
     if key is None:
         return ""
     name = f"vines-stoch-{key}"
     locators = getattr(getattr(caching, "CacheImpl", None), "_locator_classes", None)
     mixin = getattr(caching, "_SourceFileBackedLocatorMixin", None)
-    if locators is None or mixin is None:  # another numba's cache internals: its own locations
+    base = getattr(caching, "UserProvidedCacheLocator", getattr(caching, "_UserProvidedCacheLocator", None))
+    if locators is None or mixin is None or base is None:  # another numba's cache internals: its own
         return ""
     if any(getattr(k, "keyed_by_sources", False) for k in locators):
         return name
 
-    class SourceKeyedLocator(caching.UserProvidedCacheLocator):
+    class SourceKeyedLocator(base):
         """The cache of a function of this package: ``name`` under ``NUMBA_CACHE_DIR`` (with
         numba's own sub-path of the file's folder) or under the file's ``__pycache__``."""
 
@@ -96,22 +107,58 @@ def key_by_sources() -> str:
     return name
 
 
-def compile_once(dispatcher: Any, args: tuple) -> None:
-    """Compile ``dispatcher`` (a numba function cached on disk) for the types of ``args``, or load
-    it from the cache, one process of this machine at a time: processes that start the same
-    loop together (the workers of an ensemble or of a test run) compile it once, the others wait
-    for it and load it (a cold step loop takes 5-20 s to compile; two at once take as long
-    each on separate cores, or twice as long on one).  The lock is a file beside the cache,
-    named by a hash of the function, its closure and the argument types; where the cache's
-    folder cannot be written, or there are no POSIX file locks, it compiles unlocked."""
+def _in_sources(func: Any) -> bool:
+    """Whether the function ``func`` is defined in one of the files ``digest`` reads."""
+    try:
+        path = Path(inspect.getfile(func)).resolve().relative_to(PACKAGE)
+    except (TypeError, ValueError):  # (built in, or outside the package)
+        return False
+    return path.parts[0] in SOURCES
+
+
+def described(value: Any) -> str | None:
+    """``value`` as a compile reads it, in words that are the same in every process: constants
+    by ``repr``, tuples and lists item by item, a function or compiled function defined in the
+    sources ``digest`` reads by its module, name, defaults and closure (and a compiled
+    function's options); None for anything else (nothing that names it the same in each
+    process)."""
+    if value is None or isinstance(value, (bool, int, float, complex, str, bytes, np.generic)):
+        return repr(value)
+    if isinstance(value, (tuple, list)):
+        items = [described(v) for v in value]
+        return None if None in items else f"{type(value).__name__}({', '.join(items)})"
+    func = getattr(value, "py_func", value)
+    if not inspect.isfunction(func) or not _in_sources(func):
+        return None
+    inner = described((func.__defaults__ or (), tuple(c.cell_contents for c in func.__closure__ or ())))
+    options = getattr(value, "targetoptions", None)
+    if options is not None:
+        options = sorted((k, sorted(v) if isinstance(v, (set, frozenset)) else v) for k, v in options.items())
+    return None if inner is None else f"{func.__module__}.{func.__qualname__}: {inner} {options or ''}"
+
+
+def compile_once(dispatcher: Any, args: tuple, package: str = "numba.core") -> None:
+    """Compile ``dispatcher`` (a numba function cached on disk; ``package`` ``numba.cuda.core``:
+    a numba-cuda kernel) for the types of ``args`` with the faster front end
+    (``frontend.compiling``), or load it from the cache, one process of this machine at a time:
+    processes that start the same loop together (the workers of an ensemble or of a test run)
+    compile it once, the others wait for it and load it (a cold step loop takes 5-20 s to
+    compile; two at once take as long each on separate cores, or twice as long on one).  The
+    lock is a file beside the cache, named by a hash of the function, its closure and the
+    argument types; where the cache's folder cannot be written, or there are no POSIX file
+    locks, it compiles unlocked."""
     from numba import typeof
 
-    signature = tuple(typeof(a) for a in args)
+    from . import frontend  # (on first use: the physics floor, built on this floor, never loads it)
+
+    typer = typeof if package == "numba.core" else dispatcher.typeof_pyval
+    signature = tuple(typer(a) for a in args)
     if signature in dispatcher.overloads:
         return
     func = dispatcher.py_func
-    closure = tuple(cell.cell_contents for cell in func.__closure__ or ())
-    key = hashlib.sha256(repr((func.__module__, func.__qualname__, closure, signature)).encode()).hexdigest()
+    identity = described(dispatcher) or repr((func.__module__, func.__qualname__,
+                                              tuple(cell.cell_contents for cell in func.__closure__ or ())))
+    key = hashlib.sha256(repr((identity, signature)).encode()).hexdigest()
     handle = None
     if fcntl is not None:
         try:
@@ -121,11 +168,49 @@ def compile_once(dispatcher: Any, args: tuple) -> None:
         except (AttributeError, OSError, TypeError):  # (no cache folder to write)
             pass
     if handle is None:
-        dispatcher.compile(signature)
+        with frontend.compiling(package):
+            dispatcher.compile(signature)
         return
     with handle:
+        # (the file lock first, then the compiler's: no thread holds the compiler's lock while
+        # it waits for another process)
         fcntl.flock(handle, fcntl.LOCK_EX)
         try:
-            dispatcher.compile(signature)
+            with frontend.compiling(package):
+                dispatcher.compile(signature)
         finally:
             fcntl.flock(handle, fcntl.LOCK_UN)
+
+
+@cache
+def _stable_cuda_cache() -> type:
+    """numba-cuda's disk cache of kernels, its entries keyed by ``described`` of the closure."""
+    from numba.cuda.dispatcher import CUDACache
+
+    class StableCUDACache(CUDACache):
+        """numba-cuda's ``CUDACache`` whose index key (a hash of the function's bytecode and a
+        pickle of its closure's contents) reads, in place of the closure's contents, their
+        descriptions ``cells``."""
+
+        def __init__(self, py_func: Any, cells: list[str]) -> None:
+            super().__init__(py_func)
+            self._py_func = types.FunctionType(py_func.__code__, {}, py_func.__name__, None,
+                                               tuple(types.CellType(c) for c in cells))
+
+    return StableCUDACache
+
+
+def cache_on_disk(dispatcher: Any) -> bool:
+    """Cache ``dispatcher`` (a ``numba.cuda.jit`` kernel of this package, made without
+    ``cache``) on disk as numba-cuda's ``cache=True`` does, in the folder ``key_by_sources``
+    names, its entries keyed by ``described`` of its closure's contents in place of numba-cuda's
+    pickle of them: a launcher closes over a step loop's dispatcher, which pickles with an
+    identity drawn afresh in each process (numba's ``_MemoMixin._uuid``), so no process would
+    find another's entries (and each would add one).  Returns whether it is cached: not where
+    a closure's content has no such description, or the sources cannot be read."""
+    func = dispatcher.py_func
+    cells = [described(c.cell_contents) for c in func.__closure__ or ()]
+    if None in cells or not key_by_sources("numba.cuda.core"):
+        return False
+    dispatcher._cache = _stable_cuda_cache()(func, cells)  # (as numba-cuda's ``enable_caching`` does)
+    return True

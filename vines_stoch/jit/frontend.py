@@ -48,10 +48,15 @@ cold with the shared scope copies alone, 30.6 s with the bit-set live maps, 21.8
 named blocks too, and 17.2 s against 20.4 s with the kept call types (type inference 2.5 s
 against 5.1 s); the variable lists took it from 14.2 s to 13.8 s and the dead maps from 13.7 s
 to 13.3 s (means of three alternating compiles; the use-def maps 0.70 s against 0.40-0.51 s, the
-dead maps 0.47 s against 0.22 s).  All but the first replace numba functions whose source they
-were checked against (``VERIFIED``: a hash of that source); another release keeps its own.
-``install`` puts them in numba's CPU compiler (``vines_stoch.jit``, before any kernel compiles) or
-in numba-cuda's copy of the front end (``kernels/launch.py``).
+dead maps 0.47 s against 0.22 s).  All but the one-memo copies replace numba functions whose
+source they were checked against (``VERIFIED``: a hash of that source, numba 0.68 and numba-cuda
+0.30); another release keeps its own, and a ``FrontEndWarning`` says once a process which.
+
+They are in place only while the package compiles its own loops: ``compiling(package)`` puts them
+in numba's CPU compiler (``jit.cache.compile_once``, where every step loop compiles) or in
+numba-cuda's copy of the front end (the launchers, ``kernels/launch.py``), holding that
+compiler's lock, and puts numba's own back on leaving; other code of the process compiles with
+numba's own.  ``VINES_STOCH_FAST_FRONTEND=0`` leaves numba's own in place throughout.
 ``tests/unit/kernels/test_compile.py`` compares the LLVM IR, the PTX, every live map, use-def
 map and dead map with and without them.
 """
@@ -62,20 +67,38 @@ import copy
 import hashlib
 import importlib
 import inspect
+import os
+import warnings
 from collections import defaultdict
+from collections.abc import Iterator
+from contextlib import contextmanager
+from importlib import metadata
 from typing import Any
 
 import numpy as np
 
-#: Hashes of the numba sources the replacements were checked against (``_source_hash``): the
-#: live-map function, the SSA pass's driver, rewrites and handlers, the function types' call
-#: resolution and the inliner's ``inline_function``; of numba 0.68 and of numba-cuda 0.30's copy.
+#: Hashes of the numba sources the replacements were checked against (``_source_hash``), by
+#: replacement (``REPLACEMENTS``): the inliner's ``inline_function``, the live-map function, the
+#: variable lists and use-def maps, the dead maps, the SSA pass's driver, rewrites and handlers,
+#: the function types' call resolution; of numba 0.68 and of numba-cuda 0.30's copy (which has
+#: four of them).
 VERIFIED = {
-    "numba.core": {"live": "713c4c094977e93b", "ssa": "9c0b3d5f348635ea", "calls": "6559c167bfc0ad36",
-                   "inline": "1b53f183258e659d", "vars": "b7264500be4efae6", "dead": "89d45f0cc5106279"},
-    "numba.cuda.core": {"live": "cdb51290c1658e92", "ssa": "0ad27c8ec5b7b4fd", "calls": "6559c167bfc0ad36",
-                        "inline": "69a1df109038391f"},
+    "numba.core": {"inlining": "1b53f183258e659d", "liveness": "713c4c094977e93b",
+                   "variables": "b7264500be4efae6", "dead": "89d45f0cc5106279", "ssa": "9c0b3d5f348635ea",
+                   "calls": "6559c167bfc0ad36"},
+    "numba.cuda.core": {"inlining": "69a1df109038391f", "liveness": "cdb51290c1658e92",
+                        "ssa": "0ad27c8ec5b7b4fd", "calls": "6559c167bfc0ad36"},
 }
+#: The releases ``VERIFIED`` holds (the bounds of ``pyproject.toml``).
+VERIFIED_RELEASES = "numba 0.68, numba-cuda 0.30"
+#: The distribution of each front end.
+DISTRIBUTIONS = {"numba.core": "numba", "numba.cuda.core": "numba-cuda"}
+#: The environment variable that turns the replacements off (``0``).
+SWITCH = "VINES_STOCH_FAST_FRONTEND"
+#: The call types ``memo_call_types`` keeps, for every compile of the process.
+CALL_TYPES: dict = {}
+#: The front ends a ``FrontEndWarning`` was given for in this process.
+_WARNED: set[str] = set()
 #: The modules of each front end that import ``compute_use_defs`` by name.
 USE_DEFS_IMPORTERS = ("inline_closurecall", "ir_utils", "lowering", "transforms", "untyped_passes")
 #: The module of each front end's function types (numba-cuda's is numba's where numba is
@@ -84,6 +107,31 @@ FUNCTION_TYPES = {"numba.core": "numba.core.types.functions", "numba.cuda.core":
 #: The SSA pass's pieces that ``ssa_on_named_blocks`` replaces or relies on.
 SSA_PARTS = ("_run_ssa", "_fix_ssa_vars", "_fresh_vars", "_run_block_rewrite", "_make_states",
              "_FreshVarHandler", "_FixSSAVars")
+
+
+class FrontEndWarning(RuntimeWarning):
+    """A replacement does not apply to the installed numba: numba's own piece compiles."""
+
+
+class Swaps(list):
+    """The attributes put in place, each with what its owner (a module or class) held before
+    (``restore`` puts those back, last first)."""
+
+    _ABSENT = object()
+
+    def put(self, owner: Any, name: str, value: Any) -> None:
+        """Set ``owner.name`` to ``value``, keeping what was there."""
+        self.append((owner, name, vars(owner).get(name, self._ABSENT)))
+        setattr(owner, name, value)
+
+    def restore(self) -> None:
+        """Put back what every ``put`` replaced, last first."""
+        while self:
+            owner, name, value = self.pop()
+            if value is self._ABSENT:
+                delattr(owner, name)
+            else:
+                setattr(owner, name, value)
 
 
 class _NoCopy:
@@ -105,19 +153,19 @@ class _OneMemo:
         return copy.deepcopy(x, self.memo if memo is None else memo)
 
 
-def share_scope_copies(package: str = "numba.core") -> bool:
-    """Install the one-memo deep copy in the inliner of ``package`` (numba's, or numba-cuda's
-    ``numba.cuda.core``) once, and no copy for the IR ``inline_function`` makes where that
-    method's source is the verified one (``InlineWorker.inline_function.copies_nothing``);
-    returns whether the one-memo copy is in place."""
+def share_scope_copies(package: str, swaps: Swaps) -> bool:
+    """Put the one-memo deep copy in the inliner of ``package`` (numba's, or numba-cuda's
+    ``numba.cuda.core``) wherever it copies through ``copy.deepcopy``, and no copy for the IR
+    ``inline_function`` makes where that method's source is the verified one
+    (``InlineWorker.inline_function.copies_nothing``); returns whether both are in place."""
     ic = importlib.import_module(f"{package}.inline_closurecall")
     worker = getattr(ic, "InlineWorker", None)
     inline_ir = getattr(worker, "inline_ir", None)
-    if inline_ir is None or getattr(ic, "copy", None) is not copy:
-        return getattr(inline_ir, "shares_scope_copies", False)
     if getattr(inline_ir, "shares_scope_copies", False):
-        return True
-    verified = _source_hash(worker.inline_function) == VERIFIED.get(package, {}).get("inline")
+        return getattr(worker.inline_function, "copies_nothing", False)
+    if inline_ir is None or getattr(ic, "copy", None) is not copy:
+        return False
+    verified = _source_hash(worker.inline_function) == VERIFIED.get(package, {}).get("inlining")
 
     def inline_function(self, caller_ir, block, i, function, arg_typs=None):
         callee_ir = self.run_untyped_passes(function)
@@ -137,12 +185,12 @@ def share_scope_copies(package: str = "numba.core") -> bool:
 
     shared.shares_scope_copies = True
     shared.__doc__ = inline_ir.__doc__
-    worker.inline_ir = shared
+    swaps.put(worker, "inline_ir", shared)
     if verified:
         inline_function.copies_nothing = True
         inline_function.__doc__ = worker.inline_function.__doc__
-        worker.inline_function = inline_function
-    return True
+        swaps.put(worker, "inline_function", inline_function)
+    return verified
 
 
 def _source_hash(*objects: Any) -> str:
@@ -327,8 +375,8 @@ def live_variables_as_bits(cfg, var_def_map: dict, dead: _DeadMap) -> defaultdic
     return out
 
 
-def _dead_maps(package: str) -> bool:
-    """Install ``dead_maps_as_bits`` and ``live_variables_as_bits`` in ``package`` (numba's front
+def _dead_maps(package: str, swaps: Swaps) -> bool:
+    """Put ``dead_maps_as_bits`` and ``live_variables_as_bits`` in ``package`` (numba's front
     end, where their sources are the verified ones), each used where its inputs are the bit
     sets' own maps (a live map of ``live_map_as_bits``, the dead map made from it) and numba's
     own function otherwise; returns whether they are in place."""
@@ -352,12 +400,13 @@ def _dead_maps(package: str) -> bool:
 
     for new, own in ((compute_dead_maps, own_dead), (compute_live_variables, own_live)):
         new.as_bits, new.__wrapped__, new.__doc__ = True, own, own.__doc__
-    analysis.compute_dead_maps, analysis.compute_live_variables = compute_dead_maps, compute_live_variables
+    swaps.put(analysis, "compute_dead_maps", compute_dead_maps)
+    swaps.put(analysis, "compute_live_variables", compute_live_variables)
     return True
 
 
-def _live_maps(package: str) -> bool:
-    """Install ``live_map_as_bits`` as ``package``'s ``compute_live_map`` (where its source is
+def _live_maps(package: str, swaps: Swaps) -> bool:
+    """Put ``live_map_as_bits`` as ``package``'s ``compute_live_map`` (where its source is
     the verified one); returns whether it is in place.  numba sweeps its CFG's topological
     order (reversed for liveness), numba-cuda the block maps' order: the sweeps' domains."""
     analysis = importlib.import_module(f"{package}.analysis")
@@ -365,7 +414,7 @@ def _live_maps(package: str) -> bool:
     own = analysis.compute_live_map
     if getattr(own, "as_bits", False):
         return True
-    if _source_hash(own) != VERIFIED.get(package, {}).get("live"):
+    if _source_hash(own) != VERIFIED.get(package, {}).get("liveness"):
         return False
     topological = package == "numba.core"
 
@@ -377,14 +426,14 @@ def _live_maps(package: str) -> bool:
 
     compute_live_map.as_bits = True
     compute_live_map.__doc__ = own.__doc__
-    analysis.compute_live_map = compute_live_map
+    swaps.put(analysis, "compute_live_map", compute_live_map)
     if getattr(ir_utils, "compute_live_map", None) is own:
-        ir_utils.compute_live_map = compute_live_map
+        swaps.put(ir_utils, "compute_live_map", compute_live_map)
     return True
 
 
-def ssa_on_named_blocks(package: str = "numba.core") -> bool:
-    """Install in ``package``'s SSA pass a driver that rewrites, for each variable with several
+def ssa_on_named_blocks(package: str, swaps: Swaps) -> bool:
+    """Put in ``package``'s SSA pass a driver that rewrites, for each variable with several
     definitions, only the blocks whose statements name it (where the pass's source is the
     verified one); returns whether it is in place."""
     ssa = importlib.import_module(f"{package}.ssa")
@@ -440,15 +489,15 @@ def ssa_on_named_blocks(package: str = "numba.core") -> bool:
 
     _run_ssa.named_blocks = True
     _run_ssa.__doc__ = ssa._run_ssa.__doc__
-    ssa._run_ssa = _run_ssa
+    swaps.put(ssa, "_run_ssa", _run_ssa)
     return True
 
 
-def memo_call_types(package: str = "numba.core") -> bool:
-    """Install in ``package``'s function types a ``get_call_type`` that keeps each resolved
-    signature under (function type, typing context, target, argument types) and hands it out
-    again with its implementation key (where the method's source is the verified one); returns
-    whether it is in place."""
+def memo_call_types(package: str, swaps: Swaps) -> bool:
+    """Put in ``package``'s function types a ``get_call_type`` that keeps each resolved
+    signature under (function type, typing context, target, argument types) in ``CALL_TYPES``
+    and hands it out again with its implementation key (where the method's source is the
+    verified one); returns whether it is in place."""
     functions = importlib.import_module(FUNCTION_TYPES[package])
     base = functions.BaseFunction
     own = base.get_call_type
@@ -458,7 +507,7 @@ def memo_call_types(package: str = "numba.core") -> bool:
         return False
     from numba.core.target_extension import get_local_target
 
-    resolved: dict = {}
+    resolved = CALL_TYPES
 
     def get_call_type(self, context, args, kws):
         try:
@@ -479,7 +528,7 @@ def memo_call_types(package: str = "numba.core") -> bool:
     get_call_type.resolved = resolved
     get_call_type.__wrapped__ = own
     get_call_type.__doc__ = own.__doc__
-    base.get_call_type = get_call_type
+    swaps.put(base, "get_call_type", get_call_type)
     return True
 
 
@@ -568,35 +617,81 @@ def _use_defs_once(ir: Any, analysis: Any):
     return compute_use_defs
 
 
-def list_vars_once(package: str = "numba.core") -> bool:
-    """Install in ``package`` the faster ``Inst._rec_list_vars`` and ``compute_use_defs`` (where
+def list_vars_once(package: str, swaps: Swaps) -> bool:
+    """Put in ``package`` the faster ``Inst._rec_list_vars`` and ``compute_use_defs`` (where
     their sources are the verified ones); returns whether they are in place."""
     ir = importlib.import_module(f"{package}.ir")
     analysis = importlib.import_module(f"{package}.analysis")
     own = analysis.compute_use_defs
     if getattr(own, "lists_once", False):
         return True
-    if _source_hash(ir.Inst._rec_list_vars, own) != VERIFIED.get(package, {}).get("vars"):
+    if _source_hash(ir.Inst._rec_list_vars, own) != VERIFIED.get(package, {}).get("variables"):
         return False
-    ir.Inst._rec_list_vars = _variable_lister(ir)
+    swaps.put(ir.Inst, "_rec_list_vars", _variable_lister(ir))
     fast = _use_defs_once(ir, analysis)
     fast.lists_once = True
     fast.__wrapped__ = own
     fast.__doc__ = own.__doc__
-    analysis.compute_use_defs = fast
+    swaps.put(analysis, "compute_use_defs", fast)
     for name in USE_DEFS_IMPORTERS:
         try:
             module = importlib.import_module(f"{package}.{name}")
         except ImportError:
             continue
         if getattr(module, "compute_use_defs", None) is own:
-            module.compute_use_defs = fast
+            swaps.put(module, "compute_use_defs", fast)
     return True
 
 
-def install(package: str = "numba.core") -> dict[str, bool]:
-    """Install the six in ``package`` (numba's front end, or numba-cuda's
-    ``numba.cuda.core``); returns which are in place."""
-    return {"inlining": share_scope_copies(package), "liveness": _live_maps(package),
-            "variables": list_vars_once(package), "dead": _dead_maps(package),
-            "ssa": ssa_on_named_blocks(package), "calls": memo_call_types(package)}
+#: Each replacement by name, in the order they are put in place.
+REPLACEMENTS = {"inlining": share_scope_copies, "liveness": _live_maps, "variables": list_vars_once,
+                "dead": _dead_maps, "ssa": ssa_on_named_blocks, "calls": memo_call_types}
+
+
+def enabled() -> bool:
+    """Whether the replacements are wanted: ``VINES_STOCH_FAST_FRONTEND`` is not ``0`` (nor
+    ``false``, ``no``, ``off``)."""
+    return os.environ.get(SWITCH, "1").strip().lower() not in ("0", "false", "no", "off")
+
+
+def _warn_once(package: str, placed: dict[str, bool]) -> None:
+    """One ``FrontEndWarning`` a process and front end naming the replacements verified for
+    ``package`` that are not in place, with the release installed."""
+    missing = [part for part in VERIFIED.get(package, {}) if not placed.get(part)]
+    if not missing or package in _WARNED:
+        return
+    _WARNED.add(package)
+    try:
+        release = f"{DISTRIBUTIONS[package]} {metadata.version(DISTRIBUTIONS[package])}"
+    except (KeyError, metadata.PackageNotFoundError):
+        release = package
+    warnings.warn(f"vines_stoch: the front-end replacements {', '.join(missing)} do not apply to {release} "
+                  f"(verified against {VERIFIED_RELEASES}); numba's own pieces compile in their place and "
+                  f"cold compiles take longer ({SWITCH}=0 turns the replacements off and silences this)",
+                  FrontEndWarning, stacklevel=4)  # (the ``with`` of ``compiling``)
+
+
+@contextmanager
+def compiling(package: str = "numba.core") -> Iterator[dict[str, bool]]:
+    """The replacements in ``package`` (numba's front end, or numba-cuda's ``numba.cuda.core``)
+    while the block runs, holding ``package``'s compiler lock, so that no other thread compiles
+    with them; numba's own are put back on leaving.  Yields which are in place (none where
+    ``enabled`` is False); one whose numba source is not the verified one is left out, and a
+    ``FrontEndWarning`` says so once a process."""
+    if not enabled():
+        yield dict.fromkeys(REPLACEMENTS, False)
+        return
+    lock = importlib.import_module(f"{package}.compiler_lock").global_compiler_lock
+    swaps = Swaps()
+    with lock:
+        try:
+            placed = {}
+            for part, put in REPLACEMENTS.items():
+                try:
+                    placed[part] = put(package, swaps)
+                except (AttributeError, ImportError):  # (another release's front end lacks a piece)
+                    placed[part] = False
+            _warn_once(package, placed)
+            yield placed
+        finally:
+            swaps.restore()

@@ -13,7 +13,6 @@ from __future__ import annotations
 import numpy as np
 
 from ..jit.cache import compile_once
-from ..jit.frontend import install
 from ..outputs import POINCARE_SAMPLES, SLOTS, new_metrics
 from ..schemes import SCHEMES
 from ..streams import Streams
@@ -32,7 +31,6 @@ _UNUSED = np.zeros(STREAM_WORDS, np.uint64)
 _NO_HISTORY = np.zeros((0, 2))
 #: The loops this process has run (``cache.compile_once`` saw them first).
 _STARTED: set = set()
-install()  # numba's front end in less than half the time, the same code (see ``jit.frontend``)
 
 
 def kernel_for(scene, gpu: bool = False):

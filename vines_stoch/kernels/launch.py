@@ -1,6 +1,8 @@
 """The CUDA kernel around a step loop: one realisation a thread (``gpu.py``).
 
 Imported only by the cuda backend: it needs numba-cuda (``numba.cuda``), an optional extra.
+A launcher compiles through ``jit.cache.compile_once`` (numba-cuda's copy of the faster front
+end, one process at a time) and is cached on disk beside the step loops (``jit.cache.cache_on_disk``).
 """
 
 from __future__ import annotations
@@ -10,11 +12,9 @@ from functools import cache
 import numpy as np
 from numba import cuda, float64, njit, uint64
 
-from ..jit.frontend import install
+from ..jit.cache import cache_on_disk
 from .loads import stationary_start
 from .rng import STREAM_WORDS, open_stream
-
-install("numba.cuda.core")  # numba-cuda's copy of the front end, as vines_stoch.jit does numba's
 
 
 def _plain(array):
@@ -26,7 +26,9 @@ def _plain(array):
 @cache
 def launcher(kernel, n_bodies: int, simulated: bool):
     """The CUDA kernel that runs ``kernel`` (a step loop of ``kernels/``, taking its bundles) for
-    one realisation a thread; memoised by loop and body count (its stack arrays' size)."""
+    one realisation a thread; memoised by loop and body count (its stack arrays' size), and
+    cached on disk (``jit.cache.cache_on_disk``; not under the simulator, which compiles
+    nothing)."""
     NB = n_bodies
     WORDS = STREAM_WORDS
     plain = _plain if simulated else njit(inline="always")(lambda a: a)
@@ -77,4 +79,6 @@ def launcher(kernel, n_bodies: int, simulated: bool):
                (row, own_samples, own_history, plain(limits[p])),
                inc, bri, fil)
 
+    if not simulated:
+        cache_on_disk(launch)
     return launch

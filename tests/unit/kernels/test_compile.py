@@ -1,8 +1,10 @@
-"""numba's front end, faster (``vines_stoch.frontend``): one scope copy per copy of an inlined
-IR, live maps on bit sets, variable lists by exact type, dead maps from the live maps' bits,
-SSA on the blocks that name a variable, call types resolved once; the same compiled code (for
-the CPU and, through numba-cuda's copy of the front end, PTX), the same live, use-def and dead
-maps and call types, fewer copies and resolutions."""
+"""numba's front end, faster (``vines_stoch.jit.frontend``): one scope copy per copy of an
+inlined IR, live maps on bit sets, variable lists by exact type, dead maps from the live maps'
+bits, SSA on the blocks that name a variable, call types resolved once; the same compiled code
+(for the CPU and, through numba-cuda's copy of the front end, PTX), the same live, use-def and
+dead maps and call types, fewer copies and resolutions.  In place only while the package
+compiles (``frontend.compiling``), never where ``VINES_STOCH_FAST_FRONTEND=0``; a replacement
+that does not apply to the installed numba is named once a process."""
 
 from __future__ import annotations
 
@@ -11,9 +13,11 @@ import os
 import re
 import subprocess
 import sys
+import warnings
 
 import pytest
 
+from tests.helpers import ROOT
 from vines_stoch.jit import frontend
 
 #: Nested ``inline="always"`` functions with loops, branches and reassigned variables (many
@@ -21,18 +25,20 @@ from vines_stoch.jit import frontend
 #: the scope copies made, the live maps checked against numba's own, and the PTX numba-cuda's
 #: front end makes of the same function (none where no NVVM is installed).
 SCRIPT = r'''
-import copy, json, sys
+import contextlib, copy, json, sys
 import numpy as np
 from numba import njit
 from numba.core import ir, ssa
+from tests.helpers import ROOT
 from vines_stoch.jit import frontend
 copies, checked, used, dead = [0], [0], [0], [0]
+compiling = contextlib.ExitStack()  # (the replacements stay in place until the script ends)
 def watch(package):
     """Check every live map of ``package``'s front end, and (fast) every use-def map, against
     its own functions."""
     module = __import__(f"{package}.analysis", fromlist=["analysis"])
     own = module.compute_live_map
-    installed = frontend.install(package) if sys.argv[1] == "fast" else {}
+    installed = compiling.enter_context(frontend.compiling(package)) if sys.argv[1] == "fast" else {}
     assert all(on for part, on in installed.items() if part not in ("variables", "dead"))
     if installed:  # (numba's front end only: numba-cuda's lists the variables of two IR modules)
         assert installed["variables"] == installed["dead"] == (package == "numba.core")
@@ -143,16 +149,17 @@ try:
     ptx, _ = compile_ptx(outer.py_func, "(float64[:],)", device=True, cc=(9, 0))
 except ImportError:
     pass
+named = getattr(ssa._run_ssa, "named_blocks", False)
+compiling.close()
 print(json.dumps({"llvm": [f.inspect_llvm(f.signatures[0]) for f in (outer, typed)], "value": value.hex(),
                   "copies": copies[0], "restored": ic.copy is copy, "checked": checked[0], "used": used[0],
-                  "dead": dead[0],
-                  "ssa": getattr(ssa._run_ssa, "named_blocks", False), "ptx": ptx, "calls": calls[0],
-                  "kept": len(getattr(resolving, "resolved", ()))}))
+                  "dead": dead[0], "ssa": named, "left": getattr(ssa._run_ssa, "named_blocks", False),
+                  "ptx": ptx, "calls": calls[0], "kept": len(getattr(resolving, "resolved", ()))}))
 '''
 
 
 def _compile(mode: str) -> dict:
-    env = {**os.environ, "NUMBA_ENABLE_CUDASIM": "0", "NUMBA_DISABLE_CACHE": "1"}
+    env = {**os.environ, "NUMBA_ENABLE_CUDASIM": "0", "NUMBA_DISABLE_CACHE": "1", frontend.SWITCH: "1"}
     done = subprocess.run([sys.executable, "-c", SCRIPT, mode], capture_output=True, text=True, env=env)
     assert done.returncode == 0, done.stderr[-3000:]
     return json.loads(done.stdout.splitlines()[-1])
@@ -165,7 +172,7 @@ def _numbered(llvm: str) -> str:
 
 def test_the_faster_front_end_compiles_the_same_code_with_the_same_live_maps():
     plain, fast = _compile("plain"), _compile("fast")
-    assert fast["ssa"] and not plain["ssa"]
+    assert fast["ssa"] and not plain["ssa"] and not fast["left"]
     assert fast["llvm"][0] == plain["llvm"][0]
     # the overload's IR is made fewer times (its call type is kept): numba numbers each function
     # identity it makes, and the variables inlined from it carry that number in their names
@@ -184,20 +191,41 @@ def test_the_faster_front_end_compiles_the_same_code_with_the_same_live_maps():
     assert fast["ptx"] == plain["ptx"] and ".visible .func" in fast["ptx"]
 
 
+def _numba_s_own() -> dict:
+    """Where each replacement goes, and what is there now."""
+    from numba.core import analysis, ir, ir_utils, ssa
+    from numba.core import inline_closurecall as ic
+    from numba.core.types import functions
+
+    return {"inline_ir": ic.InlineWorker.inline_ir, "inline_function": ic.InlineWorker.inline_function,
+            "live": analysis.compute_live_map, "live (ir_utils)": ir_utils.compute_live_map,
+            "use-defs": analysis.compute_use_defs, "use-defs (ir_utils)": ir_utils.compute_use_defs,
+            "vars": ir.Inst._rec_list_vars, "dead": analysis.compute_dead_maps,
+            "live variables": analysis.compute_live_variables, "ssa": ssa._run_ssa,
+            "calls": functions.BaseFunction.get_call_type}
+
+
 def test_the_kernels_compile_with_the_faster_front_end():
     from numba.core import analysis, ir_utils, ssa
     from numba.core import inline_closurecall as ic
     from numba.core.types import functions
 
-    import vines_stoch.jit  # noqa: F401  (installs it)
-
-    assert frontend.install() == {"inlining": True, "liveness": True, "variables": True, "dead": True,
-                                  "ssa": True, "calls": True}
-    assert ic.InlineWorker.inline_ir.shares_scope_copies and ic.InlineWorker.inline_function.copies_nothing
-    assert analysis.compute_live_map.as_bits and ssa._run_ssa.named_blocks
-    assert analysis.compute_use_defs.lists_once and ir_utils.compute_use_defs is analysis.compute_use_defs
-    assert analysis.compute_dead_maps.as_bits and analysis.compute_live_variables.as_bits
-    assert functions.BaseFunction.get_call_type.kept
+    own = _numba_s_own()
+    with frontend.compiling() as placed:
+        assert placed == {"inlining": True, "liveness": True, "variables": True, "dead": True, "ssa": True,
+                          "calls": True}
+        worker = ic.InlineWorker
+        assert worker.inline_ir.shares_scope_copies and worker.inline_function.copies_nothing
+        assert analysis.compute_live_map.as_bits and ssa._run_ssa.named_blocks
+        assert analysis.compute_use_defs.lists_once and ir_utils.compute_use_defs is analysis.compute_use_defs
+        assert analysis.compute_dead_maps.as_bits and analysis.compute_live_variables.as_bits
+        assert functions.BaseFunction.get_call_type.kept
+        inside = _numba_s_own()
+        with frontend.compiling() as again:  # (nested: the same ones, left in place)
+            assert again == placed and _numba_s_own() == inside
+        assert _numba_s_own() == inside
+    assert all(inside[k] is not own[k] for k in own)
+    assert all(now is own[k] for k, now in _numba_s_own().items())
 
 
 def test_kept_call_types_are_numba_s_own_and_failures_are_not_kept():
@@ -209,10 +237,10 @@ def test_kept_call_types_are_numba_s_own_and_failures_are_not_kept():
     from numba.core.registry import cpu_target
     from numba.core.types import functions
 
-    import vines_stoch.jit  # noqa: F401  (installs it)
-
-    kept = functions.BaseFunction.get_call_type
+    with frontend.compiling():
+        kept = functions.BaseFunction.get_call_type
     own, resolved = kept.__wrapped__, kept.resolved
+    assert own is functions.BaseFunction.get_call_type and resolved is frontend.CALL_TYPES
     context = cpu_target.typing_context
     context.refresh()
     cases = [(operator.add, (types.float64, types.float64)), (operator.mul, (types.int64, types.float64)),
@@ -231,13 +259,21 @@ def test_kept_call_types_are_numba_s_own_and_failures_are_not_kept():
     assert len(resolved) == before
 
 
-def test_other_sources_keep_their_own_passes(monkeypatch):
-    """A numba whose passes are not the verified ones keeps them (nothing replaced)."""
+def _front_end_warnings(caught: list) -> list[str]:
+    return [str(w.message) for w in caught if issubclass(w.category, frontend.FrontEndWarning)]
+
+
+def test_other_sources_keep_their_own_passes_and_say_so_once(monkeypatch):
+    """A numba whose passes are not the verified ones keeps them (nothing replaced), and one
+    ``FrontEndWarning`` a process names them and the numba release."""
+    from importlib import metadata
+
     from numba.core import analysis, ssa
     from numba.core.types import functions
 
-    wrong = dict.fromkeys(("live", "ssa", "calls", "vars", "dead"), "0" * 16)
-    monkeypatch.setitem(frontend.VERIFIED, "numba.core", wrong)
+    wrong = dict.fromkeys(("liveness", "ssa", "calls", "variables", "dead"), "0" * 16)
+    monkeypatch.setitem(frontend.VERIFIED, "numba.core", {**frontend.VERIFIED["numba.core"], **wrong})
+    monkeypatch.setattr(frontend, "_WARNED", set())
 
     def own_live(cfg, blocks, use, defs):
         return {}
@@ -259,24 +295,138 @@ def test_other_sources_keep_their_own_passes(monkeypatch):
     monkeypatch.setattr(analysis, "compute_dead_maps", own_dead)
     monkeypatch.setattr(ssa, "_run_ssa", own_ssa)
     monkeypatch.setattr(functions.BaseFunction, "get_call_type", own_calls)
-    installed = frontend.install()
-    assert not installed["liveness"] and not installed["ssa"] and not installed["calls"]
-    assert not installed["variables"] and analysis.compute_use_defs is own_use_defs
-    assert not installed["dead"] and analysis.compute_dead_maps is own_dead
-    assert analysis.compute_live_map is own_live and ssa._run_ssa is own_ssa
-    assert functions.BaseFunction.get_call_type is own_calls
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        for _ in range(3):
+            with frontend.compiling() as installed:
+                assert not installed["liveness"] and not installed["ssa"] and not installed["calls"]
+                assert not installed["variables"] and analysis.compute_use_defs is own_use_defs
+                assert not installed["dead"] and analysis.compute_dead_maps is own_dead
+                assert analysis.compute_live_map is own_live and ssa._run_ssa is own_ssa
+                assert functions.BaseFunction.get_call_type is own_calls
+                assert installed["inlining"]  # (verified, in place)
+    [message] = _front_end_warnings(caught)
+    assert "\n" not in message and frontend.SWITCH in message
+    release = metadata.version("numba")
+    assert f"replacements liveness, variables, dead, ssa, calls do not apply to numba {release} (" in message
 
 
-def test_an_unverified_inline_function_keeps_its_copies():
+def test_a_missing_piece_keeps_numba_s_own_and_says_so(monkeypatch):
+    """A front end without a piece a replacement takes the place of (another release) keeps
+    its own passes for it, the others in place, and says which."""
+    from numba.core import analysis, ssa
+
+    monkeypatch.setattr(frontend, "_WARNED", set())
+    monkeypatch.delattr(ssa, "_FixSSAVars")
+    monkeypatch.delattr(analysis, "compute_dead_maps")
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        with frontend.compiling() as installed:
+            assert not installed["ssa"] and not installed["dead"]
+            assert not getattr(ssa._run_ssa, "named_blocks", False)
+            assert installed["liveness"] and installed["calls"] and installed["inlining"]
+        with frontend.compiling():
+            pass
+    [message] = _front_end_warnings(caught)
+    assert "replacements dead, ssa do not apply" in message
+    assert not hasattr(analysis, "compute_dead_maps")  # (nothing left behind)
+
+
+def test_an_unverified_inline_function_keeps_its_copies(monkeypatch):
     """Where numba's ``InlineWorker.inline_function`` is not the verified source, the one-memo
-    copies are installed and ``inline_function`` is left as it is (a process of its own: the
-    front end is installed once a process)."""
-    code = ("from vines_stoch.jit import frontend\n"
-            "frontend.VERIFIED['numba.core']['inline'] = '0' * 16\n"
-            "from numba.core import inline_closurecall as ic\n"
-            "own = ic.InlineWorker.inline_function\n"
-            "assert frontend.install()['inlining']\n"
-            "assert ic.InlineWorker.inline_ir.shares_scope_copies\n"
-            "assert ic.InlineWorker.inline_function is own\n")
-    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
-    assert done.returncode == 0, done.stderr[-2000:]
+    copies are put in place and ``inline_function`` is left as it is, and the warning names
+    the inlining."""
+    from numba.core import inline_closurecall as ic
+
+    wrong = {**frontend.VERIFIED["numba.core"], "inlining": "0" * 16}
+    monkeypatch.setitem(frontend.VERIFIED, "numba.core", wrong)
+    monkeypatch.setattr(frontend, "_WARNED", set())
+    own = ic.InlineWorker.inline_function
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        with frontend.compiling() as installed:
+            assert not installed["inlining"] and installed["ssa"]
+            assert ic.InlineWorker.inline_ir.shares_scope_copies
+            assert ic.InlineWorker.inline_function is own
+    assert not getattr(ic.InlineWorker.inline_ir, "shares_scope_copies", False)
+    [message] = _front_end_warnings(caught)
+    assert "replacements inlining do not apply" in message
+
+
+def test_the_switch_leaves_numba_s_own_front_end(monkeypatch):
+    """``VINES_STOCH_FAST_FRONTEND=0``: nothing replaced, nothing said (the sources may differ)."""
+    own = _numba_s_own()
+    monkeypatch.setitem(frontend.VERIFIED, "numba.core", dict.fromkeys(frontend.VERIFIED["numba.core"], ""))
+    monkeypatch.setattr(frontend, "_WARNED", set())
+    for off in ("0", "false", " OFF "):
+        monkeypatch.setenv(frontend.SWITCH, off)
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            with frontend.compiling() as installed:
+                assert not any(installed.values())
+                assert all(now is own[k] for k, now in _numba_s_own().items())
+        assert not _front_end_warnings(caught)
+    monkeypatch.setenv(frontend.SWITCH, "1")
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        with frontend.compiling():
+            assert _numba_s_own()["ssa"] is own["ssa"]  # (the wrong hashes: numba's own)
+    assert len(_front_end_warnings(caught)) == 1
+
+
+#: A process that imports the package, then compiles functions of its own (each with a probe
+#: that records, while numba types it, which of numba's front-end pieces are the replacements):
+#: after the import, through ``jit.cache.compile_once`` (in place), after a step loop ran
+#: (``kernels.simulate``: numba's own again), and in another thread while ``compiling`` is held
+#: (it waits for the compiler's lock, then compiles with numba's own).  Prints one JSON line.
+PROBES = r'''
+import json, threading
+from numba import njit, types
+from numba.core import analysis, ssa
+from numba.core.types import functions
+from numba.extending import intrinsic
+own = (analysis.compute_live_map, ssa._run_ssa, functions.BaseFunction.get_call_type)
+import vines_stoch.jit
+from vines_stoch.jit import cache, frontend
+seen = {}
+def probed(label):
+    @intrinsic
+    def probe(typingctx):
+        now = (analysis.compute_live_map, ssa._run_ssa, functions.BaseFunction.get_call_type)
+        seen.setdefault(label, []).append([a is not b for a, b in zip(now, own)])
+        return types.none(), lambda context, builder, signature, args: context.get_dummy_value()
+    @njit
+    def user():
+        probe()
+        return 1
+    return user
+probed("imported")()
+cache.compile_once(probed("compile_once"), ())
+from tests.helpers import example_data, scene_from
+from vines_stoch.kernels import simulate
+simulate(scene_from(example_data("cubic_nes_impulse"), changes={"simulation.duration": 0.5}))
+probed("after a loop")()
+waiting = probed("waiting")
+with frontend.compiling():
+    thread = threading.Thread(target=waiting)
+    thread.start()
+    thread.join(timeout=3.0)
+    blocked = thread.is_alive()
+thread.join()
+print(json.dumps({"seen": seen, "blocked": blocked,
+                  "left": [a is b for a, b in zip(own, (analysis.compute_live_map, ssa._run_ssa,
+                                                          functions.BaseFunction.get_call_type))]}))
+'''
+
+
+def test_code_outside_the_package_compiles_with_numba_s_own_front_end():
+    env = {**os.environ, "NUMBA_ENABLE_CUDASIM": "0", frontend.SWITCH: "1", "PYTHONPATH": str(ROOT)}
+    done = subprocess.run([sys.executable, "-c", PROBES], capture_output=True, text=True, env=env, cwd=ROOT)
+    assert done.returncode == 0, done.stderr[-3000:]
+    out = json.loads(done.stdout.splitlines()[-1])
+    seen = out["seen"]
+    assert set(seen) == {"imported", "compile_once", "after a loop", "waiting"}
+    assert all(probe == [True, True, True] for probe in seen["compile_once"])
+    for label in ("imported", "after a loop", "waiting"):
+        assert all(probe == [False, False, False] for probe in seen[label]), label
+    assert out["blocked"] and out["left"] == [True, True, True]
