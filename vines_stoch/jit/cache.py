@@ -26,7 +26,6 @@ from typing import Any
 
 import numpy as np
 
-
 try:
     import fcntl
 except ImportError:  # (no POSIX file locks: each process compiles on its own)
