@@ -40,7 +40,7 @@ from typing import Any
 
 from pydantic import BaseModel
 
-from .physics.absorbers import CLEARANCE, DAMPING, K_CUBIC, K_LIN, RESTITUTION
+from .physics.absorbers import COLUMNS
 from .scenario import (
     ForceRecordLoad,
     HarmonicLoad,
@@ -54,19 +54,16 @@ from .scenario import (
     WhiteNoiseLoad,
     WindLoad,
 )
+from .scenario.bodies import ABSORBERS
 from .scenario.errors import format_error
 from .scenario.study import FieldRange, checked_models, cross_check, field_range
 from .scene import Scene, absorber_row, build_scene, poincare_samples, wind_load
 
 #: Absorber fields held as they are in one column of the absorber's row (``scene.absorber_row``).
-ROW_COLUMNS = {
-    "linear": {"stiffness": K_LIN, "damping": DAMPING},
-    "cubic": {"stiffness": K_CUBIC, "linear_stiffness": K_LIN, "damping": DAMPING},
-    "impact": {"stiffness": K_LIN, "damping": DAMPING, "clearance": CLEARANCE, "restitution": RESTITUTION},
-    "hertz": {"stiffness": K_LIN, "damping": DAMPING},
-}
+ROW_COLUMNS = {kind: {name: COLUMNS[column] for name, column in model.columns.items()}
+               for kind, model in ABSORBERS.items()}
 #: Absorber types whose other fields rebuild the absorber's row and start (walls, contact).
-ROWS_REBUILT = ("hertz",)
+ROWS_REBUILT = tuple(kind for kind, model in ABSORBERS.items() if model.derived)
 #: Fields of closed-form force rows held as they are, in columns 1, 2, ... (``build_scene``).
 FORCE_COLUMNS = {
     "harmonic": ("amplitude", "frequency", "phase"),

@@ -3,7 +3,7 @@
 
 from __future__ import annotations
 
-from typing import Annotated, Literal
+from typing import Annotated, ClassVar, Literal
 
 import numpy as np
 from pydantic import Field, model_validator
@@ -130,7 +130,21 @@ def eigenfrequencies(mass: np.ndarray, stiffness: np.ndarray) -> np.ndarray:
     return np.sqrt(np.clip(eig, 0.0, None))
 
 
-class LinearAbsorber(_Model):
+class _Absorber(_Model):
+    """What every absorber type gives the scene: its row (``parameters``), the fields written
+    into it as they are (``columns``: field name to ``physics.absorbers.COLUMNS`` name; the
+    binding of uncertain parameters writes these in place), whether other fields make its row
+    through a computation (``derived``), and its linearised stiffness (``spring``)."""
+
+    columns: ClassVar[dict[str, str]] = {}
+    derived: ClassVar[bool] = False
+
+    def parameters(self) -> dict[str, float]:
+        """The absorber's row by column name (``physics.absorbers.COLUMNS``)."""
+        return {column: getattr(self, name) for name, column in self.columns.items()}
+
+
+class LinearAbsorber(_Absorber):
     """Tuned mass damper: ``f = -k u - c w`` (MODEL.md section 2)."""
 
     type: Literal["linear"]
@@ -139,9 +153,7 @@ class LinearAbsorber(_Model):
     stiffness: NonNegative = 0.0
     damping: NonNegative = 0.0
 
-    def parameters(self) -> dict[str, float]:
-        """The absorber's row by column name (``physics.absorbers.COLUMNS``)."""
-        return {"k_lin": self.stiffness, "damping": self.damping}
+    columns: ClassVar[dict[str, str]] = {"stiffness": "k_lin", "damping": "damping"}
 
     @property
     def spring(self) -> float:
@@ -150,7 +162,7 @@ class LinearAbsorber(_Model):
         return self.stiffness
 
 
-class CubicAbsorber(_Model):
+class CubicAbsorber(_Absorber):
     """Cubic NES: ``f = -k u^3 - k_lin u - c w`` (MODEL.md section 2, Wei et al. eq. 1)."""
 
     type: Literal["cubic"]
@@ -160,9 +172,8 @@ class CubicAbsorber(_Model):
     damping: NonNegative = 0.0
     linear_stiffness: NonNegative = 0.0
 
-    def parameters(self) -> dict[str, float]:
-        """The absorber's row by column name (``physics.absorbers.COLUMNS``)."""
-        return {"k_cubic": self.stiffness, "k_lin": self.linear_stiffness, "damping": self.damping}
+    columns: ClassVar[dict[str, str]] = {"stiffness": "k_cubic", "linear_stiffness": "k_lin",
+                                         "damping": "damping"}
 
     @property
     def spring(self) -> float:
@@ -170,7 +181,7 @@ class CubicAbsorber(_Model):
         return self.linear_stiffness
 
 
-class BistableAbsorber(_Model):
+class BistableAbsorber(_Absorber):
     """Bistable NES: the cubic law with a negative linear stiffness, ``f = -k u^3 - k_lin u - c w``,
     ``k_lin < 0 < k``, stable at ``u = +-sqrt(-k_lin / k)`` (MODEL.md section 2; Romeo, Sigalov,
     Bergman and Vakakis, J. Comput. Nonlinear Dyn. 10 (2015) 011007; Habib and Romeo, Nonlinear
@@ -184,9 +195,8 @@ class BistableAbsorber(_Model):
     linear_stiffness: Negative
     damping: NonNegative = 0.0
 
-    def parameters(self) -> dict[str, float]:
-        """The absorber's row by column name (``physics.absorbers.COLUMNS``): the cubic law's."""
-        return {"k_cubic": self.stiffness, "k_lin": self.linear_stiffness, "damping": self.damping}
+    columns: ClassVar[dict[str, str]] = {"stiffness": "k_cubic", "linear_stiffness": "k_lin",
+                                         "damping": "damping"}
 
     @property
     def spring(self) -> float:
@@ -199,7 +209,7 @@ class BistableAbsorber(_Model):
         return float(np.sqrt(-self.linear_stiffness / self.stiffness))
 
 
-class GeometricAbsorber(_Model):
+class GeometricAbsorber(_Absorber):
     """Geometrically nonlinear NES: two transverse linear springs of stiffness ``stiffness`` each,
     free length ``free_length``, installed length ``length >= free_length``,
     ``f = -2 k u (1 - l0 / sqrt(u^2 + l^2)) - c w`` (MODEL.md section 2; the physical cubic NES of
@@ -221,10 +231,8 @@ class GeometricAbsorber(_Model):
                              "springs installed in compression make a bistable absorber, not this law")
         return self
 
-    def parameters(self) -> dict[str, float]:
-        """The absorber's row by column name (``physics.absorbers.COLUMNS``)."""
-        return {"k_geo": self.stiffness, "free_length": self.free_length, "length": self.length,
-                "damping": self.damping}
+    columns: ClassVar[dict[str, str]] = {"stiffness": "k_geo", "free_length": "free_length",
+                                         "length": "length", "damping": "damping"}
 
     @property
     def spring(self) -> float:
@@ -233,7 +241,7 @@ class GeometricAbsorber(_Model):
         return 2.0 * self.stiffness * (1.0 - self.free_length / self.length)
 
 
-class ImpactAbsorber(_Model):
+class ImpactAbsorber(_Absorber):
     """Vibro-impact NES in a symmetric cavity with Newton restitution (MODEL.md section 2)."""
 
     type: Literal["impact"]
@@ -244,10 +252,8 @@ class ImpactAbsorber(_Model):
     stiffness: NonNegative = 0.0
     damping: NonNegative = 0.0
 
-    def parameters(self) -> dict[str, float]:
-        """The absorber's row by column name (``physics.absorbers.COLUMNS``)."""
-        return {"k_lin": self.stiffness, "damping": self.damping, "clearance": self.clearance,
-                "restitution": self.restitution}
+    columns: ClassVar[dict[str, str]] = {"stiffness": "k_lin", "damping": "damping", "clearance": "clearance",
+                                         "restitution": "restitution"}
 
     @property
     def spring(self) -> float:
@@ -288,7 +294,7 @@ class Contact(_Model):
         return hertz_constant(self.young, self.poisson, self.radius, self.q)
 
 
-class HertzAbsorber(_Model):
+class HertzAbsorber(_Absorber):
     """Vibro-impact NES with finite-duration Hertz contact (MODEL.md section 2, Lizunov et al.).
 
     ``offset`` is D (single-sided) or V (double-sided), ``gap`` is C.  ``rest`` overrides the
@@ -339,12 +345,15 @@ class HertzAbsorber(_Model):
         """Rest offset of the linear spring."""
         return self.start if self.rest is None else self.rest
 
+    columns: ClassVar[dict[str, str]] = {"stiffness": "k_lin", "damping": "damping"}
+    derived: ClassVar[bool] = True
+
     def parameters(self) -> dict[str, float]:
-        """The absorber's row by column name (``physics.absorbers.COLUMNS``)."""
+        """The absorber's row by column name (``physics.absorbers.COLUMNS``): the spring and
+        dashpot, the spring's rest offset, the contact constants and surfaces."""
         lo, hi = self.walls
-        return {"k_lin": self.stiffness, "damping": self.damping, "rest": self.spring_rest,
-                "k_left": self.contact_left.constant, "k_right": self.contact_right.constant,
-                "wall_lo": lo, "wall_hi": hi}
+        return {**super().parameters(), "rest": self.spring_rest, "k_left": self.contact_left.constant,
+                "k_right": self.contact_right.constant, "wall_lo": lo, "wall_hi": hi}
 
     @property
     def spring(self) -> float:
@@ -352,6 +361,9 @@ class HertzAbsorber(_Model):
         return self.stiffness
 
 
+#: Every absorber type, by its ``type``.
+ABSORBERS = {"linear": LinearAbsorber, "cubic": CubicAbsorber, "impact": ImpactAbsorber,
+             "hertz": HertzAbsorber, "bistable": BistableAbsorber, "geometric": GeometricAbsorber}
 Absorber = Annotated[
     LinearAbsorber | CubicAbsorber | ImpactAbsorber | HertzAbsorber | BistableAbsorber | GeometricAbsorber,
     Field(discriminator="type"),

@@ -72,6 +72,22 @@ CASES = {
          "primary.damping": {"distribution": "truncated-normal", "mean": 0.01, "std": 0.01, "low": 0.0,
                              "high": 0.015}},
         []),
+    "bistable": (
+        {"primary": PRIMARY,
+         "absorbers": [{"type": "bistable", "mass": 0.05, "stiffness": 2.0, "damping": 0.01,
+                        "linear_stiffness": -0.02}],
+         "loads": [{"type": "impulse", "velocity": 0.5}]},
+        {"absorbers.0.stiffness": lognormal(2.0), "absorbers.0.linear_stiffness": uniform(-0.03, -0.01),
+         "absorbers.0.damping": uniform(0.005, 0.02)},
+        []),
+    "geometric": (
+        {"primary": PRIMARY,
+         "absorbers": [{"type": "geometric", "mass": 0.05, "stiffness": 0.02, "damping": 0.01,
+                        "free_length": 0.2, "length": 0.25}],
+         "loads": [{"type": "impulse", "velocity": 0.5}]},
+        {"absorbers.0.stiffness": lognormal(0.02), "absorbers.0.free_length": uniform(0.15, 0.2),
+         "absorbers.0.length": uniform(0.2, 0.3), "absorbers.0.damping": uniform(0.005, 0.02)},
+        []),
     # rk4 under one harmonic force: its frequency moves the Poincare samples too
     "impact-periodic": (
         {"primary": {"mass": 1.0, "stiffness": 1.0, "damping": 0.3},
@@ -255,6 +271,8 @@ def test_a_noise_intensity_drawn_to_zero_takes_the_realised_path():
     ("hertz-double-sided", {"absorbers.0.contact_right.poisson.0": 0.5}),
     ("closed-form-forces", {"loads.2.width": 0.35}),  # (wider than the period)
     ("records", {"intensity_measures.damping": 1.0}),
+    ("bistable", {"absorbers.0.linear_stiffness": 0.01}),
+    ("geometric", {"absorbers.0.free_length": 0.3, "absorbers.0.length": 0.25}),  # (springs in compression)
 ])
 def test_drawn_values_are_refused_in_the_words_of_validation(case, values):
     """A value its field does not allow, set in a realisation, is refused with the line that
