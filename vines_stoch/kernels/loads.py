@@ -198,19 +198,31 @@ def stationary_start(p0, gen, z, draws) -> None:
 
 
 @njit(**INLINE)
+def same_row(rows, r: int, q: int) -> bool:
+    """True where rows ``r`` and ``q`` of a 2-D array are equal item by item."""
+    for c in range(rows.shape[1]):
+        if rows[r, c] != rows[q, c]:
+            return False
+    return True
+
+
+@njit(**INLINE)
 def advance_filters(z, zn, t: float, dt: float, phi, chol, envelopes, gen, draws):
     """``zn = Phi z + e(t + dt/2) L n``: the exact Gaussian step of the filter states
     (``draws`` is scratch for the standard normals ``n``)."""
     nz = z.shape[0]
     for c in range(nz):
         draws[c] = normal(gen)
+    scale = 1.0
     for r in range(nz):
         acc = 0.0
         noise = 0.0
         for c in range(nz):
             acc += phi[r, c] * z[c]
             noise += chol[r, c] * draws[c]
-        zn[r] = acc + envelope(t + 0.5 * dt, envelopes[r]) * noise
+        if r == 0 or not same_row(envelopes, r, r - 1):  # (a filter's states share its envelope)
+            scale = envelope(t + 0.5 * dt, envelopes[r])
+        zn[r] = acc + scale * noise
 
 
 @njit(**INLINE)
