@@ -59,7 +59,7 @@ class Scene:
     storey_k: np.ndarray      # (n_floors,) storey springs, storey k joins floor k-1 (ground) to k
     storey_c: np.ndarray      # (n_floors,) storey dashpots
     floor_c: np.ndarray       # (n_floors,) mass-proportional (Rayleigh) dashpots to the ground
-    kind: np.ndarray          # (n_absorbers,) law of each absorber (physics.LAWS)
+    kind: np.ndarray          # (n_absorbers,) law of each absorber (physics.absorbers.LAWS)
     host: np.ndarray          # (n_absorbers,) host floor (body index) of each absorber
     rows: np.ndarray          # (n_absorbers, physics.ROW) parameter rows
     forces: np.ndarray        # (n_forces, loads.FORCE_ROW) closed-form force rows (kernels/loads.py)

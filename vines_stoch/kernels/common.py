@@ -88,7 +88,7 @@ def accelerate(force, load, ag, inv_mass, acc):
 
 @njit(**INLINE)
 def contact_forces(x, nf: int, kind, host, rows, force, active=True):
-    """Add the Hertz contact forces (MODEL.md section 2, ``physics.contact_force_law``) on each
+    """Add the Hertz contact forces (MODEL.md section 2, ``physics.hertz.contact_force_law``) on each
     Hertz absorber, the opposite on its host floor; nothing unless ``active``."""
     for a in range(x.shape[0] - nf if active else 0):
         if kind[a] == HERTZ:
@@ -205,7 +205,7 @@ def stick_together(mass, values, nf: int, stuck, host, group_mass, group_sum, re
     stuck on it get their mass-weighted common value.  With ``release``, an absorber the wall
     would have to pull (constraint of the wrong sign) is released first.  ``group_mass`` and
     ``group_sum`` are scratch (one entry per floor).  Nothing happens unless ``active`` (a flag
-    rather than a branch around the call: see ``physics.INLINE``).
+    rather than a branch around the call: see ``jit.flags.INLINE``).
     """
     passes = (2 if release else 1) if active else 0
     for attempt in range(passes):
@@ -374,7 +374,7 @@ def block_end(i: int, n_steps: int, i0: int, h_next: int) -> int:
     """End of the block of steps from ``i`` that the step loops run without interruption: up
     to the next divergence check, the opening of the metrics window (``i0``) or the next
     history row (``h_next``, ``-1``: none).  The rare work in between stays out of the step
-    loop (see ``physics.INLINE``)."""
+    loop (see ``jit.flags.INLINE``)."""
     end = min(n_steps, (i // CHECK_EVERY + 1) * CHECK_EVERY)
     if i < i0:
         end = min(end, i0)

@@ -309,7 +309,7 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
 
     The kernel takes its inputs as bundles (``kernels.bundles``): ``bodies`` (masses, storey
     stiffnesses and dashpots, mass-proportional damping, state), ``absorbers`` (kind codes,
-    host floors, parameter rows: ``physics.LAWS``), ``ex`` and ``fl`` (loads and filters,
+    host floors, parameter rows: ``physics.absorbers.LAWS``), ``ex`` and ``fl`` (loads and filters,
     ``kernels/loads.py``), ``noise`` (white-noise intensity per floor, replayed normals),
     ``grid`` (time grid, metrics window, Poincare and history grids), ``outputs`` (metric
     vector, Poincare samples, history rows, the limits whose first passages the metric vector
@@ -366,7 +366,7 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
         out, samples, history, limits = outputs
         na = kind.shape[0]
         nz = z.shape[0]
-        # the state (copied back at the end) and the scratch, on the stack (see ``common.scratch``)
+        # the state (copied back at the end) and the scratch, on the stack (see ``jit.intrinsics.scratch``)
         x, v, force, vn, vt, inv_mass = (scratch(NB), scratch(NB), scratch(NB), scratch(NB), scratch(NB),
                                          scratch(NB))
         xt = scratch(NB)  # with vt: copies of the state for the out-of-line calls

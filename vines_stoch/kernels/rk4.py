@@ -119,7 +119,7 @@ def wall_accelerations(x, v, t, nf, mass, inv_mass, storey_k, storey_c, floor_c,
                        group_sum, sticking, contact):
     """``accelerations`` at an instant (an impact, the end of a step with stuck absorbers),
     out of line: rare work that need not grow the step loop.  The floor count and the flags
-    reach it as run-time values (``common.runtime_value``), so that it compiles once, not once
+    reach it as run-time values (``jit.intrinsics.runtime_value``), so that it compiles once, not once
     for each floor count and set of flags of the loops that call it."""
     _wall_accelerations(x, v, t, runtime_value(nf), mass, inv_mass, storey_k, storey_c, floor_c, kind, host,
                         rows, forces, series_t, series_v, series_ptr, series_target, stuck,
@@ -264,7 +264,7 @@ def rk4_kernel(n_bodies: int, n_floors: int, has_impact: bool, has_hertz: bool, 
         dt, n_steps, i0, period, sample_from, stride = grid
         out, samples, history, limits = outputs
         na = kind.shape[0]
-        # the state and the stages' scratch on the stack (see ``common.scratch``)
+        # the state and the stages' scratch on the stack (see ``jit.intrinsics.scratch``)
         x, v, xn, vn, xp, vp = scratch(NB), scratch(NB), scratch(NB), scratch(NB), scratch(NB), scratch(NB)
         acc, xs, vs, inv_mass = scratch(NB), scratch(NB), scratch(NB), scratch(NB)
         # per floor: loads, sticking groups, the step's x^2 integrals and start accelerations,

@@ -1,4 +1,4 @@
-"""``common.copy_into``: the step loops' ``dst[:] = src`` without numba's shape-formatting error."""
+"""``jit.intrinsics.copy_into``: the step loops' ``dst[:] = src`` without numba's shape-formatting error."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""``common.runtime_value``: constants passed to an out-of-line function as run-time values, so
+"""``jit.intrinsics.runtime_value``: constants passed to an out-of-line function as run-time values, so
 that it compiles once (``rk4.wall_accelerations``)."""
 
 from __future__ import annotations
