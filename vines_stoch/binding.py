@@ -42,6 +42,8 @@ from pydantic import BaseModel
 
 from .physics.absorbers import COLUMNS
 from .scenario import (
+    BaseHarmonicLoad,
+    BlastLoad,
     ForceRecordLoad,
     HarmonicLoad,
     ImpulseLoad,
@@ -52,12 +54,11 @@ from .scenario import (
     ScenarioError,
     Study,
     WhiteNoiseLoad,
-    WindLoad,
 )
 from .scenario.bodies import ABSORBERS
 from .scenario.errors import format_error
 from .scenario.study import FieldRange, checked_models, cross_check, field_range
-from .scene import Scene, absorber_row, build_scene, poincare_samples, wind_load
+from .scene import Scene, absorber_row, build_scene, closed_form_rows, poincare_samples
 
 #: Absorber fields held as they are in one column of the absorber's row (``scene.absorber_row``).
 ROW_COLUMNS = {kind: {name: COLUMNS[column] for name, column in model.columns.items()}
@@ -70,6 +71,8 @@ FORCE_COLUMNS = {
     "half-sine": ("amplitude", "duration", "start"),
     "pulse-train": ("amplitude", "width", "period", "start"),
     "chirp": ("amplitude", "f0", "f1", "duration"),
+    "blast": ("amplitude", "duration", "decay", "start"),
+    "base-harmonic": ("amplitude", "frequency", "phase"),
 }
 #: Fields of a record that scale its samples (not its time step: that changes the times).
 RECORD_SCALES = ("scale", "sa")
@@ -259,10 +262,11 @@ class Binding:
 
     def _bind_load(self, scenario: Scenario, key: str, index: int, parts: list[str]) -> bool:
         load = scenario.loads[index]
-        if parts[0] in FORCE_COLUMNS.get(load.type, ()) and len(parts) == 1:
+        scaled = isinstance(load, BlastLoad) and load.scales is not None  # (rows of s * amplitude)
+        if parts[0] in FORCE_COLUMNS.get(load.type, ()) and len(parts) == 1 and not scaled:
             column = 1 + FORCE_COLUMNS[load.type].index(parts[0])
             self._slot(key, "forces", (_force_row(scenario, index), column))
-            if isinstance(load, HarmonicLoad) and parts[0] == "frequency":
+            if isinstance(load, (HarmonicLoad, BaseHarmonicLoad)) and parts[0] == "frequency":
                 sim = scenario.simulation
                 self.poincare = partial(poincare_samples, scenario.scheme, metrics_from=sim.metrics_from,
                                         n_steps=self.base.n_steps, dt=sim.dt)
@@ -311,15 +315,10 @@ def _record(series: int, pointers: Any, load: RecordLoad | ForceRecordLoad, fiel
 
 
 def _force_row(scenario: Scenario, index: int) -> int:
-    """The row of ``scene.forces`` of closed-form load ``index``: ``build_scene`` writes one row a
-    closed-form load, and one a floor with a mean wind force, in file order."""
-    row = 0
-    for load in scenario.loads[:index]:
-        if load.type in FORCE_COLUMNS:
-            row += 1
-        elif isinstance(load, WindLoad):
-            row += sum(1 for f in wind_load(load, scenario.primary.n_floors)[0] if f != 0.0)
-    return row
+    """The first row of ``scene.forces`` of closed-form load ``index``: ``build_scene`` writes the
+    loads' ``closed_form_rows`` in file order."""
+    nf = scenario.primary.n_floors
+    return sum(len(closed_form_rows(load, _floor(scenario, load), nf)) for load in scenario.loads[:index])
 
 
 def _series_index(scenario: Scenario, index: int) -> int:
@@ -348,7 +347,8 @@ def _noise_terms(scenario: Scenario, floor: int) -> list[tuple[int | None, float
 
 def _floor(scenario: Scenario, load: Any) -> int:
     """The floor (body index) a load acts on: its ``floor``, else the roof."""
-    return scenario.primary.n_floors - 1 if load.floor is None else load.floor - 1
+    floor = getattr(load, "floor", None)  # (base loads and wind have none)
+    return scenario.primary.n_floors - 1 if floor is None else floor - 1
 
 
 def binding(study: Study, point: int) -> Binding:

@@ -19,7 +19,9 @@ from .physics.absorbers import (
     ROW,
 )
 from .physics.loads import (
+    BLAST,
     CHIRP,
+    FLOOR,
     FORCE_ROW,
     GROUND,
     HALF_SINE,
@@ -30,6 +32,8 @@ from .physics.loads import (
     STATIONARY,
 )
 from .scenario import (
+    BaseHarmonicLoad,
+    BlastLoad,
     ChirpLoad,
     FilteredNoiseLoad,
     ForceRecordLoad,
@@ -112,9 +116,11 @@ class Scene:
 
     @cached_property
     def has_ground(self) -> bool:
-        """The loads include a ground acceleration (records or filtered ground motion): a
-        compile-time flag of the step loops, looked up once a scene, not once a realisation."""
-        return bool((self.series_target == GROUND).any() or self.filters["c_ground"].any())
+        """The loads include a ground acceleration (records, filtered ground motion, base-harmonic
+        rows): a compile-time flag of the step loops, looked up once a scene, not once a
+        realisation."""
+        return bool((self.series_target == GROUND).any() or self.filters["c_ground"].any()
+                    or (self.forces[:, FLOOR] == GROUND).any())
 
     @property
     def has_impact(self) -> bool:
@@ -155,6 +161,36 @@ def limit_row(metric: str, value: float, n_floors: int) -> tuple[float, float, f
     name, floor = metric.rsplit("_", 1)
     codes = {"x_max": X_MAX_K, "drift_max": DRIFT_MAX_K, "acc_max": ACC_MAX_K}
     return codes[name], int(floor) - 1, value
+
+
+#: The loads made of closed-form rows (``closed_form_rows``; wind's mean force too).
+CLOSED_FORM = (HarmonicLoad, HalfSineLoad, PulseTrainLoad, ChirpLoad, BlastLoad, BaseHarmonicLoad)
+
+
+def closed_form_rows(load, k: int, n_floors: int, mean: np.ndarray | None = None) -> list[tuple]:
+    """The closed-form rows (``physics.loads.FORCE_ROW`` columns: kind, amplitude, parameters,
+    floor) that ``load`` on floor index ``k`` adds to ``Scene.forces``: one for each closed-form
+    load, one a floor a blast's ``scales`` load, and for wind one a floor with a mean force (a
+    harmonic row of frequency 0; ``mean``: the floors' mean forces, ``wind_load``); none for
+    other loads."""
+    if isinstance(load, HarmonicLoad):
+        return [(HARMONIC, load.amplitude, load.frequency, load.phase, 0.0, 0.0, k)]
+    if isinstance(load, BaseHarmonicLoad):
+        return [(HARMONIC, load.amplitude, load.frequency, load.phase, 0.0, 0.0, GROUND)]
+    if isinstance(load, HalfSineLoad):
+        return [(HALF_SINE, load.amplitude, load.duration, load.start, 0.0, 0.0, k)]
+    if isinstance(load, PulseTrainLoad):
+        return [(PULSE_TRAIN, load.amplitude, load.width, load.period, load.start, load.count, k)]
+    if isinstance(load, ChirpLoad):
+        return [(CHIRP, load.amplitude, load.f0, load.f1, load.duration, 0.0, k)]
+    if isinstance(load, BlastLoad):
+        scales = [(k, 1.0)] if load.scales is None else enumerate(load.scales)
+        return [(BLAST, s * load.amplitude, load.duration, load.decay, load.start, 0.0, j)
+                for j, s in scales if s != 0.0]
+    if isinstance(load, WindLoad):
+        mean = wind_load(load, n_floors)[0] if mean is None else mean
+        return [(HARMONIC, f, 0.0, 0.0, 0.0, 0.0, j) for j, f in enumerate(mean) if f != 0.0]
+    return []
 
 
 def poincare_samples(scheme: str, forces, metrics_from: float, n_steps: int,
@@ -200,14 +236,8 @@ def build_scene(scenario: Scenario) -> Scene:
         elif isinstance(load, InitialLoad):
             x0 += np.asarray(load.displacement or np.zeros(n), dtype=float)
             v0 += np.asarray(load.velocity or np.zeros(n), dtype=float)
-        elif isinstance(load, HarmonicLoad):
-            forces.append((HARMONIC, load.amplitude, load.frequency, load.phase, 0.0, 0.0, k))
-        elif isinstance(load, HalfSineLoad):
-            forces.append((HALF_SINE, load.amplitude, load.duration, load.start, 0.0, 0.0, k))
-        elif isinstance(load, PulseTrainLoad):
-            forces.append((PULSE_TRAIN, load.amplitude, load.width, load.period, load.start, load.count, k))
-        elif isinstance(load, ChirpLoad):
-            forces.append((CHIRP, load.amplitude, load.f0, load.f1, load.duration, 0.0, k))
+        elif isinstance(load, CLOSED_FORM):
+            forces += closed_form_rows(load, k, nf)
         elif isinstance(load, (RecordLoad, ForceRecordLoad)):
             series.append((*load.samples(), GROUND if isinstance(load, RecordLoad) else k))
         elif isinstance(load, WhiteNoiseLoad):
@@ -216,8 +246,7 @@ def build_scene(scenario: Scenario) -> Scene:
             filter_list.append(_filter(load, k))
         elif isinstance(load, WindLoad):
             mean, turbulence = wind_load(load, nf)
-            # the mean force: a harmonic row of frequency 0 on each loaded floor
-            forces += [(HARMONIC, f, 0.0, 0.0, 0.0, 0.0, j) for j, f in enumerate(mean) if f != 0.0]
+            forces += closed_form_rows(load, k, nf, mean)
             filter_list.append(turbulence)
     sim = scenario.simulation
     n_steps = max(1, math.ceil(sim.duration / sim.dt - 1e-9))

@@ -37,6 +37,7 @@ from numba import njit
 
 from ..jit import INLINE, KERNEL, copy_into
 from ..physics.loads import (
+    BLAST,
     FLOOR,
     GROUND,
     HALF_SINE,
@@ -123,8 +124,11 @@ def applied(t: float, tm: float, forces, series_t, series_v, series_ptr, series_
         load[k] = 0.0
     ground = 0.0
     for r in range(forces.shape[0]):
-        k = target(forces[r, FLOOR], nf)
-        load[k] += closed_form_force(t, tm, forces, r, pc, on_grid)
+        value = closed_form_force(t, tm, forces, r, pc, on_grid)
+        if forces[r, FLOOR] == GROUND:  # (a base-harmonic row)
+            ground += value
+        else:
+            load[target(forces[r, FLOOR], nf)] += value
     for s in range(series_target.shape[0]):
         value = series_value(t, tm, series_t, series_v, series_ptr[s], series_ptr[s + 1])
         if series_target[s] == GROUND:
@@ -137,10 +141,10 @@ def applied(t: float, tm: float, forces, series_t, series_v, series_ptr, series_
 
 @njit(**INLINE)
 def has_breaks(ex) -> bool:
-    """True when some load has kinks or jumps inside the run (pulses, half-sines, records)."""
+    """True when some load has kinks or jumps inside the run (pulses, half-sines, blasts, records)."""
     forces, series_t, series_v, series_ptr, series_target = ex
     for r in range(forces.shape[0]):
-        if forces[r, 0] == HALF_SINE or forces[r, 0] == PULSE_TRAIN:
+        if forces[r, 0] == HALF_SINE or forces[r, 0] == PULSE_TRAIN or forces[r, 0] == BLAST:
             return True
     return series_target.shape[0] > 0
 
@@ -167,6 +171,8 @@ def next_break(t: float, ex) -> float:
                 k += 1.0
             if count <= 0 or k < count:
                 first = min(first, tb)
+        elif row[0] == BLAST and row[4] > t:  # (the pulse's front)
+            first = min(first, row[4])
     for s in range(series_target.shape[0]):
         lo, hi = series_ptr[s], series_ptr[s + 1]
         if t < series_t[lo]:

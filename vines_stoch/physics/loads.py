@@ -10,10 +10,11 @@ from numba import njit
 
 from ..jit.flags import INLINE
 
-#: Kinds of closed-form force rows, their width and the column of their floor.
-HARMONIC, HALF_SINE, PULSE_TRAIN, CHIRP = 0, 1, 2, 3
+#: Kinds of closed-form rows, their width and the column of their floor (``GROUND`` for a
+#: ground acceleration: a harmonic row there is the ``base-harmonic`` load).
+HARMONIC, HALF_SINE, PULSE_TRAIN, CHIRP, BLAST = 0, 1, 2, 3, 4
 FORCE_ROW, FLOOR = 7, 6
-#: ``series_target`` of a ground acceleration.
+#: ``series_target`` (and closed-form rows' floor) of a ground acceleration.
 GROUND = -1
 #: Envelope kinds of filter rows (``filters.STATIONARY`` etc.).
 STATIONARY, JENNINGS, SARAGONI_HART = 0, 1, 2
@@ -41,6 +42,12 @@ def closed_form_force(t: float, tm: float, forces, r: int, pc, on_grid: bool) ->
         if count > 0 and k >= count:
             return 0.0
         return amplitude if tm - t0 - k * period < width else 0.0
+    if kind == BLAST:  # Friedlander: Ps (1 - s) exp(-b s), s = (t - t0) / Td, for t >= t0
+        duration, decay, t0 = forces[r, 2], forces[r, 3], forces[r, 4]
+        if tm < t0:
+            return 0.0
+        s = (t - t0) / duration
+        return amplitude * (1.0 - s) * math.exp(-decay * s)
     # CHIRP: A sin(2 pi (f0 t + (f1 - f0) t^2 / (2 T)))
     f0, f1, sweep = forces[r, 2], forces[r, 3], forces[r, 4]
     return amplitude * math.sin(2.0 * np.pi * (f0 * t + (f1 - f0) * t * t / (2.0 * sweep)))

@@ -31,6 +31,8 @@ from .distributions import (
 )
 from .errors import ScenarioError
 from .loads import (
+    BaseHarmonicLoad,
+    BlastLoad,
     ChirpLoad,
     FilteredNoiseLoad,
     ForceRecordLoad,
@@ -66,10 +68,9 @@ from .study import Study, load_scenario, parse_scenario
 from .sweeps import get_path, set_path
 
 __all__ = [
-    "OBJECTIVES", "Absorber", "BistableAbsorber", "Bound", "ChirpLoad", "Contact", "CubicAbsorber",
-    "Distribution", "Ensemble", "FilteredNoiseLoad", "ForceRecordLoad", "GeometricAbsorber",
-    "GroundMotionLoad",
-    "HalfSineLoad", "HarmonicLoad",
+    "OBJECTIVES", "Absorber", "BaseHarmonicLoad", "BistableAbsorber", "BlastLoad", "Bound", "ChirpLoad",
+    "Contact", "CubicAbsorber", "Distribution", "Ensemble", "FilteredNoiseLoad", "ForceRecordLoad",
+    "GeometricAbsorber", "GroundMotionLoad", "HalfSineLoad", "HarmonicLoad",
     "HertzAbsorber", "History", "ImpactAbsorber", "IntensityMeasures", "ImpulseLoad", "InitialLoad",
     "JenningsEnvelope", "Limit", "LinearAbsorber", "Load", "LognormalDistribution", "NormalDistribution",
     "Optimize", "Output", "Primary", "PulseTrainLoad", "Rayleigh", "RecordLoad", "SaragoniHartEnvelope",

@@ -11,7 +11,16 @@ from typing import Any
 
 from .bodies import ImpactAbsorber
 from .errors import format_error
-from .loads import ChirpLoad, FilteredNoiseLoad, GroundMotionLoad, HalfSineLoad, HarmonicLoad, WindLoad
+from .loads import (
+    BaseHarmonicLoad,
+    BlastLoad,
+    ChirpLoad,
+    FilteredNoiseLoad,
+    GroundMotionLoad,
+    HalfSineLoad,
+    HarmonicLoad,
+    WindLoad,
+)
 from .model import Scenario
 
 #: A scene's time scales: ``(omega, what)`` pairs.
@@ -40,12 +49,14 @@ def load_frequencies(scenario: Scenario) -> list[tuple[float, str]]:
     fastest pole of a filter of noise, the upper end of a wind filter's band."""
     found = []
     for i, load in enumerate(scenario.loads):
-        if isinstance(load, HarmonicLoad):
+        if isinstance(load, (HarmonicLoad, BaseHarmonicLoad)):
             omega, what = load.frequency, "harmonic forcing"
         elif isinstance(load, ChirpLoad):
             omega, what = 2.0 * math.pi * max(load.f0, load.f1), "chirp's highest frequency"
         elif isinstance(load, HalfSineLoad):
             omega, what = math.pi / load.duration, "half-sine (a period twice its duration)"
+        elif isinstance(load, BlastLoad):
+            omega, what = math.pi / load.duration, "blast (a period twice its positive phase)"
         elif isinstance(load, FilteredNoiseLoad):
             omega, what = _pole(load.frequency, load.damping), "filter's fastest pole"
         elif isinstance(load, GroundMotionLoad):

@@ -248,6 +248,37 @@ class HalfSineLoad(_Model):
     floor: Floor | None = None
 
 
+class BlastLoad(_Model):
+    """Friedlander blast pulse, ``F = amplitude (1 - s) exp(-decay s)`` with
+    ``s = (t - start) / duration`` for ``t >= start``, else 0 (MODEL.md section 3): the peak
+    overpressure force ``Ps``, the positive phase ``Td`` and the decay coefficient ``b``; on one
+    floor, or on every floor scaled by ``scales`` (one per floor, from the lowest)."""
+
+    type: Literal["blast"]
+    amplitude: Real
+    duration: Positive
+    decay: NonNegative
+    start: NonNegative = 0.0
+    floor: Floor | None = None
+    scales: Annotated[list[Real], Field(min_length=1)] | None = None
+
+    @model_validator(mode="after")
+    def _one_way(self) -> BlastLoad:
+        if self.scales is not None and self.floor is not None:
+            raise FieldError("scales", self.scales, "give either floor or scales (one per floor), not both")
+        return self
+
+
+class BaseHarmonicLoad(_Model):
+    """Harmonic ground acceleration ``a_g = amplitude cos(frequency t + phase)`` (m/s^2; frequency
+    in rad/s) acting on every body through its mass (MODEL.md section 3)."""
+
+    type: Literal["base-harmonic"]
+    amplitude: Real
+    frequency: NonNegative
+    phase: Real = 0.0
+
+
 class PulseTrainLoad(_Model):
     """``F = amplitude`` while ``(t - start) mod period < width`` (``t >= start``), for ``count``
     pulses (0: no end)."""
@@ -350,7 +381,8 @@ class ForceRecordLoad(_RecordLoad):
 
 Load = Annotated[
     ImpulseLoad | InitialLoad | HarmonicLoad | WhiteNoiseLoad | FilteredNoiseLoad | GroundMotionLoad
-    | WindLoad | HalfSineLoad | PulseTrainLoad | ChirpLoad | RecordLoad | ForceRecordLoad,
+    | WindLoad | HalfSineLoad | PulseTrainLoad | ChirpLoad | RecordLoad | ForceRecordLoad | BlastLoad
+    | BaseHarmonicLoad,
     Field(discriminator="type"),
 ]
 

@@ -20,7 +20,7 @@ from .bodies import (
 from .distributions import Distribution
 from .errors import FieldError
 from .fields import MAX_ABSORBERS, MAX_LIMITS, MAX_LOADS, MAX_STEPS, _Model
-from .loads import InitialLoad, Load, WhiteNoiseLoad, WindLoad, draws_filter_noise
+from .loads import BlastLoad, InitialLoad, Load, WhiteNoiseLoad, WindLoad, draws_filter_noise
 from .settings import (
     Ensemble,
     IntensityMeasures,
@@ -77,6 +77,9 @@ class Scenario(_Model):
         for i, load in enumerate(self.loads):
             if isinstance(load, WindLoad) and (bad := load.floors_error(n)) is not None:
                 raise FieldError(f"loads.{i}.{bad[0]}", bad[1], bad[2])
+            if isinstance(load, BlastLoad) and load.scales is not None and len(load.scales) != n:
+                raise FieldError(f"loads.{i}.scales", load.scales,
+                                 f"must list {n} values (one per floor, from the lowest)")
             if isinstance(load, InitialLoad):
                 for field in ("displacement", "velocity"):
                     values = getattr(load, field)

@@ -150,6 +150,18 @@ CASES = {
          "loads.3.duration": uniform(0.5, 1.5), "loads.4.amplitude": uniform(0.5, 1.5),
          "loads.4.frequency": uniform(1.5, 2.5), "loads.4.phase": uniform(0.0, 1.0)},
         []),
+    # a blast after a scaled blast (one row a floor) and base excitation
+    "blast-and-base": (
+        {"primary": PRIMARY,
+         "loads": [{"type": "blast", "amplitude": 2.0, "duration": 0.2, "decay": 1.0, "scales": [0.5]},
+                   {"type": "blast", "amplitude": 1.0, "duration": 0.3, "decay": 0.5, "start": 0.1,
+                    "floor": 1},
+                   {"type": "base-harmonic", "amplitude": 0.3, "frequency": 2.0, "phase": 0.0}]},
+        {"loads.1.amplitude": uniform(0.5, 1.5), "loads.1.duration": uniform(0.1, 0.3),
+         "loads.1.decay": uniform(0.0, 2.0), "loads.1.start": uniform(0.0, 0.2),
+         "loads.2.amplitude": uniform(0.1, 0.5), "loads.2.frequency": uniform(1.5, 2.5),
+         "loads.2.phase": uniform(0.0, 1.0), "loads.0.amplitude": uniform(1.0, 3.0)},
+        ["loads.0.amplitude"]),
     # sums over the loads: impulses and an initial velocity in v0, white-noise variances in sigma
     "state-and-noise": (
         {"primary": PRIMARY, "absorbers": [{"type": "cubic", "mass": 0.05, "stiffness": 1.0}],
