@@ -68,6 +68,31 @@ from ..physics.absorbers import CLEARANCE, HERTZ, IMPACT, RESTITUTION, WALL_HI, 
 from ..physics.hertz import contact_energy, contact_force_law
 from ..physics.structure import host_of, primary_energy
 from .brownian import MEMO, path_value
+from .carry import (
+    ABSORBER,
+    CONTACT,
+    E1_PEAK,
+    E1_PREV,
+    E_SUM,
+    GROUND_NEXT,
+    HISTORY_NEXT,
+    LEFT,
+    LOSS,
+    PEAK,
+    PENDING,
+    PRIMARY,
+    REPLAYED,
+    RIGHT,
+    SEED_HIGH,
+    SEED_LOW,
+    WORK,
+    restore_absorbers,
+    restore_floors,
+    restore_rows,
+    save_absorbers,
+    save_floors,
+    save_rows,
+)
 from .common import (
     CHECK_EVERY,
     MAX_EVENTS,
@@ -310,9 +335,11 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
     stiffnesses and dashpots, mass-proportional damping, state), ``absorbers`` (kind codes,
     host floors, parameter rows: ``physics.LAWS``), ``ex`` and ``fl`` (loads and filters,
     ``kernels/loads.py``), ``noise`` (white-noise intensity per floor, replayed normals),
-    ``grid`` (time grid, metrics window, Poincare and history grids), ``outputs`` (metric
-    vector, Poincare samples, history rows, the limits whose first passages the metric vector
-    records: ``common.first_passages``), then the generators of the step increments, of
+    ``grid`` (time grid, metrics window, Poincare and history grids, the steps from ``first``
+    to ``n_steps`` to run), ``outputs`` (metric vector, Poincare samples, history rows, the
+    limits whose first passages the metric vector records: ``common.first_passages``, the
+    carry: ``kernels/carry.py``, restored where ``first > 0``, saved where it is not empty),
+    then the generators of the step increments, of
     the Brownian trees' seed and of the filter noise (an empty Philox stream where unused;
     three arguments, not a bundle: numba types a tuple holding a Generator in Python, about
     20 us a call).
@@ -350,16 +377,20 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
     def kernel(bodies, absorbers, ex, fl, noise, grid, outputs, gen, gen_bridge, gen_filter):
         nb = NB
         nf = NF
-        mass, storey_k, storey_c, floor_c, state_x, state_v = bodies
-        kind, host, rows = absorbers
-        forces, series_t, series_v, series_ptr, series_target = ex
-        phi, chol, envelopes, c_force, c_ground, z, zn, draws = fl
-        sigma, normals, refine = noise
+        mass, storey_k, storey_c, floor_c = bodies.mass, bodies.storey_k, bodies.storey_c, bodies.floor_c
+        state_x, state_v = bodies.x, bodies.v
+        kind, host, rows = absorbers.kind, absorbers.host, absorbers.rows
+        forces, series_t, series_v, series_ptr, series_target = (ex.forces, ex.series_t, ex.series_v,
+                                                                 ex.series_ptr, ex.series_target)
+        phi, chol, envelopes, c_force, c_ground = fl.phi, fl.chol, fl.envelope, fl.c_force, fl.c_ground
+        z, zn, draws = fl.z, fl.zn, fl.draws
+        sigma, normals, refine = noise.sigma, noise.normals, noise.refine
         replay = normals.shape[0] > 0
         piecewise = has_breaks(ex)  # re-evaluate each step's start on its own piece
         ground = GROUND
-        dt, n_steps, i0, period, sample_from, stride = grid
-        out, samples, history, limits = outputs
+        dt, n_steps, i0, stride, first = grid.dt, grid.n_steps, grid.i0, grid.stride, grid.first
+        out, history, limits, carry = outputs.out, outputs.history, outputs.limits, outputs.carry
+        resume = first > 0  # a later stretch of the path: its state from ``carry``
         na = kind.shape[0]
         nz = z.shape[0]
         # the state (copied back at the end) and the scratch, on the stack (see ``common.scratch``)
@@ -389,12 +420,16 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
                 noisy += 1
         # the seed of the Brownian trees inside the steps (``brownian``)
         seed = np.uint64(0)
+        high = low = 0.0
         if TREE:
-            high, low = uniform(gen_bridge), uniform(gen_bridge)
+            if resume:
+                high, low = carry[SEED_HIGH], carry[SEED_LOW]
+            else:
+                high, low = uniform(gen_bridge), uniform(gen_bridge)
             seed = (np.uint64(high * 2.0**32) << np.uint64(32)) | np.uint64(low * 2.0**32)
         # the Runge-Kutta stages' scratch, only where they run
         a1, a2, a3, xs, v2, v3 = scratch(NS), scratch(NS), scratch(NS), scratch(NS), scratch(NS), scratch(NS)
-        for r in range(nz):
+        for r in range(nz if not resume else 0):
             zn[r] = z[r]
         # phasors (cos, sin) of the harmonic loads at the step's start and at its midpoint, and
         # their turns in a step and in half a step; on the stack (heap arrays passed to the
@@ -408,14 +443,10 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
             stuck, touching = int_scratch(NA), int_scratch(NA)
         else:
             stuck, touching = np.zeros(na, np.int64), np.zeros(na, np.int64)
-        if has_hertz:
+        if has_hertz and not resume:
             contact_sides(x, nf, kind, host, rows, touching)
         # per absorber: a contact's balance over a sub-step and what it owes (``contact_closing``)
         held, owed = scratch(NA), scratch(NA)
-        e1_prev = primary_energy(mass, storey_k, x, v, nf)
-        h_next = start_history(history, stride, x, nf, e1_prev)
-        ag_next = excitation(0.0, 0.5 * dt, 0.0, forces, series_t, series_v, series_ptr, series_target,
-                             filtered, c_force, c_ground, z, zn, pc, False, ground, load_next)
         # accumulators in registers; written to ``out`` once at the end
         # (the trapezoid integrals of E1 and x_k^2 as plain sums of the step ends' values, the
         # window's ends at half weight: one add a step each)
@@ -423,8 +454,22 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
         loss_sum = n_left = n_right = contact_time = peak_force = 0.0
         replayed = 0
         pending = limits.shape[0]  # limits not passed yet
-        i = 0
-        inside = i0 == 0
+        if resume:
+            work, d_primary, d_absorber = carry[WORK], carry[PRIMARY], carry[ABSORBER]
+            e_sum, e1_max, loss_sum = carry[E_SUM], carry[E1_PEAK], carry[LOSS]
+            n_left, n_right, contact_time, peak_force = carry[LEFT], carry[RIGHT], carry[CONTACT], carry[PEAK]
+            e1_prev, ag_next = carry[E1_PREV], carry[GROUND_NEXT]
+            replayed, pending, h_next = int(carry[REPLAYED]), int(carry[PENDING]), int(carry[HISTORY_NEXT])
+            restore_floors(carry, x_max, drift_max, acc_max, x2_integral, load_next)
+            restore_absorbers(carry, nf, stuck, touching, owed)
+            restore_rows(carry, nf, na, pc, ps)
+        else:
+            e1_prev = primary_energy(mass, storey_k, x, v, nf)
+            h_next = start_history(history, stride, x, nf, e1_prev)
+            ag_next = excitation(0.0, 0.5 * dt, 0.0, forces, series_t, series_v, series_ptr, series_target,
+                                 filtered, c_force, c_ground, z, zn, pc, False, ground, load_next)
+        i = first
+        inside = i0 == 0 or i0 < first
         while i < n_steps:
             # rare work between blocks of steps, out of the step loop: the window opening,
             # the divergence check, history rows
@@ -682,6 +727,16 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
             i = end
             if i == h_next:
                 h_next = record_history(history, stride, h_next, x, nf, e1_prev)
+        if carry.shape[0] > 0:  # the path's state for its next stretch, raw
+            carry[WORK], carry[PRIMARY], carry[ABSORBER] = work, d_primary, d_absorber
+            carry[E_SUM], carry[E1_PEAK], carry[LOSS] = e_sum, e1_max, loss_sum
+            carry[LEFT], carry[RIGHT], carry[CONTACT], carry[PEAK] = n_left, n_right, contact_time, peak_force
+            carry[E1_PREV], carry[GROUND_NEXT] = e1_prev, ag_next
+            carry[REPLAYED], carry[PENDING], carry[HISTORY_NEXT] = replayed, pending, h_next
+            carry[SEED_HIGH], carry[SEED_LOW] = high, low
+            save_floors(carry, x_max, drift_max, acc_max, x2_integral, load_next)
+            save_absorbers(carry, nf, stuck, touching, owed)
+            save_rows(carry, nf, na, pc, ps)
         if diverged(x):
             out[STATUS] = STATUS_DIVERGED
         for b in range(nb):

@@ -43,6 +43,15 @@ from ..outputs import (
 )
 from ..physics.absorbers import CLEARANCE, DAMPING, HERTZ, IMPACT, RESTITUTION, WALL_HI, WALL_LO
 from ..physics.structure import host_of, primary_energy, structure_power
+from .carry import (
+    HISTORY_NEXT,
+    NEXT_SAMPLE,
+    PENDING,
+    restore_absorbers,
+    restore_floors,
+    save_absorbers,
+    save_floors,
+)
 from .common import (
     CHECK_EVERY,
     MAX_EVENTS,
@@ -249,11 +258,16 @@ def rk4_kernel(n_bodies: int, n_floors: int, has_impact: bool, has_hertz: bool, 
     def kernel(bodies, absorbers, ex, fl, noise, grid, outputs, gen, gen_bridge, gen_filter):
         nb = NB
         nf = NF
-        mass, storey_k, storey_c, floor_c, state_x, state_v = bodies
-        kind, host, rows = absorbers
-        forces, series_t, series_v, series_ptr, series_target = ex
-        dt, n_steps, i0, period, sample_from, stride = grid
-        out, samples, history, limits = outputs
+        mass, storey_k, storey_c, floor_c = bodies.mass, bodies.storey_k, bodies.storey_c, bodies.floor_c
+        state_x, state_v = bodies.x, bodies.v
+        kind, host, rows = absorbers.kind, absorbers.host, absorbers.rows
+        forces, series_t, series_v, series_ptr, series_target = (ex.forces, ex.series_t, ex.series_v,
+                                                                 ex.series_ptr, ex.series_target)
+        dt, n_steps, i0, period, sample_from, stride, first = (grid.dt, grid.n_steps, grid.i0, grid.period,
+                                                                grid.sample_from, grid.stride, grid.first)
+        out, samples, history, limits, carry = (outputs.out, outputs.samples, outputs.history, outputs.limits,
+                                                outputs.carry)
+        resume = first > 0  # a later stretch of the path: its state from ``carry`` (its sums in ``out``)
         na = kind.shape[0]
         # the state and the stages' scratch on the stack (see ``common.scratch``)
         x, v, xn, vn, xp, vp = scratch(NB), scratch(NB), scratch(NB), scratch(NB), scratch(NB), scratch(NB)
@@ -274,13 +288,20 @@ def rk4_kernel(n_bodies: int, n_floors: int, has_impact: bool, has_hertz: bool, 
             stuck, touching = int_scratch(NA), int_scratch(NA)
         else:
             stuck, touching = np.zeros(na, np.int64), np.zeros(na, np.int64)
-        next_sample = 0
-        h_next = start_history(history, stride, x, nf, primary_energy(mass, storey_k, x, v, nf))
-        pending = limits.shape[0]  # limits not passed yet
+        owed = scratch(NA)  # (no contact debts: the carry's block stays zero)
+        if resume:
+            next_sample, pending = int(carry[NEXT_SAMPLE]), int(carry[PENDING])
+            h_next = int(carry[HISTORY_NEXT])
+            restore_floors(carry, x_max, drift_max, acc_max, x2_integral, load)
+            restore_absorbers(carry, nf, stuck, touching, owed)
+        else:
+            next_sample = 0
+            h_next = start_history(history, stride, x, nf, primary_energy(mass, storey_k, x, v, nf))
+            pending = limits.shape[0]  # limits not passed yet
         sampling = period > 0.0  # Poincare samples for the regime
         piecewise = has_breaks(ex)  # sub-steps end at the loads' kinks and jumps
-        i = 0
-        inside = i0 == 0
+        i = first
+        inside = i0 == 0 or i0 < first
         while i < n_steps:
             # rare work between blocks of steps (see ``block_end``)
             if i == i0:
@@ -419,6 +440,10 @@ def rk4_kernel(n_bodies: int, n_floors: int, has_impact: bool, has_hertz: bool, 
             if i == h_next:
                 h_next = record_history(history, stride, h_next, x, nf,
                                         primary_energy(mass, storey_k, x, v, nf))
+        if carry.shape[0] > 0:  # the path's state for its next stretch
+            carry[NEXT_SAMPLE], carry[PENDING], carry[HISTORY_NEXT] = next_sample, pending, h_next
+            save_floors(carry, x_max, drift_max, acc_max, x2_integral, load)
+            save_absorbers(carry, nf, stuck, touching, owed)
         if diverged(x):
             out[STATUS] = STATUS_DIVERGED
         for b in range(nb):
