@@ -49,6 +49,22 @@ def new_carry(n_floors: int, n_absorbers: int, n_rows: int) -> np.ndarray:
 
 
 @njit(**INLINE)
+def save_accounts(carry, work, d_primary, d_absorber, e_sum, e1_max, loss, n_left, n_right, contact_time,
+                  peak_force) -> None:
+    """Carry the energy accounts and the event counts (``energy``), raw."""
+    carry[WORK], carry[PRIMARY], carry[ABSORBER] = work, d_primary, d_absorber
+    carry[E_SUM], carry[E1_PEAK], carry[LOSS] = e_sum, e1_max, loss
+    carry[LEFT], carry[RIGHT], carry[CONTACT], carry[PEAK] = n_left, n_right, contact_time, peak_force
+
+
+@njit(**INLINE)
+def restore_accounts(carry):
+    """The accounts back from the carry (``save_accounts``), in its order."""
+    return (carry[WORK], carry[PRIMARY], carry[ABSORBER], carry[E_SUM], carry[E1_PEAK], carry[LOSS],
+            carry[LEFT], carry[RIGHT], carry[CONTACT], carry[PEAK])
+
+
+@njit(**INLINE)
 def save_floors(carry, x_max, drift_max, acc_max, x2_integral, load_next) -> None:
     """Carry the per-floor blocks (``FLOOR_CARRIED``)."""
     nf = x_max.shape[0]

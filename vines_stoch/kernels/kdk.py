@@ -14,8 +14,9 @@ mass depends on ``dW``: an absorber stuck to its wall and released by the noise.
 
 When the drift would carry an impact absorber through its wall, the step is split at the
 impact: the sub-step of length ``s`` that lands exactly on the wall is found by a bracketed
-root search (``crossing``).  The Newton map (``common.resolve_impact``) acts at the end of that
-sub-step, and the rest of the step continues from the post-impact state.  (Applying the
+root search (``crossing``; which event a sub-step meets: ``events.event_ahead``).  The Newton
+map (``common.resolve_impact``) acts at the end of that sub-step, and the rest of the step
+continues from the post-impact state.  (Applying the
 impact at a grid state of a symmetric map matters: with a kick-drift map the energy balance
 drifts by ``O(dt)`` per impact.)  Hertz contact is sub-stepped as in ``rk4.py``: its onset and
 its end are located by the same root search, and in between the sub-steps are sized from the
@@ -48,48 +49,31 @@ from numba import njit
 from ..jit.flags import INLINE, KERNEL
 from ..jit.intrinsics import any_set, int_scratch, scratch
 from ..outputs import (
-    ABSORBER_DISS,
     CAPPED,
     CONTACT_TIME,
-    E1_MAX,
-    ENERGY_INT,
     FINAL_ENERGY,
-    IMPACT_LOSS,
-    IMPACTS,
-    IMPACTS_LEFT,
-    IMPACTS_RIGHT,
-    INPUT,
     PEAK_FORCE,
-    PRIMARY_DISS,
     STATUS,
     STATUS_DIVERGED,
 )
-from ..physics.absorbers import CLEARANCE, HERTZ, IMPACT, RESTITUTION, WALL_HI, WALL_LO
+from ..physics.absorbers import HERTZ, RESTITUTION, WALL_HI, WALL_LO
 from ..physics.hertz import contact_energy, contact_force_law
 from ..physics.structure import host_of, primary_energy
 from .brownian import MEMO, path_value
 from .carry import (
-    ABSORBER,
-    CONTACT,
-    E1_PEAK,
     E1_PREV,
-    E_SUM,
     GROUND_NEXT,
     HISTORY_NEXT,
-    LEFT,
-    LOSS,
-    PEAK,
     PENDING,
-    PRIMARY,
     REPLAYED,
-    RIGHT,
     SEED_HIGH,
     SEED_LOW,
-    WORK,
     restore_absorbers,
+    restore_accounts,
     restore_floors,
     restore_rows,
     save_absorbers,
+    save_accounts,
     save_floors,
     save_rows,
 )
@@ -97,7 +81,6 @@ from .common import (
     CHECK_EVERY,
     MAX_EVENTS,
     MAX_SUBSTEPS,
-    absorber_dissipation,
     attachment_forces,
     block_end,
     contact_force,
@@ -107,16 +90,16 @@ from .common import (
     first_passages,
     floor_peaks,
     keep_in_cavities,
-    momentum,
     pin_to_walls,
     record_history,
     resolve_impact,
     start_history,
     stick_together,
     stored_energy,
-    structure_dissipation,
     write_floor_metrics,
 )
+from .energy import absorber_dissipation, impulse_work, momentum, structure_dissipation, write_accounts
+from .events import EXIT, NONE, event_ahead, gap_sign
 from .loads import advance_filters, excitation, has_breaks, phasors, rotations, turn
 from .rng import normal, uniform
 from .sra3 import sra3_step
@@ -139,16 +122,6 @@ def kick(v, s, dws, load, ag, force, inv_mass, vn, ground):
         vn[k] = (v[k] + ((load[k] * s + dws[k]) * inv_mass[k] - base)) + force[k] * (s * inv_mass[k])
     for b in range(nf, vn.shape[0]):
         vn[b] = (v[b] - base) + force[b] * (s * inv_mass[b])
-
-
-@njit(**INLINE)
-def impulse_work(load, s, dws, v, vn) -> float:
-    """Work of the floors' load impulses ``load s + dws`` at the mean of ``v`` and ``vn``."""
-    w = 0.0
-    for k in range(load.shape[0]):
-        term = (load[k] * s + dws[k]) * (0.5 * (v[k] + vn[k]))
-        w = term if k == 0 else w + term  # (see ``common.structure_dissipation``)
-    return w
 
 
 @njit(**INLINE)
@@ -455,9 +428,8 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
         replayed = 0
         pending = limits.shape[0]  # limits not passed yet
         if resume:
-            work, d_primary, d_absorber = carry[WORK], carry[PRIMARY], carry[ABSORBER]
-            e_sum, e1_max, loss_sum = carry[E_SUM], carry[E1_PEAK], carry[LOSS]
-            n_left, n_right, contact_time, peak_force = carry[LEFT], carry[RIGHT], carry[CONTACT], carry[PEAK]
+            (work, d_primary, d_absorber, e_sum, e1_max, loss_sum, n_left, n_right, contact_time,
+             peak_force) = restore_accounts(carry)
             e1_prev, ag_next = carry[E1_PREV], carry[GROUND_NEXT]
             replayed, pending, h_next = int(carry[REPLAYED]), int(carry[PENDING]), int(carry[HISTORY_NEXT])
             restore_floors(carry, x_max, drift_max, acc_max, x2_integral, load_next)
@@ -589,31 +561,21 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
                     if has_impact:
                         stick_together(mass, vn, nf, stuck, host, group_mass, group_sum, True)
                     # the first impact, contact onset or contact end in the sub-step
-                    hit, side, s_hit, leaves = -1, 0, s, False
+                    hit, side, s_hit, hit_event, hit_wall = -1, 0, s, NONE, 0.0
                     if search and ((has_impact and n_impacts < MAX_EVENTS) or has_hertz):
                         for a in range(na):
                             h = host_of(host, a, nf)
                             j = nf + a
                             u_end = x[j] - x[h] + s * (vn[j] - vn[h])
-                            sq, wall, exits = 0, 0.0, False
-                            if has_impact and kind[a] == IMPACT and stuck[a] == 0 and n_impacts < MAX_EVENTS:
-                                if abs(u_end) > rows[a, CLEARANCE]:
-                                    sq, wall = (1 if u_end > 0.0 else -1), rows[a, CLEARANCE]
-                            elif has_hertz and kind[a] == HERTZ:
-                                if touching[a] == 0 and u_end < rows[a, WALL_LO]:
-                                    sq, wall = -1, -rows[a, WALL_LO]
-                                elif touching[a] == 0 and u_end > rows[a, WALL_HI]:
-                                    sq, wall = 1, rows[a, WALL_HI]
-                                elif touching[a] < 0 and u_end > rows[a, WALL_LO]:  # the contact ends
-                                    sq, wall, exits = 1, rows[a, WALL_LO], True
-                                elif touching[a] > 0 and u_end < rows[a, WALL_HI]:
-                                    sq, wall, exits = -1, -rows[a, WALL_HI], True
-                            if sq != 0:
+                            event, sa, wall = event_ahead(kind, stuck, touching, rows, a, u_end, has_impact,
+                                                          n_impacts < MAX_EVENTS, has_hertz)
+                            if event != NONE:
+                                sq = gap_sign(event, sa)
                                 sc = crossing(x, v, s, left, path, dw, off, w_at, sigma, normals, slot, memo,
-                                              load, ag, force, mass, inv_mass, stuck, host, a, sq, wall, vt,
-                                              dwc, group_mass, group_sum, ground, has_impact, TREE)
+                                              load, ag, force, mass, inv_mass, stuck, host, a, sq, sq * wall,
+                                              vt, dwc, group_mass, group_sum, ground, has_impact, TREE)
                                 if hit < 0 or sc < s_hit:
-                                    hit, side, s_hit, leaves = a, sq, sc, exits
+                                    hit, side, s_hit, hit_event, hit_wall = a, sa, sc, event, wall
                                     for b in range(nb):  # the root search's kick to its root
                                         vh[b] = vt[b]
                                     for k in range(nf):
@@ -679,7 +641,7 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
                     for k in range(nf):
                         w_at[k] += dws[k]
                         load[k] = load_end[k]
-                    if hit >= 0 and not leaves:
+                    if hit >= 0 and hit_event != EXIT:
                         h = host_of(host, hit, nf)
                         j = nf + hit
                         if inside:
@@ -690,11 +652,10 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
                     if has_hertz and hit >= 0 and kind[hit] == HERTZ:  # onto or off the contact surface
                         h = host_of(host, hit, nf)
                         j = nf + hit
-                        x[j] = x[h] + (rows[hit, WALL_LO] if side * (-1 if leaves else 1) < 0
-                                       else rows[hit, WALL_HI])
-                        touching[hit] = 0 if leaves else side
+                        x[j] = x[h] + hit_wall
+                        touching[hit] = 0 if hit_event == EXIT else side
                     elif has_impact and hit >= 0:  # the impact, at t + s
-                        x[j] = x[h] + side * rows[hit, CLEARANCE]
+                        x[j] = x[h] + hit_wall
                         gain = (force[j] / mass[j] - (force[h] + load_end[h]) / mass[h]) * dt
                         # the last impact a step may resolve ends a chatter sequence: inelastic collapse
                         last = n_impacts == MAX_EVENTS - 1
@@ -728,9 +689,8 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
             if i == h_next:
                 h_next = record_history(history, stride, h_next, x, nf, e1_prev)
         if carry.shape[0] > 0:  # the path's state for its next stretch, raw
-            carry[WORK], carry[PRIMARY], carry[ABSORBER] = work, d_primary, d_absorber
-            carry[E_SUM], carry[E1_PEAK], carry[LOSS] = e_sum, e1_max, loss_sum
-            carry[LEFT], carry[RIGHT], carry[CONTACT], carry[PEAK] = n_left, n_right, contact_time, peak_force
+            save_accounts(carry, work, d_primary, d_absorber, e_sum, e1_max, loss_sum, n_left, n_right,
+                          contact_time, peak_force)
             carry[E1_PREV], carry[GROUND_NEXT] = e1_prev, ag_next
             carry[REPLAYED], carry[PENDING], carry[HISTORY_NEXT] = replayed, pending, h_next
             carry[SEED_HIGH], carry[SEED_LOW] = high, low
@@ -742,9 +702,6 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
         for b in range(nb):
             state_x[b] = x[b]
             state_v[b] = v[b]
-        out[INPUT] = work
-        out[PRIMARY_DISS] = d_primary
-        out[ABSORBER_DISS] = d_absorber
         e_integral = 0.0
         if inside and i0 < n_steps:  # (the window's last state at half weight)
             e_integral = (e_sum - 0.5 * e1_prev) * dt
@@ -752,12 +709,7 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
                 x2_integral[k] = (x2_integral[k] - 0.5 * x[k] * x[k]) * dt
                 if not sra:  # peak absolute acceleration: the peak floor force over the mass
                     acc_max[k] *= inv_mass[k]
-        out[ENERGY_INT] = e_integral
-        out[E1_MAX] = e1_max
-        out[IMPACT_LOSS] = loss_sum
-        out[IMPACTS] = n_left + n_right
-        out[IMPACTS_LEFT] = n_left
-        out[IMPACTS_RIGHT] = n_right
+        write_accounts(out, work, d_primary, d_absorber, e_integral, e1_max, loss_sum, n_left, n_right)
         if has_hertz:
             out[CONTACT_TIME] = contact_time
             out[PEAK_FORCE] = peak_force
