@@ -9,8 +9,9 @@ peak; in registers through the run, written to the metric vector once at the end
 work of each half kick's impulses at the kick's mean velocity (``impulse_work``, ``momentum``,
 ``structure_dissipation``, ``absorber_dissipation``: the change of kinetic energy equals the
 impulses' work exactly), the SRA3 step its stages' weighted impulses at the step's mean
-velocity (``sra3.sra3_step``), the RK4 loop the rates (``load_power``, ``absorber_power``,
-``physics.structure_power``) integrated as extra states by its stages (``rk4.rk4_step``).
+velocity (``sra3.sra3_step``), the RK4 loop the rates of these (``rk4.accelerations``: written
+out there, as an inlined helper of their own they cost 28 % of its speed) integrated as extra
+states by its stages (``rk4.rk4_step``).
 """
 
 from __future__ import annotations
@@ -80,29 +81,6 @@ def impulse_work(load, s, dws, v, vn) -> float:
         term = (load[k] * s + dws[k]) * (0.5 * (v[k] + vn[k]))
         w = term if k == 0 else w + term  # (see ``structure_dissipation``)
     return w
-
-
-@njit(**INLINE)
-def load_power(load, v, ag: float, mass) -> float:
-    """Power of the floors' loads ``load`` and of the ground acceleration ``ag`` (on every
-    body) at the velocities ``v``."""
-    power = 0.0
-    for k in range(load.shape[0]):
-        power += load[k] * v[k]
-    if ag != 0.0:
-        for b in range(v.shape[0]):
-            power -= ag * mass[b] * v[b]
-    return power
-
-
-@njit(**INLINE)
-def absorber_power(v, nf: int, host, rows) -> float:
-    """Power the absorbers' dashpots take at the velocities ``v``."""
-    power = 0.0
-    for a in range(v.shape[0] - nf):
-        w = v[nf + a] - v[host_of(host, a, nf)]
-        power += rows[a, DAMPING] * w * w
-    return power
 
 
 @njit(**INLINE)

@@ -15,35 +15,38 @@ from __future__ import annotations
 from numba import njit
 
 from ..jit.flags import INLINE
-from ..physics.absorbers import CLEARANCE, HERTZ, IMPACT, WALL_HI, WALL_LO
+from ..physics.absorbers import HERTZ, IMPACT
 
 #: Event kinds: none, an impact on a wall, a contact's onset, a contact's end.
 NONE, IMPACT_EVENT, ONSET, EXIT = 0, 1, 2, 3
 
 
 @njit(**INLINE)
-def event_ahead(kind, stuck, touching, rows, a: int, u: float, impacts: bool, room: bool, contact: bool):
-    """``(event, side, wall)``: the event absorber ``a`` has passed when its displacement
-    relative to its host floor is ``u`` (``NONE``, side 0: none).  An impact absorber not stuck
-    (``stuck[a] == 0``) outside its clearance has hit the wall on that side; a Hertz absorber
-    touching nothing (``touching[a] == 0``) beyond a contact surface has touched it, one in
-    contact on side ``touching[a]`` back inside has left it.  ``impacts``, ``contact``: the scene
-    has impact, Hertz absorbers (compile-time flags); ``room``: the step may resolve another
-    impact."""
+def event_ahead(kind: int, stuck: int, touching: int, clearance: float, wall_lo: float, wall_hi: float,
+                u: float, impacts: bool, room: bool, contact: bool):
+    """``(event, side, wall)``: the event an absorber (law code ``kind``; its row's clearance
+    and contact surfaces ``wall_lo``, ``wall_hi``: ``physics.absorbers``) has passed when its
+    displacement relative to its host floor is ``u`` (``NONE``, side 0: none).  An impact
+    absorber not stuck (``stuck == 0``) outside its clearance has hit the wall on that side; a
+    Hertz absorber touching nothing (``touching == 0``) beyond a contact surface has touched it,
+    one in contact on side ``touching`` back inside has left it.  ``impacts``, ``contact``: the
+    scene has impact, Hertz absorbers (compile-time flags); ``room``: the step may resolve
+    another impact.  (Values, not the loops' arrays: an inlined function given heap arrays
+    inside its branches costs reference counting at every call, see ``jit.flags.INLINE``.)"""
     event, side, wall = NONE, 0, 0.0
-    if impacts and kind[a] == IMPACT and stuck[a] == 0 and room:
-        if abs(u) > rows[a, CLEARANCE]:
+    if impacts and kind == IMPACT and stuck == 0 and room:
+        if abs(u) > clearance:
             side = 1 if u > 0.0 else -1
-            event, wall = IMPACT_EVENT, side * rows[a, CLEARANCE]
-    elif contact and kind[a] == HERTZ:
-        if touching[a] == 0 and u < rows[a, WALL_LO]:
-            event, side, wall = ONSET, -1, rows[a, WALL_LO]
-        elif touching[a] == 0 and u > rows[a, WALL_HI]:
-            event, side, wall = ONSET, 1, rows[a, WALL_HI]
-        elif touching[a] < 0 and u > rows[a, WALL_LO]:
-            event, side, wall = EXIT, -1, rows[a, WALL_LO]
-        elif touching[a] > 0 and u < rows[a, WALL_HI]:
-            event, side, wall = EXIT, 1, rows[a, WALL_HI]
+            event, wall = IMPACT_EVENT, side * clearance
+    elif contact and kind == HERTZ:
+        if touching == 0 and u < wall_lo:
+            event, side, wall = ONSET, -1, wall_lo
+        elif touching == 0 and u > wall_hi:
+            event, side, wall = ONSET, 1, wall_hi
+        elif touching < 0 and u > wall_lo:
+            event, side, wall = EXIT, -1, wall_lo
+        elif touching > 0 and u < wall_hi:
+            event, side, wall = EXIT, 1, wall_hi
     return event, side, wall
 
 

@@ -56,7 +56,7 @@ from ..outputs import (
     STATUS,
     STATUS_DIVERGED,
 )
-from ..physics.absorbers import HERTZ, RESTITUTION, WALL_HI, WALL_LO
+from ..physics.absorbers import CLEARANCE, HERTZ, RESTITUTION, WALL_HI, WALL_LO
 from ..physics.hertz import contact_energy, contact_force_law
 from ..physics.structure import host_of, primary_energy
 from .brownian import MEMO, path_value
@@ -567,8 +567,9 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
                             h = host_of(host, a, nf)
                             j = nf + a
                             u_end = x[j] - x[h] + s * (vn[j] - vn[h])
-                            event, sa, wall = event_ahead(kind, stuck, touching, rows, a, u_end, has_impact,
-                                                          n_impacts < MAX_EVENTS, has_hertz)
+                            event, sa, wall = event_ahead(kind[a], stuck[a], touching[a], rows[a, CLEARANCE],
+                                                          rows[a, WALL_LO], rows[a, WALL_HI], u_end,
+                                                          has_impact, n_impacts < MAX_EVENTS, has_hertz)
                             if event != NONE:
                                 sq = gap_sign(event, sa)
                                 sc = crossing(x, v, s, left, path, dw, off, w_at, sigma, normals, slot, memo,

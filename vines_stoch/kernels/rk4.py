@@ -32,7 +32,7 @@ from ..outputs import (
     STATUS,
     STATUS_DIVERGED,
 )
-from ..physics.absorbers import RESTITUTION
+from ..physics.absorbers import CLEARANCE, DAMPING, RESTITUTION, WALL_HI, WALL_LO
 from ..physics.structure import host_of, primary_energy, structure_power
 from .carry import (
     HISTORY_NEXT,
@@ -68,7 +68,7 @@ from .common import (
     stored_energy,
     write_floor_metrics,
 )
-from .energy import absorber_power, load_power, write_accounts
+from .energy import write_accounts
 from .events import EXIT, IMPACT_EVENT, NONE, ONSET, event_ahead, gap_sign
 from .loads import applied, has_breaks, next_break
 
@@ -93,9 +93,18 @@ def accelerations(x, v, t, tm, nf, mass, inv_mass, storey_k, storey_c, floor_c, 
     contact_forces(x, nf, kind, host, rows, acc, contact)
     ag = applied(t, tm, forces, series_t, series_v, series_ptr, series_target, series_t, False, load)
     accelerate(acc, load, ag, inv_mass, acc)
-    power = load_power(load, v, ag, mass)
+    power = 0.0
+    for k in range(nf):
+        power += load[k] * v[k]
+    if ag != 0.0:
+        for b in range(v.shape[0]):
+            power -= ag * mass[b] * v[b]
     stick_together(mass, acc, nf, stuck, host, group_mass, group_sum, release, sticking)
-    return (power, structure_power(v, nf, storey_c, floor_c), absorber_power(v, nf, host, rows),
+    absorber_power = 0.0
+    for a in range(x.shape[0] - nf):
+        w = v[nf + a] - v[host_of(host, a, nf)]
+        absorber_power += rows[a, DAMPING] * w * w
+    return (power, structure_power(v, nf, storey_c, floor_c), absorber_power,
             primary_energy(mass, storey_k, x, v, nf), ag)
 
 
@@ -191,7 +200,8 @@ def next_event(x, xn, h, nf, kind, host, rows, stuck, touching):
         hf = host_of(host, a, nf)
         u0 = x[j] - x[hf]
         u1 = xn[j] - xn[hf]
-        event, side, wall = event_ahead(kind, stuck, touching, rows, a, u1, True, True, True)
+        event, side, wall = event_ahead(kind[a], stuck[a], touching[a], rows[a, CLEARANCE], rows[a, WALL_LO],
+                                        rows[a, WALL_HI], u1, True, True, True)
         if event != NONE:
             sign = gap_sign(event, side)
             g0 = sign * (u0 - wall)
