@@ -45,10 +45,11 @@ def kernel_for(scene, gpu: bool = False):
     """The compiled loop for a scene's scheme (``schemes.SCHEMES``) and structure (``gpu``: the
     loop the cuda backend compiles, ``kdk.kdk_kernel``)."""
     nb, nf = scene.mass.shape[0], scene.n_floors
-    if SCHEMES[scene.scheme].kernel == "rk4":
+    scheme = SCHEMES[scene.scheme]
+    if scheme.kernel == "rk4":
         return rk4_kernel(nb, nf, scene.has_impact, scene.has_hertz, gpu)
     return kdk_kernel(nb, nf, scene.forces.shape[0], scene.has_white_noise, scene.has_impact, scene.has_hertz,
-                      scene.has_filters, scene.has_ground, scene.scheme == "sra", gpu)
+                      scene.has_filters, scene.has_ground, scheme.step == "sra3", gpu)
 
 
 def sample_buffer(scene) -> np.ndarray:
