@@ -268,7 +268,7 @@ def rk4_kernel(n_bodies: int, n_floors: int, has_impact: bool, has_hertz: bool, 
              peak_force) = restore_accounts(carry)
             next_sample, pending = int(carry[NEXT_SAMPLE]), int(carry[PENDING])
             h_next = int(carry[HISTORY_NEXT])
-            restore_floors(carry, x_max, drift_max, acc_max, x2_integral, load)
+            restore_floors(carry, x_max, drift_max, acc_max, x2_integral, load)  # (``load``: scratch here)
             restore_absorbers(carry, nf, stuck, touching, owed)
         else:
             next_sample = 0
