@@ -18,7 +18,8 @@ class Scheme:
     (None: not for noise); ``stability``: the largest ``omega dt`` at which it is stable on an
     undamped linear oscillator; ``noise``, ``impacts``, ``hertz``, ``filters``: what a scene
     may contain; ``normals``: standard normals a step draws per noisy floor; ``kernel``: the
-    step loop that runs it (``kernels/<kernel>.py``); ``source``: where it comes from.
+    step loop that runs it (``kernels/<kernel>.py``); ``step``: the step that loop takes
+    (``kernels/<step>.py``); ``source``: where it comes from.
     """
 
     name: str
@@ -32,13 +33,14 @@ class Scheme:
     filters: bool
     normals: int
     kernel: str
+    step: str
     source: str
 
 
 SCHEMES: dict[str, Scheme] = {
     s.name: s for s in (
         Scheme("euler-maruyama", order=2, strong_order=1.0, weak_order=1.0, stability=2.0,
-               noise=True, impacts=True, hertz=True, filters=True, normals=1, kernel="kdk",
+               noise=True, impacts=True, hertz=True, filters=True, normals=1, kernel="kdk", step="kdk",
                source="Euler-Maruyama for additive noise (Kloeden and Platen, Numerical Solution of "
                       "Stochastic Differential Equations, Springer 1992, section 10.2) in kick-drift-kick "
                       "form (velocity Verlet: Swope, Andersen, Berens and Wilson, J. Chem. Phys. 76 (1982) "
@@ -46,10 +48,10 @@ SCHEMES: dict[str, Scheme] = {
                       "Hertz contact sub-stepped, both on a virtual Brownian tree (kernels/kdk.py, "
                       "kernels/brownian.py)"),
         Scheme("sra", order=3, strong_order=1.5, weak_order=2.0, stability=math.sqrt(3.0), noise=True,
-               impacts=False, hertz=False, filters=False, normals=2, kernel="kdk",
+               impacts=False, hertz=False, filters=False, normals=2, kernel="kdk", step="sra3",
                source="SRA3, Roessler (2010), SIAM J. Numer. Anal. 48(3) 922-952, doi:10.1137/09076636X"),
         Scheme("rk4", order=4, strong_order=None, weak_order=None, stability=2.0 * math.sqrt(2.0),
-               noise=False, impacts=True, hertz=True, filters=False, normals=0, kernel="rk4",
+               noise=False, impacts=True, hertz=True, filters=False, normals=0, kernel="rk4", step="rk4",
                source="classical Runge-Kutta (Kutta 1901; Hairer, Norsett and Wanner, Solving Ordinary "
                       "Differential Equations I, 2nd ed., Springer 1993, section II.1) with located impacts "
                       "and sub-stepped Hertz contact (kernels/rk4.py)"),

@@ -5,10 +5,14 @@ compiled once.
 (``common.SLOTS``, then the per-floor blocks of ``common.FLOOR_SLOTS``).  Kernels are
 memoised by scene structure (the numbers of bodies and floors included); the parameters are
 arguments, so a sweep of parameters never recompiles.  Every kernel takes the same bundles
-(``bundles``): bodies, absorbers, loads, filters, noise, grid, outputs and streams.
+(``bundles``, the named tuples of ``kernels/bundles.py``): bodies, absorbers, loads, filters,
+noise, grid, outputs and the three streams.
 """
 
 from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -16,6 +20,8 @@ from ..jit.cache import compile_once
 from ..outputs import POINCARE_SAMPLES, SLOTS, new_metrics
 from ..schemes import SCHEMES
 from ..streams import Streams
+from .bundles import Absorbers, Bodies, Filters, Grid, Loads, Noise, Outputs
+from .carry import new_carry
 from .kdk import kdk_kernel
 from .loads import load_path, stationary_start
 from .rk4 import rk4_kernel
@@ -29,6 +35,8 @@ _UNDRAWN = np.random.default_rng(0)
 #: the same loop (the same argument types: one compilation) on the CPU and on the simulator.
 _UNUSED = np.zeros(STREAM_WORDS, np.uint64)
 _NO_HISTORY = np.zeros((0, 2))
+#: The carry of a path run in one go: none kept.
+_NO_CARRY = np.zeros(0)
 #: The loops this process has run (``cache.compile_once`` saw them first).
 _STARTED: set = set()
 
@@ -37,10 +45,11 @@ def kernel_for(scene, gpu: bool = False):
     """The compiled loop for a scene's scheme (``schemes.SCHEMES``) and structure (``gpu``: the
     loop the cuda backend compiles, ``kdk.kdk_kernel``)."""
     nb, nf = scene.mass.shape[0], scene.n_floors
-    if SCHEMES[scene.scheme].kernel == "rk4":
+    scheme = SCHEMES[scene.scheme]
+    if scheme.kernel == "rk4":
         return rk4_kernel(nb, nf, scene.has_impact, scene.has_hertz, gpu, scene.has_geometric)
     return kdk_kernel(nb, nf, scene.forces.shape[0], scene.has_white_noise, scene.has_impact, scene.has_hertz,
-                      scene.has_filters, scene.has_ground, scene.scheme == "sra", gpu, scene.has_geometric)
+                      scene.has_filters, scene.has_ground, scheme.step == "sra3", gpu, scene.has_geometric)
 
 
 def sample_buffer(scene) -> np.ndarray:
@@ -50,7 +59,7 @@ def sample_buffer(scene) -> np.ndarray:
     return np.full((POINCARE_SAMPLES, 2 * scene.mass.shape[0] + 2), np.nan)
 
 
-def filter_tuple(scene, generator: np.random.Generator | np.ndarray | None) -> tuple:
+def filter_tuple(scene, generator: np.random.Generator | np.ndarray | None) -> Filters:
     """The kernels' filter arrays with the initial filter state: zero (from rest) or a draw
     from the stationary law (``p0`` is the root of its covariance) from ``generator`` (the
     filter stream: a numpy Generator, or a Philox stream as on the GPU, ``loads.stationary_start``);
@@ -61,7 +70,8 @@ def filter_tuple(scene, generator: np.random.Generator | np.ndarray | None) -> t
         stationary_start(f["p0"], generator, z, np.zeros(z.shape[0]))
     elif z.shape[0] and f["p0"].any():
         z = f["p0"] @ generator.standard_normal(z.shape[0])
-    return f["phi"], f["chol"], f["envelope"], f["c_force"], f["c_ground"], z, z.copy(), np.zeros(z.shape[0])
+    return Filters(phi=f["phi"], chol=f["chol"], envelope=f["envelope"], c_force=f["c_force"],
+                   c_ground=f["c_ground"], z=z, zn=z.copy(), draws=np.zeros(z.shape[0]))
 
 
 def needed_streams(scene, replay: bool = False) -> tuple[bool, bool, bool]:
@@ -98,23 +108,119 @@ def _streams_for(scene, replay: bool, streams: Streams | np.random.Generator | N
     return tuple(gens)
 
 
-def bundles(scene, x: np.ndarray, v: np.ndarray, fl: tuple, normals: np.ndarray, out: np.ndarray,
-            samples: np.ndarray, history: np.ndarray, stride: int, gens: tuple, refine: int = 1) -> tuple:
-    """The kernels' arguments as named bundles: bodies (masses, storey stiffnesses and dashpots,
-    mass-proportional dashpots, state), absorbers (kinds, hosts, rows), loads, filters, noise
-    (intensity per floor, replayed normals, replayed fine steps a step), grid, outputs (with the
-    limits whose first passages the metric vector records); then the three generators of
-    ``gens`` (increments, bridge, filter) as arguments of their own (see ``kdk.kdk_kernel``)."""
+def loads_of(scene) -> Loads:
+    """A scene's loads bundle (``kernels/loads.py``)."""
+    return Loads(forces=scene.forces, series_t=scene.series_t, series_v=scene.series_v,
+                 series_ptr=scene.series_ptr, series_target=scene.series_target)
+
+
+def bundles(scene, x: np.ndarray, v: np.ndarray, fl: Filters, normals: np.ndarray, out: np.ndarray,
+            samples: np.ndarray, history: np.ndarray, stride: int, gens: tuple, refine: int = 1,
+            carry: np.ndarray = _NO_CARRY) -> tuple:
+    """The kernels' arguments (``kernels/bundles.py``): bodies (masses, storey stiffnesses and
+    dashpots, mass-proportional dashpots, state), absorbers (kinds, hosts, rows), loads, filters,
+    noise (intensity per floor, replayed normals, replayed fine steps a step), grid, outputs
+    (with the limits whose first passages the metric vector records, and the ``carry`` of a
+    path run in stretches: ``kernels/carry.py``); then the three generators of ``gens``
+    (increments, bridge, filter) as arguments of their own (see ``kdk.kdk_kernel``).  The grid
+    runs the whole path from its start."""
     return (
-        (scene.mass, scene.storey_k, scene.storey_c, scene.floor_c, x, v),
-        (scene.kind, scene.host, scene.rows),
-        scene.excitation,
+        Bodies(mass=scene.mass, storey_k=scene.storey_k, storey_c=scene.storey_c, floor_c=scene.floor_c,
+               x=x, v=v),
+        Absorbers(kind=scene.kind, host=scene.host, rows=scene.rows),
+        loads_of(scene),
         fl,
-        (scene.sigma, normals, refine),
-        (scene.dt, scene.n_steps, scene.i0, scene.period, scene.sample_from, stride),
-        (out, samples, history, scene.limits),
+        Noise(sigma=scene.sigma, normals=normals, refine=refine),
+        Grid(dt=scene.dt, n_steps=scene.n_steps, i0=scene.i0, period=scene.period,
+             sample_from=scene.sample_from, stride=stride, first=0),
+        Outputs(out=out, samples=samples, history=history, limits=scene.limits, carry=carry),
         *gens,
     )
+
+
+@dataclass
+class Path:
+    """A realisation run in stretches of steps (``start_path``, ``advance``): its step loop,
+    the loop's arguments (``bundles``: the state, the metric vector, the carry and the
+    generators, each stretch continuing where the last one stopped) and the step reached."""
+
+    kernel: Any
+    args: tuple
+    step: int = 0
+
+    @property
+    def x(self) -> np.ndarray:
+        """The bodies' positions at ``step``."""
+        return self.args[0].x
+
+    @property
+    def v(self) -> np.ndarray:
+        """The bodies' velocities at ``step``."""
+        return self.args[0].v
+
+    @property
+    def out(self) -> np.ndarray:
+        """The raw metric vector (``SLOTS``) of the steps run so far."""
+        return self.args[6].out
+
+    @property
+    def t(self) -> float:
+        """The time reached, ``step dt``."""
+        return self.step * self.args[5].dt
+
+
+def start_path(scene, streams: Streams | np.random.Generator | None = None, *,
+               normals: np.ndarray | None = None, samples: np.ndarray | None = None,
+               history: np.ndarray | None = None, stride: int = 1, refine: int = 1,
+               stretches: bool = True) -> Path:
+    """A realisation of ``scene`` at its start (step 0, the scene's initial state), to be run
+    by ``advance``; the arguments are those of ``simulate``.  With ``stretches`` the loop keeps
+    its carry (``kernels/carry.py``), so that the path may be run in several stretches."""
+    out = new_metrics(scene.n_floors, scene.limits.shape[0])
+    x, v = scene.x0.copy(), scene.v0.copy()
+    if samples is None:
+        samples = sample_buffer(scene)
+    replay = normals is not None
+    needed = scene.n_steps * SCHEMES[scene.scheme].normals * max(scene.noisy_floors, 1) * refine
+    if refine < 1 or (refine > 1 and (not replay or scene.scheme != "euler-maruyama")):
+        raise ValueError(f"refine: {refine} fine steps a step; must be >= 1, and more than 1 only with "
+                         "replayed normals and the euler-maruyama scheme")
+    if replay and normals.shape[0] < needed:
+        raise ValueError(f"normals: need {needed} values, got {normals.shape[0]}")
+    if replay and scene.has_filters:
+        raise ValueError("normals: a replayed Brownian path drives white noise only, not filtered loads")
+    gens = _streams_for(scene, replay, streams)
+    fl = filter_tuple(scene, gens[2])
+    carry = (new_carry(scene.n_floors, scene.kind.shape[0], scene.forces.shape[0]) if stretches
+             else _NO_CARRY)
+    args = bundles(scene, x, v, fl, normals if replay else _NO_NORMALS, out, samples,
+                   _NO_HISTORY if history is None else history, stride, gens, refine, carry)
+    return Path(kernel_for(scene), args)
+
+
+def advance(path: Path, stop: int) -> Path:
+    """Run ``path`` from the step it has reached to step ``stop`` (at most the scene's step
+    count), in place; returns it.  Its state, metric vector, history rows, Poincare samples and
+    generators continue where the last stretch stopped, so a path run in stretches ends in the
+    state and with the metrics of the path run in one go, bitwise (``tests/unit/kernels/
+    test_stretches.py``); the metric vector after a stretch holds the metrics of the steps so
+    far, as if the path ended there."""
+    grid = path.args[5]
+    if not path.step <= stop <= grid.n_steps:
+        raise ValueError(f"advance: stop {stop} must lie between the step reached ({path.step}) and the "
+                         f"scene's step count ({grid.n_steps})")
+    if path.step > 0 and path.args[6].carry.shape[0] == 0:
+        raise ValueError("advance: this path keeps no carry (start_path(..., stretches=False)); it runs in "
+                         "one stretch only")
+    if stop == path.step and stop > 0:  # (a path of no steps still writes its metrics)
+        return path
+    args = (*path.args[:5], grid._replace(n_steps=stop, first=path.step), *path.args[6:])
+    if path.kernel not in _STARTED:  # the first run in this process: compiled by one process at a time
+        compile_once(path.kernel, args)
+        _STARTED.add(path.kernel)
+    path.kernel(*args)
+    path.step = stop
+    return path
 
 
 def simulate(scene, streams: Streams | np.random.Generator | None = None, *,
@@ -135,33 +241,15 @@ def simulate(scene, streams: Streams | np.random.Generator | None = None, *,
     ``samples`` (from ``sample_buffer``) receives the Poincare
     samples of periodic scenes; ``history`` (shape ``(G, 2)`` or ``(G, 2 + n_floors)``)
     receives the roof's ``x``, ``E1`` (and every floor's ``x``) at ``t = j stride dt``,
-    ``j < G`` (rows after a divergence keep their previous content).
+    ``j < G`` (rows after a divergence keep their previous content).  (A path run in
+    stretches: ``start_path``, ``advance``.)
     """
-    out = new_metrics(scene.n_floors, scene.limits.shape[0])
-    x, v = scene.x0.copy(), scene.v0.copy()
-    if samples is None:
-        samples = sample_buffer(scene)
-    replay = normals is not None
-    needed = scene.n_steps * SCHEMES[scene.scheme].normals * max(scene.noisy_floors, 1) * refine
-    if refine < 1 or (refine > 1 and (not replay or scene.scheme != "euler-maruyama")):
-        raise ValueError(f"refine: {refine} fine steps a step; must be >= 1, and more than 1 only with "
-                         "replayed normals and the euler-maruyama scheme")
-    if replay and normals.shape[0] < needed:
-        raise ValueError(f"normals: need {needed} values, got {normals.shape[0]}")
-    if replay and scene.has_filters:
-        raise ValueError("normals: a replayed Brownian path drives white noise only, not filtered loads")
-    gens = _streams_for(scene, replay, streams)
-    fl = filter_tuple(scene, gens[2])
-    kernel = kernel_for(scene)
-    args = bundles(scene, x, v, fl, normals if replay else _NO_NORMALS, out, samples,
-                   _NO_HISTORY if history is None else history, stride, gens, refine)
-    if kernel not in _STARTED:  # the first run in this process: compiled by one process at a time
-        compile_once(kernel, args)
-        _STARTED.add(kernel)
-    kernel(*args)
+    path = start_path(scene, streams, normals=normals, samples=samples, history=history, stride=stride,
+                      refine=refine, stretches=False)
+    advance(path, scene.n_steps)
     if final is not None:
-        final[0], final[1] = x, v
-    return out
+        final[0], final[1] = path.x, path.v
+    return path.out
 
 
 def load_history(
@@ -180,8 +268,9 @@ def load_history(
     gen = streams if isinstance(streams, (np.random.Generator, np.ndarray)) else streams.filter
     if gen is None:
         gen = np.random.default_rng(0)  # a scene without filters draws nothing
-    load_path(scene.excitation, filter_tuple(scene, gen), scene.dt, n, gen, force, ground)
+    load_path(loads_of(scene), filter_tuple(scene, gen), scene.dt, n, gen, force, ground)
     return scene.dt * np.arange(n + 1), force, ground
 
 
-__all__ = ["SLOTS", "bundles", "kernel_for", "load_history", "sample_buffer", "simulate"]
+__all__ = ["SLOTS", "Path", "advance", "bundles", "kernel_for", "load_history", "sample_buffer", "simulate",
+           "start_path"]

@@ -157,47 +157,6 @@ def stored_energy(x, v, mass, nf: int, storey_k, kind, host, rows) -> float:
 
 
 @njit(**INLINE)
-def momentum(mass, v, vn) -> float:
-    """Total momentum at the mean of two velocity vectors (work of the ground acceleration)."""
-    p = 0.0
-    for b in range(v.shape[0]):
-        p += mass[b] * 0.5 * (v[b] + vn[b])
-    return p
-
-
-
-
-@njit(**INLINE)
-def structure_dissipation(v, vn, nf: int, storey_c, floor_c, s: float) -> float:
-    """Energy the structure's dashpots take in a half kick of length ``s``: their forces at the
-    velocities ``v`` times the mean of ``v`` and ``vn`` (see ``kdk``)."""
-    d = 0.0
-    for k in range(nf):
-        dv = v[k] - v[k - 1] if k > 0 else v[k]
-        dvn = vn[k] - vn[k - 1] if k > 0 else vn[k]
-        term = storey_c[k] * dv * 0.5 * s * (0.5 * (dv + dvn))
-        if nf > 1:
-            term += floor_c[k] * v[k] * 0.5 * s * (0.5 * (v[k] + vn[k]))
-        # the first term starts the sum: ``0.0 + term`` cannot be folded under IEEE rules, and
-        # these sums cost about 5 % of a smooth scene's step that way
-        d = term if k == 0 else d + term
-    return d
-
-
-@njit(**INLINE)
-def absorber_dissipation(v, vn, nf: int, host, rows, s: float) -> float:
-    """Energy the absorbers' dashpots take in a half kick of length ``s`` (see
-    ``structure_dissipation``)."""
-    d = 0.0
-    for a in range(v.shape[0] - nf):
-        h = host_of(host, a, nf)
-        w = v[nf + a] - v[h]
-        term = rows[a, DAMPING] * w * 0.5 * s * 0.5 * (w + vn[nf + a] - vn[h])
-        d = term if a == 0 else d + term  # (see ``structure_dissipation``)
-    return d
-
-
-@njit(**INLINE)
 def stick_together(mass, values, nf: int, stuck, host, group_mass, group_sum, release, active=True):
     """Floors and the absorbers stuck to their cavity walls move as one body (MODEL.md section 2).
 

@@ -14,8 +14,9 @@ mass depends on ``dW``: an absorber stuck to its wall and released by the noise.
 
 When the drift would carry an impact absorber through its wall, the step is split at the
 impact: the sub-step of length ``s`` that lands exactly on the wall is found by a bracketed
-root search (``crossing``).  The Newton map (``common.resolve_impact``) acts at the end of that
-sub-step, and the rest of the step continues from the post-impact state.  (Applying the
+root search (``crossing``; which event a sub-step meets: ``events.event_ahead``).  The Newton
+map (``common.resolve_impact``) acts at the end of that sub-step, and the rest of the step
+continues from the post-impact state.  (Applying the
 impact at a grid state of a symmetric map matters: with a kick-drift map the energy balance
 drifts by ``O(dt)`` per impact.)  Hertz contact is sub-stepped as in ``rk4.py``: its onset and
 its end are located by the same root search, and in between the sub-steps are sized from the
@@ -48,31 +49,38 @@ from numba import njit
 from ..jit.flags import INLINE, KERNEL
 from ..jit.intrinsics import any_set, int_scratch, scratch
 from ..outputs import (
-    ABSORBER_DISS,
     CAPPED,
     CONTACT_TIME,
-    E1_MAX,
-    ENERGY_INT,
     FINAL_ENERGY,
-    IMPACT_LOSS,
-    IMPACTS,
-    IMPACTS_LEFT,
-    IMPACTS_RIGHT,
-    INPUT,
     PEAK_FORCE,
-    PRIMARY_DISS,
     STATUS,
     STATUS_DIVERGED,
 )
-from ..physics.absorbers import CLEARANCE, HERTZ, IMPACT, RESTITUTION, WALL_HI, WALL_LO
+from ..physics.absorbers import CLEARANCE, HERTZ, RESTITUTION, WALL_HI, WALL_LO
 from ..physics.hertz import contact_energy, contact_force_law
 from ..physics.structure import host_of, primary_energy
 from .brownian import MEMO, path_value
+from .carry import (
+    E1_PREV,
+    GROUND_NEXT,
+    HISTORY_NEXT,
+    PENDING,
+    REPLAYED,
+    SEED_HIGH,
+    SEED_LOW,
+    restore_absorbers,
+    restore_accounts,
+    restore_floors,
+    restore_rows,
+    save_absorbers,
+    save_accounts,
+    save_floors,
+    save_rows,
+)
 from .common import (
     CHECK_EVERY,
     MAX_EVENTS,
     MAX_SUBSTEPS,
-    absorber_dissipation,
     attachment_forces,
     block_end,
     contact_force,
@@ -83,16 +91,16 @@ from .common import (
     floor_peaks,
     geometric_forces,
     keep_in_cavities,
-    momentum,
     pin_to_walls,
     record_history,
     resolve_impact,
     start_history,
     stick_together,
     stored_energy,
-    structure_dissipation,
     write_floor_metrics,
 )
+from .energy import absorber_dissipation, impulse_work, momentum, structure_dissipation, write_accounts
+from .events import EXIT, NONE, event_ahead, gap_sign
 from .loads import advance_filters, excitation, has_breaks, phasors, rotations, turn
 from .rng import normal, uniform
 from .sra3 import sra3_step
@@ -115,16 +123,6 @@ def kick(v, s, dws, load, ag, force, inv_mass, vn, ground):
         vn[k] = (v[k] + ((load[k] * s + dws[k]) * inv_mass[k] - base)) + force[k] * (s * inv_mass[k])
     for b in range(nf, vn.shape[0]):
         vn[b] = (v[b] - base) + force[b] * (s * inv_mass[b])
-
-
-@njit(**INLINE)
-def impulse_work(load, s, dws, v, vn) -> float:
-    """Work of the floors' load impulses ``load s + dws`` at the mean of ``v`` and ``vn``."""
-    w = 0.0
-    for k in range(load.shape[0]):
-        term = (load[k] * s + dws[k]) * (0.5 * (v[k] + vn[k]))
-        w = term if k == 0 else w + term  # (see ``common.structure_dissipation``)
-    return w
 
 
 @njit(**INLINE)
@@ -311,9 +309,11 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
     stiffnesses and dashpots, mass-proportional damping, state), ``absorbers`` (kind codes,
     host floors, parameter rows: ``physics.absorbers.LAWS``), ``ex`` and ``fl`` (loads and filters,
     ``kernels/loads.py``), ``noise`` (white-noise intensity per floor, replayed normals),
-    ``grid`` (time grid, metrics window, Poincare and history grids), ``outputs`` (metric
-    vector, Poincare samples, history rows, the limits whose first passages the metric vector
-    records: ``common.first_passages``), then the generators of the step increments, of
+    ``grid`` (time grid, metrics window, Poincare and history grids, the steps from ``first``
+    to ``n_steps`` to run), ``outputs`` (metric vector, Poincare samples, history rows, the
+    limits whose first passages the metric vector records: ``common.first_passages``, the
+    carry: ``kernels/carry.py``, restored where ``first > 0``, saved where it is not empty),
+    then the generators of the step increments, of
     the Brownian trees' seed and of the filter noise (an empty Philox stream where unused;
     three arguments, not a bundle: numba types a tuple holding a Generator in Python, about
     20 us a call).
@@ -354,16 +354,20 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
     def kernel(bodies, absorbers, ex, fl, noise, grid, outputs, gen, gen_bridge, gen_filter):
         nb = NB
         nf = NF
-        mass, storey_k, storey_c, floor_c, state_x, state_v = bodies
-        kind, host, rows = absorbers
-        forces, series_t, series_v, series_ptr, series_target = ex
-        phi, chol, envelopes, c_force, c_ground, z, zn, draws = fl
-        sigma, normals, refine = noise
+        mass, storey_k, storey_c, floor_c = bodies.mass, bodies.storey_k, bodies.storey_c, bodies.floor_c
+        state_x, state_v = bodies.x, bodies.v
+        kind, host, rows = absorbers.kind, absorbers.host, absorbers.rows
+        forces, series_t, series_v, series_ptr, series_target = (ex.forces, ex.series_t, ex.series_v,
+                                                                 ex.series_ptr, ex.series_target)
+        phi, chol, envelopes, c_force, c_ground = fl.phi, fl.chol, fl.envelope, fl.c_force, fl.c_ground
+        z, zn, draws = fl.z, fl.zn, fl.draws
+        sigma, normals, refine = noise.sigma, noise.normals, noise.refine
         replay = normals.shape[0] > 0
         piecewise = has_breaks(ex)  # re-evaluate each step's start on its own piece
         ground = GROUND
-        dt, n_steps, i0, period, sample_from, stride = grid
-        out, samples, history, limits = outputs
+        dt, n_steps, i0, stride, first = grid.dt, grid.n_steps, grid.i0, grid.stride, grid.first
+        out, history, limits, carry = outputs.out, outputs.history, outputs.limits, outputs.carry
+        resume = first > 0  # a later stretch of the path: its state from ``carry``
         na = kind.shape[0]
         nz = z.shape[0]
         # the state (copied back at the end) and the scratch, on the stack (see ``jit.intrinsics.scratch``)
@@ -393,12 +397,16 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
                 noisy += 1
         # the seed of the Brownian trees inside the steps (``brownian``)
         seed = np.uint64(0)
+        high = low = 0.0
         if TREE:
-            high, low = uniform(gen_bridge), uniform(gen_bridge)
+            if resume:
+                high, low = carry[SEED_HIGH], carry[SEED_LOW]
+            else:
+                high, low = uniform(gen_bridge), uniform(gen_bridge)
             seed = (np.uint64(high * 2.0**32) << np.uint64(32)) | np.uint64(low * 2.0**32)
         # the Runge-Kutta stages' scratch, only where they run
         a1, a2, a3, xs, v2, v3 = scratch(NS), scratch(NS), scratch(NS), scratch(NS), scratch(NS), scratch(NS)
-        for r in range(nz):
+        for r in range(nz if not resume else 0):
             zn[r] = z[r]
         # phasors (cos, sin) of the harmonic loads at the step's start and at its midpoint, and
         # their turns in a step and in half a step; on the stack (heap arrays passed to the
@@ -412,14 +420,10 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
             stuck, touching = int_scratch(NA), int_scratch(NA)
         else:
             stuck, touching = np.zeros(na, np.int64), np.zeros(na, np.int64)
-        if has_hertz:
+        if has_hertz and not resume:
             contact_sides(x, nf, kind, host, rows, touching)
         # per absorber: a contact's balance over a sub-step and what it owes (``contact_closing``)
         held, owed = scratch(NA), scratch(NA)
-        e1_prev = primary_energy(mass, storey_k, x, v, nf)
-        h_next = start_history(history, stride, x, nf, e1_prev)
-        ag_next = excitation(0.0, 0.5 * dt, 0.0, forces, series_t, series_v, series_ptr, series_target,
-                             filtered, c_force, c_ground, z, zn, pc, False, ground, load_next)
         # accumulators in registers; written to ``out`` once at the end
         # (the trapezoid integrals of E1 and x_k^2 as plain sums of the step ends' values, the
         # window's ends at half weight: one add a step each)
@@ -427,8 +431,21 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
         loss_sum = n_left = n_right = contact_time = peak_force = 0.0
         replayed = 0
         pending = limits.shape[0]  # limits not passed yet
-        i = 0
-        inside = i0 == 0
+        if resume:
+            (work, d_primary, d_absorber, e_sum, e1_max, loss_sum, n_left, n_right, contact_time,
+             peak_force) = restore_accounts(carry)
+            e1_prev, ag_next = carry[E1_PREV], carry[GROUND_NEXT]
+            replayed, pending, h_next = int(carry[REPLAYED]), int(carry[PENDING]), int(carry[HISTORY_NEXT])
+            restore_floors(carry, x_max, drift_max, acc_max, x2_integral, load_next)
+            restore_absorbers(carry, nf, stuck, touching, owed)
+            restore_rows(carry, nf, na, pc, ps)
+        else:
+            e1_prev = primary_energy(mass, storey_k, x, v, nf)
+            h_next = start_history(history, stride, x, nf, e1_prev)
+            ag_next = excitation(0.0, 0.5 * dt, 0.0, forces, series_t, series_v, series_ptr, series_target,
+                                 filtered, c_force, c_ground, z, zn, pc, False, ground, load_next)
+        i = first
+        inside = i0 == 0 or i0 < first
         while i < n_steps:
             # rare work between blocks of steps, out of the step loop: the window opening,
             # the divergence check, history rows
@@ -550,31 +567,22 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
                     if has_impact:
                         stick_together(mass, vn, nf, stuck, host, group_mass, group_sum, True)
                     # the first impact, contact onset or contact end in the sub-step
-                    hit, side, s_hit, leaves = -1, 0, s, False
+                    hit, side, s_hit, hit_event, hit_wall = -1, 0, s, NONE, 0.0
                     if search and ((has_impact and n_impacts < MAX_EVENTS) or has_hertz):
                         for a in range(na):
                             h = host_of(host, a, nf)
                             j = nf + a
                             u_end = x[j] - x[h] + s * (vn[j] - vn[h])
-                            sq, wall, exits = 0, 0.0, False
-                            if has_impact and kind[a] == IMPACT and stuck[a] == 0 and n_impacts < MAX_EVENTS:
-                                if abs(u_end) > rows[a, CLEARANCE]:
-                                    sq, wall = (1 if u_end > 0.0 else -1), rows[a, CLEARANCE]
-                            elif has_hertz and kind[a] == HERTZ:
-                                if touching[a] == 0 and u_end < rows[a, WALL_LO]:
-                                    sq, wall = -1, -rows[a, WALL_LO]
-                                elif touching[a] == 0 and u_end > rows[a, WALL_HI]:
-                                    sq, wall = 1, rows[a, WALL_HI]
-                                elif touching[a] < 0 and u_end > rows[a, WALL_LO]:  # the contact ends
-                                    sq, wall, exits = 1, rows[a, WALL_LO], True
-                                elif touching[a] > 0 and u_end < rows[a, WALL_HI]:
-                                    sq, wall, exits = -1, -rows[a, WALL_HI], True
-                            if sq != 0:
+                            event, sa, wall = event_ahead(kind[a], stuck[a], touching[a], rows[a, CLEARANCE],
+                                                          rows[a, WALL_LO], rows[a, WALL_HI], u_end,
+                                                          has_impact, n_impacts < MAX_EVENTS, has_hertz)
+                            if event != NONE:
+                                sq = gap_sign(event, sa)
                                 sc = crossing(x, v, s, left, path, dw, off, w_at, sigma, normals, slot, memo,
-                                              load, ag, force, mass, inv_mass, stuck, host, a, sq, wall, vt,
-                                              dwc, group_mass, group_sum, ground, has_impact, TREE)
+                                              load, ag, force, mass, inv_mass, stuck, host, a, sq, sq * wall,
+                                              vt, dwc, group_mass, group_sum, ground, has_impact, TREE)
                                 if hit < 0 or sc < s_hit:
-                                    hit, side, s_hit, leaves = a, sq, sc, exits
+                                    hit, side, s_hit, hit_event, hit_wall = a, sa, sc, event, wall
                                     for b in range(nb):  # the root search's kick to its root
                                         vh[b] = vt[b]
                                     for k in range(nf):
@@ -641,7 +649,7 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
                     for k in range(nf):
                         w_at[k] += dws[k]
                         load[k] = load_end[k]
-                    if hit >= 0 and not leaves:
+                    if hit >= 0 and hit_event != EXIT:
                         h = host_of(host, hit, nf)
                         j = nf + hit
                         if inside:
@@ -652,11 +660,10 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
                     if has_hertz and hit >= 0 and kind[hit] == HERTZ:  # onto or off the contact surface
                         h = host_of(host, hit, nf)
                         j = nf + hit
-                        x[j] = x[h] + (rows[hit, WALL_LO] if side * (-1 if leaves else 1) < 0
-                                       else rows[hit, WALL_HI])
-                        touching[hit] = 0 if leaves else side
+                        x[j] = x[h] + hit_wall
+                        touching[hit] = 0 if hit_event == EXIT else side
                     elif has_impact and hit >= 0:  # the impact, at t + s
-                        x[j] = x[h] + side * rows[hit, CLEARANCE]
+                        x[j] = x[h] + hit_wall
                         gain = (force[j] / mass[j] - (force[h] + load_end[h]) / mass[h]) * dt
                         # the last impact a step may resolve ends a chatter sequence: inelastic collapse
                         last = n_impacts == MAX_EVENTS - 1
@@ -689,14 +696,20 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
             i = end
             if i == h_next:
                 h_next = record_history(history, stride, h_next, x, nf, e1_prev)
+        if carry.shape[0] > 0:  # the path's state for its next stretch, raw
+            save_accounts(carry, work, d_primary, d_absorber, e_sum, e1_max, loss_sum, n_left, n_right,
+                          contact_time, peak_force)
+            carry[E1_PREV], carry[GROUND_NEXT] = e1_prev, ag_next
+            carry[REPLAYED], carry[PENDING], carry[HISTORY_NEXT] = replayed, pending, h_next
+            carry[SEED_HIGH], carry[SEED_LOW] = high, low
+            save_floors(carry, x_max, drift_max, acc_max, x2_integral, load_next)
+            save_absorbers(carry, nf, stuck, touching, owed)
+            save_rows(carry, nf, na, pc, ps)
         if diverged(x):
             out[STATUS] = STATUS_DIVERGED
         for b in range(nb):
             state_x[b] = x[b]
             state_v[b] = v[b]
-        out[INPUT] = work
-        out[PRIMARY_DISS] = d_primary
-        out[ABSORBER_DISS] = d_absorber
         e_integral = 0.0
         if inside and i0 < n_steps:  # (the window's last state at half weight)
             e_integral = (e_sum - 0.5 * e1_prev) * dt
@@ -704,12 +717,7 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
                 x2_integral[k] = (x2_integral[k] - 0.5 * x[k] * x[k]) * dt
                 if not sra:  # peak absolute acceleration: the peak floor force over the mass
                     acc_max[k] *= inv_mass[k]
-        out[ENERGY_INT] = e_integral
-        out[E1_MAX] = e1_max
-        out[IMPACT_LOSS] = loss_sum
-        out[IMPACTS] = n_left + n_right
-        out[IMPACTS_LEFT] = n_left
-        out[IMPACTS_RIGHT] = n_right
+        write_accounts(out, work, d_primary, d_absorber, e_integral, e1_max, loss_sum, n_left, n_right)
         if has_hertz:
             out[CONTACT_TIME] = contact_time
             out[PEAK_FORCE] = peak_force

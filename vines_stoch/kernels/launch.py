@@ -13,6 +13,7 @@ import numpy as np
 from numba import cuda, float64, njit, uint64
 
 from ..jit.cache import cache_on_disk
+from .bundles import Absorbers, Bodies, Filters, Grid, Loads, Noise, Outputs
 from .loads import stationary_start
 from .rng import STREAM_WORDS, open_stream
 
@@ -28,7 +29,9 @@ def launcher(kernel, n_bodies: int, simulated: bool):
     """The CUDA kernel that runs ``kernel`` (a step loop of ``kernels/``, taking its bundles) for
     one realisation a thread; memoised by loop and body count (its stack arrays' size), and
     cached on disk (``jit.cache.cache_on_disk``; not under the simulator, which compiles
-    nothing)."""
+    nothing).  The arguments are ``gpu.PER_PATH`` (a leading axis: one entry, or one a
+    realisation) and ``gpu.SHARED``, in their order; each thread builds the loop's bundles from
+    its slices, by field name (``kernels/bundles.py``)."""
     NB = n_bodies
     WORDS = STREAM_WORDS
     plain = _plain if simulated else njit(inline="always")(lambda a: a)
@@ -69,14 +72,18 @@ def launcher(kernel, n_bodies: int, simulated: bool):
         z, zn, draws = plain(work[t, 0]), plain(work[t, 1]), plain(work[t, 2])
         f0 = plain(p0[p])
         stationary_start(f0, fil, z, draws)
-        kernel((plain(mass[p]), plain(storey_k[p]), plain(storey_c[p]), plain(floor_c[p]), x, v),
-               (plain(kind), plain(host), plain(rows[p])),
-               (plain(forces[p]), plain(series_t), plain(series_v), plain(series_ptr), plain(series_target)),
-               (plain(phi[p]), plain(chol[p]), plain(envelope[p]), plain(c_force[p]), plain(c_ground[p]),
-                z, zn, draws),
-               (plain(sigma[p]), plain(normals), 1),
-               (dt, n_steps, i0, period, sample_from, stride),
-               (row, own_samples, own_history, plain(limits[p])),
+        kernel(Bodies(mass=plain(mass[p]), storey_k=plain(storey_k[p]), storey_c=plain(storey_c[p]),
+                      floor_c=plain(floor_c[p]), x=x, v=v),
+               Absorbers(kind=plain(kind), host=plain(host), rows=plain(rows[p])),
+               Loads(forces=plain(forces[p]), series_t=plain(series_t), series_v=plain(series_v),
+                     series_ptr=plain(series_ptr), series_target=plain(series_target)),
+               Filters(phi=plain(phi[p]), chol=plain(chol[p]), envelope=plain(envelope[p]),
+                       c_force=plain(c_force[p]), c_ground=plain(c_ground[p]), z=z, zn=zn, draws=draws),
+               Noise(sigma=plain(sigma[p]), normals=plain(normals), refine=1),
+               Grid(dt=dt, n_steps=n_steps, i0=i0, period=period, sample_from=sample_from, stride=stride,
+                    first=0),
+               Outputs(out=row, samples=own_samples, history=own_history, limits=plain(limits[p]),
+                       carry=row[:0]),
                inc, bri, fil)
 
     if not simulated:

@@ -1,7 +1,7 @@
 """Loads evaluated inside the step loops (MODEL.md section 3): no per-step Python.
 
-A scene's time-dependent loads reach a kernel as the tuple
-``ex = (forces, series_t, series_v, series_ptr, series_target)``:
+A scene's time-dependent loads reach a kernel as the bundle
+``ex = Loads(forces, series_t, series_v, series_ptr, series_target)`` (``kernels/bundles.py``):
 
 - ``forces`` rows ``(kind, amplitude, p1, p2, p3, p4, floor)`` of closed-form forces on a
   floor (``HARMONIC``, ``HALF_SINE``, ``PULSE_TRAIN``, ``CHIRP``);
@@ -142,7 +142,7 @@ def applied(t: float, tm: float, forces, series_t, series_v, series_ptr, series_
 @njit(**INLINE)
 def has_breaks(ex) -> bool:
     """True when some load has kinks or jumps inside the run (pulses, half-sines, blasts, records)."""
-    forces, series_t, series_v, series_ptr, series_target = ex
+    forces, series_target = ex.forces, ex.series_target
     for r in range(forces.shape[0]):
         if forces[r, 0] == HALF_SINE or forces[r, 0] == PULSE_TRAIN or forces[r, 0] == BLAST:
             return True
@@ -152,7 +152,7 @@ def has_breaks(ex) -> bool:
 @njit(**INLINE)
 def next_break(t: float, ex) -> float:
     """The first break point of the loads after ``t`` (``inf`` if none)."""
-    forces, series_t, series_v, series_ptr, series_target = ex
+    forces, series_t, series_ptr, series_target = ex.forces, ex.series_t, ex.series_ptr, ex.series_target
     first = np.inf
     for r in range(forces.shape[0]):
         row = forces[r]
@@ -263,8 +263,10 @@ def load_path(ex, fl, dt: float, n_steps: int, gen, force, ground):
     """Force on each floor (``force``, shape ``(n_steps + 1, n_floors)``) and ground
     acceleration at ``t = i dt``, ``i = 0..n_steps``, with the filters advanced exactly as in
     the step loops (``fl`` as the kernels take it; ``gen``: the filter stream)."""
-    phi, chol, envelopes, c_force, c_ground, z, zn, draws = fl
-    forces, series_t, series_v, series_ptr, series_target = ex
+    phi, chol, envelopes, c_force, c_ground, z, zn, draws = (fl.phi, fl.chol, fl.envelope, fl.c_force,
+                                                             fl.c_ground, fl.z, fl.zn, fl.draws)
+    forces, series_t, series_v, series_ptr, series_target = (ex.forces, ex.series_t, ex.series_v,
+                                                             ex.series_ptr, ex.series_target)
     copy_into(zn, z)
     for i in range(n_steps + 1):
         t = i * dt

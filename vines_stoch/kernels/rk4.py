@@ -4,8 +4,8 @@ The energy integrals of MODEL.md section 4 (work of the loads, viscous dissipati
 integrals of ``E1`` and ``x1^2``) are integrated as extra states by the same RK4 stages, so
 the energy balance closes to the scheme's fourth-order error.
 
-Events are located inside a step by Newton iteration on the length of an RK4 sub-step from
-the start of the step (converged to round-off):
+Events (``events.event_ahead``) are located inside a step by Newton iteration on the length
+of an RK4 sub-step from the start of the step (converged to round-off):
 
 - an impact absorber reaching its wall: the Newton map is applied at that instant;
 - a Hertz absorber touching a contact surface: from there the step is cut into sub-steps
@@ -25,24 +25,26 @@ from numba import njit
 from ..jit.flags import INLINE, KERNEL
 from ..jit.intrinsics import any_set, copy_into, int_scratch, pick, put, runtime_value, scratch
 from ..outputs import (
-    ABSORBER_DISS,
     CAPPED,
     CONTACT_TIME,
-    E1_MAX,
-    ENERGY_INT,
     FINAL_ENERGY,
-    IMPACT_LOSS,
-    IMPACTS,
-    IMPACTS_LEFT,
-    IMPACTS_RIGHT,
-    INPUT,
     PEAK_FORCE,
-    PRIMARY_DISS,
     STATUS,
     STATUS_DIVERGED,
 )
-from ..physics.absorbers import CLEARANCE, DAMPING, HERTZ, IMPACT, RESTITUTION, WALL_HI, WALL_LO
+from ..physics.absorbers import CLEARANCE, DAMPING, RESTITUTION, WALL_HI, WALL_LO
 from ..physics.structure import host_of, primary_energy, structure_power
+from .carry import (
+    HISTORY_NEXT,
+    NEXT_SAMPLE,
+    PENDING,
+    restore_absorbers,
+    restore_accounts,
+    restore_floors,
+    save_absorbers,
+    save_accounts,
+    save_floors,
+)
 from .common import (
     CHECK_EVERY,
     MAX_EVENTS,
@@ -67,6 +69,8 @@ from .common import (
     stored_energy,
     write_floor_metrics,
 )
+from .energy import write_accounts
+from .events import EXIT, IMPACT_EVENT, NONE, ONSET, event_ahead, gap_sign
 from .loads import applied, has_breaks, next_break
 
 NEWTON_ITERATIONS = 12
@@ -74,8 +78,6 @@ NEWTON_ITERATIONS = 12
 #: absorbers in contact), geometric attachments (a compile-time constant of the loop:
 #: ``common.geometric_forces``).  One argument for both: ``rk4_step`` has numba's 30.
 HERTZ_FORCES, GEOMETRIC_FORCES = 1, 2
-#: Event kinds.
-NONE, IMPACT_EVENT, ONSET, EXIT = 0, 1, 2, 3
 
 
 @njit(**INLINE)
@@ -194,49 +196,27 @@ def rk4_step(x, v, t, h, xo, vo, acc, xs, vs, x2, a0, mass, inv_mass, storey_k, 
 
 
 @njit(**KERNEL)
-def event_geometry(kind_of_event, a, side, nf, host, rows):
-    """Absorber body ``j``, its host floor, sign and wall of an event's gap
-    ``g = sign * (x_j - x_host - wall)``, which crosses zero upwards when the event happens."""
-    h = host_of(host, a, nf)
-    if kind_of_event == IMPACT_EVENT:
-        return nf + a, h, side, side * rows[a, CLEARANCE]
-    wall = rows[a, WALL_LO] if side < 0 else rows[a, WALL_HI]
-    return nf + a, h, (side if kind_of_event == ONSET else -side), wall
-
-
-@njit(**KERNEL)
 def next_event(x, xn, h, nf, kind, host, rows, stuck, touching):
-    """The first event of a step ``x -> xn`` of length ``h``: an impact absorber crossing its
-    wall, a Hertz contact starting or ending (by linear interpolation of the gap).
-    Returns ``(kind, absorber, side, tau)``; ``kind == NONE`` when nothing happens."""
-    event_kind, hit, hit_side, first = NONE, -1, 0, h
+    """The first event of a step ``x -> xn`` of length ``h`` (``events.event_ahead``: an impact
+    absorber crossing its wall, a Hertz contact starting or ending), by linear interpolation of
+    the gap.  Returns ``(kind, absorber, side, tau, wall)``; ``kind == NONE`` when nothing
+    happens."""
+    event_kind, hit, hit_side, first, hit_wall = NONE, -1, 0, h, 0.0
     for a in range(kind.shape[0]):
         j = nf + a
         hf = host_of(host, a, nf)
         u0 = x[j] - x[hf]
         u1 = xn[j] - xn[hf]
-        if kind[a] == IMPACT and stuck[a] == 0:
-            clearance = rows[a, CLEARANCE]
-            if abs(u1) > clearance:
-                s = 1 if u1 > 0.0 else -1
-                g0 = s * u0 - clearance
-                g1 = s * u1 - clearance
-                tau = h * max(-g0, 0.0) / (g1 - g0)
-                if tau < first or event_kind == NONE:
-                    event_kind, hit, hit_side, first = IMPACT_EVENT, a, s, tau
-        elif kind[a] == HERTZ:
-            for s in (-1, 1):
-                if touching[a] == 0 or touching[a] == s:
-                    event = ONSET if touching[a] == 0 else EXIT
-                    sign = s if event == ONSET else -s
-                    wall = rows[a, WALL_LO] if s < 0 else rows[a, WALL_HI]
-                    g1 = sign * (u1 - wall)
-                    if g1 > 0.0:
-                        g0 = sign * (u0 - wall)
-                        tau = h * max(-g0, 0.0) / (g1 - g0)
-                        if tau < first or event_kind == NONE:
-                            event_kind, hit, hit_side, first = event, a, s, tau
-    return event_kind, hit, hit_side, first
+        event, side, wall = event_ahead(kind[a], stuck[a], touching[a], rows[a, CLEARANCE], rows[a, WALL_LO],
+                                        rows[a, WALL_HI], u1, True, True, True)
+        if event != NONE:
+            sign = gap_sign(event, side)
+            g0 = sign * (u0 - wall)
+            g1 = sign * (u1 - wall)
+            tau = h * max(-g0, 0.0) / (g1 - g0)
+            if tau < first or event_kind == NONE:
+                event_kind, hit, hit_side, first, hit_wall = event, a, side, tau, wall
+    return event_kind, hit, hit_side, first, hit_wall
 
 
 @cache
@@ -258,11 +238,16 @@ def rk4_kernel(n_bodies: int, n_floors: int, has_impact: bool, has_hertz: bool, 
     def kernel(bodies, absorbers, ex, fl, noise, grid, outputs, gen, gen_bridge, gen_filter):
         nb = NB
         nf = NF
-        mass, storey_k, storey_c, floor_c, state_x, state_v = bodies
-        kind, host, rows = absorbers
-        forces, series_t, series_v, series_ptr, series_target = ex
-        dt, n_steps, i0, period, sample_from, stride = grid
-        out, samples, history, limits = outputs
+        mass, storey_k, storey_c, floor_c = bodies.mass, bodies.storey_k, bodies.storey_c, bodies.floor_c
+        state_x, state_v = bodies.x, bodies.v
+        kind, host, rows = absorbers.kind, absorbers.host, absorbers.rows
+        forces, series_t, series_v, series_ptr, series_target = (ex.forces, ex.series_t, ex.series_v,
+                                                                 ex.series_ptr, ex.series_target)
+        dt, n_steps, i0, period, sample_from, stride, first = (grid.dt, grid.n_steps, grid.i0, grid.period,
+                                                                grid.sample_from, grid.stride, grid.first)
+        out, samples, history, limits, carry = (outputs.out, outputs.samples, outputs.history, outputs.limits,
+                                                outputs.carry)
+        resume = first > 0  # a later stretch of the path: its state from ``carry``
         na = kind.shape[0]
         # the state and the stages' scratch on the stack (see ``jit.intrinsics.scratch``)
         x, v, xn, vn, xp, vp = scratch(NB), scratch(NB), scratch(NB), scratch(NB), scratch(NB), scratch(NB)
@@ -283,26 +268,38 @@ def rk4_kernel(n_bodies: int, n_floors: int, has_impact: bool, has_hertz: bool, 
             stuck, touching = int_scratch(NA), int_scratch(NA)
         else:
             stuck, touching = np.zeros(na, np.int64), np.zeros(na, np.int64)
-        next_sample = 0
-        h_next = start_history(history, stride, x, nf, primary_energy(mass, storey_k, x, v, nf))
-        pending = limits.shape[0]  # limits not passed yet
+        owed = scratch(NA)  # (no contact debts: the carry's block stays zero)
+        # the accounts in registers (``energy``), written to ``out`` once at the end
+        work = d_primary = d_absorber = e_integral = e1_max = 0.0
+        loss_sum = n_left = n_right = contact_time = peak_force = 0.0
+        if resume:
+            (work, d_primary, d_absorber, e_integral, e1_max, loss_sum, n_left, n_right, contact_time,
+             peak_force) = restore_accounts(carry)
+            next_sample, pending = int(carry[NEXT_SAMPLE]), int(carry[PENDING])
+            h_next = int(carry[HISTORY_NEXT])
+            restore_floors(carry, x_max, drift_max, acc_max, x2_integral, load)  # (``load``: scratch here)
+            restore_absorbers(carry, nf, stuck, touching, owed)
+        else:
+            next_sample = 0
+            h_next = start_history(history, stride, x, nf, primary_energy(mass, storey_k, x, v, nf))
+            pending = limits.shape[0]  # limits not passed yet
         sampling = period > 0.0  # Poincare samples for the regime
         piecewise = has_breaks(ex)  # sub-steps end at the loads' kinks and jumps
-        i = 0
-        inside = i0 == 0
+        i = first
+        inside = i0 == 0 or i0 < first
         while i < n_steps:
             # rare work between blocks of steps (see ``block_end``)
             if i == i0:
                 inside = True
                 # (x, v reach out-of-line calls anyway)
-                out[INPUT] = stored_energy(x, v, mass, nf, storey_k, kind, host, rows)
-                out[E1_MAX] = primary_energy(mass, storey_k, x, v, nf)
+                work = stored_energy(x, v, mass, nf, storey_k, kind, host, rows)
+                e1_max = primary_energy(mass, storey_k, x, v, nf)
                 for k in range(nf):  # (the accelerations from the window's first sub-step on)
                     x_max[k] = abs(x[k])
                     drift_max[k] = abs(x[k] - x[k - 1] if k > 0 else x[k])
                 if pending > 0:
                     pending = first_passages(limits, i * dt, nf, x_max, drift_max, acc_max, inv_mass, False,
-                                             out[E1_MAX], out)
+                                             e1_max, out)
             if i % CHECK_EVERY == 0 and diverged(x):
                 out[STATUS] = STATUS_DIVERGED
                 break
@@ -350,10 +347,10 @@ def rk4_kernel(n_bodies: int, n_floors: int, has_impact: bool, has_hertz: bool, 
                         if (has_impact or has_hertz) and not capped:
                             for b in range(nb):
                                 x_event[b] = xn[b]
-                            event_kind, q, side, tau = next_event(x, x_event, h, nf, kind, host, rows, stuck,
-                                                                  touching)
+                            event_kind, q, side, tau, wall = next_event(x, x_event, h, nf, kind, host, rows,
+                                                                        stuck, touching)
                         if event_kind != NONE:
-                            j, hf, sign, wall = event_geometry(event_kind, q, side, nf, host, rows)
+                            j, hf, sign = nf + q, host_of(host, q, nf), gap_sign(event_kind, side)
                             phase = 1
                             continue
                     elif (has_impact or has_hertz) and phase > 0:
@@ -368,26 +365,26 @@ def rk4_kernel(n_bodies: int, n_floors: int, has_impact: bool, has_hertz: bool, 
                     h = tau
                     done = event_kind == NONE and h == left
                     if inside:
-                        out[INPUT] += inc[0]
-                        out[PRIMARY_DISS] += inc[1]
-                        out[ABSORBER_DISS] += inc[2]
-                        out[ENERGY_INT] += inc[3]
+                        work += inc[0]
+                        d_primary += inc[1]
+                        d_absorber += inc[2]
+                        e_integral += inc[3]
                         for k in range(nf):
                             x2_integral[k] += x2[k]
                         # peaks: the state at the sub-step's end, the accelerations at its start
                         floor_peaks(xn, nf, a0, x_max, drift_max, acc_max)
-                        out[E1_MAX] = max(out[E1_MAX], primary_energy(mass, storey_k, xn, vn, nf))
+                        e1_max = max(e1_max, primary_energy(mass, storey_k, xn, vn, nf))
                         if pending > 0:
                             pending = first_passages(limits, t + h, nf, x_max, drift_max, acc_max, inv_mass,
-                                                     False, out[E1_MAX], out)
+                                                     False, e1_max, out)
                     for b in range(nb):
                         x[b] = xn[b]
                         v[b] = vn[b]
                     if has_hertz and inside and contact:
                         for c in range(na):
                             if touching[c] != 0:
-                                out[CONTACT_TIME] += h
-                                out[PEAK_FORCE] = max(out[PEAK_FORCE], contact_force(x, nf, c, host, rows))
+                                contact_time += h
+                                peak_force = max(peak_force, contact_force(x, nf, c, host, rows))
                     t += h
                     left -= h
                     if done:
@@ -396,7 +393,7 @@ def rk4_kernel(n_bodies: int, n_floors: int, has_impact: bool, has_hertz: bool, 
                         break
                     if has_impact and event_kind == IMPACT_EVENT:
                         n_impacts += 1
-                        put(x, j, x[hf] + side * rows[q, CLEARANCE])
+                        put(x, j, x[hf] + wall)
                         wall_accelerations(x, v, t, nf, mass, inv_mass, storey_k, storey_c, floor_c, kind,
                                            host, rows, forces, series_t, series_v, series_ptr, series_target,
                                            stuck, False, acc_wall, load_wall, gm_wall, gs_wall, True,
@@ -406,15 +403,17 @@ def rk4_kernel(n_bodies: int, n_floors: int, has_impact: bool, has_hertz: bool, 
                         loss = resolve_impact(mass, v, nf, q, side, gain, rows[q, RESTITUTION],
                                               n_impacts >= MAX_EVENTS, stuck, host)
                         if inside:
-                            out[IMPACT_LOSS] += loss
-                            out[E1_MAX] = max(out[E1_MAX], primary_energy(mass, storey_k, x, v, nf))
+                            loss_sum += loss
+                            e1_max = max(e1_max, primary_energy(mass, storey_k, x, v, nf))
                     elif has_hertz and event_kind == ONSET:
                         touching[q] = side
                     elif has_hertz and event_kind == EXIT:
                         touching[q] = 0
                     if inside and (event_kind == IMPACT_EVENT or event_kind == ONSET):
-                        out[IMPACTS] += 1
-                        out[IMPACTS_LEFT if side < 0 else IMPACTS_RIGHT] += 1
+                        if side < 0:
+                            n_left += 1.0
+                        else:
+                            n_right += 1.0
                     sub += 1
                 if has_impact and any_set(stuck):
                     pin_to_walls(x, nf, stuck, host, rows)
@@ -424,16 +423,26 @@ def rk4_kernel(n_bodies: int, n_floors: int, has_impact: bool, has_hertz: bool, 
                                        True, acc_wall, load_wall, gm_wall, gs_wall, True, GEO)
                 if sampling:
                     next_sample = record_sample(samples, next_sample, sample_from, period, i * dt, dt,
-                                                xp, vp, x, v, out[IMPACTS_LEFT], out[IMPACTS_RIGHT])
+                                                xp, vp, x, v, n_left, n_right)
             i = end
             if i == h_next:
                 h_next = record_history(history, stride, h_next, x, nf,
                                         primary_energy(mass, storey_k, x, v, nf))
+        if carry.shape[0] > 0:  # the path's state for its next stretch
+            save_accounts(carry, work, d_primary, d_absorber, e_integral, e1_max, loss_sum, n_left, n_right,
+                          contact_time, peak_force)
+            carry[NEXT_SAMPLE], carry[PENDING], carry[HISTORY_NEXT] = next_sample, pending, h_next
+            save_floors(carry, x_max, drift_max, acc_max, x2_integral, load)
+            save_absorbers(carry, nf, stuck, touching, owed)
         if diverged(x):
             out[STATUS] = STATUS_DIVERGED
         for b in range(nb):
             state_x[b] = x[b]
             state_v[b] = v[b]
+        write_accounts(out, work, d_primary, d_absorber, e_integral, e1_max, loss_sum, n_left, n_right)
+        if has_hertz:
+            out[CONTACT_TIME] = contact_time
+            out[PEAK_FORCE] = peak_force
         out[FINAL_ENERGY] = stored_energy(x, v, mass, nf, storey_k, kind, host, rows)
         write_floor_metrics(out, nf, x_max, drift_max, acc_max, x2_integral)
 

@@ -17,7 +17,8 @@ from numba import njit
 from ..jit.flags import INLINE
 from ..physics.absorbers import DAMPING
 from ..physics.structure import host_of
-from .common import accelerate, attachment_forces, geometric_forces, momentum
+from .common import accelerate, attachment_forces, geometric_forces
+from .energy import momentum
 
 
 @njit(**INLINE)

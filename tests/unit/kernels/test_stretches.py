@@ -1,0 +1,113 @@
+"""A path run in stretches (``kernels.start_path``, ``kernels.advance``) ends in the state, with
+the metrics, history rows and Poincare samples of the same path run in one go, bitwise: the step
+loops carry their accumulators and hidden state across a split (``kernels/carry.py``), and the
+generators continue where the last stretch stopped.  The splits fall before, at and after the
+metrics window's opening, off the divergence checks' grid (1024 steps) and across it."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from tests.helpers import example_data, scene_from
+from vines_stoch.kernels import advance, sample_buffer, simulate, start_path
+from vines_stoch.outputs import ENERGY_INT
+from vines_stoch.validation import scenes
+
+#: Example scenarios, shortened, and the scheme each runs with: the RK4 loop with Hertz contact
+#: and Poincare samples, with impacts and sticking; the kick-drift-kick loop with impacts
+#: (deterministic), with Hertz contact and impacts under white noise (the Brownian tree),
+#: with filtered ground motion and first-passage limits.
+EXAMPLES = {
+    "rk4 Hertz contact, harmonic": ("seed003_ds20", "rk4"),
+    "rk4 impacts": ("parallel_nes_impulse", "rk4"),
+    "kdk impacts, deterministic": ("parallel_nes_impulse", "euler-maruyama"),
+    "kdk Hertz contact and impacts under white noise": ("contact_noise_parallel", None),
+    "kdk filtered ground motion with limits": ("ground_motion", None),
+}
+
+
+def _example(name: str, scheme: str | None):
+    changes = {"simulation.duration": 10.0, "simulation.metrics_from": 2.5}
+    if scheme is not None:
+        changes["simulation.scheme"] = scheme
+    data = example_data(name)
+    data.pop("sweep", None)
+    return scene_from(data, changes=changes)
+
+
+def _sra():
+    """The smooth scene (cubic NES, harmonic load and white noise) with the SRA3 step."""
+    return scenes.scene("smooth", {"simulation.duration": 6.0, "simulation.metrics_from": 2.5,
+                                   "simulation.scheme": "sra"})
+
+
+def _run(scene, stops, seed: int = 7):
+    """State, metrics, history and samples of the path run to each of ``stops`` in turn (one
+    stop: in one go, by ``simulate``)."""
+    history = np.zeros((8, 2 + scene.n_floors))
+    samples = sample_buffer(scene)
+    stride = scene.n_steps // 7
+    if len(stops) == 1:
+        final = np.zeros((2, scene.mass.shape[0]))
+        out = simulate(scene, np.random.default_rng(seed), final=final, history=history, stride=stride,
+                       samples=samples)
+        return final[0], final[1], out, history, samples
+    path = start_path(scene, np.random.default_rng(seed), history=history, stride=stride, samples=samples)
+    for stop in stops:
+        advance(path, stop)
+    assert path.step == scene.n_steps and path.t == scene.n_steps * scene.dt
+    return path.x, path.v, path.out, history, samples
+
+
+def _splits(scene) -> list[int]:
+    i0 = scene.i0
+    assert 1024 < i0 < scene.n_steps - 1501  # the splits below fall where the docstring says
+    return [777, i0, i0 + 1501, scene.n_steps]
+
+
+def _assert_same(one_go, stretched):
+    for whole, parts in zip(one_go, stretched):
+        np.testing.assert_array_equal(parts, whole)  # (NaN equal to NaN: unpassed limits, no samples)
+
+
+@pytest.mark.parametrize("case", list(EXAMPLES))
+def test_a_path_split_in_stretches_ends_as_in_one_go(case):
+    scene = _example(*EXAMPLES[case])
+    one_go = _run(scene, [scene.n_steps])
+    _assert_same(one_go, _run(scene, _splits(scene)))
+    assert np.isfinite(one_go[2][:6]).all() and one_go[0].any()
+
+
+def test_the_sra_step_continues_its_stream_across_a_split():
+    scene = _sra()
+    _assert_same(_run(scene, [scene.n_steps]), _run(scene, _splits(scene)))
+
+
+def test_a_stretch_leaves_the_metrics_of_the_path_so_far():
+    """After a stretch the metric vector holds the metrics of the path ended there: those of
+    the same scene with the shorter duration, run in one go."""
+    scene = _example("parallel_nes_impulse", "euler-maruyama")
+    path = start_path(scene)
+    advance(path, 4000)
+    shorter = scene_from(example_data("parallel_nes_impulse", "sweep"),
+                         changes={"simulation.duration": 4.0, "simulation.metrics_from": 2.5,
+                                  "simulation.scheme": "euler-maruyama"})
+    assert shorter.n_steps == 4000
+    so_far = simulate(shorter)
+    np.testing.assert_array_equal(path.out, so_far)
+    advance(path, scene.n_steps)
+    assert path.out[ENERGY_INT] > so_far[ENERGY_INT] > 0.0  # (the integral of E1 grew after the split)
+
+
+def test_advance_refuses_stops_outside_the_path_and_paths_without_a_carry():
+    scene = _example("parallel_nes_impulse", "euler-maruyama")
+    path = start_path(scene)
+    with pytest.raises(ValueError, match="stop -1 must lie between"):
+        advance(path, -1)
+    with pytest.raises(ValueError, match=f"scene's step count \\({scene.n_steps}\\)"):
+        advance(path, scene.n_steps + 1)
+    once = start_path(scene, stretches=False)
+    once.step = 10  # (as after a first stretch)
+    with pytest.raises(ValueError, match="keeps no carry"):
+        advance(once, 20)
