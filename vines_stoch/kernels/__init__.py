@@ -49,7 +49,8 @@ def kernel_for(scene, gpu: bool = False):
     if scheme.kernel == "rk4":
         return rk4_kernel(nb, nf, scene.has_impact, scene.has_hertz, gpu, scene.has_geometric)
     return kdk_kernel(nb, nf, scene.forces.shape[0], scene.has_white_noise, scene.has_impact, scene.has_hertz,
-                      scene.has_filters, scene.has_ground, scheme.step == "sra3", gpu, scene.has_geometric)
+                      scene.has_filters, scene.has_ground, scheme.step == "sra3", gpu, scene.has_geometric,
+                      scene.filters["phi"].shape[0])
 
 
 def sample_buffer(scene) -> np.ndarray:

@@ -295,7 +295,8 @@ def contact_sides(x, nf, kind, host, rows, touching):
 
 @cache
 def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_impact: bool, has_hertz: bool,
-               filtered: bool, ground: bool, sra: bool = False, gpu: bool = False, geometric: bool = False):
+               filtered: bool, ground: bool, sra: bool = False, gpu: bool = False, geometric: bool = False,
+               n_states: int = 0):
     """The kick-drift-kick Euler-Maruyama loop specialised to a scene's structure: the numbers
     of bodies, of floors and of closed-form force rows (the sizes of its arrays on the stack),
     white noise, impact and Hertz absorbers, filtered loads, ground acceleration
@@ -329,7 +330,9 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
     second).
 
     ``geometric``: the scene has absorbers with the geometric attachment
-    (``common.geometric_forces``).
+    (``common.geometric_forces``).  ``n_states``: the filters' state count (a stack size, as the
+    body count: the filter step's loops unroll and its state stays in registers; the filter
+    bundle's arrays hold the state between stretches of a path).
 
     ``gpu``: the loop the cuda backend compiles (``kernels/launch.py``), whose per-absorber
     flags live on the stack (a GPU thread has no heap); on the CPU they are heap arrays (on the
@@ -348,6 +351,7 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
     GPU = gpu
     NR = n_rows
     NS = n_bodies if sra else 0
+    NZ = n_states
     ROOT3 = math.sqrt(3.0)
 
     @njit(**KERNEL)
@@ -360,7 +364,10 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
         forces, series_t, series_v, series_ptr, series_target = (ex.forces, ex.series_t, ex.series_v,
                                                                  ex.series_ptr, ex.series_target)
         phi, chol, envelopes, c_force, c_ground = fl.phi, fl.chol, fl.envelope, fl.c_force, fl.c_ground
-        z, zn, draws = fl.z, fl.zn, fl.draws
+        z, zn, draws = scratch(NZ), scratch(NZ), scratch(NZ)  # (see ``n_states``)
+        for r in range(NZ):
+            z[r] = fl.z[r]
+            zn[r] = fl.zn[r]
         sigma, normals, refine = noise.sigma, noise.normals, noise.refine
         replay = normals.shape[0] > 0
         piecewise = has_breaks(ex)  # re-evaluate each step's start on its own piece
@@ -369,7 +376,7 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
         out, history, limits, carry = outputs.out, outputs.history, outputs.limits, outputs.carry
         resume = first > 0  # a later stretch of the path: its state from ``carry``
         na = kind.shape[0]
-        nz = z.shape[0]
+        nz = NZ
         # the state (copied back at the end) and the scratch, on the stack (see ``jit.intrinsics.scratch``)
         x, v, force, vn, vt, inv_mass = (scratch(NB), scratch(NB), scratch(NB), scratch(NB), scratch(NB),
                                          scratch(NB))
@@ -710,6 +717,9 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
         for b in range(nb):
             state_x[b] = x[b]
             state_v[b] = v[b]
+        for r in range(NZ):
+            fl.z[r] = z[r]
+            fl.zn[r] = zn[r]
         e_integral = 0.0
         if inside and i0 < n_steps:  # (the window's last state at half weight)
             e_integral = (e_sum - 0.5 * e1_prev) * dt
