@@ -37,7 +37,9 @@ _UNUSED = np.zeros(STREAM_WORDS, np.uint64)
 _NO_HISTORY = np.zeros((0, 2))
 #: The carry of a path run in one go: none kept.
 _NO_CARRY = np.zeros(0)
-#: The loops this process has run (``cache.compile_once`` saw them first).
+#: The loops this process has run, with the kinds of their generators (``cache.compile_once``
+#: saw them first: a loop given numpy Generators and then Philox stream arrays compiles twice,
+#: both times with the faster front end).
 _STARTED: set = set()
 
 
@@ -216,9 +218,10 @@ def advance(path: Path, stop: int) -> Path:
     if stop == path.step and stop > 0:  # (a path of no steps still writes its metrics)
         return path
     args = (*path.args[:5], grid._replace(n_steps=stop, first=path.step), *path.args[6:])
-    if path.kernel not in _STARTED:  # the first run in this process: compiled by one process at a time
+    started = (path.kernel, *(type(gen) for gen in args[7:]))
+    if started not in _STARTED:  # the first run in this process: compiled by one process at a time
         compile_once(path.kernel, args)
-        _STARTED.add(path.kernel)
+        _STARTED.add(started)
     path.kernel(*args)
     path.step = stop
     return path
