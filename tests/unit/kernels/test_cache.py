@@ -145,8 +145,9 @@ def test_the_first_run_of_a_loop_in_a_process_compiles_nothing_more():
     """``kernels.simulate`` compiles a loop for the very argument types it then runs it with."""
     scene = scene_from(example_data("cubic_nes_impulse"), changes={"simulation.duration": 1.0})
     kernel = kernel_for(scene)
-    _STARTED.discard(kernel)
+    for started in [s for s in _STARTED if s[0] is kernel]:
+        _STARTED.discard(started)
     simulate(scene)
     count = len(kernel.overloads)
     simulate(scene, np.random.default_rng(0))
-    assert kernel in _STARTED and len(kernel.overloads) == count
+    assert any(s[0] is kernel for s in _STARTED) and len(kernel.overloads) == count
