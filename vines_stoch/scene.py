@@ -130,7 +130,7 @@ class Scene:
     def has_hertz(self) -> bool:
         return bool((self.kind == HERTZ).any())
 
-    @property
+    @cached_property
     def has_geometric(self) -> bool:
         """True when an absorber has the geometric attachment (its spring constant ``K_GEO``)."""
         return bool((self.rows[:, K_GEO] != 0.0).any())

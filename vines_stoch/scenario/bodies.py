@@ -203,11 +203,6 @@ class BistableAbsorber(_Absorber):
         """Stiffness at the two stable positions, ``k_lin + 3 k u^2 = -2 k_lin``."""
         return -2.0 * self.linear_stiffness
 
-    @property
-    def wells(self) -> float:
-        """The stable positions' distance from the barrier, ``sqrt(-k_lin / k)``."""
-        return float(np.sqrt(-self.linear_stiffness / self.stiffness))
-
 
 class GeometricAbsorber(_Absorber):
     """Geometrically nonlinear NES: two transverse linear springs of stiffness ``stiffness`` each,

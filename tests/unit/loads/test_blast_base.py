@@ -88,9 +88,9 @@ def test_blast_on_one_floor_and_scaled_per_floor():
     rows = scene_from({"name": "b", "primary": FRAME, "loads": loads,
                        "simulation": {"duration": 1.0, "dt": 1e-3}}).forces
     assert rows[:, 0].tolist() == [BLAST, BLAST] and rows[:, 1].tolist() == [1.5, 3.0]
-    # the kick-drift-kick loop ends a step at the front too: second order in dt on this damped frame
-    # (first order in c dt: its closing kick's dashpot forces at the half-kicked velocities), and
-    # within 1e-3 of the amplitude at dt = 1e-3
+    # the kick-drift-kick loop ends a step at the front too: within 1e-3 of the amplitude at
+    # dt = 1e-3 (on this damped frame its error is of first order in c dt: its closing kick takes
+    # the dashpot forces at the half-kicked velocities)
     kdk = _engine(loads, "euler-maruyama")
     assert np.max(np.abs(kdk - ref)) < 1e-3 * np.max(np.abs(ref))
 
