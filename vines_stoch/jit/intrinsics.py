@@ -116,3 +116,33 @@ def any_set(a) -> bool:
         if a[j] != 0:
             return True
     return False
+
+
+def _borrow(context, builder, ty, value):
+    """``value`` of type ``ty`` with each array in it (nested in tuples) as a view whose memory
+    info is null: reference counting skips it."""
+    if isinstance(ty, types.Array):
+        array = make_array(ty)(context, builder, value)
+        array.meminfo = cgutils.get_null_value(array.meminfo.type)
+        array.parent = cgutils.get_null_value(array.parent.type)
+        return array._getvalue()
+    if isinstance(ty, types.BaseTuple):
+        items = [_borrow(context, builder, t, builder.extract_value(value, i)) for i, t in enumerate(ty)]
+        return context.make_tuple(builder, ty, items)
+    context.nrt.incref(builder, ty, value)  # (what is not an array: a new reference, as numba expects)
+    return value
+
+
+@intrinsic
+def borrowed(typingctx, value):
+    """``value`` (an array, or a tuple or named tuple holding arrays) with its arrays as views
+    that reference counting skips.  An inlined function that takes heap arrays and spans loops
+    costs an atomic increment and decrement of each a call (numba's pruning of reference
+    counts works within simple regions of the control flow); the step loop passes its bundles
+    and state to the scheme's step as borrowed views, once, outside the loop.  The views must
+    not outlive the values they borrow from (the loop's arguments, a state it keeps)."""
+
+    def codegen(context, builder, signature, args):
+        return _borrow(context, builder, signature.args[0], args[0])
+
+    return value(value), codegen

@@ -22,10 +22,12 @@ from ..schemes import SCHEMES
 from ..streams import Streams
 from .bundles import Absorbers, Bodies, Filters, Grid, Loads, Noise, Outputs
 from .carry import new_carry
-from .kdk import kdk_kernel
+from .driver import Spec, step_loop
+from .kdk import kdk_step
 from .loads import load_path, stationary_start
-from .rk4 import rk4_kernel
+from .rk4 import rk4_step
 from .rng import STREAM_WORDS
+from .sra3 import sra3_step
 
 _NO_NORMALS = np.zeros(0)
 #: The generator in the increments' place of a replayed path: never drawn from.
@@ -43,16 +45,31 @@ _NO_CARRY = np.zeros(0)
 _STARTED: set = set()
 
 
+#: Each scheme's step (``schemes.Scheme.step``): a ``driver.Step`` factory of ``kernels/<step>.py``.
+STEPS = {"kdk": kdk_step, "sra3": sra3_step, "rk4": rk4_step}
+
+
+def spec_of(scene, gpu: bool = False) -> Spec:
+    """What a scene's loop is specialised to (``driver.Spec``); what its scheme does not use is
+    left out (white noise and filtered loads of the RK4 step, the load rows and filter states of
+    steps that read neither from the grid), so that one loop serves the scenes that differ only
+    there."""
+    step = SCHEMES[scene.scheme].step
+    grid = step != "rk4"
+    return Spec(n_bodies=scene.mass.shape[0], n_floors=scene.n_floors,
+                n_rows=scene.forces.shape[0] if grid else 0,
+                n_states=scene.filters["phi"].shape[0] if grid else 0,
+                has_noise=scene.has_white_noise and grid, has_impact=scene.has_impact,
+                has_hertz=scene.has_hertz,
+                filtered=scene.has_filters and grid, ground=scene.has_ground and grid,
+                geometric=scene.has_geometric, gpu=gpu)
+
+
 def kernel_for(scene, gpu: bool = False):
-    """The compiled loop for a scene's scheme (``schemes.SCHEMES``) and structure (``gpu``: the
-    loop the cuda backend compiles, ``kdk.kdk_kernel``)."""
-    nb, nf = scene.mass.shape[0], scene.n_floors
-    scheme = SCHEMES[scene.scheme]
-    if scheme.kernel == "rk4":
-        return rk4_kernel(nb, nf, scene.has_impact, scene.has_hertz, gpu, scene.has_geometric)
-    return kdk_kernel(nb, nf, scene.forces.shape[0], scene.has_white_noise, scene.has_impact, scene.has_hertz,
-                      scene.has_filters, scene.has_ground, scheme.step == "sra3", gpu, scene.has_geometric,
-                      scene.filters["phi"].shape[0])
+    """The compiled loop for a scene's scheme and structure: the loop driver around the
+    scheme's step (``driver.step_loop``; ``gpu``: the loop the cuda backend compiles)."""
+    spec = spec_of(scene, gpu)
+    return step_loop(STEPS[SCHEMES[scene.scheme].step](spec), spec)
 
 
 def sample_buffer(scene) -> np.ndarray:
@@ -125,7 +142,7 @@ def bundles(scene, x: np.ndarray, v: np.ndarray, fl: Filters, normals: np.ndarra
     noise (intensity per floor, replayed normals, replayed fine steps a step), grid, outputs
     (with the limits whose first passages the metric vector records, and the ``carry`` of a
     path run in stretches: ``kernels/carry.py``); then the three generators of ``gens``
-    (increments, bridge, filter) as arguments of their own (see ``kdk.kdk_kernel``).  The grid
+    (increments, bridge, filter) as arguments of their own (see ``kernels/bundles.py``).  The grid
     runs the whole path from its start."""
     return (
         Bodies(mass=scene.mass, storey_k=scene.storey_k, storey_c=scene.storey_c, floor_c=scene.floor_c,
@@ -236,7 +253,7 @@ def simulate(scene, streams: Streams | np.random.Generator | None = None, *,
     ``streams`` (``vines_stoch.streams.Streams``: increments, bridge draws, filter noise; or
     one numpy Generator for every purpose) is required where the scene draws random numbers
     (a ``ValueError`` says so); ``normals`` replays a given Brownian path (one standard normal
-    per noisy floor and step, two with the ``sra`` scheme: see ``kdk_kernel``) instead of
+    per noisy floor and step, two with the ``sra`` scheme: see ``grid.step_normals``) instead of
     drawing the increments; with ``refine`` (kick-drift-kick only) it holds ``refine`` fine
     normals a step and noisy floor, fine step by fine step, and the run sees the path of the
     fine steps, inside a step too (``brownian``): a coarse run and the run of the fine steps

@@ -65,8 +65,9 @@ def restore_accounts(carry):
 
 
 @njit(**INLINE)
-def save_floors(carry, x_max, drift_max, acc_max, x2_integral, load_next) -> None:
-    """Carry the per-floor blocks (``FLOOR_CARRIED``)."""
+def save_floors(carry, x_max, drift_max, acc_max, x2_integral) -> None:
+    """Carry the per-floor peaks and ``x_k^2`` integrals (the driver's blocks of
+    ``FLOOR_CARRIED``)."""
     nf = x_max.shape[0]
     base = len(CARRIED)
     for k in range(nf):
@@ -74,12 +75,11 @@ def save_floors(carry, x_max, drift_max, acc_max, x2_integral, load_next) -> Non
         carry[base + nf + k] = drift_max[k]
         carry[base + 2 * nf + k] = acc_max[k]
         carry[base + 3 * nf + k] = x2_integral[k]
-        carry[base + 4 * nf + k] = load_next[k]
 
 
 @njit(**INLINE)
-def restore_floors(carry, x_max, drift_max, acc_max, x2_integral, load_next) -> None:
-    """The per-floor blocks back from the carry (``save_floors``)."""
+def restore_floors(carry, x_max, drift_max, acc_max, x2_integral) -> None:
+    """The per-floor peaks and integrals back from the carry (``save_floors``)."""
     nf = x_max.shape[0]
     base = len(CARRIED)
     for k in range(nf):
@@ -87,7 +87,25 @@ def restore_floors(carry, x_max, drift_max, acc_max, x2_integral, load_next) -> 
         drift_max[k] = carry[base + nf + k]
         acc_max[k] = carry[base + 2 * nf + k]
         x2_integral[k] = carry[base + 3 * nf + k]
-        load_next[k] = carry[base + 4 * nf + k]
+
+
+@njit(**INLINE)
+def save_loads(carry, load_next) -> None:
+    """Carry the floors' loads at the next step's start (the grid steps' block of
+    ``FLOOR_CARRIED``)."""
+    nf = load_next.shape[0]
+    base = len(CARRIED) + 4 * nf
+    for k in range(nf):
+        carry[base + k] = load_next[k]
+
+
+@njit(**INLINE)
+def restore_loads(carry, load_next) -> None:
+    """The floors' loads at the next step's start back from the carry (``save_loads``)."""
+    nf = load_next.shape[0]
+    base = len(CARRIED) + 4 * nf
+    for k in range(nf):
+        load_next[k] = carry[base + k]
 
 
 @njit(**INLINE)

@@ -9,10 +9,10 @@ peak; in registers through the run, written to the metric vector once at the end
 work of each half kick's impulses at the kick's mean velocity (``impulse_work``, ``momentum``,
 ``structure_dissipation``, ``absorber_dissipation``: the change of kinetic energy equals the
 impulses' work exactly), the SRA3 step its stages' weighted impulses at the step's mean
-velocity (``sra3.sra3_step``), the RK4 loop the rates of these (written out in
+velocity (``sra3.sra3_update``), the RK4 loop the rates of these (written out in
 ``rk4.accelerations``: helpers of their own, inlined there with the loop's heap arrays, were
 part of a change that cost it 28 % of its speed) integrated as extra states by its stages
-(``rk4.rk4_step``).
+(``rk4.rk4_update``).
 """
 
 from __future__ import annotations

@@ -29,8 +29,8 @@ virtual Brownian tree of ``brownian.py`` pinned to the step's increments (its se
 bridge stream; the step increments are the same whatever the sub-steps), so the sub-stepped
 path is the same path whatever the sub-steps and root-search iterates query.
 
-The same step loop (``kdk_kernel``: the time grid, the noise draws, the loads, the metrics)
-runs the SRA3 step of ``sra3.py`` for the ``sra`` scheme in place of the kick-drift-kick step.
+The step plugs into the loop driver (``driver.py``: the time grid, the window, the metrics) as
+``kdk_step``; the loads on the grid and the step's normals come from ``grid.py``.
 
 Energy bookkeeping uses the midpoint velocity of each kick, for which the change of kinetic
 energy equals the work of the impulses exactly; the only residual left in the energy balance
@@ -42,68 +42,46 @@ from __future__ import annotations
 
 import math
 from functools import cache
+from typing import Any, NamedTuple
 
 import numpy as np
 from numba import njit
 
-from ..jit.flags import INLINE, KERNEL
+from ..jit.flags import INLINE
 from ..jit.intrinsics import any_set, int_scratch, scratch
-from ..outputs import (
-    CAPPED,
-    CONTACT_TIME,
-    FINAL_ENERGY,
-    PEAK_FORCE,
-    STATUS,
-    STATUS_DIVERGED,
-)
+from ..outputs import CAPPED
 from ..physics.absorbers import CLEARANCE, HERTZ, RESTITUTION, WALL_HI, WALL_LO
 from ..physics.hertz import contact_energy, contact_force_law
-from ..physics.structure import host_of, primary_energy
+from ..physics.structure import host_of
 from .brownian import MEMO, path_value
-from .carry import (
-    E1_PREV,
-    GROUND_NEXT,
-    HISTORY_NEXT,
-    PENDING,
-    REPLAYED,
-    SEED_HIGH,
-    SEED_LOW,
-    restore_absorbers,
-    restore_accounts,
-    restore_floors,
-    restore_rows,
-    save_absorbers,
-    save_accounts,
-    save_floors,
-    save_rows,
-)
+from .carry import REPLAYED, SEED_HIGH, SEED_LOW, restore_absorbers, save_absorbers
 from .common import (
-    CHECK_EVERY,
     MAX_EVENTS,
     MAX_SUBSTEPS,
     attachment_forces,
-    block_end,
     contact_force,
     contact_forces,
     contact_step,
-    diverged,
-    first_passages,
-    floor_peaks,
     geometric_forces,
     keep_in_cavities,
     pin_to_walls,
-    record_history,
     resolve_impact,
-    start_history,
     stick_together,
-    stored_energy,
-    write_floor_metrics,
 )
-from .energy import absorber_dissipation, impulse_work, momentum, structure_dissipation, write_accounts
+from .driver import Step
+from .energy import absorber_dissipation, impulse_work, momentum, structure_dissipation
 from .events import EXIT, NONE, event_ahead, gap_sign
-from .loads import advance_filters, excitation, has_breaks, phasors, rotations, turn
-from .rng import normal, uniform
-from .sra3 import sra3_step
+from .grid import (
+    GridLoads,
+    finish_loads,
+    noise_scales,
+    save_grid_loads,
+    start_loads,
+    step_loads,
+    step_normals,
+)
+from .loads import excitation, has_breaks, phasors
+from .rng import uniform
 
 #: Iterations of the bracketed search for the impact instant (Illinois method).
 ROOT_ITERATIONS = 100
@@ -293,115 +271,84 @@ def contact_sides(x, nf, kind, host, rows, touching):
             touching[a] = 1
 
 
+class KdkState(NamedTuple):
+    """The kick-drift-kick step's state and scratch on the loop's stack: per body the forces,
+    the kicked velocities, a root search's trial kick and the kick to a sub-step's first event
+    (``vt``, ``vh``); the grid loads (``grid.GridLoads``); per floor the step's Wiener
+    increments (the step's, a sub-step's, half of them, the root search's), each floor's
+    ``sigma sqrt(dt)``, its place among the noisy floors, the path at a sub-step's start, the
+    step's normals, the sticking groups; the Brownian trees' descent memo; per absorber the
+    wall it sticks to, the side it touches, a contact's balance over a sub-step and what it
+    owes (``contact_closing``); the noisy floors' count and the Brownian trees' seed (with its
+    halves, for the carry)."""
+
+    force: Any
+    vn: Any
+    vt: Any
+    vh: Any
+    gl: Any
+    dw: Any
+    dws: Any
+    dwh: Any
+    dwc: Any
+    noise_scale: Any
+    slot: Any
+    w_at: Any
+    u1: Any
+    group_mass: Any
+    group_sum: Any
+    memo: Any
+    stuck: Any
+    touching: Any
+    held: Any
+    owed: Any
+    noisy: Any
+    seed: Any
+    high: Any
+    low: Any
+
+
 @cache
-def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_impact: bool, has_hertz: bool,
-               filtered: bool, ground: bool, sra: bool = False, gpu: bool = False, geometric: bool = False,
-               n_states: int = 0):
-    """The kick-drift-kick Euler-Maruyama loop specialised to a scene's structure: the numbers
-    of bodies, of floors and of closed-form force rows (the sizes of its arrays on the stack),
-    white noise, impact and Hertz absorbers, filtered loads, ground acceleration
+def kdk_step(spec) -> Step:
+    """The kick-drift-kick Euler-Maruyama step for a loop specialised to ``spec``
+    (``driver.Spec``), as the driver's ``Step``.  Ground acceleration is a compile-time flag
     (``Scene.has_ground``: as a run-time value it cost the smooth scene 7 % of its speed, the
-    ground term joining every kick) and the scheme.  What costs nothing measurable as a run-time
-    value is one: loads with kinks or jumps (``loads.has_breaks``) and the limits whose first
-    passages to watch (none: one integer test a step).  Harmonic loads on the step grid come
-    from phasors (``loads.turn``), set exactly every ``CHECK_EVERY`` steps.
+    ground term joining every kick); loads with kinks or jumps (``loads.has_breaks``) are a
+    run-time value, costing nothing measurable.  Harmonic loads on the step grid come from
+    phasors (``loads.turn``), set exactly every ``CHECK_EVERY`` steps (``check``).
 
-    The kernel takes its inputs as bundles (``kernels.bundles``): ``bodies`` (masses, storey
-    stiffnesses and dashpots, mass-proportional damping, state), ``absorbers`` (kind codes,
-    host floors, parameter rows: ``physics.absorbers.LAWS``), ``ex`` and ``fl`` (loads and filters,
-    ``kernels/loads.py``), ``noise`` (white-noise intensity per floor, replayed normals),
-    ``grid`` (time grid, metrics window, Poincare and history grids, the steps from ``first``
-    to ``n_steps`` to run), ``outputs`` (metric vector, Poincare samples, history rows, the
-    limits whose first passages the metric vector records: ``common.first_passages``, the
-    carry: ``kernels/carry.py``, restored where ``first > 0``, saved where it is not empty),
-    then the generators of the step increments, of
-    the Brownian trees' seed and of the filter noise (an empty Philox stream where unused;
-    three arguments, not a bundle: numba types a tuple holding a Generator in Python, about
-    20 us a call).
-
-    Given ``normals`` (the noise bundle's replayed path: ``refine`` fine normals a step and
+    Given replayed normals (the noise bundle's ``normals``: ``refine`` fine normals a step and
     noisy floor, for convergence studies), the step increments are sums of them instead of
     draws.  Replaying is a run-time choice, not a specialisation: a path drawn from the stream
     and the same path replayed run the same machine code, so they agree bitwise.
 
-    With ``sra`` (scenes without impact absorbers and filtered loads), each step is the
-    stochastic Runge-Kutta step of ``sra3.sra3_step`` instead of the kick-drift-kick one; it
-    draws two normals a step and noisy floor (replayed: all floors' first normals, then their
-    second).
-
-    ``geometric``: the scene has absorbers with the geometric attachment
-    (``common.geometric_forces``).  ``n_states``: the filters' state count (a stack size, as the
-    body count: the filter step's loops unroll and its state stays in registers; the filter
-    bundle's arrays hold the state between stretches of a path).
-
-    ``gpu``: the loop the cuda backend compiles (``kernels/launch.py``), whose per-absorber
-    flags live on the stack (a GPU thread has no heap); on the CPU they are heap arrays (on the
-    stack the impact-rich scene ran 8 % slower).
+    On the GPU (``spec.gpu``: the loop the cuda backend compiles, ``kernels/launch.py``) the
+    per-absorber flags live on the stack (a GPU thread has no heap); on the CPU they are heap
+    arrays (on the stack the impact-rich scene ran 8 % slower).
     """
-
-    # passes of a step's event loop: one without impact or Hertz absorbers (nothing to split
-    # at), none with the Runge-Kutta step
-    EVENTS = 0 if sra else (MAX_SUBSTEPS if has_hertz else (MAX_EVENTS + 1 if has_impact else 1))
+    # passes of a step's event loop: one without impact or Hertz absorbers (nothing to split at)
+    has_noise, has_impact, has_hertz = spec.has_noise, spec.has_impact, spec.has_hertz
+    filtered, ground, geometric = spec.filtered, spec.ground, spec.geometric
+    EVENTS = MAX_SUBSTEPS if has_hertz else (MAX_EVENTS + 1 if has_impact else 1)
     TREE = has_noise and (has_impact or has_hertz)  # sub-steps take increments from the Brownian tree
-    MEMO_SIZE = n_floors * MEMO if TREE else 0
-    GROUND = ground
-    NB = n_bodies
-    NF = n_floors
-    NA = n_bodies - n_floors
-    GPU = gpu
-    NR = n_rows
-    NS = n_bodies if sra else 0
-    NZ = n_states
-    ROOT3 = math.sqrt(3.0)
+    MEMO_SIZE = spec.n_floors * MEMO if TREE else 0
+    NB = spec.n_bodies
+    NF = spec.n_floors
+    NA = spec.n_bodies - spec.n_floors
+    NR = spec.n_rows
+    NZ = spec.n_states
+    GPU = spec.gpu
 
-    @njit(**KERNEL)
-    def kernel(bodies, absorbers, ex, fl, noise, grid, outputs, gen, gen_bridge, gen_filter):
-        nb = NB
+    @njit(**INLINE)
+    def start(bodies, absorbers, ex, fl, noise, grid, carry, resume, x, v, gen_bridge):
         nf = NF
-        mass, storey_k, storey_c, floor_c = bodies.mass, bodies.storey_k, bodies.storey_c, bodies.floor_c
-        state_x, state_v = bodies.x, bodies.v
-        kind, host, rows = absorbers.kind, absorbers.host, absorbers.rows
-        forces, series_t, series_v, series_ptr, series_target = (ex.forces, ex.series_t, ex.series_v,
-                                                                 ex.series_ptr, ex.series_target)
-        phi, chol, envelopes, c_force, c_ground = fl.phi, fl.chol, fl.envelope, fl.c_force, fl.c_ground
-        z, zn, draws = scratch(NZ), scratch(NZ), scratch(NZ)  # (see ``n_states``)
-        for r in range(NZ):
-            z[r] = fl.z[r]
-            zn[r] = fl.zn[r]
-        sigma, normals, refine = noise.sigma, noise.normals, noise.refine
-        replay = normals.shape[0] > 0
-        piecewise = has_breaks(ex)  # re-evaluate each step's start on its own piece
-        ground = GROUND
-        dt, n_steps, i0, stride, first = grid.dt, grid.n_steps, grid.i0, grid.stride, grid.first
-        out, history, limits, carry = outputs.out, outputs.history, outputs.limits, outputs.carry
-        resume = first > 0  # a later stretch of the path: its state from ``carry``
-        na = kind.shape[0]
-        nz = NZ
-        # the state (copied back at the end) and the scratch, on the stack (see ``jit.intrinsics.scratch``)
-        x, v, force, vn, vt, inv_mass = (scratch(NB), scratch(NB), scratch(NB), scratch(NB), scratch(NB),
-                                         scratch(NB))
-        xt = scratch(NB)  # with vt: copies of the state for the out-of-line calls
-        vh = scratch(NB)  # the kick to the first event of a sub-step
-        for b in range(nb):
-            x[b] = state_x[b]
-            v[b] = state_v[b]
-            inv_mass[b] = 1.0 / mass[b]
-        # per floor: loads at the step's start, end, an event and the midpoint, Wiener
-        # increments (the step's, a sub-step's, the bridge draws), the sticking groups, the
-        # metrics' accumulators
-        load, load_next, load_end, load3 = scratch(NF), scratch(NF), scratch(NF), scratch(NF)
-        dw, dws, dwh, dwc, noise_scale = scratch(NF), scratch(NF), scratch(NF), scratch(NF), scratch(NF)
-        w_at, slot = scratch(NF), scratch(NF)  # the path at a sub-step's start; place among noisy floors
-        memo = scratch(MEMO_SIZE)  # the Brownian trees' descent memo (``brownian.tree_value``)
-        u1, u2, dz = scratch(NF), scratch(NF), scratch(NF)
-        group_mass, group_sum, acc = scratch(NF), scratch(NF), scratch(NF)
-        x_max, drift_max, acc_max, x2_integral = scratch(NF), scratch(NF), scratch(NF), scratch(NF)
-        noisy = 0  # noisy floors (normals a step)
-        for k in range(nf):
-            noise_scale[k] = sigma[k] * math.sqrt(dt)
-            slot[k] = noisy
-            if nf == 1 or noise_scale[k] > 0.0:
-                noisy += 1
+        na = absorbers.kind.shape[0]
+        gl = GridLoads(scratch(NF), scratch(NF), scratch(NF), scratch(0), scratch(NR), scratch(NR),
+                       scratch(0),
+                       scratch(0), scratch(NR), scratch(NR), scratch(0), scratch(0), scratch(NZ), scratch(NZ),
+                       scratch(NZ))
+        noise_scale, slot = scratch(NF), scratch(NF)
+        noisy = noise_scales(noise.sigma, grid.dt, noise_scale, slot)
         # the seed of the Brownian trees inside the steps (``brownian``)
         seed = np.uint64(0)
         high = low = 0.0
@@ -411,330 +358,229 @@ def kdk_kernel(n_bodies: int, n_floors: int, n_rows: int, has_noise: bool, has_i
             else:
                 high, low = uniform(gen_bridge), uniform(gen_bridge)
             seed = (np.uint64(high * 2.0**32) << np.uint64(32)) | np.uint64(low * 2.0**32)
-        # the Runge-Kutta stages' scratch, only where they run
-        a1, a2, a3, xs, v2, v3 = scratch(NS), scratch(NS), scratch(NS), scratch(NS), scratch(NS), scratch(NS)
-        for r in range(nz if not resume else 0):
-            zn[r] = z[r]
-        # phasors (cos, sin) of the harmonic loads at the step's start and at its midpoint, and
-        # their turns in a step and in half a step; on the stack (heap arrays passed to the
-        # inlined load functions cost reference counting in the step loop)
-        pc, ps, mc, ms = scratch(NR), scratch(NR), scratch(NR), scratch(NR)
-        rc, rs, hc, hs = scratch(NR), scratch(NR), scratch(NR), scratch(NR)
-        rotations(forces, dt, rc, rs)
-        rotations(forces, 0.5 * dt, hc, hs)
-        # per absorber: the wall it sticks to, the side it touches (``contact_sides``)
         if GPU:
             stuck, touching = int_scratch(NA), int_scratch(NA)
         else:
             stuck, touching = np.zeros(na, np.int64), np.zeros(na, np.int64)
         if has_hertz and not resume:
-            contact_sides(x, nf, kind, host, rows, touching)
-        # per absorber: a contact's balance over a sub-step and what it owes (``contact_closing``)
+            contact_sides(x, nf, absorbers.kind, absorbers.host, absorbers.rows, touching)
         held, owed = scratch(NA), scratch(NA)
-        # accumulators in registers; written to ``out`` once at the end
-        # (the trapezoid integrals of E1 and x_k^2 as plain sums of the step ends' values, the
-        # window's ends at half weight: one add a step each)
-        work = d_primary = d_absorber = e_sum = e1_max = 0.0
-        loss_sum = n_left = n_right = contact_time = peak_force = 0.0
         replayed = 0
-        pending = limits.shape[0]  # limits not passed yet
         if resume:
-            (work, d_primary, d_absorber, e_sum, e1_max, loss_sum, n_left, n_right, contact_time,
-             peak_force) = restore_accounts(carry)
-            e1_prev, ag_next = carry[E1_PREV], carry[GROUND_NEXT]
-            replayed, pending, h_next = int(carry[REPLAYED]), int(carry[PENDING]), int(carry[HISTORY_NEXT])
-            restore_floors(carry, x_max, drift_max, acc_max, x2_integral, load_next)
+            replayed = int(carry[REPLAYED])
             restore_absorbers(carry, nf, stuck, touching, owed)
-            restore_rows(carry, nf, na, pc, ps)
-        else:
-            e1_prev = primary_energy(mass, storey_k, x, v, nf)
-            h_next = start_history(history, stride, x, nf, e1_prev)
-            ag_next = excitation(0.0, 0.5 * dt, 0.0, forces, series_t, series_v, series_ptr, series_target,
-                                 filtered, c_force, c_ground, z, zn, pc, False, ground, load_next)
-        i = first
-        inside = i0 == 0 or i0 < first
-        while i < n_steps:
-            # rare work between blocks of steps, out of the step loop: the window opening,
-            # the divergence check, history rows
-            if i == i0:
-                inside = True
-                for b in range(nb):  # (copies for the out-of-line call: see ``stored_energy``)
-                    xt[b] = x[b]
-                    vt[b] = v[b]
-                work = stored_energy(xt, vt, mass, nf, storey_k, kind, host, rows)
-                e1_max = e1_prev
-                e_sum = 0.5 * e1_prev
-                attachment_forces(x, v, nf, storey_k, storey_c, floor_c, host, rows, force)
-                geometric_forces(x, nf, host, rows, force, geometric)
-                for k in range(nf):
-                    x2_integral[k] = 0.5 * x[k] * x[k]
-                    acc[k] = force[k] + load_next[k]  # (the floors' forces: see ``acc_max`` below)
-                    if sra:
-                        acc[k] *= inv_mass[k]
-                floor_peaks(x, nf, acc, x_max, drift_max, acc_max)
-                if pending > 0:
-                    pending = first_passages(limits, i * dt, nf, x_max, drift_max, acc_max, inv_mass, not sra,
-                                             e1_max, out)
-            if i % CHECK_EVERY == 0:
-                if diverged(x):
-                    out[STATUS] = STATUS_DIVERGED
-                    break
-                phasors(i * dt, forces, pc, ps)
-            end = block_end(i, n_steps, i0, h_next)
-            start = i
-            for i in range(start, end):
-                t_step = i * dt
-                tm = t_step + 0.5 * dt
-                if filtered:
-                    for r in range(nz):
-                        z[r] = zn[r]
-                    advance_filters(z, zn, t_step, dt, phi, chol, envelopes, gen_filter, draws)
-                for k in range(nf):
-                    load[k] = load_next[k]
-                ag = ag_next
-                if piecewise:  # re-evaluate each step's start on its own piece
-                    ag = excitation(t_step, tm, 0.0, forces, series_t, series_v, series_ptr, series_target,
-                                    filtered, c_force, c_ground, z, zn, pc, True, ground, load)
-                ag3 = 0.0  # the Runge-Kutta step's mid-step loads
-                if sra:
-                    turn(pc, ps, hc, hs, mc, ms)
-                    ag3 = excitation(t_step + 0.5 * dt, tm, 0.5, forces, series_t, series_v, series_ptr,
-                                     series_target, filtered, c_force, c_ground, z, zn, mc, True, ground,
-                                     load3)
-                turn(pc, ps, rc, rs, pc, ps)
-                ag_next = excitation(t_step + dt, tm, 1.0, forces, series_t, series_v, series_ptr,
-                                     series_target, filtered, c_force, c_ground, z, zn, pc, True, ground,
-                                     load_next)
-                # the step's Wiener increments on the noisy floors (two integrals each for
-                # SRA3), from the increment stream or a replayed path: one normal per noisy floor
-                # (SRA3: all floors' first normals, then their second)
-                if has_noise:
-                    for part in range(2 if sra else 1):
-                        for k in range(nf):
-                            if nf == 1 or noise_scale[k] > 0.0:
-                                if replay and sra:  # (no counter carried through the loop otherwise)
-                                    u = normals[replayed]
-                                    replayed += 1
-                                elif replay:  # the sum of the step's fine normals
-                                    u = 0.0
-                                    for f in range(refine):
-                                        u += normals[(i * refine + f) * noisy + int(slot[k])]
-                                    u /= math.sqrt(refine)
-                                else:
-                                    u = normal(gen)
-                                if part == 0:
-                                    u1[k] = u
-                                else:
-                                    u2[k] = u
-                    for k in range(nf):
-                        dw[k] = noise_scale[k] * u1[k]
-                        if sra:
-                            dz[k] = 0.5 * noise_scale[k] * (u1[k] + u2[k] / ROOT3)  # sigma I10 / h
-                if sra:
-                    dwork, dprimary, dabsorber = sra3_step(x, v, vn, force, a1, a2, a3, xs, v2, v3, load,
-                                                           load_next, load3, ag, ag_next, ag3, dw, dz, dt,
-                                                           mass, inv_mass, storey_k, storey_c, floor_c, host,
-                                                           rows, inside, ground, geometric)
-                    work += dwork
-                    d_primary += dprimary
-                    d_absorber += dabsorber
-                    for k in range(nf):
-                        acc[k] = a1[k] + ag  # the step start's absolute acceleration, for the peaks
-                left = dt
-                t = t_step
-                off = 0.0  # the sub-step's start in the step
-                path = (seed, i, dt, refine, noisy, replay)
-                if TREE:
-                    for k in range(nf):
-                        w_at[k] = 0.0
-                n_impacts = 0
-                capped = False
-                for event in range(EVENTS):
-                    if event > 0 and left <= 0.0:
-                        break
-                    attachment_forces(x, v, nf, storey_k, storey_c, floor_c, host, rows, force)
-                    contact_forces(x, nf, kind, host, rows, force, has_hertz)
-                    geometric_forces(x, nf, host, rows, force, geometric)
-                    # the sub-step: the rest of the step, or a Hertz contact's share of it; the
-                    # last pass a step allows takes the rest at once, with no events
-                    search = event < EVENTS - 1
-                    s = left
-                    if has_hertz and not search:
-                        capped = True
-                    elif has_hertz and any_set(touching):
-                        s = min(left, contact_step(x, v, nf, mass, host, rows, touching))
-                    if TREE:
-                        increments(path, dw, off, s, left, w_at, sigma, normals, slot, memo, dws)
-                    else:
-                        for k in range(nf):
-                            dws[k] = dw[k]
-                    for k in range(nf):
-                        dwh[k] = 0.5 * dws[k]
-                    kick(v, 0.5 * s, dwh, load, ag, force, inv_mass, vn, ground)
-                    if has_impact:
-                        stick_together(mass, vn, nf, stuck, host, group_mass, group_sum, True)
-                    # the first impact, contact onset or contact end in the sub-step
-                    hit, side, s_hit, hit_event, hit_wall = -1, 0, s, NONE, 0.0
-                    if search and ((has_impact and n_impacts < MAX_EVENTS) or has_hertz):
-                        for a in range(na):
-                            h = host_of(host, a, nf)
-                            j = nf + a
-                            u_end = x[j] - x[h] + s * (vn[j] - vn[h])
-                            event, sa, wall = event_ahead(kind[a], stuck[a], touching[a], rows[a, CLEARANCE],
-                                                          rows[a, WALL_LO], rows[a, WALL_HI], u_end,
-                                                          has_impact, n_impacts < MAX_EVENTS, has_hertz)
-                            if event != NONE:
-                                sq = gap_sign(event, sa)
-                                sc = crossing(x, v, s, left, path, dw, off, w_at, sigma, normals, slot, memo,
-                                              load, ag, force, mass, inv_mass, stuck, host, a, sq, sq * wall,
-                                              vt, dwc, group_mass, group_sum, ground, has_impact, TREE)
-                                if hit < 0 or sc < s_hit:
-                                    hit, side, s_hit, hit_event, hit_wall = a, sa, sc, event, wall
-                                    for b in range(nb):  # the root search's kick to its root
-                                        vh[b] = vt[b]
-                                    for k in range(nf):
-                                        dwh[k] = dwc[k]
-                        if hit >= 0:  # the first half kick to the event: the search's last trial
-                            s = s_hit
-                            for k in range(nf):
-                                dws[k] = 2.0 * dwh[k]
-                            for b in range(nb):
-                                vn[b] = vh[b]
-                    if inside:
-                        work += 0.5 * impulse_work(load, s, dws, v, vn) - (
-                            0.5 * ag * s * momentum(mass, v, vn) if ag != 0.0 else 0.0)
-                        d_primary += structure_dissipation(v, vn, nf, storey_c, floor_c, s)
-                        d_absorber += absorber_dissipation(v, vn, nf, host, rows, s)
-                        if has_hertz:  # contact time: the sub-steps that start in contact
-                            for a in range(na):
-                                if touching[a] != 0:
-                                    contact_time += s
-                    if has_hertz:
-                        contact_start(x, v, vn, s, nf, host, rows, touching, held)
-                    for b in range(nb):
-                        x[b] += s * vn[b]
-                        v[b] = vn[b]
-                    # closing half kick with the forces at the new positions (its bookkeeping is
-                    # written out like the first kick's: an inlined helper for both measured 40 %
-                    # slower)
-                    ag_end = ag_next
-                    if (has_impact or has_hertz) and s < left:
-                        ag_end = excitation(t + s, tm, (t + s - t_step) / dt, forces, series_t, series_v,
-                                            series_ptr, series_target, filtered, c_force, c_ground, z, zn, pc,
-                                            False, ground, load_end)
-                    else:
-                        for k in range(nf):
-                            load_end[k] = load_next[k]
-                    attachment_forces(x, v, nf, storey_k, storey_c, floor_c, host, rows, force)
-                    contact_forces(x, nf, kind, host, rows, force, has_hertz)
-                    geometric_forces(x, nf, host, rows, force, geometric)
-                    kick(v, 0.5 * s, dwh, load_end, ag_end, force, inv_mass, vn, ground)
-                    if has_hertz:
-                        contact_closing(x, v, vn, s, nf, inv_mass, host, rows, touching, held, owed)
-                    if has_impact:
-                        stick_together(mass, vn, nf, stuck, host, group_mass, group_sum, False)
-                    if has_hertz:
-                        contact_owed(v, vn, nf, host, touching, held, owed)
-                    if inside:
-                        work += 0.5 * impulse_work(load_end, s, dws, v, vn) - (
-                            0.5 * ag_end * s * momentum(mass, v, vn) if ag_end != 0.0 else 0.0)
-                        d_primary += structure_dissipation(v, vn, nf, storey_c, floor_c, s)
-                        d_absorber += absorber_dissipation(v, vn, nf, host, rows, s)
-                    for b in range(nb):
-                        v[b] = vn[b]
-                    if has_hertz and inside:
-                        for a in range(na):
-                            if kind[a] == HERTZ:
-                                peak_force = max(peak_force, contact_force(x, nf, a, host, rows))
-                    if not (has_impact or has_hertz) or (hit < 0 and s >= left):
-                        break
-                    # the sub-step's end: an impact, a contact onset or a contact sub-step's end
-                    t += s
-                    left -= s
-                    off += s
-                    ag = ag_end
-                    for k in range(nf):
-                        w_at[k] += dws[k]
-                        load[k] = load_end[k]
-                    if hit >= 0 and hit_event != EXIT:
-                        h = host_of(host, hit, nf)
-                        j = nf + hit
-                        if inside:
-                            if side < 0:
-                                n_left += 1.0
-                            else:
-                                n_right += 1.0
-                    if has_hertz and hit >= 0 and kind[hit] == HERTZ:  # onto or off the contact surface
-                        h = host_of(host, hit, nf)
-                        j = nf + hit
-                        x[j] = x[h] + hit_wall
-                        touching[hit] = 0 if hit_event == EXIT else side
-                    elif has_impact and hit >= 0:  # the impact, at t + s
-                        x[j] = x[h] + hit_wall
-                        gain = (force[j] / mass[j] - (force[h] + load_end[h]) / mass[h]) * dt
-                        # the last impact a step may resolve ends a chatter sequence: inelastic collapse
-                        last = n_impacts == MAX_EVENTS - 1
-                        loss = resolve_impact(mass, v, nf, hit, side, gain, rows[hit, RESTITUTION], last,
-                                              stuck, host)
-                        n_impacts += 1
-                        if inside:
-                            loss_sum += loss
-                        capped = capped or last
-                if (has_impact or has_hertz) and capped:
-                    out[CAPPED] += 1
-                if has_hertz and capped:  # the last pass took no events: the contacts as they are
-                    contact_sides(x, nf, kind, host, rows, touching)
-                if has_impact:
-                    keep_in_cavities(x, nf, kind, host, rows)
-                    pin_to_walls(x, nf, stuck, host, rows)
-                e1 = primary_energy(mass, storey_k, x, v, nf)
-                if inside:
-                    e_sum += e1
-                    e1_max = max(e1_max, e1)
-                    for k in range(nf):
-                        x2_integral[k] += x[k] * x[k]
-                        if not sra:  # the forces on the floor at the step's end
-                            acc[k] = force[k] + load_end[k]
-                    floor_peaks(x, nf, acc, x_max, drift_max, acc_max)
-                    if pending > 0:
-                        pending = first_passages(limits, t_step + dt, nf, x_max, drift_max, acc_max, inv_mass,
-                                                 not sra, e1_max, out)
-                e1_prev = e1
-            i = end
-            if i == h_next:
-                h_next = record_history(history, stride, h_next, x, nf, e1_prev)
-        if carry.shape[0] > 0:  # the path's state for its next stretch, raw
-            save_accounts(carry, work, d_primary, d_absorber, e_sum, e1_max, loss_sum, n_left, n_right,
-                          contact_time, peak_force)
-            carry[E1_PREV], carry[GROUND_NEXT] = e1_prev, ag_next
-            carry[REPLAYED], carry[PENDING], carry[HISTORY_NEXT] = replayed, pending, h_next
-            carry[SEED_HIGH], carry[SEED_LOW] = high, low
-            save_floors(carry, x_max, drift_max, acc_max, x2_integral, load_next)
-            save_absorbers(carry, nf, stuck, touching, owed)
-            save_rows(carry, nf, na, pc, ps)
-        if diverged(x):
-            out[STATUS] = STATUS_DIVERGED
-        for b in range(nb):
-            state_x[b] = x[b]
-            state_v[b] = v[b]
-        for r in range(NZ):
-            fl.z[r] = z[r]
-            fl.zn[r] = zn[r]
-        e_integral = 0.0
-        if inside and i0 < n_steps:  # (the window's last state at half weight)
-            e_integral = (e_sum - 0.5 * e1_prev) * dt
-            for k in range(nf):
-                x2_integral[k] = (x2_integral[k] - 0.5 * x[k] * x[k]) * dt
-                if not sra:  # peak absolute acceleration: the peak floor force over the mass
-                    acc_max[k] *= inv_mass[k]
-        write_accounts(out, work, d_primary, d_absorber, e_integral, e1_max, loss_sum, n_left, n_right)
-        if has_hertz:
-            out[CONTACT_TIME] = contact_time
-            out[PEAK_FORCE] = peak_force
-        for b in range(nb):
-            xt[b] = x[b]
-            vt[b] = v[b]
-        out[FINAL_ENERGY] = stored_energy(xt, vt, mass, nf, storey_k, kind, host, rows)
-        write_floor_metrics(out, nf, x_max, drift_max, acc_max, x2_integral)
+        ag_next = start_loads(gl, ex, fl, grid.dt, carry, resume, nf, na, filtered, ground)
+        own = KdkState(scratch(NB), scratch(NB), scratch(NB), scratch(NB), gl, scratch(NF), scratch(NF),
+                       scratch(NF), scratch(NF), noise_scale, slot, scratch(NF), scratch(NF), scratch(NF),
+                       scratch(NF), scratch(MEMO_SIZE), stuck, touching, held, owed, noisy, seed, high, low)
+        return own, (ag_next, replayed)
 
-    return kernel
+    @njit(**INLINE)
+    def opening(own, x, v, inv_mass, acc, bodies, absorbers):
+        force = own.force
+        attachment_forces(x, v, NF, bodies.storey_k, bodies.storey_c, bodies.floor_c, absorbers.host,
+                          absorbers.rows, force)
+        geometric_forces(x, NF, absorbers.host, absorbers.rows, force, geometric)
+        for k in range(NF):
+            acc[k] = force[k] + own.gl.load_next[k]  # (the floors' forces: the driver's ``force_peaks``)
+
+    @njit(**INLINE)
+    def check(own, i, dt, ex):
+        phasors(i * dt, ex.forces, own.gl.pc, own.gl.ps)
+
+    @njit(**INLINE)
+    def save(carry, own, sc):
+        save_grid_loads(carry, own.gl, sc[0], NF, own.stuck.shape[0])
+        carry[REPLAYED], carry[SEED_HIGH], carry[SEED_LOW] = sc[1], own.high, own.low
+        save_absorbers(carry, NF, own.stuck, own.touching, own.owed)
+
+    @njit(**INLINE)
+    def finish(own, sc, fl, out):
+        finish_loads(own.gl, fl)
+
+    @njit(**INLINE)
+    def step(i, x, v, inv_mass, acc, own, sc, acct, inside, peaks, bodies, absorbers, ex, fl, noise, grid,
+             outputs, gen, gen_filter):
+        nb = NB
+        nf = NF
+        na = NA
+        mass, storey_k, storey_c, floor_c = bodies.mass, bodies.storey_k, bodies.storey_c, bodies.floor_c
+        kind, host, rows = absorbers.kind, absorbers.host, absorbers.rows
+        forces, series_t, series_v, series_ptr, series_target = (ex.forces, ex.series_t, ex.series_v,
+                                                                 ex.series_ptr, ex.series_target)
+        c_force, c_ground = fl.c_force, fl.c_ground
+        sigma, normals, refine = noise.sigma, noise.normals, noise.refine
+        dt = grid.dt
+        out = outputs.out
+        force, vn, vt, vh, gl = own.force, own.vn, own.vt, own.vh, own.gl
+        load, load_next, load_end, pc, z, zn = gl.load, gl.load_next, gl.load_end, gl.pc, gl.z, gl.zn
+        dw, dws, dwh, dwc, w_at = own.dw, own.dws, own.dwh, own.dwc, own.w_at
+        slot, memo, stuck, touching = own.slot, own.memo, own.stuck, own.touching
+        held, owed = own.held, own.owed
+        group_mass, group_sum = own.group_mass, own.group_sum
+        ag_next, replayed = sc
+        work, d_primary, d_absorber, e_sum, e1_max, loss_sum, n_left, n_right, contact_time, peak_force, \
+            pending = acct
+        t_step = i * dt
+        tm = t_step + 0.5 * dt
+        ag, ag_next, _ = step_loads(i, dt, gl, ex, fl, ag_next, has_breaks(ex), False, filtered, ground,
+                                    gen_filter)
+        # the step's Wiener increments on the noisy floors: one normal per noisy floor
+        if has_noise:
+            replayed = step_normals(i, 1, own.noise_scale, slot, own.noisy, normals, refine, replayed, gen,
+                                    own.u1, own.u1)
+            for k in range(nf):
+                dw[k] = own.noise_scale[k] * own.u1[k]
+        left = dt
+        t = t_step
+        off = 0.0  # the sub-step's start in the step
+        path = (own.seed, i, dt, refine, own.noisy, normals.shape[0] > 0)
+        if TREE:
+            for k in range(nf):
+                w_at[k] = 0.0
+        n_impacts = 0
+        capped = False
+        for event in range(EVENTS):
+            if event > 0 and left <= 0.0:
+                break
+            attachment_forces(x, v, nf, storey_k, storey_c, floor_c, host, rows, force)
+            contact_forces(x, nf, kind, host, rows, force, has_hertz)
+            geometric_forces(x, nf, host, rows, force, geometric)
+            # the sub-step: the rest of the step, or a Hertz contact's share of it; the
+            # last pass a step allows takes the rest at once, with no events
+            search = event < EVENTS - 1
+            s = left
+            if has_hertz and not search:
+                capped = True
+            elif has_hertz and any_set(touching):
+                s = min(left, contact_step(x, v, nf, mass, host, rows, touching))
+            if TREE:
+                increments(path, dw, off, s, left, w_at, sigma, normals, slot, memo, dws)
+            else:
+                for k in range(nf):
+                    dws[k] = dw[k]
+            for k in range(nf):
+                dwh[k] = 0.5 * dws[k]
+            kick(v, 0.5 * s, dwh, load, ag, force, inv_mass, vn, ground)
+            if has_impact:
+                stick_together(mass, vn, nf, stuck, host, group_mass, group_sum, True)
+            # the first impact, contact onset or contact end in the sub-step
+            hit, side, s_hit, hit_event, hit_wall = -1, 0, s, NONE, 0.0
+            if search and ((has_impact and n_impacts < MAX_EVENTS) or has_hertz):
+                for a in range(na):
+                    h = host_of(host, a, nf)
+                    j = nf + a
+                    u_end = x[j] - x[h] + s * (vn[j] - vn[h])
+                    event, sa, wall = event_ahead(kind[a], stuck[a], touching[a], rows[a, CLEARANCE],
+                                                  rows[a, WALL_LO], rows[a, WALL_HI], u_end,
+                                                  has_impact, n_impacts < MAX_EVENTS, has_hertz)
+                    if event != NONE:
+                        sq = gap_sign(event, sa)
+                        sc_ = crossing(x, v, s, left, path, dw, off, w_at, sigma, normals, slot, memo,
+                                       load, ag, force, mass, inv_mass, stuck, host, a, sq, sq * wall,
+                                       vt, dwc, group_mass, group_sum, ground, has_impact, TREE)
+                        if hit < 0 or sc_ < s_hit:
+                            hit, side, s_hit, hit_event, hit_wall = a, sa, sc_, event, wall
+                            for b in range(nb):  # the root search's kick to its root
+                                vh[b] = vt[b]
+                            for k in range(nf):
+                                dwh[k] = dwc[k]
+                if hit >= 0:  # the first half kick to the event: the search's last trial
+                    s = s_hit
+                    for k in range(nf):
+                        dws[k] = 2.0 * dwh[k]
+                    for b in range(nb):
+                        vn[b] = vh[b]
+            if inside:
+                work += 0.5 * impulse_work(load, s, dws, v, vn) - (
+                    0.5 * ag * s * momentum(mass, v, vn) if ag != 0.0 else 0.0)
+                d_primary += structure_dissipation(v, vn, nf, storey_c, floor_c, s)
+                d_absorber += absorber_dissipation(v, vn, nf, host, rows, s)
+                if has_hertz:  # contact time: the sub-steps that start in contact
+                    for a in range(na):
+                        if touching[a] != 0:
+                            contact_time += s
+            if has_hertz:
+                contact_start(x, v, vn, s, nf, host, rows, touching, held)
+            for b in range(nb):
+                x[b] += s * vn[b]
+                v[b] = vn[b]
+            # closing half kick with the forces at the new positions (its bookkeeping is
+            # written out like the first kick's: an inlined helper for both measured 40 %
+            # slower)
+            ag_end = ag_next
+            if (has_impact or has_hertz) and s < left:
+                ag_end = excitation(t + s, tm, (t + s - t_step) / dt, forces, series_t, series_v,
+                                    series_ptr, series_target, filtered, c_force, c_ground, z, zn, pc,
+                                    False, ground, load_end)
+            else:
+                for k in range(nf):
+                    load_end[k] = load_next[k]
+            attachment_forces(x, v, nf, storey_k, storey_c, floor_c, host, rows, force)
+            contact_forces(x, nf, kind, host, rows, force, has_hertz)
+            geometric_forces(x, nf, host, rows, force, geometric)
+            kick(v, 0.5 * s, dwh, load_end, ag_end, force, inv_mass, vn, ground)
+            if has_hertz:
+                contact_closing(x, v, vn, s, nf, inv_mass, host, rows, touching, held, owed)
+            if has_impact:
+                stick_together(mass, vn, nf, stuck, host, group_mass, group_sum, False)
+            if has_hertz:
+                contact_owed(v, vn, nf, host, touching, held, owed)
+            if inside:
+                work += 0.5 * impulse_work(load_end, s, dws, v, vn) - (
+                    0.5 * ag_end * s * momentum(mass, v, vn) if ag_end != 0.0 else 0.0)
+                d_primary += structure_dissipation(v, vn, nf, storey_c, floor_c, s)
+                d_absorber += absorber_dissipation(v, vn, nf, host, rows, s)
+            for b in range(nb):
+                v[b] = vn[b]
+            if has_hertz and inside:
+                for a in range(na):
+                    if kind[a] == HERTZ:
+                        peak_force = max(peak_force, contact_force(x, nf, a, host, rows))
+            if not (has_impact or has_hertz) or (hit < 0 and s >= left):
+                break
+            # the sub-step's end: an impact, a contact onset or a contact sub-step's end
+            t += s
+            left -= s
+            off += s
+            ag = ag_end
+            for k in range(nf):
+                w_at[k] += dws[k]
+                load[k] = load_end[k]
+            if hit >= 0 and hit_event != EXIT:
+                h = host_of(host, hit, nf)
+                j = nf + hit
+                if inside:
+                    if side < 0:
+                        n_left += 1.0
+                    else:
+                        n_right += 1.0
+            if has_hertz and hit >= 0 and kind[hit] == HERTZ:  # onto or off the contact surface
+                h = host_of(host, hit, nf)
+                j = nf + hit
+                x[j] = x[h] + hit_wall
+                touching[hit] = 0 if hit_event == EXIT else side
+            elif has_impact and hit >= 0:  # the impact, at t + s
+                x[j] = x[h] + hit_wall
+                gain = (force[j] / mass[j] - (force[h] + load_end[h]) / mass[h]) * dt
+                # the last impact a step may resolve ends a chatter sequence: inelastic collapse
+                last = n_impacts == MAX_EVENTS - 1
+                loss = resolve_impact(mass, v, nf, hit, side, gain, rows[hit, RESTITUTION], last,
+                                      stuck, host)
+                n_impacts += 1
+                if inside:
+                    loss_sum += loss
+                capped = capped or last
+        if (has_impact or has_hertz) and capped:
+            out[CAPPED] += 1
+        if has_hertz and capped:  # the last pass took no events: the contacts as they are
+            contact_sides(x, nf, kind, host, rows, touching)
+        if has_impact:
+            keep_in_cavities(x, nf, kind, host, rows)
+            pin_to_walls(x, nf, stuck, host, rows)
+        for k in range(nf):  # the forces on the floor at the step's end, for the peaks
+            acc[k] = force[k] + load_end[k]
+        return (ag_next, replayed), (work, d_primary, d_absorber, e_sum, e1_max, loss_sum, n_left, n_right,
+                                     contact_time, peak_force, pending)
+
+    return Step(start, opening, check, step, save, finish, integrates=False, force_peaks=True)

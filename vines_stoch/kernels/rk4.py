@@ -18,58 +18,34 @@ The outer step ``dt`` never has to be shrunk by the user for contact.
 from __future__ import annotations
 
 from functools import cache
+from typing import Any, NamedTuple
 
 import numpy as np
 from numba import njit
 
 from ..jit.flags import INLINE, KERNEL
-from ..jit.intrinsics import any_set, copy_into, int_scratch, pick, put, runtime_value, scratch
-from ..outputs import (
-    CAPPED,
-    CONTACT_TIME,
-    FINAL_ENERGY,
-    PEAK_FORCE,
-    STATUS,
-    STATUS_DIVERGED,
-)
+from ..jit.intrinsics import any_set, int_scratch, pick, put, runtime_value, scratch
+from ..outputs import CAPPED
 from ..physics.absorbers import CLEARANCE, DAMPING, RESTITUTION, WALL_HI, WALL_LO
 from ..physics.structure import host_of, primary_energy, structure_power
-from .carry import (
-    HISTORY_NEXT,
-    NEXT_SAMPLE,
-    PENDING,
-    restore_absorbers,
-    restore_accounts,
-    restore_floors,
-    save_absorbers,
-    save_accounts,
-    save_floors,
-)
+from .carry import restore_absorbers, save_absorbers
 from .common import (
-    CHECK_EVERY,
     MAX_EVENTS,
     MAX_SUBSTEPS,
     accelerate,
     attachment_forces,
-    block_end,
     contact_force,
     contact_forces,
     contact_step,
-    diverged,
     first_passages,
     floor_peaks,
     geometric_forces,
     keep_in_cavities,
     pin_to_walls,
-    record_history,
-    record_sample,
     resolve_impact,
-    start_history,
     stick_together,
-    stored_energy,
-    write_floor_metrics,
 )
-from .energy import write_accounts
+from .driver import Step
 from .events import EXIT, IMPACT_EVENT, NONE, ONSET, event_ahead, gap_sign
 from .loads import applied, has_breaks, next_break
 
@@ -140,7 +116,8 @@ def _wall_accelerations(x, v, t, nf, mass, inv_mass, storey_k, storey_c, floor_c
 
 
 @njit(**INLINE)
-def rk4_step(x, v, t, h, xo, vo, acc, xs, vs, x2, a0, mass, inv_mass, storey_k, storey_c, floor_c, kind, host,
+def rk4_update(x, v, t, h, xo, vo, acc, xs, vs, x2, a0, mass, inv_mass, storey_k, storey_c, floor_c, kind,
+               host,
              rows, forces, series_t, series_v, series_ptr, series_target, stuck, load, group_mass, group_sum,
              sticking, contact):
     """One RK4 step of size ``h`` from ``(x, v)`` into ``(xo, vo)``; returns the increments
@@ -219,231 +196,209 @@ def next_event(x, xn, h, nf, kind, host, rows, stuck, touching):
     return event_kind, hit, hit_side, first, hit_wall
 
 
-@cache
-def rk4_kernel(n_bodies: int, n_floors: int, has_impact: bool, has_hertz: bool, gpu: bool = False,
-               geometric: bool = False):
-    """The RK4 loop specialised to a scene's structure (the numbers of bodies and of floors, impact
-    absorbers, Hertz absorbers); Poincare sampling for the regime (a period), loads with kinks or
-    jumps (``loads.has_breaks``) and limits to watch are run-time values.  It takes the arguments
-    of ``kdk.kdk_kernel`` (no noise, no generators).  ``gpu``: the loop the cuda backend compiles
-    (as ``kdk.kdk_kernel``: flags on the stack, no slice copies).
-    """
-    NB = n_bodies
-    NF = n_floors
-    NA = n_bodies - n_floors
-    GPU = gpu
-    GEO = GEOMETRIC_FORCES if geometric else 0
+class Rk4State(NamedTuple):
+    """The RK4 step's state and scratch on the loop's stack: per body the sub-step's end state,
+    the stages' accelerations, state and the copies for the out-of-line calls (so that the
+    stages' arrays stay in registers); per floor the loads, the sticking groups, the sub-step's
+    ``x_k^2`` integrals and start accelerations, and the out-of-line calls' own; per absorber
+    the wall it sticks to, the side it touches and a contact's debt (none here: the carry's
+    block stays zero)."""
 
-    @njit(**KERNEL)
-    def kernel(bodies, absorbers, ex, fl, noise, grid, outputs, gen, gen_bridge, gen_filter):
-        nb = NB
-        nf = NF
-        mass, storey_k, storey_c, floor_c = bodies.mass, bodies.storey_k, bodies.storey_c, bodies.floor_c
-        state_x, state_v = bodies.x, bodies.v
-        kind, host, rows = absorbers.kind, absorbers.host, absorbers.rows
-        forces, series_t, series_v, series_ptr, series_target = (ex.forces, ex.series_t, ex.series_v,
-                                                                 ex.series_ptr, ex.series_target)
-        dt, n_steps, i0, period, sample_from, stride, first = (grid.dt, grid.n_steps, grid.i0, grid.period,
-                                                                grid.sample_from, grid.stride, grid.first)
-        out, samples, history, limits, carry = (outputs.out, outputs.samples, outputs.history, outputs.limits,
-                                                outputs.carry)
-        resume = first > 0  # a later stretch of the path: its state from ``carry``
-        na = kind.shape[0]
-        # the state and the stages' scratch on the stack (see ``jit.intrinsics.scratch``)
-        x, v, xn, vn, xp, vp = scratch(NB), scratch(NB), scratch(NB), scratch(NB), scratch(NB), scratch(NB)
-        acc, xs, vs, inv_mass = scratch(NB), scratch(NB), scratch(NB), scratch(NB)
-        # per floor: loads, sticking groups, the step's x^2 integrals and start accelerations,
-        # the metrics' accumulators
-        load, group_mass, group_sum, x2, a0 = scratch(NF), scratch(NF), scratch(NF), scratch(NF), scratch(NF)
-        x_max, drift_max, acc_max, x2_integral = scratch(NF), scratch(NF), scratch(NF), scratch(NF)
-        # the out-of-line calls' own arrays, so that the stages' stay in registers
-        acc_wall, x_event, load_wall, gm_wall, gs_wall = (scratch(NB), scratch(NB), scratch(NF), scratch(NF),
-                                                          scratch(NF))
-        for b in range(nb):
-            x[b] = state_x[b]
-            v[b] = state_v[b]
-            inv_mass[b] = 1.0 / mass[b]
-        # per absorber: its wall if stuck, its contact side (on the stack for the GPU: ``kdk_kernel``)
+    xn: Any
+    vn: Any
+    acc: Any
+    xs: Any
+    vs: Any
+    x_event: Any
+    acc_wall: Any
+    load: Any
+    group_mass: Any
+    group_sum: Any
+    x2: Any
+    a0: Any
+    load_wall: Any
+    gm_wall: Any
+    gs_wall: Any
+    stuck: Any
+    touching: Any
+    owed: Any
+
+
+@cache
+def rk4_step(spec) -> Step:
+    """The RK4 step with located events for a loop specialised to ``spec`` (``driver.Spec``:
+    the bodies and floors, impact and Hertz absorbers, geometric attachments; no noise), as the
+    driver's ``Step``.  It integrates the energy accounts with its stages and observes the peaks
+    and first passages at each sub-step's end (``integrates``); loads with kinks or jumps
+    (``loads.has_breaks``) end its sub-steps (a run-time value).  ``spec.gpu``: per-absorber flags
+    on the stack (as ``kdk.kdk_step``)."""
+    NB = spec.n_bodies
+    NF = spec.n_floors
+    NA = spec.n_bodies - spec.n_floors
+    GPU = spec.gpu
+    GEO = GEOMETRIC_FORCES if spec.geometric else 0
+    has_impact, has_hertz = spec.has_impact, spec.has_hertz
+
+    @njit(**INLINE)
+    def start(bodies, absorbers, ex, fl, noise, grid, carry, resume, x, v, gen_bridge):
+        na = absorbers.kind.shape[0]
         if GPU:
             stuck, touching = int_scratch(NA), int_scratch(NA)
         else:
             stuck, touching = np.zeros(na, np.int64), np.zeros(na, np.int64)
-        owed = scratch(NA)  # (no contact debts: the carry's block stays zero)
-        # the accounts in registers (``energy``), written to ``out`` once at the end
-        work = d_primary = d_absorber = e_integral = e1_max = 0.0
-        loss_sum = n_left = n_right = contact_time = peak_force = 0.0
+        owed = scratch(NA)
         if resume:
-            (work, d_primary, d_absorber, e_integral, e1_max, loss_sum, n_left, n_right, contact_time,
-             peak_force) = restore_accounts(carry)
-            next_sample, pending = int(carry[NEXT_SAMPLE]), int(carry[PENDING])
-            h_next = int(carry[HISTORY_NEXT])
-            restore_floors(carry, x_max, drift_max, acc_max, x2_integral, load)  # (``load``: scratch here)
-            restore_absorbers(carry, nf, stuck, touching, owed)
-        else:
-            next_sample = 0
-            h_next = start_history(history, stride, x, nf, primary_energy(mass, storey_k, x, v, nf))
-            pending = limits.shape[0]  # limits not passed yet
-        sampling = period > 0.0  # Poincare samples for the regime
-        piecewise = has_breaks(ex)  # sub-steps end at the loads' kinks and jumps
-        i = first
-        inside = i0 == 0 or i0 < first
-        while i < n_steps:
-            # rare work between blocks of steps (see ``block_end``)
-            if i == i0:
-                inside = True
-                # (x, v reach out-of-line calls anyway)
-                work = stored_energy(x, v, mass, nf, storey_k, kind, host, rows)
-                e1_max = primary_energy(mass, storey_k, x, v, nf)
-                for k in range(nf):  # (the accelerations from the window's first sub-step on)
-                    x_max[k] = abs(x[k])
-                    drift_max[k] = abs(x[k] - x[k - 1] if k > 0 else x[k])
-                if pending > 0:
-                    pending = first_passages(limits, i * dt, nf, x_max, drift_max, acc_max, inv_mass, False,
-                                             e1_max, out)
-            if i % CHECK_EVERY == 0 and diverged(x):
-                out[STATUS] = STATUS_DIVERGED
-                break
-            end = block_end(i, n_steps, i0, h_next)
-            start = i
-            for i in range(start, end):
-                if sampling:
-                    if GPU:  # (on the CPU this loop ran 6 % slower than a slice copy; copy_into matches one)
-                        for b in range(nb):
-                            xp[b] = x[b]
-                            vp[b] = v[b]
-                    else:
-                        copy_into(xp, x)
-                        copy_into(vp, v)
-                t = i * dt
-                left = dt
-                n_impacts = 0
-                sub = 0
-                # phase 0: a new sub-step; 1 .. NEWTON_ITERATIONS: Newton iterations on the
-                # length of the sub-step that ends at an event; -1: the sub-step at the final
-                # length.  One call site of the (inlined) step for all of them.
-                phase = 0
-                while True:
-                    if phase == 0:
-                        sticking = has_impact and any_set(stuck)
-                        contact = has_hertz and any_set(touching)
-                        h = left
-                        if contact:
-                            h = min(left, contact_step(x, v, nf, mass, host, rows, touching))
-                        if piecewise:  # sub-steps end at the loads' kinks and jumps
-                            tb = next_break(t + 1e-9 * dt, ex)
-                            if tb < t + h - 1e-9 * dt:
-                                h = tb - t
-                        capped = sub == MAX_SUBSTEPS - 1 or n_impacts >= MAX_EVENTS
-                        if capped:  # take the rest of the step at once, keep absorbers in their cavity
-                            h = left
-                            out[CAPPED] += 1
-                        tau = h
-                    inc = rk4_step(x, v, t, tau, xn, vn, acc, xs, vs, x2, a0, mass, inv_mass, storey_k,
-                                   storey_c, floor_c, kind, host, rows, forces, series_t, series_v,
-                                   series_ptr, series_target, stuck, load, group_mass, group_sum, sticking,
-                                   (HERTZ_FORCES if contact else 0) | GEO)
-                    if phase == 0:
-                        event_kind, q, side, j, hf, sign, wall = NONE, -1, 0, 0, 0, 0, 0.0
-                        if (has_impact or has_hertz) and not capped:
-                            for b in range(nb):
-                                x_event[b] = xn[b]
-                            event_kind, q, side, tau, wall = next_event(x, x_event, h, nf, kind, host, rows,
-                                                                        stuck, touching)
-                        if event_kind != NONE:
-                            j, hf, sign = nf + q, host_of(host, q, nf), gap_sign(event_kind, side)
-                            phase = 1
-                            continue
-                    elif (has_impact or has_hertz) and phase > 0:
-                        approach = sign * (pick(vn, j) - vn[hf])
-                        if approach > 0.0:
-                            correction = sign * (pick(xn, j) - xn[hf] - wall) / approach
-                            tau = min(max(tau - correction, 0.0), h)
-                            phase = (phase + 1 if abs(correction) > 1e-15 * dt and phase < NEWTON_ITERATIONS
-                                     else -1)
-                            continue
-                    phase = 0
-                    h = tau
-                    done = event_kind == NONE and h == left
-                    if inside:
-                        work += inc[0]
-                        d_primary += inc[1]
-                        d_absorber += inc[2]
-                        e_integral += inc[3]
-                        for k in range(nf):
-                            x2_integral[k] += x2[k]
-                        # peaks: the state at the sub-step's end, the accelerations at its start
-                        floor_peaks(xn, nf, a0, x_max, drift_max, acc_max)
-                        e1_max = max(e1_max, primary_energy(mass, storey_k, xn, vn, nf))
-                        if pending > 0:
-                            pending = first_passages(limits, t + h, nf, x_max, drift_max, acc_max, inv_mass,
-                                                     False, e1_max, out)
-                    for b in range(nb):
-                        x[b] = xn[b]
-                        v[b] = vn[b]
-                    if has_hertz and inside and contact:
-                        for c in range(na):
-                            if touching[c] != 0:
-                                contact_time += h
-                                peak_force = max(peak_force, contact_force(x, nf, c, host, rows))
-                    t += h
-                    left -= h
-                    if done:
-                        if capped:
-                            keep_in_cavities(x, nf, kind, host, rows)
-                        break
-                    if has_impact and event_kind == IMPACT_EVENT:
-                        n_impacts += 1
-                        put(x, j, x[hf] + wall)
-                        wall_accelerations(x, v, t, nf, mass, inv_mass, storey_k, storey_c, floor_c, kind,
-                                           host, rows, forces, series_t, series_v, series_ptr, series_target,
-                                           stuck, False, acc_wall, load_wall, gm_wall, gs_wall, True,
-                                           (HERTZ_FORCES if contact else 0) | GEO)
-                        # the last impact a step may resolve ends a chatter sequence: inelastic collapse
-                        gain = (pick(acc_wall, j) - acc_wall[hf]) * dt
-                        loss = resolve_impact(mass, v, nf, q, side, gain, rows[q, RESTITUTION],
-                                              n_impacts >= MAX_EVENTS, stuck, host)
-                        if inside:
-                            loss_sum += loss
-                            e1_max = max(e1_max, primary_energy(mass, storey_k, x, v, nf))
-                    elif has_hertz and event_kind == ONSET:
-                        touching[q] = side
-                    elif has_hertz and event_kind == EXIT:
-                        touching[q] = 0
-                    if inside and (event_kind == IMPACT_EVENT or event_kind == ONSET):
-                        if side < 0:
-                            n_left += 1.0
-                        else:
-                            n_right += 1.0
-                    sub += 1
-                if has_impact and any_set(stuck):
-                    pin_to_walls(x, nf, stuck, host, rows)
-                    # release contacts the wall would have to pull (checked at step ends)
-                    wall_accelerations(x, v, t, nf, mass, inv_mass, storey_k, storey_c, floor_c, kind, host,
-                                       rows, forces, series_t, series_v, series_ptr, series_target, stuck,
-                                       True, acc_wall, load_wall, gm_wall, gs_wall, True, GEO)
-                if sampling:
-                    next_sample = record_sample(samples, next_sample, sample_from, period, i * dt, dt,
-                                                xp, vp, x, v, n_left, n_right)
-            i = end
-            if i == h_next:
-                h_next = record_history(history, stride, h_next, x, nf,
-                                        primary_energy(mass, storey_k, x, v, nf))
-        if carry.shape[0] > 0:  # the path's state for its next stretch
-            save_accounts(carry, work, d_primary, d_absorber, e_integral, e1_max, loss_sum, n_left, n_right,
-                          contact_time, peak_force)
-            carry[NEXT_SAMPLE], carry[PENDING], carry[HISTORY_NEXT] = next_sample, pending, h_next
-            save_floors(carry, x_max, drift_max, acc_max, x2_integral, load)
-            save_absorbers(carry, nf, stuck, touching, owed)
-        if diverged(x):
-            out[STATUS] = STATUS_DIVERGED
-        for b in range(nb):
-            state_x[b] = x[b]
-            state_v[b] = v[b]
-        write_accounts(out, work, d_primary, d_absorber, e_integral, e1_max, loss_sum, n_left, n_right)
-        if has_hertz:
-            out[CONTACT_TIME] = contact_time
-            out[PEAK_FORCE] = peak_force
-        out[FINAL_ENERGY] = stored_energy(x, v, mass, nf, storey_k, kind, host, rows)
-        write_floor_metrics(out, nf, x_max, drift_max, acc_max, x2_integral)
+            restore_absorbers(carry, NF, stuck, touching, owed)
+        own = Rk4State(scratch(NB), scratch(NB), scratch(NB), scratch(NB), scratch(NB), scratch(NB),
+                       scratch(NB), scratch(NF), scratch(NF), scratch(NF), scratch(NF), scratch(NF),
+                       scratch(NF), scratch(NF), scratch(NF), stuck, touching, owed)
+        return own, 0
 
-    return kernel
+    @njit(**INLINE)
+    def opening(own, x, v, inv_mass, acc, bodies, absorbers):
+        pass  # (the accelerations count from the window's first sub-step on)
+
+    @njit(**INLINE)
+    def check(own, i, dt, ex):
+        pass
+
+    @njit(**INLINE)
+    def save(carry, own, sc):
+        save_absorbers(carry, NF, own.stuck, own.touching, own.owed)
+
+    @njit(**INLINE)
+    def finish(own, sc, fl, out):
+        pass
+
+    @njit(**INLINE)
+    def step(i, x, v, inv_mass, floor_acc, own, sc, acct, inside, peaks, bodies, absorbers, ex, fl, noise,
+             grid,
+             outputs, gen, gen_filter):
+        nb = NB
+        nf = NF
+        na = NA
+        mass, storey_k, storey_c, floor_c = bodies.mass, bodies.storey_k, bodies.storey_c, bodies.floor_c
+        kind, host, rows = absorbers.kind, absorbers.host, absorbers.rows
+        forces, series_t, series_v, series_ptr, series_target = (ex.forces, ex.series_t, ex.series_v,
+                                                                 ex.series_ptr, ex.series_target)
+        dt = grid.dt
+        out, limits = outputs.out, outputs.limits
+        x_max, drift_max, acc_max, x2_integral = peaks
+        xn, vn, acc, xs, vs = own.xn, own.vn, own.acc, own.xs, own.vs
+        x_event, acc_wall = own.x_event, own.acc_wall
+        load, group_mass, group_sum, x2, a0 = own.load, own.group_mass, own.group_sum, own.x2, own.a0
+        load_wall, gm_wall, gs_wall = own.load_wall, own.gm_wall, own.gs_wall
+        stuck, touching = own.stuck, own.touching
+        work, d_primary, d_absorber, e_integral, e1_max, loss_sum, n_left, n_right, contact_time, \
+            peak_force, pending = acct
+        piecewise = has_breaks(ex)  # sub-steps end at the loads' kinks and jumps
+        t = i * dt
+        left = dt
+        n_impacts = 0
+        sub = 0
+        # phase 0: a new sub-step; 1 .. NEWTON_ITERATIONS: Newton iterations on the length of the
+        # sub-step that ends at an event; -1: the sub-step at the final length.  One call site of
+        # the (inlined) step for all of them.
+        phase = 0
+        while True:
+            if phase == 0:
+                sticking = has_impact and any_set(stuck)
+                contact = has_hertz and any_set(touching)
+                h = left
+                if contact:
+                    h = min(left, contact_step(x, v, nf, mass, host, rows, touching))
+                if piecewise:  # sub-steps end at the loads' kinks and jumps
+                    tb = next_break(t + 1e-9 * dt, ex)
+                    if tb < t + h - 1e-9 * dt:
+                        h = tb - t
+                capped = sub == MAX_SUBSTEPS - 1 or n_impacts >= MAX_EVENTS
+                if capped:  # take the rest of the step at once, keep absorbers in their cavity
+                    h = left
+                    out[CAPPED] += 1
+                tau = h
+            inc = rk4_update(x, v, t, tau, xn, vn, acc, xs, vs, x2, a0, mass, inv_mass, storey_k, storey_c,
+                             floor_c, kind, host, rows, forces, series_t, series_v, series_ptr, series_target,
+                             stuck, load, group_mass, group_sum, sticking,
+                             (HERTZ_FORCES if contact else 0) | GEO)
+            if phase == 0:
+                event_kind, q, side, j, hf, sign, wall = NONE, -1, 0, 0, 0, 0, 0.0
+                if (has_impact or has_hertz) and not capped:
+                    for b in range(nb):
+                        x_event[b] = xn[b]
+                    event_kind, q, side, tau, wall = next_event(x, x_event, h, nf, kind, host, rows, stuck,
+                                                                touching)
+                if event_kind != NONE:
+                    j, hf, sign = nf + q, host_of(host, q, nf), gap_sign(event_kind, side)
+                    phase = 1
+                    continue
+            elif (has_impact or has_hertz) and phase > 0:
+                approach = sign * (pick(vn, j) - vn[hf])
+                if approach > 0.0:
+                    correction = sign * (pick(xn, j) - xn[hf] - wall) / approach
+                    tau = min(max(tau - correction, 0.0), h)
+                    phase = phase + 1 if abs(correction) > 1e-15 * dt and phase < NEWTON_ITERATIONS else -1
+                    continue
+            phase = 0
+            h = tau
+            done = event_kind == NONE and h == left
+            if inside:
+                work += inc[0]
+                d_primary += inc[1]
+                d_absorber += inc[2]
+                e_integral += inc[3]
+                for k in range(nf):
+                    x2_integral[k] += x2[k]
+                # peaks: the state at the sub-step's end, the accelerations at its start
+                floor_peaks(xn, nf, a0, x_max, drift_max, acc_max)
+                e1_max = max(e1_max, primary_energy(mass, storey_k, xn, vn, nf))
+                if pending > 0:
+                    pending = first_passages(limits, t + h, nf, x_max, drift_max, acc_max, inv_mass, False,
+                                             e1_max, out)
+            for b in range(nb):
+                x[b] = xn[b]
+                v[b] = vn[b]
+            if has_hertz and inside and contact:
+                for c in range(na):
+                    if touching[c] != 0:
+                        contact_time += h
+                        peak_force = max(peak_force, contact_force(x, nf, c, host, rows))
+            t += h
+            left -= h
+            if done:
+                if capped:
+                    keep_in_cavities(x, nf, kind, host, rows)
+                break
+            if has_impact and event_kind == IMPACT_EVENT:
+                n_impacts += 1
+                put(x, j, x[hf] + wall)
+                wall_accelerations(x, v, t, nf, mass, inv_mass, storey_k, storey_c, floor_c, kind, host, rows,
+                                   forces, series_t, series_v, series_ptr, series_target, stuck, False,
+                                   acc_wall, load_wall, gm_wall, gs_wall, True,
+                                   (HERTZ_FORCES if contact else 0) | GEO)
+                # the last impact a step may resolve ends a chatter sequence: inelastic collapse
+                gain = (pick(acc_wall, j) - acc_wall[hf]) * dt
+                loss = resolve_impact(mass, v, nf, q, side, gain, rows[q, RESTITUTION],
+                                      n_impacts >= MAX_EVENTS, stuck, host)
+                if inside:
+                    loss_sum += loss
+                    e1_max = max(e1_max, primary_energy(mass, storey_k, x, v, nf))
+            elif has_hertz and event_kind == ONSET:
+                touching[q] = side
+            elif has_hertz and event_kind == EXIT:
+                touching[q] = 0
+            if inside and (event_kind == IMPACT_EVENT or event_kind == ONSET):
+                if side < 0:
+                    n_left += 1.0
+                else:
+                    n_right += 1.0
+            sub += 1
+        if has_impact and any_set(stuck):
+            pin_to_walls(x, nf, stuck, host, rows)
+            # release contacts the wall would have to pull (checked at step ends)
+            wall_accelerations(x, v, t, nf, mass, inv_mass, storey_k, storey_c, floor_c, kind, host, rows,
+                               forces, series_t, series_v, series_ptr, series_target, stuck, True, acc_wall,
+                               load_wall, gm_wall, gs_wall, True, GEO)
+        return sc, (work, d_primary, d_absorber, e_integral, e1_max, loss_sum, n_left, n_right, contact_time,
+                    peak_force, pending)
+
+    return Step(start, opening, check, step, save, finish, integrates=True, force_peaks=False)

@@ -6,23 +6,41 @@ doi:10.1137/09076636X (its method SRA3).  Three stages at ``t``, ``t + h`` and
 ``t + h/2``; the deterministic part is the third-order strong-stability-preserving Runge-Kutta
 method; strong order 1.5 and weak order 2 with additive noise.  Each noisy floor's step draws
 ``I1 = dW`` and ``I10`` (the time integral of ``W`` over the step, ``sqrt(h) h / 2 (u1 +
-u2 / sqrt 3)``); the step loop of ``kdk.py`` draws them and runs this step in place of the
-kick-drift-kick one.  It has no impact events and takes white noise only (``schemes.SCHEMES``).
+u2 / sqrt 3)``).  The step plugs into the loop driver (``driver.py``) as ``sra3_step``; it
+shares the grid loads and the normals with the kick-drift-kick step (``grid.py``).  It has no
+impact events and takes white noise only (``schemes.SCHEMES``).
 """
 
 from __future__ import annotations
 
+import math
+from functools import cache
+from typing import Any, NamedTuple
+
 from numba import njit
 
 from ..jit.flags import INLINE
+from ..jit.intrinsics import scratch
 from ..physics.absorbers import DAMPING
 from ..physics.structure import host_of
+from .carry import REPLAYED
 from .common import accelerate, attachment_forces, geometric_forces
+from .driver import Step
 from .energy import momentum
+from .grid import (
+    GridLoads,
+    finish_loads,
+    noise_scales,
+    save_grid_loads,
+    start_loads,
+    step_loads,
+    step_normals,
+)
+from .loads import has_breaks, phasors
 
 
 @njit(**INLINE)
-def sra3_step(x, v, vn, force, a1, a2, a3, xs, v2, v3, load, load_next, load3, ag, ag_next, ag3, dw, dz, dt,
+def sra3_update(x, v, vn, force, a1, a2, a3, xs, v2, v3, load, load_next, load3, ag, ag_next, ag3, dw, dz, dt,
               mass, inv_mass, storey_k, storey_c, floor_c, host, rows, inside, ground, geometric):
     """One SRA3 step of length ``dt`` from ``(x, v)``, in place.
 
@@ -83,3 +101,113 @@ def sra3_step(x, v, vn, force, a1, a2, a3, xs, v2, v3, load, load_next, load3, a
         x[b] += dt * (v[b] / 6.0 + v2[b] / 6.0 + 2.0 / 3.0 * v3[b])
         v[b] = vn[b]
     return work, d_primary, d_absorber
+
+
+class SraState(NamedTuple):
+    """The SRA3 step's state and scratch on the loop's stack: per body the forces, the end
+    velocities and the stages' accelerations, positions and velocities; the grid loads
+    (``grid.GridLoads``, the midpoint's included); per floor ``sigma I1`` and ``sigma I10 / h``,
+    the step's two normals, ``sigma sqrt(dt)`` and the place among the noisy floors; the noisy
+    floors' count."""
+
+    force: Any
+    vn: Any
+    a1: Any
+    a2: Any
+    a3: Any
+    xs: Any
+    v2: Any
+    v3: Any
+    gl: Any
+    dw: Any
+    dz: Any
+    u1: Any
+    u2: Any
+    noise_scale: Any
+    slot: Any
+    noisy: Any
+
+
+@cache
+def sra3_step(spec) -> Step:
+    """The SRA3 step for a loop specialised to ``spec`` (``driver.Spec``), as the driver's
+    ``Step``: two normals a step and noisy floor (replayed: all floors' first normals, then
+    their second)."""
+    NB = spec.n_bodies
+    NF = spec.n_floors
+    NR = spec.n_rows
+    NZ = spec.n_states
+    has_noise, filtered, ground, geometric = spec.has_noise, spec.filtered, spec.ground, spec.geometric
+    ROOT3 = math.sqrt(3.0)
+
+    @njit(**INLINE)
+    def start(bodies, absorbers, ex, fl, noise, grid, carry, resume, x, v, gen_bridge):
+        gl = GridLoads(scratch(NF), scratch(NF), scratch(NF), scratch(NF), scratch(NR), scratch(NR),
+                       scratch(NR), scratch(NR), scratch(NR), scratch(NR), scratch(NR), scratch(NR),
+                       scratch(NZ), scratch(NZ), scratch(NZ))
+        noise_scale, slot = scratch(NF), scratch(NF)
+        noisy = noise_scales(noise.sigma, grid.dt, noise_scale, slot)
+        replayed = int(carry[REPLAYED]) if resume else 0
+        ag_next = start_loads(gl, ex, fl, grid.dt, carry, resume, NF, absorbers.kind.shape[0], filtered,
+                              ground)
+        own = SraState(scratch(NB), scratch(NB), scratch(NB), scratch(NB), scratch(NB), scratch(NB),
+                       scratch(NB),
+                       scratch(NB), gl, scratch(NF), scratch(NF), scratch(NF), scratch(NF), noise_scale, slot,
+                       noisy)
+        return own, (ag_next, replayed)
+
+    @njit(**INLINE)
+    def opening(own, x, v, inv_mass, acc, bodies, absorbers):
+        force = own.force
+        attachment_forces(x, v, NF, bodies.storey_k, bodies.storey_c, bodies.floor_c, absorbers.host,
+                          absorbers.rows, force)
+        geometric_forces(x, NF, absorbers.host, absorbers.rows, force, geometric)
+        for k in range(NF):
+            acc[k] = (force[k] + own.gl.load_next[k]) * inv_mass[k]
+
+    @njit(**INLINE)
+    def check(own, i, dt, ex):
+        phasors(i * dt, ex.forces, own.gl.pc, own.gl.ps)
+
+    @njit(**INLINE)
+    def save(carry, own, sc):
+        save_grid_loads(carry, own.gl, sc[0], NF, NB - NF)
+        carry[REPLAYED] = sc[1]
+
+    @njit(**INLINE)
+    def finish(own, sc, fl, out):
+        finish_loads(own.gl, fl)
+
+    @njit(**INLINE)
+    def step(i, x, v, inv_mass, acc, own, sc, acct, inside, peaks, bodies, absorbers, ex, fl, noise, grid,
+             outputs, gen, gen_filter):
+        nf = NF
+        dt = grid.dt
+        gl = own.gl
+        dw, dz, u1, u2, noise_scale = own.dw, own.dz, own.u1, own.u2, own.noise_scale
+        ag_next, replayed = sc
+        work, d_primary, d_absorber, e_sum, e1_max, loss, n_left, n_right, contact_time, peak_force, \
+            pending = acct
+        ag, ag_next, ag3 = step_loads(i, dt, gl, ex, fl, ag_next, has_breaks(ex), True, filtered, ground,
+                                      gen_filter)
+        # the step's two integrals on the noisy floors
+        if has_noise:
+            replayed = step_normals(i, 2, noise_scale, own.slot, own.noisy, noise.normals, noise.refine,
+                                    replayed, gen, u1, u2)
+            for k in range(nf):
+                dw[k] = noise_scale[k] * u1[k]
+                dz[k] = 0.5 * noise_scale[k] * (u1[k] + u2[k] / ROOT3)  # sigma I10 / h
+        mass, storey_k, storey_c, floor_c = bodies.mass, bodies.storey_k, bodies.storey_c, bodies.floor_c
+        dwork, dprimary, dabsorber = sra3_update(x, v, own.vn, own.force, own.a1, own.a2, own.a3, own.xs,
+                                                 own.v2, own.v3, gl.load, gl.load_next, gl.load3, ag, ag_next,
+                                                 ag3, dw, dz, dt, mass, inv_mass, storey_k, storey_c, floor_c,
+                                                 absorbers.host, absorbers.rows, inside, ground, geometric)
+        work += dwork
+        d_primary += dprimary
+        d_absorber += dabsorber
+        for k in range(nf):
+            acc[k] = own.a1[k] + ag  # the step start's absolute acceleration, for the peaks
+        return (ag_next, replayed), (work, d_primary, d_absorber, e_sum, e1_max, loss, n_left, n_right,
+                                     contact_time, peak_force, pending)
+
+    return Step(start, opening, check, step, save, finish, integrates=False, force_peaks=False)

@@ -95,9 +95,11 @@ def test_what_a_launcher_closes_over_is_described_by_value_and_name():
     module, name, options and closure; nothing else (an array, a function of other code)."""
     first, second = (kernel_for(_scene(n), gpu=True) for n in ("contact_noise_parallel", "seed003_ds20"))
     described = cache.described(first)
-    assert described.startswith("vines_stoch.kernels.kdk.kdk_kernel.<locals>.kernel: tuple(")
+    assert described.startswith("vines_stoch.kernels.driver.step_loop.<locals>.kernel: tuple(")
     assert "('fastmath', ['contract'])" in described  # (its options)
-    assert cache.described(second).startswith("vines_stoch.kernels.rk4.rk4_kernel.<locals>.kernel: ")
+    assert "vines_stoch.kernels.kdk.kdk_step.<locals>.step" in described  # (the step it closes over)
+    assert cache.described(second).startswith("vines_stoch.kernels.driver.step_loop.<locals>.kernel: ")
+    assert "vines_stoch.kernels.rk4.rk4_step.<locals>.step" in cache.described(second)
     assert cache.described(kernel_for(_scene("contact_noise_parallel"), gpu=False)) != described
     assert cache.described((1, 2.5, True, None, np.uint64(3))) == "tuple(1, 2.5, True, None, np.uint64(3))"
     assert cache.described(np.zeros(3)) is None and cache.described(object()) is None

@@ -1,0 +1,272 @@
+"""The one loop driver: every scheme's step loop is this loop around the scheme's step.
+
+The driver owns what every scheme shares (MODEL.md section 4): the state in and out, the time
+grid and its blocks (``common.block_end``), the metrics window's opening, the divergence
+checks, the energy accounts and the per-floor peaks (``energy``), the first passages of the
+limits, the history rows, the Poincare samples, the path's carry from one stretch to the next
+(``carry``) and the metric vector.  A scheme plugs in as a ``Step`` of compiled functions that
+the driver inlines (``kdk.kdk_step``, ``sra3.sra3_step``, ``rk4.rk4_step``; the registry
+``schemes.SCHEMES`` names each scheme's step): a new scheme is one file with its ``Step`` and
+one registry line.
+
+The protocol (every function inlined; ``own``: the scheme's state and scratch, a named tuple
+its ``start`` makes on the loop's stack; ``sc``: its scalar state, a tuple carried from step
+to step; ``acct``: the accounts, ``ACCOUNTS``):
+
+- ``start(spec arrays..., x, v, carry, resume, gen_bridge) -> (own, sc)``: the scheme's state
+  at the path's start, or restored from the carry;
+- ``opening(own, x, v, inv_mass, acc, bodies, absorbers)``: at the metrics window's opening, each
+  floor's force or acceleration for the peaks into ``acc``;
+- ``check(own, i, dt, ex)``: every ``common.CHECK_EVERY`` steps (the phasors' exact reset);
+- ``step(i, x, v, inv_mass, acc, own, sc, acct, inside, peaks, bodies, absorbers, ex, fl,
+  noise, grid, outputs, gen, gen_filter) -> (sc, acct)``: one step of the grid, ``x, v`` in
+  place; ``acc`` is left with each floor's force or acceleration at the step's end for the
+  peaks;
+- ``save(carry, own, sc)``, ``finish(own, sc, fl, out)``: the scheme's part of the carry, and
+  of the metric vector and the filter bundle at the end.
+
+Two constants say how a scheme's step meets the accounts: ``integrates`` (the step integrates
+``E1`` and ``x_k^2`` with its own stages and observes the peaks and first passages at its own
+sub-steps' ends, as RK4 at its located events; otherwise the driver observes every step's end
+and integrates by the trapezoid rule) and ``force_peaks`` (``acc`` holds floor forces, the
+peak accelerations being the peak forces over the masses).
+"""
+
+from __future__ import annotations
+
+from functools import cache
+from typing import Any, NamedTuple
+
+from numba import njit
+
+from ..jit.flags import KERNEL
+from ..jit.intrinsics import borrowed, copy_into, scratch
+from ..outputs import CONTACT_TIME, FINAL_ENERGY, PEAK_FORCE, STATUS, STATUS_DIVERGED
+from ..physics.structure import primary_energy
+from .carry import (
+    E1_PREV,
+    HISTORY_NEXT,
+    NEXT_SAMPLE,
+    PENDING,
+    restore_accounts,
+    restore_floors,
+    save_accounts,
+    save_floors,
+)
+from .common import (
+    CHECK_EVERY,
+    block_end,
+    diverged,
+    first_passages,
+    floor_peaks,
+    record_history,
+    record_sample,
+    start_history,
+    stored_energy,
+    write_floor_metrics,
+)
+from .energy import write_accounts
+
+#: The accounts a step takes and returns, in this order (``energy``): input work, structure
+#: and absorber dissipation, the sum (or integral) of ``E1``, its peak, the impacts' loss and
+#: counts, contact time, peak contact force, limits not passed yet.
+ACCOUNTS = ("work", "d_primary", "d_absorber", "e_sum", "e1_max", "loss", "n_left", "n_right",
+            "contact_time", "peak_force", "pending")
+
+
+class Spec(NamedTuple):
+    """What a loop is specialised to (compile-time constants): the numbers of bodies, floors,
+    closed-form load rows and filter states (the sizes of its arrays on the stack), white
+    noise, impact and Hertz absorbers, filtered loads, ground acceleration, geometric
+    attachments, and the cuda backend's loop (per-absorber flags on the stack)."""
+
+    n_bodies: int
+    n_floors: int
+    n_rows: int
+    n_states: int
+    has_noise: bool
+    has_impact: bool
+    has_hertz: bool
+    filtered: bool
+    ground: bool
+    geometric: bool
+    gpu: bool
+
+
+class Step(NamedTuple):
+    """A scheme's step and its hooks (see the module's docstring)."""
+
+    start: Any
+    opening: Any
+    check: Any
+    step: Any
+    save: Any
+    finish: Any
+    integrates: bool
+    force_peaks: bool
+
+
+@cache
+def step_loop(plug: Step, spec: Spec):
+    """The step loop of a scheme's ``Step`` specialised to ``spec``.  It takes the bundles
+    ``(bodies, absorbers, ex, fl, noise, grid, outputs, gen, gen_bridge, gen_filter)`` of
+    ``kernels/bundles.py``; runs steps ``grid.first`` to ``grid.n_steps`` (a later stretch of
+    a path restores its state from the outputs' carry, ``carry.py``) and writes the metric
+    vector (``outputs.SLOTS``), the history rows and the Poincare samples."""
+    start, opening, check, step, save, finish = (plug.start, plug.opening, plug.check, plug.step, plug.save,
+                                                 plug.finish)
+    INTEGRATES = plug.integrates
+    FORCE_PEAKS = plug.force_peaks
+    NB = spec.n_bodies
+    NF = spec.n_floors
+    GPU = spec.gpu
+    HERTZ = spec.has_hertz
+
+    @njit(**KERNEL)
+    def kernel(bodies, absorbers, ex, fl, noise, grid, outputs, gen, gen_bridge, gen_filter):
+        nb = NB
+        nf = NF
+        mass, storey_k = bodies.mass, bodies.storey_k
+        kind, host, rows = absorbers.kind, absorbers.host, absorbers.rows
+        dt, n_steps, i0, period, sample_from, stride, first = (grid.dt, grid.n_steps, grid.i0, grid.period,
+                                                                grid.sample_from, grid.stride, grid.first)
+        out, samples, history, limits, carry = (outputs.out, outputs.samples, outputs.history, outputs.limits,
+                                                outputs.carry)
+        resume = first > 0  # a later stretch of the path: its state from ``carry``
+        # the state (copied back at the end) on the stack (see ``jit.intrinsics.scratch``); copies
+        # of it for the out-of-line calls and for the Poincare samples' interpolation
+        x, v, inv_mass = scratch(NB), scratch(NB), scratch(NB)
+        xc, vc, xp, vp = scratch(NB), scratch(NB), scratch(NB), scratch(NB)
+        for b in range(nb):
+            x[b] = bodies.x[b]
+            v[b] = bodies.v[b]
+            inv_mass[b] = 1.0 / mass[b]
+        # per floor: the force or acceleration for the peaks, the peaks, the x_k^2 integrals
+        acc, x_max, drift_max = scratch(NF), scratch(NF), scratch(NF)
+        acc_max, x2_integral = scratch(NF), scratch(NF)
+        peaks = (x_max, drift_max, acc_max, x2_integral)
+        kept, sc = start(bodies, absorbers, ex, fl, noise, grid, carry, resume, x, v, gen_bridge)
+        # the step's arguments as borrowed views (``jit.intrinsics.borrowed``): no reference
+        # counting in the step loop
+        own = borrowed(kept)
+        b_bodies, b_absorbers, b_ex, b_fl, b_noise, b_grid, b_outputs = borrowed(
+            (bodies, absorbers, ex, fl, noise, grid, outputs))
+        # the accounts in registers, written to ``out`` once at the end (the trapezoid rule's
+        # integrals as plain sums of the step ends' values, the window's ends at half weight)
+        work = d_primary = d_absorber = e_sum = e1_max = 0.0
+        loss = n_left = n_right = contact_time = peak_force = 0.0
+        if resume:
+            work, d_primary, d_absorber, e_sum, e1_max, loss, n_left, n_right, contact_time, peak_force = (
+                restore_accounts(carry))
+            e1_prev = carry[E1_PREV]
+            pending, h_next = int(carry[PENDING]), int(carry[HISTORY_NEXT])
+            next_sample = int(carry[NEXT_SAMPLE])
+            restore_floors(carry, x_max, drift_max, acc_max, x2_integral)
+        else:
+            e1_prev = primary_energy(mass, storey_k, x, v, nf)
+            h_next = start_history(history, stride, x, nf, e1_prev)
+            pending = limits.shape[0]  # limits not passed yet
+            next_sample = 0
+        sampling = samples.shape[0] > 0
+        i = first
+        inside = i0 == 0 or i0 < first
+        while i < n_steps:
+            # rare work between blocks of steps, out of the step loop: the window opening,
+            # the divergence check, history rows
+            if i == i0:
+                inside = True
+                for b in range(nb):  # (copies for the out-of-line call: see ``stored_energy``)
+                    xc[b] = x[b]
+                    vc[b] = v[b]
+                work = stored_energy(xc, vc, mass, nf, storey_k, kind, host, rows)
+                if INTEGRATES:
+                    e1_max = primary_energy(mass, storey_k, x, v, nf)
+                else:
+                    e1_max = e1_prev
+                    e_sum = 0.5 * e1_prev
+                    for k in range(nf):
+                        x2_integral[k] = 0.5 * x[k] * x[k]
+                opening(own, x, v, inv_mass, acc, bodies, absorbers)
+                floor_peaks(x, nf, acc, x_max, drift_max, acc_max)
+                if pending > 0:
+                    pending = first_passages(limits, i * dt, nf, x_max, drift_max, acc_max, inv_mass,
+                                             FORCE_PEAKS,
+                                             e1_max, out)
+            if i % CHECK_EVERY == 0:
+                if diverged(x):
+                    out[STATUS] = STATUS_DIVERGED
+                    break
+                check(own, i, dt, ex)
+            end = block_end(i, n_steps, i0, h_next)
+            begin = i
+            for i in range(begin, end):
+                if sampling:
+                    if GPU:  # (on the CPU this loop ran 6 % slower than a slice copy; copy_into matches one)
+                        for b in range(nb):
+                            xp[b] = x[b]
+                            vp[b] = v[b]
+                    else:
+                        copy_into(xp, x)
+                        copy_into(vp, v)
+                acct = (work, d_primary, d_absorber, e_sum, e1_max, loss, n_left, n_right, contact_time,
+                        peak_force, pending)
+                sc, acct = step(i, x, v, inv_mass, acc, own, sc, acct, inside, peaks, b_bodies, b_absorbers,
+                                b_ex, b_fl, b_noise, b_grid, b_outputs, gen, gen_filter)
+                work, d_primary, d_absorber, e_sum, e1_max, loss, n_left, n_right, contact_time, peak_force, \
+                    pending = acct
+                if not INTEGRATES:  # the step's end observed: the trapezoid sums, the peaks
+                    e1 = primary_energy(mass, storey_k, x, v, nf)
+                    if inside:
+                        e_sum += e1
+                        e1_max = max(e1_max, e1)
+                        for k in range(nf):
+                            x2_integral[k] += x[k] * x[k]
+                        floor_peaks(x, nf, acc, x_max, drift_max, acc_max)
+                        if pending > 0:
+                            pending = first_passages(limits, i * dt + dt, nf, x_max, drift_max, acc_max,
+                                                     inv_mass,
+                                                     FORCE_PEAKS, e1_max, out)
+                    e1_prev = e1
+                if sampling:
+                    next_sample = record_sample(samples, next_sample, sample_from, period, i * dt, dt, xp,
+                                                vp, x,
+                                                v, n_left, n_right)
+            i = end
+            if i == h_next:
+                h_next = record_history(history, stride, h_next, x, nf,
+                                        primary_energy(mass, storey_k, x, v, nf) if INTEGRATES else e1_prev)
+        if carry.shape[0] > 0:  # the path's state for its next stretch, raw
+            save_accounts(carry, work, d_primary, d_absorber, e_sum, e1_max, loss, n_left, n_right,
+                          contact_time, peak_force)
+            carry[E1_PREV], carry[PENDING], carry[HISTORY_NEXT], carry[NEXT_SAMPLE] = (e1_prev, pending,
+                                                                                       h_next,
+                                                                                       next_sample)
+            save_floors(carry, x_max, drift_max, acc_max, x2_integral)
+            save(carry, kept, sc)
+        if diverged(x):
+            out[STATUS] = STATUS_DIVERGED
+        for b in range(nb):
+            bodies.x[b] = x[b]
+            bodies.v[b] = v[b]
+        finish(kept, sc, fl, out)
+        if INTEGRATES:
+            e_integral = e_sum
+        else:
+            e_integral = 0.0
+            if inside and i0 < n_steps:  # (the window's last state at half weight)
+                e_integral = (e_sum - 0.5 * e1_prev) * dt
+                for k in range(nf):
+                    x2_integral[k] = (x2_integral[k] - 0.5 * x[k] * x[k]) * dt
+                    if FORCE_PEAKS:  # peak absolute acceleration: the peak floor force over the mass
+                        acc_max[k] *= inv_mass[k]
+        write_accounts(out, work, d_primary, d_absorber, e_integral, e1_max, loss, n_left, n_right)
+        if HERTZ:
+            out[CONTACT_TIME] = contact_time
+            out[PEAK_FORCE] = peak_force
+        for b in range(nb):
+            xc[b] = x[b]
+            vc[b] = v[b]
+        out[FINAL_ENERGY] = stored_energy(xc, vc, mass, nf, storey_k, kind, host, rows)
+        write_floor_metrics(out, nf, x_max, drift_max, acc_max, x2_integral)
+
+    return kernel

@@ -1,0 +1,156 @@
+"""What a step on the fixed time grid takes from the scene, shared by the grid steps
+(``kdk.kdk_step``, ``sra3.sra3_step``): the loads at the step's start, end and midpoint
+(harmonic rows from phasors, filtered loads advanced exactly: ``loads``) and the step's
+standard normals on the noisy floors (drawn, or replayed from a given path)."""
+
+from __future__ import annotations
+
+import math
+from typing import Any, NamedTuple
+
+from numba import njit
+
+from ..jit.flags import INLINE
+from .carry import GROUND_NEXT, restore_loads, restore_rows, save_loads, save_rows
+from .loads import advance_filters, excitation, rotations, turn
+from .rng import normal
+
+
+class GridLoads(NamedTuple):
+    """The floors' loads at the step's start, end, an event inside it and its midpoint; the
+    harmonic rows' phasors (cos, sin) at the step's start and midpoint and their turns over a
+    step and half a step (``loads.turn``); the filter state, its next state and the normals'
+    scratch (on the stack: heap arrays passed to the inlined load functions cost reference
+    counting in the step loop)."""
+
+    load: Any
+    load_next: Any
+    load_end: Any
+    load3: Any
+    pc: Any
+    ps: Any
+    mc: Any
+    ms: Any
+    rc: Any
+    rs: Any
+    hc: Any
+    hs: Any
+    z: Any
+    zn: Any
+    draws: Any
+
+
+@njit(**INLINE)
+def start_loads(gl, ex, fl, dt: float, carry, resume: bool, nf: int, na: int, filtered: bool,
+                ground: bool) -> float:
+    """The grid loads at a path's start (or restored from the carry where ``resume``): the
+    filter state from the filter bundle, the phasors' turns, the loads at the first step's
+    start; returns the ground acceleration there."""
+    for r in range(gl.z.shape[0]):
+        gl.z[r] = fl.z[r]
+        gl.zn[r] = fl.zn[r] if resume else fl.z[r]
+    rotations(ex.forces, dt, gl.rc, gl.rs)
+    rotations(ex.forces, 0.5 * dt, gl.hc, gl.hs)
+    if resume:
+        restore_loads(carry, gl.load_next)
+        restore_rows(carry, nf, na, gl.pc, gl.ps)
+        return carry[GROUND_NEXT]
+    return excitation(0.0, 0.5 * dt, 0.0, ex.forces, ex.series_t, ex.series_v, ex.series_ptr,
+                      ex.series_target,
+                      filtered, fl.c_force, fl.c_ground, gl.z, gl.zn, gl.pc, False, ground, gl.load_next)
+
+
+@njit(**INLINE)
+def save_grid_loads(carry, gl, ag_next: float, nf: int, na: int) -> None:
+    """Carry the grid loads to the path's next stretch (``start_loads``)."""
+    carry[GROUND_NEXT] = ag_next
+    save_loads(carry, gl.load_next)
+    save_rows(carry, nf, na, gl.pc, gl.ps)
+
+
+@njit(**INLINE)
+def finish_loads(gl, fl) -> None:
+    """The filter state back into the filter bundle (the path's next stretch starts there)."""
+    for r in range(gl.z.shape[0]):
+        fl.z[r] = gl.z[r]
+        fl.zn[r] = gl.zn[r]
+
+
+@njit(**INLINE)
+def step_loads(i: int, dt: float, gl, ex, fl, ag_next: float, piecewise: bool, mid: bool, filtered: bool,
+               ground: bool, gen_filter):
+    """The loads of step ``i``: ``load`` at its start (the last step's end, re-evaluated on
+    the step's own piece where the loads have breaks), ``load3`` at its midpoint (``mid``: the
+    Runge-Kutta step's), ``load_next`` at its end, the filters advanced over the step first;
+    returns the ground accelerations ``(start, end, midpoint)``."""
+    t_step = i * dt
+    tm = t_step + 0.5 * dt
+    forces, series_t, series_v, series_ptr, series_target = (ex.forces, ex.series_t, ex.series_v,
+                                                             ex.series_ptr,
+                                                             ex.series_target)
+    z, zn, pc = gl.z, gl.zn, gl.pc
+    if filtered:
+        for r in range(z.shape[0]):
+            z[r] = zn[r]
+        advance_filters(z, zn, t_step, dt, fl.phi, fl.chol, fl.envelope, gen_filter, gl.draws)
+    for k in range(gl.load.shape[0]):
+        gl.load[k] = gl.load_next[k]
+    ag = ag_next
+    if piecewise:  # re-evaluate each step's start on its own piece
+        ag = excitation(t_step, tm, 0.0, forces, series_t, series_v, series_ptr, series_target, filtered,
+                        fl.c_force, fl.c_ground, z, zn, pc, True, ground, gl.load)
+    ag3 = 0.0
+    if mid:
+        turn(pc, gl.ps, gl.hc, gl.hs, gl.mc, gl.ms)
+        ag3 = excitation(t_step + 0.5 * dt, tm, 0.5, forces, series_t, series_v, series_ptr, series_target,
+                         filtered, fl.c_force, fl.c_ground, z, zn, gl.mc, True, ground, gl.load3)
+    turn(pc, gl.ps, gl.rc, gl.rs, pc, gl.ps)
+    ag_next = excitation(t_step + dt, tm, 1.0, forces, series_t, series_v, series_ptr, series_target,
+                         filtered,
+                         fl.c_force, fl.c_ground, z, zn, pc, True, ground, gl.load_next)
+    return ag, ag_next, ag3
+
+
+@njit(**INLINE)
+def noise_scales(sigma, dt: float, noise_scale, slot) -> int:
+    """Each floor's ``sigma sqrt(dt)`` into ``noise_scale`` and its place among the noisy floors
+    into ``slot``; returns the number of noisy floors (normals a step; a one-storey primary
+    counts as noisy)."""
+    nf = noise_scale.shape[0]
+    noisy = 0
+    for k in range(nf):
+        noise_scale[k] = sigma[k] * math.sqrt(dt)
+        slot[k] = noisy
+        if nf == 1 or noise_scale[k] > 0.0:
+            noisy += 1
+    return noisy
+
+
+@njit(**INLINE)
+def step_normals(i: int, parts: int, noise_scale, slot, noisy: int, normals, refine: int, replayed: int, gen,
+                 u1, u2) -> int:
+    """The standard normals of step ``i`` on the noisy floors into ``u1`` (and, with ``parts``
+    2, ``u2``: the SRA3 step's second integral), drawn from ``gen`` or replayed from
+    ``normals`` (the kick-drift-kick step: the sum of the step's ``refine`` fine normals; with
+    two parts, all floors' first normals, then their second, counted by ``replayed``); returns
+    the replayed normals used."""
+    nf = noise_scale.shape[0]
+    replay = normals.shape[0] > 0
+    for part in range(parts):
+        for k in range(nf):
+            if nf == 1 or noise_scale[k] > 0.0:
+                if replay and parts == 2:  # (no counter carried through the loop otherwise)
+                    u = normals[replayed]
+                    replayed += 1
+                elif replay:  # the sum of the step's fine normals
+                    u = 0.0
+                    for f in range(refine):
+                        u += normals[(i * refine + f) * noisy + int(slot[k])]
+                    u /= math.sqrt(refine)
+                else:
+                    u = normal(gen)
+                if part == 0:
+                    u1[k] = u
+                else:
+                    u2[k] = u
+    return replayed
