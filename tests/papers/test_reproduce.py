@@ -20,9 +20,12 @@ def test_one_section_writes_its_table_and_figures(tmp_path):
     rows = [line.split("|") for line in report.splitlines() if line.startswith("| Fig. 3 |")]
     assert len(rows) == 6
     assert all(re.search(r"\d", row[4]) for row in rows)
+    forced = [line.split("|") for line in report.splitlines()
+              if line.startswith(("| Figs. 7", "| Figs. 9", "| Fig. 11"))]
+    assert len(forced) == 3 and all(re.search(r"\d", row[4]) for row in forced)
     if available():
         assert sorted(p.name for p in (tmp_path / "figures").iterdir()) == [
-            "seed000_fig3_edm.png", "seed000_fig4_energy_integral.png"]
+            "seed000_fig3_edm.png", "seed000_fig4_energy_integral.png", "seed000_figs7_to_11_responses.png"]
 
 
 def test_an_unknown_section_is_refused(tmp_path):

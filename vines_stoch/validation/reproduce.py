@@ -2,8 +2,9 @@
 ``tests/papers`` tests hold is run again and written beside the paper's value into
 ``reports/seed-tables.md`` (source, paper, ours, difference), and the figures into
 ``reports/figures/``: seed 002 Table 3 and the regimes of Tables 1-2, seed 003 Tables 1-6 and its
-Figs. 2 and 7 (E1max against frequency, m2 = 60 and 20 kg), the seed 001 Table 2 rig, and the seed
-000 threshold of Figs. 3-4.  The printed values live here, once; the tests import them."""
+Figs. 2 and 7 (E1max against frequency, m2 = 60 and 20 kg), the seed 001 Table 2 rig, and seed 000's
+threshold (Figs. 3-4) and forced responses (Figs. 7-11).  The printed values live here, once; the
+tests import them."""
 
 from __future__ import annotations
 
@@ -16,6 +17,7 @@ from typing import Any
 
 import numpy as np
 
+from .. import history as hist
 from ..ensemble import run_chunk
 from ..plotting import pyplot
 from ..scenario import Scenario, load_scenario
@@ -350,6 +352,66 @@ def seed001(scenarios: Path, figures: Path) -> list[str]:
 # ----------------------------------------------------------------------------- seed 000
 
 
+#: Seed 000's forced cases (``scenarios/seed000_<case>_<twin>.toml``): the figures, the load and what
+#: the paper says of them.
+FORCED = {"harmonic": ("Figs. 7-8", "harmonic", "the primary's displacement suppressed a lot, the parallel "
+                                                "NES more than the cubic NES"),
+          "harmonic_noise": ("Figs. 9-10", "harmonic + white noise", "similar to the pure harmonic case; the "
+                             "parallel NES suppresses the primary to a very low stage"),
+          "filtered_noise": ("Fig. 11", "filtered noise", "modulated responses; the parallel NES works "
+                             "better than the cubic NES")}
+#: The twins of each forced case.
+TWINS = ("none", "cubic", "parallel")
+#: Realisations of each noisy twin in the report.
+FORCED_REALIZATIONS = 32
+
+
+def _forced(scenarios: Path, figures: Path) -> list[str]:
+    """Seed 000 Figs. 7-11: the steady displacement rms of the primary with no NES, the cubic NES and
+    the parallel NES under each forced case (its first sweep point), and realisation 0's x1(t)."""
+    lines = ["| source | load | paper | x1_rms, no NES | cubic NES | parallel NES | no > cubic > parallel |",
+             "|---|---|---|---|---|---|---|"]
+    histories = {}
+    for case, (figure, load, says) in FORCED.items():
+        found = {}
+        for twin in TWINS:
+            name = f"seed000_{case}_{twin}"
+            point = _points(scenarios, name)[0]
+            scene = build_scene(point)
+            seed = tomllib.loads((scenarios / f"{name}.toml").read_text()).get("ensemble", {}).get("seed", 0)
+            stride, size = hist.grid(scene.n_steps, 4001)
+            count = 1 if case == "harmonic" else FORCED_REALIZATIONS
+            rows, paths = run_chunk(scene, seed, 0, 0, count, grid=(stride, size))
+            found[twin] = rows["x1_rms"].to_numpy()
+            histories[case, twin] = (np.arange(size) * stride * point.simulation.dt, paths[0, :, 0])
+        cells = []
+        for twin in TWINS:
+            values = found[twin]
+            sem = values.std(ddof=1) / math.sqrt(values.size) if values.size > 1 else 0.0
+            cells.append(f"{values.mean():.4f}" + (f" +- {sem:.4f}" if sem else ""))
+        means = [found[twin].mean() for twin in TWINS]
+        order = "yes" if means[0] > means[1] > means[2] else "**no**"
+        lines.append(f"| {figure} | {load} | {says} | {' | '.join(cells)} | {order} |")
+    plt = pyplot("seed000_figs7_to_11_responses.png")
+    if plt is not None:
+        fig, axes = plt.subplots(len(FORCED), 1, figsize=(8.0, 7.5), sharex=True)
+        for ax, (case, (figure, load, _)) in zip(axes, FORCED.items()):
+            for twin in TWINS:
+                t, x1 = histories[case, twin]
+                ax.plot(t, x1, linewidth=0.5, label="no NES" if twin == "none" else f"{twin} NES")
+            ax.set(ylabel="x1", title=f"{figure}: {load} (realisation 0)")
+            ax.legend(fontsize=8, loc="upper right")
+        axes[-1].set_xlabel("t")
+        fig.tight_layout()
+        fig.savefig(figures / "seed000_figs7_to_11_responses.png", dpi=120)
+        plt.close(fig)
+    return ["", "Figs. 7-11 (`scenarios/seed000_<case>_<twin>.toml`, the first sweep point of each: the "
+            "noise of strength gamma f, the filtered noise with the harmonic force's rms): the primary's "
+            f"steady displacement rms over [500, 1000], under noise the mean over {FORCED_REALIZATIONS} "
+            "realisations +- its standard error (`tests/papers/test_seed000_forced.py`).", "", *lines, "",
+            "Figure: `figures/seed000_figs7_to_11_responses.png` (x1(t) of realisation 0 of each twin).", ""]
+
+
 def seed000(scenarios: Path, figures: Path) -> list[str]:
     """The threshold of Fig. 3 and the energy integral of Fig. 4 (the reconstruction)."""
     rows = {kind: [_row(p) for p in _points(scenarios, f"seed000_impulse_{kind}")]
@@ -403,7 +465,7 @@ def seed000(scenarios: Path, figures: Path) -> list[str]:
             f"{high['parallel'].max():.3g} | |", "",
             "Figures: `figures/seed000_fig3_edm.png`, `figures/seed000_fig4_energy_integral.png` (the "
             "energy integral of the parallel NES", "below the cubic NES's wherever it impacts, as the "
-            "paper's Fig. 4).", ""]
+            "paper's Fig. 4).", *_forced(scenarios, figures)]
 
 
 # ----------------------------------------------------------------------------- the report
