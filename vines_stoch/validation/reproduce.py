@@ -81,7 +81,7 @@ SEED002_DESIGNS = {"seed002_m22": "22.7 kg", "seed002_m38": "37.9 kg", "seed002_
                    "seed002_m62": "62.0 kg"}
 
 #: Frequencies (rad/s) of the seed 003 E1max-against-frequency sweeps.
-FIG2_FREQUENCIES = tuple(float(w) for w in np.round(np.linspace(5.0, 8.0, 31), 10))
+E1MAX_FREQUENCIES = tuple(float(w) for w in np.round(np.linspace(5.0, 8.0, 31), 10))
 
 #: Seed 003 E1max-against-frequency figures by damper mass (kg): the figure, what the paper's text says
 #: of it and the regimes its table lists.
@@ -262,7 +262,7 @@ def seed003(scenarios: Path, figures: Path) -> list[str]:
         lines.append(f"| {label} | very weak mitigation, bilateral impacts | {e1:.0f} | "
                      f"{e1 / e1_primary:.0%} | {regime} |")
     alone = [_steady(_points(scenarios, "seed003_primary", {"loads.0.frequency": w})[0])[0]
-             for w in FIG2_FREQUENCIES]
+             for w in E1MAX_FREQUENCIES]
     for mass in E1MAX_FIGURES:
         lines += ["", *_e1max_frequency(scenarios, figures, mass, alone)]
     return lines + [""]
@@ -283,9 +283,9 @@ def _e1max_frequency(scenarios: Path, figures: Path, mass: int, alone: list[floa
             a = point.absorbers[0]
             offset = SS_4_60[3] if label == "SS-4(60)" else a.offset
             runs = [_steady(design(scenarios, name.removesuffix(".toml"), a.mass, a.stiffness, a.damping,
-                                   offset, a.gap, w)) for w in FIG2_FREQUENCIES]
+                                   offset, a.gap, w)) for w in E1MAX_FREQUENCIES]
             label = f"{label}, D = {offset:g} m" if offset != a.offset else label
-            if abs(runs[FIG2_FREQUENCIES.index(6.3)][0] / e1_paper - 1.0) > MATCH:
+            if abs(runs[E1MAX_FREQUENCIES.index(6.3)][0] / e1_paper - 1.0) > MATCH:
                 missed.append(label)
             curves[label] = [e for e, _ in runs]
             regimes[label] = {r for _, r in runs}
@@ -294,10 +294,10 @@ def _e1max_frequency(scenarios: Path, figures: Path, mass: int, alone: list[floa
     if plt is not None:
         fig, axes = plt.subplots(1, 2, figsize=(10.0, 4.0), sharey=True)
         for ax, side in zip(axes, ("SS", "DS")):
-            ax.plot(FIG2_FREQUENCIES, alone, "k--", label="primary alone")
+            ax.plot(E1MAX_FREQUENCIES, alone, "k--", label="primary alone")
             for label, values in curves.items():
                 if label.startswith(side):
-                    ax.plot(FIG2_FREQUENCIES, values, "-o", markersize=3, label=label)
+                    ax.plot(E1MAX_FREQUENCIES, values, "-o", markersize=3, label=label)
             ax.set(xlabel="forcing frequency (rad/s)", title=f"{side}VI NES, m2 = {mass} kg")
             ax.legend(fontsize=8)
         axes[0].set_ylabel("steady E1max (J)")
@@ -309,8 +309,8 @@ def _e1max_frequency(scenarios: Path, figures: Path, mass: int, alone: list[floa
     ss = sorted({r for label, found in regimes.items() if label.startswith("SS") for r in found})
     ds = sorted({r for label, found in regimes.items() if label.startswith("DS") for r in found})
     return [f"### {figure} (m2 = {mass} kg): E1max against frequency", "",
-            f"Figure: `figures/{what}`, {len(FIG2_FREQUENCIES)} frequencies from {FIG2_FREQUENCIES[0]:g} "
-            f"to {FIG2_FREQUENCIES[-1]:g} rad/s, the designs as in the table above"
+            f"Figure: `figures/{what}`, {len(E1MAX_FREQUENCIES)} frequencies from {E1MAX_FREQUENCIES[0]:g} "
+            f"to {E1MAX_FREQUENCIES[-1]:g} rad/s, the designs as in the table above"
             f"{' (' + ', '.join(missed) + ' as printed: off the paper at 6.3 rad/s)' if missed else ''}. "
             f"Of its {figure} the "
             f"paper says {says}; its table lists the regimes {printed}.",
