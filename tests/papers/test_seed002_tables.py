@@ -30,24 +30,15 @@ from tests.helpers import ROOT
 from vines_stoch import load_scenario
 from vines_stoch.ensemble import run_chunk
 from vines_stoch.scene import build_scene
+from vines_stoch.validation.reproduce import REGIMES_MISSED, REGIMES_PRINTED, WANE
+from vines_stoch.validation.reproduce import SEED002_FREQUENCIES as FREQUENCIES
 
-#: The forcing frequencies (rad/s) of Tables 1-3, the sweep of every seed 002 scenario.
-FREQUENCIES = (6.2, 6.3, 6.4, 6.5, 6.7, 7.0)
-
-#: Table 3: E1max wane (%) at each frequency.
-WANE = {"seed002_m40": (13.7, 44.1, 50.8, 49.0, 41.2, 31.4),
-        "seed002_m62": (20.1, 54.2, 61.9, 61.4, 53.9, 42.5)}
 #: Wane agreement in percentage points (module docstring).
 WANE_POINTS = 2.0
-
-#: Tables 1-2, rows "with 7 optimized parameters" (chaotic, chatter: ``aperiodic``; transient chaos
-#: then a periodic regime: that regime); None where the paper's regime is not reproduced.
-REGIMES = {
-    "seed002_m22": ("aperiodic", "aperiodic", None, "T,1,2", "T,1,2", "T,1,2"),
-    "seed002_m38": ("T,3,3", "aperiodic", None, "aperiodic", "T,2,2", None),
-    "seed002_m40": ("T,1,2", "T,1,2", "T,0,2", "T,0,1", "T,0,1", "T,0,1"),
-    "seed002_m62": ("aperiodic", "T,3,3", "aperiodic", "T,2,2", "T,2,2", None),
-}
+#: Tables 1-2 as printed, where this model reproduces them.
+REGIMES = {name: tuple(None if (name, omega) in REGIMES_MISSED else regime
+                       for omega, regime in zip(FREQUENCIES, row))
+           for name, row in REGIMES_PRINTED.items()}
 
 
 @cache

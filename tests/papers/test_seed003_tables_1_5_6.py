@@ -32,32 +32,13 @@ from functools import cache
 
 import pytest
 
-from tests.helpers import example_data, study_from
+from tests.helpers import ROOT
 from vines_stoch.ensemble import run_chunk
 from vines_stoch.scene import build_scene
-from vines_stoch.validation.reproduce import PRIMARY_E1MAX
+from vines_stoch.validation.reproduce import PRIMARY_E1MAX, SS_4_60, TABLE_1, TABLE_5, TABLE_6, WEAK, design
 
 #: Agreement of E1max with the printed value (module docstring).
 REL = 0.06
-#: The least E1max, as a fraction of the primary alone's, of a design whose mitigation is "very
-#: weak, almost non-existent" (Table 6, module docstring).
-WEAK = 0.80
-
-#: Table 1 (double-sided): m2 (kg), k2 (N/m), c2 (N s/m), V (m), C (m), printed E1max (J).
-TABLE_1 = {"40.0 kg": (40.0, 217.0, 64.8, 0.496, 0.238, 517.0),
-           "49.3 kg": (49.3, 196.0, 70.2, 0.416, 0.256, 282.0),
-           "66.1 kg": (66.1, 223.0, 71.9, 0.154, 0.250, 101.0)}
-#: Table 5, double-sided rows (m2 = 10 kg), and the E1max row printed under them.
-TABLE_5 = {"DS-1(10)": (10.0, 354.0, 7.14, 0.0194, 1.037, 428.0),
-           "DS-2(10)": (10.0, 414.0, 14.8, 0.185, 0.735, 603.0),
-           "DS-3(10)": (10.0, 387.0, 8.57, 0.149, 0.985, 411.0),
-           "DS-4(10)": (10.0, 428.0, 12.6, 0.0276, 0.799, 560.0)}
-#: Table 2, SS-4(60) with D = 0.0759 m for the printed 0.759 m (the other 60 kg designs have
-#: D = 0.06-0.07 m; with 0.759 m it impacts neither side: T,0,0, 1071 J).
-SS_4_60 = (60.0, 203.0, 83.6, 0.0759, 0.435, 145.0)
-#: Table 6, the "normal" 10 kg designs: scenario the geometry comes from, m2, k2, c2, D (V), C.
-TABLE_6 = {"SS-5(10)": ("seed003_ss20", 10.0, 215.0, 250.0, 0.01, 0.1),
-           "DS-5(10)": ("seed003_ds20", 10.0, 215.0, 132.0, 0.1, 0.1)}
 
 REGIME = re.compile(r"(\d*)T,(\d+),(\d+)")
 
@@ -66,11 +47,8 @@ REGIME = re.compile(r"(\d*)T,(\d+),(\d+)")
 def steady(scenario: str, mass: float, stiffness: float, damping: float, offset: float,
            gap: float) -> tuple[float, str]:
     """Steady ``e1_max`` and regime of ``scenarios/<scenario>.toml`` (its first design) with the
-    absorber's parameters set."""
-    changes = {"absorbers.0.mass": mass, "absorbers.0.stiffness": stiffness, "absorbers.0.damping": damping,
-               "absorbers.0.offset": offset, "absorbers.0.gap": gap}
-    point = study_from(example_data(scenario, "sweep"), changes).points[0]
-    assert point.loads[0].frequency == 6.3
+    absorber's parameters set, at 6.3 rad/s."""
+    point = design(ROOT / "scenarios", scenario, mass, stiffness, damping, offset, gap)
     row = run_chunk(build_scene(point), 0, 0, 0, 1)[0].iloc[0]
     return float(row["e1_max"]), str(row["regime"])
 

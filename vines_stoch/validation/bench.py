@@ -5,7 +5,7 @@
   through a minimal semi-implicit Euler-Maruyama loop in the same process.
 - The impact-rich stochastic scene: the same plus an impact NES (clearance 0.2, r = 0.6), the
   parallel NES of seed 000.
-- Contact under noise: the SSVI design SS-1(20) of seed 003 under stochastic ground motion and
+- Contact under noise: the SSVI design SS-2(20) of seed 003 under stochastic ground motion and
   the steel-on-steel chatter scene (example scenarios) as ratios to the smooth scene, and the
   work-precision of Hertz contact and impacts under noise on one Brownian path.
 - The SSVI design SS-1(60) of seed 003 (12 s from rest): vines_stoch against scipy DOP853
@@ -160,10 +160,10 @@ def _api_rate(n_paths: int, workers: int, directory: Path, impacts: bool = False
 
 #: Steps ``2^-level`` of the same-path work-precision study of contact and impacts under noise.
 SAME_PATH_LEVELS = [6, 7, 8, 9, 10, 11]
-#: Contact under noise: the SSVI design SS-1(20) of seed 003 under Clough-Penzien ground motion
+#: Contact under noise: the SSVI design SS-2(20) of seed 003 under Clough-Penzien ground motion
 #: (intensity 0.3) and the steel-on-steel double-sided NES beside a plastic impact NES under
 #: harmonic + white noise (the example scenarios), run at one sweep point with ``n`` paths.
-CONTACT_SCENES = {"SSVI SS-1(20) under ground motion": ("scenarios/seed003_ss_ground_motion.toml", 1),
+CONTACT_SCENES = {"SSVI SS-2(20) under ground motion": ("scenarios/seed003_ss_ground_motion.toml", 1),
                   "steel-on-steel DSVI + plastic impact NES, harmonic + white noise":
                       ("scenarios/contact_noise_parallel.toml", 0)}
 

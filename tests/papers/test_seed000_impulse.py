@@ -1,0 +1,112 @@
+"""Seed 000 (Wei, Wei, Zhang, Dong, Peng, Zhang 2019, "Targeted energy transfer of a parallel nonlinear
+energy sink"), Figs. 3 and 4: EDM and the energy integral against the impulse strength X for the cubic
+NES at its optimum and the parallel NES (``scenarios/seed000_impulse_cubic.toml``, ``_parallel``: a
+reconstruction, their headers say what is assumed).  The paper prints no number for these figures;
+the tests hold what its text says they show: targeted energy transfer only above an input energy,
+its efficiency declining as the energy grows, the parallel NES keeping a high EDM over a wider range
+of X and emptying the primary faster.
+
+Tolerances.  The scenes are deterministic; halving dt moves no EDM of the sweep in the third digit.
+Below the threshold the cubic spring is too soft to act (its force is ``k u^2 / (c omega)`` = 2e-4
+of the dashpot's at X = 0.01), and the absorber is a free mass that the primary drags through the
+dashpot: its share of the dissipation is ``c_eff / (c1 + c_eff)``, ``c_eff = c m^2 w^2 / (m^2 w^2 +
+c^2)`` (0.3704).  That formula ignores the decay of the primary's motion within a period (total damping
+ratio 0.016) and the absorber's mass-loading of the frequency (eps / 2), first-order effects on the
+dissipation rate that cancel in the share to second order: it is tested within 0.005.  The other
+tests compare curves whose gaps (0.01 to 0.4) exceed the dt error by more than twenty times."""
+
+from __future__ import annotations
+
+from functools import cache
+
+import numpy as np
+import pytest
+
+from tests.helpers import example_data, study_from
+from vines_stoch.ensemble import run_chunk
+from vines_stoch.scene import build_scene
+
+#: The impulse strengths of the scenarios' sweep.
+X = np.logspace(-2.0, 1.0, 31)
+
+
+@cache
+def sweep(kind: str) -> dict[str, np.ndarray]:
+    """EDM, impacts and energy integral per input energy along the sweep of
+    ``scenarios/seed000_impulse_<kind>.toml``."""
+    points = study_from(example_data(f"seed000_impulse_{kind}")).points
+    assert [p.loads[0].velocity for p in points] == pytest.approx(X, rel=1e-12)
+    rows = [run_chunk(build_scene(p), 0, 0, 0, 1)[0].iloc[0] for p in points]
+    return {"edm": np.array([r["edm"] for r in rows]),
+            "impacts": np.array([r["impacts"] for r in rows]),
+            "integral": np.array([r["energy_integral"] / r["input_energy"] for r in rows])}
+
+
+@cache
+def edm_at_one(stiffness: float, damping: float) -> float:
+    """EDM at X = 1 of the cubic NES with the stiffness and damping given."""
+    changes = {"loads.0.velocity": 1.0, "absorbers.0.stiffness": stiffness, "absorbers.0.damping": damping}
+    point = study_from(example_data("seed000_impulse_cubic", "sweep"), changes).points[0]
+    return float(run_chunk(build_scene(point), 0, 0, 0, 1)[0].iloc[0]["edm"])
+
+
+def dashpot_share() -> float:
+    """The absorbers' share of the dissipation when the cubic spring does not act (module docstring)."""
+    data = example_data("seed000_impulse_cubic")
+    c1, (nes,) = data["primary"]["damping"], data["absorbers"]
+    inertia = (nes["mass"] * 1.0) ** 2
+    effective = nes["damping"] * inertia / (inertia + nes["damping"] ** 2)
+    return effective / (c1 + effective)
+
+
+def test_below_the_threshold_the_cubic_nes_takes_its_dashpot_share():
+    low = X <= 0.1
+    assert sweep("cubic")["edm"][low] == pytest.approx(dashpot_share(), abs=0.005)
+
+
+def test_targeted_energy_transfer_only_above_an_input_energy():
+    edm = sweep("cubic")["edm"]
+    peak = int(np.argmax(edm))
+    assert 0.6 < X[peak] < 1.6
+    assert edm[peak] >= 2.0 * dashpot_share()
+    # below half the peak's X the spring is still idle: EDM stays near the dashpot share
+    assert np.all(edm[X < X[peak] / 2.0] < dashpot_share() + 0.05)
+
+
+def test_above_the_threshold_the_efficiency_declines():
+    edm = sweep("cubic")["edm"]
+    peak = int(np.argmax(edm))
+    assert np.all(np.diff(edm[peak:]) < 0.0)
+    assert edm[-1] < dashpot_share()
+
+
+def test_the_cubic_nes_is_at_its_optimum():
+    best = edm_at_one(0.025, 0.0125)
+    # a step of 1.5 times either way in stiffness or damping
+    for stiffness, damping in ((0.0375, 0.0125), (0.025 / 1.5, 0.0125), (0.025, 0.01875),
+                               (0.025, 0.0125 / 1.5)):
+        assert best > edm_at_one(stiffness, damping) + 0.005, (stiffness, damping)
+    assert best > edm_at_one(1.0, 0.01) + 0.4   # the earlier representative values (MODEL.md section 5)
+
+
+def test_without_impacts_the_parallel_nes_is_the_cubic_nes():
+    quiet = sweep("parallel")["impacts"] == 0
+    assert X[quiet].max() >= 0.1   # the primary's swing stays inside the cavity up to X = 0.2
+    assert sweep("parallel")["edm"][quiet] == pytest.approx(sweep("cubic")["edm"][quiet], rel=1e-12)
+
+
+def test_the_parallel_nes_keeps_a_high_edm_over_a_wider_range():
+    cubic, parallel = sweep("cubic")["edm"], sweep("parallel")["edm"]
+    assert np.all(parallel >= cubic - 1e-12)
+    below = (X >= 0.25) & (X <= 0.65)   # impacts, but the cubic NES below its threshold
+    assert np.all(parallel[below] >= 0.6) and np.all(cubic[below] < 0.45)
+    above = X >= 3.0
+    assert np.all(parallel[above] > cubic[above] + 0.05)
+
+
+def test_the_parallel_nes_empties_the_primary_faster():
+    """Fig. 4: the integral of the primary's energy, per input energy, is smaller with impacts."""
+    cubic, parallel = sweep("cubic")["integral"], sweep("parallel")["integral"]
+    assert np.all(parallel <= cubic * (1.0 + 1e-9))
+    below = (X >= 0.25) & (X <= 0.65)
+    assert np.all(parallel[below] < 0.7 * cubic[below])
