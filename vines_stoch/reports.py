@@ -98,9 +98,10 @@ def markdown(frame: pd.DataFrame, digits: int = 4) -> str:
 
 def compare(runs: list[Run], metrics: tuple[str, ...] = COMPARED) -> pd.DataFrame:
     """Per sweep point and metric: each run's mean, and each later run's difference from the
-    first with its standard error.  Runs with the same seed and common random numbers are
-    paired realisation by realisation (standard error of the paired differences); otherwise
-    the errors of independent means are combined."""
+    first with its standard error and 95 % interval.  Runs with the same seed and common random
+    numbers are paired realisation by realisation (``scipy.stats.ttest_rel``: the Student-t
+    interval of the paired differences); otherwise the errors of independent means are combined
+    (a normal interval)."""
     first = runs[0]
     for run in runs[1:]:
         if len(run.summary) != len(first.summary):
@@ -116,25 +117,37 @@ def compare(runs: list[Run], metrics: tuple[str, ...] = COMPARED) -> pd.DataFram
             for run in runs:
                 row[run.label] = run.summary[f"{m}_mean"].iloc[p]
             for run in runs[1:]:
-                diff, se, paired = _difference(first, run, p, m)
+                diff, se, (low, high), paired = _difference(first, run, p, m)
                 row[f"{run.label} - {first.label}"] = diff
                 row[f"se ({run.label})"] = se
+                row[f"ci95 ({run.label})"] = f"[{low:.4g}, {high:.4g}]"
                 row[f"paired ({run.label})"] = "yes" if paired else "no"
             rows.append(row)
     return pd.DataFrame(rows)
 
 
-def _difference(a: Run, b: Run, point: int, metric: str) -> tuple[float, float, bool]:
+def _difference(a: Run, b: Run, point: int,
+                metric: str) -> tuple[float, float, tuple[float, float], bool]:
+    """``b - a`` of ``metric``'s mean at ``point``: the difference, its standard error, its 95 %
+    interval and whether the realisations were paired."""
+    from scipy.stats import norm, ttest_rel
+    from scipy.stats import t as student_t
+
     ra = a.realizations[(a.realizations["point"] == point) & (a.realizations["status"] == "ok")]
     rb = b.realizations[(b.realizations["point"] == point) & (b.realizations["status"] == "ok")]
     if a.seed == b.seed and a.common and b.common:
         joined = ra[["realization", metric]].merge(rb[["realization", metric]], on="realization")
         if len(joined) > 1:
-            d = (joined[f"{metric}_y"] - joined[f"{metric}_x"]).to_numpy(dtype=float)
-            return float(d.mean()), float(d.std(ddof=1) / math.sqrt(d.size)), True
+            y, x = joined[f"{metric}_y"].to_numpy(dtype=float), joined[f"{metric}_x"].to_numpy(dtype=float)
+            test = ttest_rel(y, x)
+            ci = test.confidence_interval(0.95)
+            se = 0.5 * (ci.high - ci.low) / student_t.ppf(0.975, test.df)  # (the interval's half-width)
+            return float(np.mean(y - x)), float(se), (float(ci.low), float(ci.high)), True
     sa, sb = a.summary[f"{metric}_sem"].iloc[point], b.summary[f"{metric}_sem"].iloc[point]
-    diff = b.summary[f"{metric}_mean"].iloc[point] - a.summary[f"{metric}_mean"].iloc[point]
-    return float(diff), float(math.hypot(sa, sb)), False
+    diff = float(b.summary[f"{metric}_mean"].iloc[point] - a.summary[f"{metric}_mean"].iloc[point])
+    se = float(math.hypot(sa, sb))
+    low, high = norm.interval(0.95, loc=diff, scale=se) if se > 0 else (diff, diff)
+    return diff, se, (float(low), float(high)), False
 
 
 def effective_range(run: Run, level: float = EDM_LEVEL) -> dict[str, object]:
