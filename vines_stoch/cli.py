@@ -277,7 +277,8 @@ def fragility(
                + (f"\nnotes: {first['notes']}" if first["notes"] else ""))
     from .plotting import available
 
-    plot = f", {directory / f'fragility_{limit}.png'}" if available() else ""
+    plot = "".join(f", {directory / f'fragility_{limit}{suffix}'}" for suffix in (".png", ".svg")
+                   if available())
     typer.echo(f"wrote {directory / 'fragility.parquet'}{plot}")
 
 

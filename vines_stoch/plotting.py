@@ -29,6 +29,9 @@ STYLE = {
     "svg.fonttype": "none", "savefig.bbox": "tight",
 }
 
+#: Longest legend entry (characters) kept inside the axes (``legend``).
+LEGEND_TEXT = 45
+
 #: Result columns: physical name and SI unit ("" for a pure number, "count" for counts).
 QUANTITIES: dict[str, tuple[str, str]] = {
     "t": ("time", "s"), "x1": ("roof displacement", "m"), "e1": ("energy of the primary", "J"),
@@ -147,11 +150,12 @@ def counts(axis: Any) -> None:
 
 
 def legend(ax: Any) -> None:
-    """The legend where it hides the least data (``loc="best"``); with more than four entries,
-    beside the axes instead."""
-    handles, _ = ax.get_legend_handles_labels()
-    if len(handles) > 4:
-        ax.legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0)
+    """The legend where it hides the least data (``loc="best"``) when it is small; with more than
+    three entries, or an entry longer than ``LEGEND_TEXT`` characters, below the axes instead,
+    where it cannot cover the data."""
+    handles, labels = ax.get_legend_handles_labels()
+    if len(handles) > 3 or max(map(len, labels), default=0) > LEGEND_TEXT:
+        ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.14), borderaxespad=0.0)
     else:
         ax.legend(loc="best")
 
