@@ -30,10 +30,10 @@ def as_study(scenario: Study | Mapping[str, Any] | str | os.PathLike) -> Study:
     if isinstance(scenario, (str, os.PathLike)):
         return load_scenario(scenario)
     if isinstance(scenario, Mapping):
-        from .validation.scenes import text
+        import tomlkit
 
         try:
-            source = text(scenario)
+            source = tomlkit.dumps(dict(scenario))
         except (TypeError, ValueError) as exc:  # (a value TOML cannot hold)
             raise ScenarioError(f"<dict>: not a scenario's tables ({exc})") from None
         return parse_scenario(source, "<dict>")

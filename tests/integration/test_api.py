@@ -111,6 +111,8 @@ def test_bad_scenarios_are_named():
         run(42)
     with pytest.raises(ScenarioError, match=r"<dict>: .*ensemble.realizations"):
         run({**DATA, "ensemble": {"realizations": -1}})
+    with pytest.raises(ScenarioError, match=r"<dict>: not a scenario's tables \(Keys must be strings\)"):
+        run({1: 2})
     with pytest.raises(ScenarioError, match="no-such.toml"):
         run("no-such.toml")
     with pytest.raises(ValueError, match=r"point = 2: must be a whole number \[0, 1\]"):
