@@ -1,13 +1,14 @@
 """vines_stoch: stochastic Monte Carlo response analysis of vibration absorbers.
 
-Public API::
+Public API (README, "Python API")::
 
-    study = load_scenario("scenarios/parallel_nes_impulse.toml")
-    realizations, summary = run(study, "results/x")
-    realizations, summary = read_results("results/x")
+    results = run("scenarios/parallel_nes_impulse.toml")           # in memory: nothing written
+    results = run({"name": "x", ...}, out="results/x", realizations=200)
+    realizations, summary = read_results("results/x")              # a Results unpacks as a pair
+    solution = solve("scenarios/parallel_nes_impulse.toml")        # one realisation: ts, ys["e1"]
 
-``run`` and ``read_results`` are imported on first use (PEP 562): reading and validating a
-scenario does not import numba, dask or pandas.
+``run``, ``solve``, ``read_results``, ``Results`` and ``Solution`` are imported on first use
+(PEP 562): reading and validating a scenario does not import numba, dask or pandas.
 """
 
 from __future__ import annotations
@@ -30,9 +31,11 @@ __version__ = _version()
 from .scenario import ScenarioError, load_scenario, parse_scenario  # noqa: E402
 
 #: Public names imported on first use, and their modules.
-_LAZY = {"run": "ensemble", "read_results": "store"}
+_LAZY = {"run": "ensemble", "solve": "ensemble", "read_results": "results", "Results": "results",
+         "Solution": "results"}
 
-__all__ = ["ScenarioError", "__version__", "load_scenario", "parse_scenario", "read_results", "run"]
+__all__ = ["Results", "ScenarioError", "Solution", "__version__", "load_scenario", "parse_scenario",
+           "read_results", "run", "solve"]
 
 
 def __getattr__(name: str) -> Any:

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import os
 import sys
+import time
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -64,11 +65,11 @@ def _check_backend(backend: str) -> None:
 @app.command()
 def run(
     scenario: Path = typer.Argument(..., help="Scenario TOML file."),
-    out: Path | None = typer.Option(None, "--out", help="Output directory (overrides [output] directory)."),
+    out: Path | None = typer.Option(None, "--out", help="Output directory (overrides \\[output] directory)."),
     workers: int | None = typer.Option(None, "--workers", min=1,
                                        help="Threads of the embedded scheduler (default: all cores)."),
     chunk: int | None = typer.Option(None, "--chunk", min=0,
-                                     help="Realisations per task (overrides [ensemble] chunk; "
+                                     help="Realisations per task (overrides \\[ensemble] chunk; "
                                           "0 = automatic)."),
     resume: bool = typer.Option(False, "--resume",
                                 help="Keep the chunks an interrupted run of the same scenario finished."),
@@ -90,6 +91,7 @@ def run(
     from .ensemble import Interrupted, output_directory
     from .ensemble import run as run_study
 
+    started = time.monotonic()
     _check_backend(backend)
     try:
         study = load_scenario(scenario)
@@ -129,13 +131,28 @@ def run(
         return
     typer.echo(f"results: {directory}/realizations.parquet ({len(realizations)} rows), "
                f"{directory}/summary.parquet ({len(summary)} rows)"
-               + (f", {directory}/history.parquet" if study.base.simulation.history else ""))
+               + (f", {directory}/history.parquet" if study.base.simulation.history else "")
+               + f"; {time.monotonic() - started:.1f} s in all")
     import pandas as pd
 
-    columns = (study.sweep_keys + ["n_ok", "n_failed"]
-               + [f"{m}_mean" for m in ("edm", "e1_max", "impacts", "energy_residual")])
-    with pd.option_context("display.width", 200, "display.max_columns", 20, "display.precision", 4):
-        typer.echo(summary[columns].to_string(index=False))
+    with pd.option_context("display.width", 200, "display.max_columns", 24, "display.precision", 4):
+        typer.echo(summary[headline(study, summary)].to_string(index=False))
+
+
+def headline(study: Study, summary: pd.DataFrame) -> list[str]:
+    """The summary columns the end-of-run table shows, those the scenario is about: the swept
+    keys, the realisations ok and failed, the mean EDM and peak energy, the impacts where an
+    absorber impacts, the objective of ``[optimize]``, each limit's exceedance probability
+    ``p_NAME`` with its interval, and the energy residual (the run's check)."""
+    means = ["edm", "e1_max"]
+    if "impacts_mean" in summary and (summary["impacts_mean"].fillna(0) > 0).any():
+        means.append("impacts")
+    if study.base.optimize is not None and study.base.optimize.objective not in means:
+        means.append(study.base.optimize.objective)
+    limits = [c for c in summary.columns if c.startswith("p_")]  # (p_NAME, p_NAME_lo, p_NAME_hi)
+    columns = [*study.sweep_keys, "n_ok", "n_failed", *(f"{m}_mean" for m in means), *limits,
+               "energy_residual_mean"]
+    return [c for c in dict.fromkeys(columns) if c in summary]
 
 
 @app.command()
@@ -155,7 +172,7 @@ def loads(
     out: Path = typer.Argument(..., help="File to write: .AT2 (ground acceleration in g) "
                                          "or .csv (t, force, ground)."),
     seed: int | None = typer.Option(None, "--seed", min=0, max=2**63 - 1,
-                                    help="Seed (default: the scenario's [ensemble] seed)."),
+                                    help="Seed (default: the scenario's \\[ensemble] seed)."),
     realization: int = typer.Option(0, "--realization", min=0, max=2**63 - 1,
                                     help="Realisation whose loads to write."),
     point: int = typer.Option(0, "--point", min=0, help="Sweep point."),
@@ -218,7 +235,7 @@ def report(
                                      help="Sweep point of the EDM histogram and history plot "
                                           "(default: the middle one)."),
 ) -> None:
-    """Write a Markdown report with tables and PNG plots of finished runs."""
+    """Write a Markdown report with tables and plots (PNG and SVG) of finished runs."""
     from .reports import report as write_report
 
     if label and len(label) != len(directories):
@@ -232,9 +249,9 @@ def report(
 
 @app.command()
 def fragility(
-    directory: Path = typer.Argument(..., help="Result directory of a run with [limits] "
+    directory: Path = typer.Argument(..., help="Result directory of a run with \\[limits] "
                                                "and a sweep over intensity."),
-    limit: str = typer.Option(..., "--limit", help="Name of the limit (a key of [limits])."),
+    limit: str = typer.Option(..., "--limit", help="Name of the limit (a key of \\[limits])."),
     im: str = typer.Option(..., "--im",
                            help="Intensity measure: a column constant at each sweep point (a swept key)."),
     diverged: str = typer.Option("exclude", "--diverged",
@@ -260,7 +277,8 @@ def fragility(
                + (f"\nnotes: {first['notes']}" if first["notes"] else ""))
     from .plotting import available
 
-    plot = f", {directory / f'fragility_{limit}.png'}" if available() else ""
+    plot = "".join(f", {directory / f'fragility_{limit}{suffix}'}" for suffix in (".png", ".svg")
+                   if available())
     typer.echo(f"wrote {directory / 'fragility.parquet'}{plot}")
 
 
@@ -296,7 +314,7 @@ def compare(
 
 @app.command()
 def optimize(
-    scenario: Path = typer.Argument(..., help="Scenario TOML file with an [optimize] table."),
+    scenario: Path = typer.Argument(..., help="Scenario TOML file with an \\[optimize] table."),
     out: Path | None = typer.Option(None, "--out",
                                     help="Output directory (default: <output directory>-optimum)."),
     workers: int | None = typer.Option(None, "--workers", min=1,

@@ -19,10 +19,11 @@ import signal
 import sys
 import threading
 import time
-from collections.abc import Iterator
+from collections.abc import Iterator, Mapping
 from contextlib import ExitStack, closing, contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pandas as pd
@@ -34,7 +35,9 @@ from .kernels import needed_streams, sample_buffer, simulate
 from .metrics import METRICS, finish_table, ground_intensity, summarise
 from .outputs import POINCARE_SAMPLES
 from .progress import Progress
-from .scenario import History, Study
+from .results import Results, Solution, as_study, check_whole, read_results
+from .scenario import History, Study, history_signals
+from .scenario.fields import MAX_REALIZATIONS
 from .scene import Scene, build_scene
 from .store import (
     CHECKPOINT,
@@ -45,7 +48,6 @@ from .store import (
     prepare_folder,
     provenance,
     read_arrays,
-    read_results,
     run_key,
     write_arrays,
     write_table,
@@ -165,15 +167,16 @@ class Plan:
 
 
 def plan(study: Study, chunk: int | None = None, realizations: int | None = None,
-         backend: str = "cpu") -> Plan:
+         backend: str = "cpu", history: History | None = None) -> Plan:
     """Split every sweep point's realisations into chunks (``chunk`` 0 or None: automatic,
     from the scene's cost and the backend alone, so the plan is the same on any cluster or
-    GPU).  With history statistics a chunk holds at most ``HISTORY_CHUNK_BYTES`` of paths
-    (cuda: ``GPU_CHUNK_BYTES`` of paths and Poincare samples)."""
+    GPU).  With history statistics (or the time histories ``history``, where given, kept) a chunk
+    holds at most ``HISTORY_CHUNK_BYTES`` of paths (cuda: ``GPU_CHUNK_BYTES`` of paths and
+    Poincare samples)."""
     scenes = [build_scene(s) for s in study.points]
-    wanted = realizations or study.base.ensemble.realizations
+    wanted = study.base.ensemble.realizations if realizations is None else realizations
     chunk = study.base.ensemble.chunk if chunk is None else chunk
-    spec = study.base.simulation.history
+    spec = history or study.base.simulation.history
     random = bool(study.base.uncertain)
     counts = [wanted if scene.has_noise or random else 1 for scene in scenes]
     chunks = []
@@ -378,14 +381,38 @@ def output_directory(study: Study, directory: str | Path | None = None) -> Path:
     return Path(directory or study.base.output.directory or f"results/{study.base.name}")
 
 
-def run(study: Study, directory: str | Path | None = None, *, workers: int | None = None,
-        chunk: int | None = None, realizations: int | None = None, resume: bool = False,
-        scheduler: str | None = None, progress: bool = False, checkpoint_seconds: float = 30.0,
-        shard: tuple[int, int] | None = None,
-        backend: str = "cpu") -> tuple[pd.DataFrame, pd.DataFrame] | None:
-    """Run a validated study; write ``realizations.parquet``, ``summary.parquet`` (and
-    ``history.parquet`` when ``simulation.history`` asks for it) into ``directory`` (default:
-    the scenario's output directory) and return realisations and summary as DataFrames.
+def _check_arguments(out: object, workers: object, chunk: object, realizations: object, paths: object,
+                     checkpoint_seconds: object, backend: object) -> None:
+    """Refuse an argument of ``run`` of the wrong type (``TypeError``) or out of its range
+    (``ValueError``), naming it, its value and what is allowed."""
+    if out is not None and not isinstance(out, (str, os.PathLike)):
+        raise TypeError(f"out = {out!r}: give a folder's path, or None to run in memory")
+    check_whole("realizations", realizations, 1, MAX_REALIZATIONS)
+    check_whole("workers", workers, 1)
+    check_whole("chunk", chunk, 0, MAX_REALIZATIONS)
+    if not isinstance(paths, bool):
+        raise TypeError(f"paths = {paths!r}: must be True or False")
+    if isinstance(checkpoint_seconds, bool) or not isinstance(checkpoint_seconds, (int, float)) \
+            or not checkpoint_seconds >= 0:
+        raise ValueError(f"checkpoint_seconds = {checkpoint_seconds!r}: must be a number >= 0")
+    if backend not in BACKENDS:
+        raise ValueError(f"backend {backend!r}: must be one of {', '.join(BACKENDS)}")
+
+
+def run(scenario: Study | Mapping[str, Any] | str | os.PathLike, out: str | Path | None = None, *,
+        workers: int | None = None, chunk: int | None = None, realizations: int | None = None,
+        paths: bool = False, resume: bool = False, scheduler: str | None = None, progress: bool = False,
+        checkpoint_seconds: float = 30.0, shard: tuple[int, int] | None = None,
+        backend: str = "cpu") -> Results | None:
+    """Run a scenario (a file's path, a dict of its tables or a validated ``Study``) and return
+    its ``Results`` (realisations, summary, history statistics where ``[simulation.history]``
+    asks for them, and with ``paths`` every realisation's time histories).
+
+    ``out``: the folder that receives ``realizations.parquet``, ``summary.parquet`` (and
+    ``history.parquet``); None runs in memory and writes nothing.  ``realizations`` (1 to
+    10,000,000): the ensemble size in place of the file's ``[ensemble] realizations``.
+    ``paths``: keep the time histories of every realisation (``Results.paths``, on the history
+    grid: ``[simulation.history] points``, 1000 by default; never written to the folder).
 
     ``workers``: threads of the embedded scheduler (default: all cores).  ``scheduler``: the
     address of a running ``dask.distributed`` scheduler to use instead, or the path of its
@@ -394,7 +421,9 @@ def run(study: Study, directory: str | Path | None = None, *, workers: int | Non
     often the history statistics are saved for a resume.  ``shard = (i, n)``: run only the
     chunks whose index in the plan is ``i`` modulo ``n`` into the folder, write no results and
     return None (for job arrays: shards run side by side, then a ``resume`` run writes the
-    results from their parts; not with history statistics, which need the paths).
+    results from their parts; not with history statistics, which need the paths).  ``progress``:
+    a line for each step loop compiled, a bar (or lines, in a log) of the realisations done with
+    their rate, and the total time, on standard error.
 
     ``backend``: ``"cpu"`` (numba loops on CPU threads) or ``"cuda"`` (the same loops on an
     NVIDIA GPU, one realisation a thread: ``gpu.py``; its realisations draw from Philox streams,
@@ -408,12 +437,16 @@ def run(study: Study, directory: str | Path | None = None, *, workers: int | Non
     run refuses parts, results or a checkpoint of another run.  Ctrl-C raises ``Interrupted``
     (a ``KeyboardInterrupt``) saying how many chunks are kept.
     """
-    if backend not in BACKENDS:
-        raise ValueError(f"backend {backend!r}: must be one of {', '.join(BACKENDS)}")
+    _check_arguments(out, workers, chunk, realizations, paths, checkpoint_seconds, backend)
+    study = as_study(scenario)
     if backend == "cuda":
         from . import gpu
 
         gpu.require()
+    if out is None and (resume or shard is not None):
+        raise ValueError(f"{'resume' if resume else 'shard'}: needs a folder (out) to keep the chunks in")
+    if paths and (resume or shard is not None):
+        raise ValueError("paths: not with resume or shard (the chunks kept in the folder keep no paths)")
     if shard is not None:
         if not 0 <= shard[0] < shard[1]:
             raise ValueError(f"--shard {shard[0]}/{shard[1]}: give I/N with 0 <= I < N "
@@ -422,60 +455,124 @@ def run(study: Study, directory: str | Path | None = None, *, workers: int | Non
             raise ValueError(f"--shard: {study.source} asks for history statistics, which are folded from "
                              "the paths of every realisation in order and cannot be split into shards; "
                              "run it in one job")
-    directory = output_directory(study, directory)
+    options = _Options(workers, chunk, realizations, paths, resume, scheduler, progress, checkpoint_seconds,
+                       shard, backend)
+    if out is None:
+        return _run(study, None, options)
+    directory = Path(out)
     try:
         directory.mkdir(parents=True, exist_ok=True)
     except FileExistsError:
         raise NotADirectoryError(f"{directory}: exists and is not a folder") from None
     with lock_folder(directory, None if shard is None else f"shard-{shard[0]}-of-{shard[1]}"):
-        return _run(study, directory, workers, chunk, realizations, resume, scheduler, progress,
-                    checkpoint_seconds, shard, backend)
+        return _run(study, directory, options)
 
 
-def _run(study: Study, directory: Path, workers: int | None, chunk: int | None, realizations: int | None,
-         resume: bool, scheduler: str | None, progress: bool, checkpoint_seconds: float,
-         shard: tuple[int, int] | None, backend: str) -> tuple[pd.DataFrame, pd.DataFrame] | None:
-    """``run`` in a directory it owns."""
+@dataclass(frozen=True)
+class _Options:
+    """The options of ``run`` that ``_run`` takes on."""
+
+    workers: int | None
+    chunk: int | None
+    realizations: int | None
+    paths: bool
+    resume: bool
+    scheduler: str | None
+    progress: bool
+    checkpoint_seconds: float
+    shard: tuple[int, int] | None
+    backend: str
+
+
+def structure(scene: Scene) -> str:
+    """The structure a step loop is compiled for, in words (its scheme, bodies, floors and what
+    the loop carries)."""
+    features = [name for name, present in (("impacts", scene.has_impact), ("Hertz contact", scene.has_hertz),
+                                           ("white noise", scene.has_white_noise),
+                                           ("filtered loads", scene.has_filters),
+                                           ("ground motion", scene.has_ground),
+                                           ("geometric absorber", scene.has_geometric)) if present]
+    return (f"{scene.scheme} loop, {scene.mass.shape[0]} bodies, {scene.n_floors} floor(s)"
+            + "".join(f", {f}" for f in features))
+
+
+def prepare_loops(scenes: list[Scene], seed: int, common: bool, grid: tuple[int, int] | None = None,
+                  signals: tuple[str, ...] = hist.SIGNALS) -> None:
+    """Compile (or load from numba's cache on disk) the step loop of each structure among
+    ``scenes`` that this process has not run yet, before any chunk starts, with one line each on
+    standard error: which structure, and whether it was compiled (once: later runs load it) or
+    loaded.  A path of no steps runs each loop with the argument types of ``run_chunk``."""
+    from .kernels import advance, kernel_for, start_path
+
+    seen = set()
+    for point, scene in enumerate(scenes):
+        kernel = kernel_for(scene)
+        if kernel in seen or kernel.overloads:
+            continue
+        seen.add(kernel)
+        print(f"step loop: {structure(scene)}: compiling or loading ...", end="", file=sys.stderr, flush=True)
+        hits, start = sum(kernel.stats.cache_hits.values()), time.monotonic()
+        increments, bridge, filters = needed_streams(scene)
+        history = None
+        if grid is not None:
+            columns = len(hist.SIGNALS) + (scene.n_floors if hist.needs_floors(signals) else 0)
+            history = np.full((grid[1], columns), np.nan)
+        gens = streams(seed, point, 0, increments=increments, bridge=bridge, filters=filters, common=common)
+        advance(start_path(scene, gens, samples=sample_buffer(scene), history=history,
+                           stride=grid[0] if grid else 1, stretches=False), 0)
+        loaded = sum(kernel.stats.cache_hits.values()) > hits
+        print(f" {'loaded from the cache' if loaded else 'compiled (cached on disk for later runs)'} "
+              f"in {time.monotonic() - start:.1f} s", file=sys.stderr, flush=True)
+
+
+def _run(study: Study, directory: Path | None, o: _Options) -> Results | None:
+    """``run`` in a directory it owns, or in memory (``directory`` None)."""
     base = study.base
-    the_plan = plan(study, chunk, realizations, backend)
-    seed, target, spec = base.ensemble.seed, base.ensemble.target_sem, base.simulation.history
-    grids = [hist.grid(scene.n_steps, spec.points) if spec else None for scene in the_plan.scenes]
-    key = run_key(study.text, the_plan.chunks, backend)
-    keep = "--resume" if resume else "--shard" if shard is not None else None
-    found = prepare_folder(directory, key, len(the_plan.chunks), study.source, keep)
-    checkpoint = _Checkpoint(directory / "parts" / CHECKPOINT, key, checkpoint_seconds)
+    spec = base.simulation.history
+    grid_spec = spec or (History() if o.paths else None)  # (the grid of the paths kept)
+    the_plan = plan(study, o.chunk, o.realizations, o.backend, grid_spec)
+    seed, target = base.ensemble.seed, base.ensemble.target_sem
+    signals = tuple(grid_spec.signals) if grid_spec else hist.SIGNALS
+    grids = [hist.grid(scene.n_steps, grid_spec.points) if grid_spec else None for scene in the_plan.scenes]
+    key = run_key(study.text, the_plan.chunks, o.backend)
+    keep = "--resume" if o.resume else "--shard" if o.shard is not None else None
+    found = set() if directory is None else prepare_folder(directory, key, len(the_plan.chunks), study.source,
+                                                           keep)
+    checkpoint = None if directory is None else _Checkpoint(directory / "parts" / CHECKPOINT, key,
+                                                            o.checkpoint_seconds)
     states = [PointState([c for c in the_plan.chunks if c[0] == p], tree=hist.Tree() if spec else None)
               for p in range(len(the_plan.scenes))]
-    if resume and spec:
+    if o.resume and spec:
         checkpoint.load(states)
     folded_chunks = {c for s in states for c in s.chunks[:s.folded]}
     # a part on disk is reused unless its history paths are still needed
-    on_disk = {c for c in the_plan.chunks if part_path(directory, *c) in found}
+    on_disk = {c for c in the_plan.chunks if directory is not None and part_path(directory, *c) in found}
     reusable = folded_chunks if spec else on_disk
     ready: dict[tuple[int, int, int], tuple[pd.DataFrame, np.ndarray | None]] = {}
+    frames: dict[tuple[int, int, int], pd.DataFrame] = {}  # (in memory: the chunks' tables)
+    kept_paths: dict[tuple[int, int, int], np.ndarray] = {}
 
     def fold_ready() -> None:
         for state in states:
             while not state.done:
                 c = state.chunks[state.folded]
                 if c in ready:
-                    frame, paths = ready.pop(c)
+                    frame, chunk_paths = ready.pop(c)
                 elif c in reusable and not spec:
-                    frame, paths = (pd.read_parquet(part_path(directory, *c)) if target else None), None
+                    frame, chunk_paths = (pd.read_parquet(part_path(directory, *c)) if target else None), None
                 else:
                     break
-                state.fold(frame, paths, target)
+                state.fold(frame, chunk_paths, target)
 
-    mine = the_plan.chunks if shard is None else the_plan.chunks[shard[0]::shard[1]]
+    mine = the_plan.chunks if o.shard is None else the_plan.chunks[o.shard[0]::o.shard[1]]
     todo = [c for c in mine if c not in reusable]
     total = sum(c[2] - c[1] for c in mine)
     done = total - sum(c[2] - c[1] for c in todo)
-    chunk_runner = run_chunk_cuda if backend == "cuda" else run_chunk
+    chunk_runner = run_chunk_cuda if o.backend == "cuda" else run_chunk
 
     def call(c: tuple[int, int, int]) -> tuple:
         return chunk_runner, (the_plan.scenes[c[0]], seed, *c, grids[c[0]], study if base.uncertain else None,
-                              base.ensemble.common_random_numbers,
-                              tuple(spec.signals) if spec else hist.SIGNALS)
+                              base.ensemble.common_random_numbers, signals)
 
     def skip(c: tuple[int, int, int]) -> bool:
         return states[c[0]].done
@@ -488,67 +585,83 @@ def _run(study: Study, directory: Path, workers: int | None, chunk: int | None, 
         return sum(held(c) or (states[c[0]].stop is not None and c[1] >= states[c[0]].stop) for c in mine)
 
     try:
+        if o.progress and o.backend == "cpu" and not o.scheduler and todo:
+            prepare_loops(the_plan.scenes, seed, base.ensemble.common_random_numbers, grids[0], signals)
         with ExitStack() as stack:
             interrupted = stack.enter_context(_noting_interrupts())
             fold_ready()
-            bar = stack.enter_context(Progress(total, done, enabled=progress))
-            if scheduler:
-                client = stack.enter_context(_client(scheduler, progress))
+            bar = stack.enter_context(Progress(total, done, enabled=o.progress))
+            if o.scheduler:
+                client = stack.enter_context(_client(o.scheduler, o.progress))
                 where = f"dask.distributed at {client.scheduler.address}"
                 results = schedulers.distributed(client, todo, call, skip)
             else:  # (one GPU: its chunks one after the other)
-                threads = 1 if backend == "cuda" else workers or os.cpu_count() or 1
+                threads = 1 if o.backend == "cuda" else o.workers or os.cpu_count() or 1
                 where, results = "embedded", schedulers.embedded(todo, call, skip, threads)
             stack.enter_context(closing(results))  # (its threads or futures stop before the client goes)
-            if backend == "cuda":  # (the workers' GPUs of a cluster are theirs to name)
+            if o.backend == "cuda":  # (the workers' GPUs of a cluster are theirs to name)
                 from . import gpu
 
-                where = f"{where}, cuda" + ("" if scheduler else f" ({gpu.device_name()})")
+                where = f"{where}, cuda" + ("" if o.scheduler else f" ({gpu.device_name()})")
             folding = False
             try:
-                for c, (frame, paths) in results:
+                for c, (frame, chunk_paths) in results:
                     _label(frame, study, c[0])
-                    write_table(frame, part_path(directory, *c), {KEY: key})
-                    ready[c] = (frame, paths)
+                    if directory is None:
+                        frames[c] = frame
+                    else:
+                        write_table(frame, part_path(directory, *c), {KEY: key})
+                    if o.paths:
+                        kept_paths[c] = chunk_paths
+                    ready[c] = (frame, chunk_paths)
                     folding = True
                     fold_ready()
                     folding = False
                     for rc in [rc for rc in ready if states[rc[0]].done]:
                         ready.pop(rc)
-                    if spec:
+                    if spec and checkpoint is not None:
                         checkpoint.save(states)
                     bar.advance(c[2] - c[1])
                     if interrupted.is_set():
                         raise KeyboardInterrupt
             except BaseException:
-                if spec and not folding:  # keep what was folded, unless interrupted mid-fold
-                    checkpoint.save(states, force=True)
+                if spec and checkpoint is not None and not folding:  # keep what was folded, unless
+                    checkpoint.save(states, force=True)  # interrupted mid-fold
                 raise
             if interrupted.is_set():
                 raise KeyboardInterrupt
-        if shard is not None:
+        if o.shard is not None:
             return None
-        meta = provenance(study.text, study.source, seed, where, backend, key)
-        return _consolidate(study, the_plan, states, directory, meta, grids, spec)
+        meta = provenance(study.text, study.source, seed, where, o.backend, key)
+        return _consolidate(study, the_plan, states, directory, frames, meta, grids, spec,
+                            kept_paths if o.paths else None, signals)
     except KeyboardInterrupt as exc:
+        if directory is None:
+            raise
         raise Interrupted(kept(), len(mine)) from exc
 
 
-def _consolidate(study: Study, the_plan: Plan, states: list[PointState], directory: Path,
-                 meta: dict[str, str], grids: list[tuple[int, int] | None],
-                 spec: History | None) -> tuple[pd.DataFrame, pd.DataFrame]:
-    """Gather the parts kept (up to each point's stopping count) into the result files."""
-    frames = []
+def _consolidate(study: Study, the_plan: Plan, states: list[PointState], directory: Path | None,
+                 frames: dict[tuple[int, int, int], pd.DataFrame], meta: dict[str, str],
+                 grids: list[tuple[int, int] | None], spec: History | None,
+                 kept_paths: dict[tuple[int, int, int], np.ndarray] | None,
+                 signals: tuple[str, ...]) -> Results:
+    """Gather the chunks kept (up to each point's stopping count: from ``frames`` in memory, else
+    the folder's parts) into the result tables, written into ``directory`` where there is one."""
+    kept, path_rows = [], []
     for state in states:
         for c in state.chunks:
             if state.stop is not None and c[1] >= state.stop:
                 break
-            frame = pd.read_parquet(part_path(directory, *c))
-            frames.append(frame if state.stop is None else frame[frame["realization"] < state.stop])
-    realizations_df = pd.concat(frames, ignore_index=True)
+            frame = frames[c] if directory is None else pd.read_parquet(part_path(directory, *c))
+            n = len(frame) if state.stop is None else min(len(frame), state.stop - c[1])
+            kept.append(frame.iloc[:n])
+            if kept_paths is not None:
+                path_rows.append(_path_rows(study, the_plan.scenes[c[0]], grids[c[0]], c,
+                                            kept_paths[c][:, :, :n], signals))
+    realizations_df = _in_file_types(pd.concat(kept, ignore_index=True))
     summary_df = summarise(realizations_df, study.sweep_keys, study.base.simulation.residual_tolerance)
-    write_table(realizations_df, directory / "realizations.parquet", meta)
-    write_table(summary_df, directory / "summary.parquet", meta)
+    history_df = None
     if spec:
         rows = []
         for p, (state, scene, grid) in enumerate(zip(states, the_plan.scenes, grids)):
@@ -558,9 +671,67 @@ def _consolidate(study: Study, the_plan: Plan, states: list[PointState], directo
             for i, k in enumerate(study.sweep_keys):
                 rows_p.insert(1 + i, k, study.grid[p][k])
             rows.append(rows_p)
-        write_table(pd.concat(rows, ignore_index=True), directory / "history.parquet",
+        history_df = pd.concat(rows, ignore_index=True)
+    paths_df = pd.concat(path_rows, ignore_index=True) if kept_paths is not None else None
+    if directory is None:
+        history_df = None if history_df is None else _in_file_types(history_df)
+        return Results(realizations_df, _in_file_types(summary_df), history_df, paths_df, meta, None, study)
+    write_table(realizations_df, directory / "realizations.parquet", meta)
+    write_table(summary_df, directory / "summary.parquet", meta)
+    if history_df is not None:
+        write_table(history_df, directory / "history.parquet",
                     {**meta, "vines_stoch.history_block": str(hist.BLOCK)})
-    return read_results(directory)
+    results = read_results(directory)
+    results.paths, results.study = paths_df, study
+    return results
 
 
-__all__ = ["METRICS", "generator", "plan", "run", "run_chunk", "sample"]
+def _in_file_types(frame: pd.DataFrame) -> pd.DataFrame:
+    """``frame`` with the column types it has once written as Parquet and read back (an Arrow
+    table in memory): results in memory and from a folder compare equal."""
+    import pyarrow as pa
+
+    return pa.Table.from_pandas(frame, preserve_index=False).to_pandas()
+
+
+def _path_rows(study: Study, scene: Scene, grid: tuple[int, int], c: tuple[int, int, int],
+               paths: np.ndarray, signals: tuple[str, ...]) -> pd.DataFrame:
+    """The time histories ``paths`` (``(signals, grid, n)``) of the realisations of chunk ``c``
+    as rows: point, swept values, realisation, ``t``, one column per signal."""
+    n, size = paths.shape[2], grid[1]
+    rows = {"point": np.full(n * size, c[0], dtype=np.int64),
+            **{k: np.repeat(study.grid[c[0]][k], n * size) for k in study.sweep_keys},
+            "realization": np.repeat(np.arange(c[1], c[1] + n, dtype=np.int64), size),
+            "t": np.tile(scene.dt * grid[0] * np.arange(size), n)}
+    for i, name in enumerate(signals):
+        rows[name] = paths[i].T.reshape(-1)
+    return pd.DataFrame(rows)
+
+
+def solve(scenario: Study | Mapping[str, Any] | str | os.PathLike, *, point: int = 0, realization: int = 0,
+          points: int | None = None, signals: list[str] | tuple[str, ...] | None = None) -> Solution:
+    """One realisation of a scenario with its time histories (``Solution``: ``ts``, ``ys`` by
+    signal name, and its metrics, the same values as realisation ``realization`` of sweep point
+    ``point`` in an ensemble run).  ``points``: rows of the time grid (default: every step);
+    ``signals``: any of ``x1``, ``e1``, ``x_k``, ``drift_k`` (default ``x1``, ``e1``)."""
+    study = as_study(scenario)
+    check_whole("point", point, 0, len(study.points) - 1, allow_none=False)
+    check_whole("realization", realization, 0, 2**63 - 1, allow_none=False)
+    check_whole("points", points, 2, 100_000_000)
+    scene = build_scene(study.points[point])
+    signals = tuple(signals or hist.SIGNALS)
+    allowed = history_signals(scene.n_floors)
+    for name in signals:
+        if name not in allowed:
+            raise ValueError(f"signals: {name!r} is not a signal of this scenario "
+                             f"(allowed: {', '.join(allowed)})")
+    grid = hist.grid(scene.n_steps, points or scene.n_steps + 1)
+    base = study.base
+    frame, paths = run_chunk(scene, base.ensemble.seed, point, realization, realization + 1, grid,
+                             study if base.uncertain else None, base.ensemble.common_random_numbers, signals)
+    _label(frame, study, point)
+    ys = {s: paths[i, :, 0] for i, s in enumerate(signals)}
+    return Solution(scene.dt * grid[0] * np.arange(grid[1]), ys, frame.iloc[0], point, realization, study)
+
+
+__all__ = ["METRICS", "generator", "plan", "run", "run_chunk", "sample", "solve"]

@@ -26,8 +26,9 @@ import pandas as pd
 from scipy.special import log_ndtr, ndtr, ndtri
 
 from .metrics import exceedance, limit_names
-from .plotting import pyplot
-from .store import KEY, ForeignFiles, png_text, read_metadata, read_results, write_table
+from .plotting import label, legend, pyplot, save
+from .results import read_results
+from .store import KEY, ForeignFiles, png_text, write_table
 
 #: Fisher-scoring iterations (a fit converges in well under 20; separated stripes never do).
 ITERATIONS = 60
@@ -145,9 +146,10 @@ def _replicates(n: np.ndarray, z: np.ndarray, samples: int,
     return nb, zb
 
 
-def fit(table: pd.DataFrame, samples: int = 1000, seed: int = 0) -> dict[str, object]:
+def fit(table: pd.DataFrame, samples: int = 1000, seed: int = 0, keep: bool = False) -> dict[str, object]:
     """The lognormal fragility of ``stripes`` rows: ``median``, ``beta``, their 95 % bootstrap
-    bounds, the log-likelihood, the replicates used for the bounds, and notes.
+    bounds, the log-likelihood, the replicates used for the bounds, and notes (with ``keep``,
+    also ``replicates``: the ``(medians, betas)`` of the replicates used, for ``band``).
 
     Stripes that separate (``separation``) have no fit: NaN, and the notes give the gap.  A
     bootstrap replicate that separates counts as ``beta = 0`` with its median in the middle of
@@ -193,6 +195,8 @@ def fit(table: pd.DataFrame, samples: int = 1000, seed: int = 0) -> dict[str, ob
     medians[sep], betas[sep] = np.exp(gap[sep]), 0.0
     used = np.isfinite(betas)
     result["bootstrap_fitted"] = int(used.sum())
+    if keep:
+        result["replicates"] = (medians[used], betas[used])
     if sep.any():
         notes.append(f"{int(sep.sum())} of {samples} bootstrap replicates separate (counted as beta = 0, "
                      "median in their gap)")
@@ -215,14 +219,15 @@ def fragility(directory: str | Path, limit: str, im: str, diverged: str = "exclu
     rows of an earlier fit of the same limit and intensity) and ``fragility_<limit>.png`` (where
     matplotlib is installed); returns the rows written."""
     directory = Path(directory)
-    realizations, _ = read_results(directory)  # (and fragility.parquet, if there, is this run's)
-    meta = read_metadata(directory / "summary.parquet")
+    results = read_results(directory)  # (and fragility.parquet, if there, is this run's)
+    realizations, meta = results.realizations, results.metadata
     figure = directory / f"fragility_{limit}.png"
     if plot and figure.exists() and KEY not in png_text(figure):
         raise ForeignFiles(f"{figure}: not a plot vines-stoch wrote; move it out of the folder to fit "
                            f"{limit}")
     table = stripes(realizations, limit, im, diverged)
-    result = fit(table, samples, seed)
+    result = fit(table, samples, seed, keep=True)
+    replicates = result.pop("replicates", None)
     policy = "counted as exceedances" if diverged == "exceed" else "excluded"
     rows = table.assign(limit=limit, im_key=im, diverged=policy, **result)
     if np.isfinite(result["median"]):
@@ -235,17 +240,30 @@ def fragility(directory: str | Path, limit: str, im: str, diverged: str = "exclu
         rows = pd.concat([old[(old["limit"] != limit) | (old["im_key"] != im)], rows], ignore_index=True)
     write_table(rows, path, meta)  # (the run's provenance and key: fitted to this run)
     if plot:
-        _plot(table, result, limit, im, policy, figure, meta[KEY])
+        _plot(table, result, replicates, limit, im, policy, figure, meta)
     return rows[(rows["limit"] == limit) & (rows["im_key"] == im)].reset_index(drop=True)
 
 
-def _plot(table: pd.DataFrame, result: dict, limit: str, im: str, policy: str, path: Path, key: str) -> None:
-    """The stripes' fractions with their intervals and the fitted curve (where matplotlib is
-    installed), the run ``key`` among the PNG's text entries."""
+def band(x: np.ndarray, medians: np.ndarray, betas: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The pointwise 95 % bootstrap band of the fragility curve at intensities ``x``: the 2.5 and
+    97.5 % percentiles over the replicates' curves (a replicate with ``beta = 0`` is the step at
+    its median)."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        z = np.log(x[None, :] / medians[:, None]) / betas[:, None]
+    curves = np.where(betas[:, None] > 0, ndtr(z), (x[None, :] >= medians[:, None]).astype(float))
+    return np.percentile(curves, 2.5, axis=0), np.percentile(curves, 97.5, axis=0)
+
+
+def _plot(table: pd.DataFrame, result: dict, replicates: tuple[np.ndarray, np.ndarray] | None, limit: str,
+          im: str, policy: str, path: Path, meta: dict[str, str]) -> None:
+    """The stripes' fractions with their intervals, the fitted curve and its bootstrap band
+    (where matplotlib is installed), as PNG and SVG, the run's key among their text entries."""
+    import tomllib
+
     plt = pyplot(str(path))
     if plt is None:
         return
-    fig, ax = plt.subplots(figsize=(6.4, 4.2))
+    fig, ax = plt.subplots()
     shown, what = table, "stripes"
     if len(table) > PLOT_BINS:  # intensities of their own (a cloud): pooled into bins for the eye
         bins = np.array_split(np.arange(len(table)), PLOT_BINS)
@@ -258,17 +276,19 @@ def _plot(table: pd.DataFrame, result: dict, limit: str, im: str, policy: str, p
                                                               zip(shown["exceeded"], shown["n"])]
         what = f"{len(table)} intensities in {PLOT_BINS} bins"
     err = np.vstack([shown["fraction"] - shown["fraction_lo"], shown["fraction_hi"] - shown["fraction"]])
-    ax.errorbar(shown["im"], shown["fraction"], yerr=err, fmt="o", capsize=3,
+    ax.errorbar(shown["im"], shown["fraction"], yerr=err, fmt="o", capsize=3, color="C0",
                 label=f"{what} (95 % Wilson intervals; did not end ok: {policy})")
     if np.isfinite(result["median"]):
         x = np.geomspace(table["im"][table["im"] > 0].min() / 2, table["im"].max() * 2, 200)
-        ax.plot(x, ndtr(np.log(x / result["median"]) / result["beta"]),
+        ax.plot(x, ndtr(np.log(x / result["median"]) / result["beta"]), color="C1",
                 label=f"lognormal fit: median {result['median']:.4g}, beta {result['beta']:.3g}")
+        if replicates is not None and replicates[0].size >= 20:
+            low, high = band(x, *replicates)
+            ax.fill_between(x, low, high, color="C1", alpha=0.2, lw=0,
+                            label=f"95 % bootstrap band ({replicates[0].size} replicates)")
     ax.set_xscale("log")
-    ax.set_xlabel(im)
-    ax.set_ylabel(f"P(exceed {limit})")
+    ax.set_xlabel(label(im, tomllib.loads(meta.get("vines_stoch.scenario", ""))))
+    ax.set_ylabel(f"probability of exceeding {limit}")
     ax.set_ylim(-0.02, 1.02)
-    ax.legend(fontsize=8)
-    fig.tight_layout()
-    fig.savefig(path, dpi=120, metadata={KEY: key})
-    plt.close(fig)
+    legend(ax)
+    save(fig, path, {KEY: meta[KEY]})

@@ -7,7 +7,6 @@ from collections.abc import Sequence
 
 import numpy as np
 import pandas as pd
-from scipy.special import stdtrit
 
 from .outputs import ACC_MAX_K, DRIFT_MAX_K, SLOTS, STATUS_DIVERGED, X_MAX_K, X_SQ_INT_K, passage_slots
 from .scene import Scene
@@ -236,6 +235,15 @@ def summarise(realizations: pd.DataFrame, parameters: list[str],
 
     Failed realisations are counted, never averaged in.
     """
+    from functools import cache
+
+    from scipy.stats import t as student_t  # (scipy.stats takes about 0.5 s to import)
+
+    @cache
+    def t_bounds(n: int) -> tuple[float, float]:
+        """The 95 % interval of Student's t with ``n - 1`` degrees of freedom (NaN for ``n < 2``)."""
+        return tuple(map(float, student_t.interval(0.95, n - 1))) if n > 1 else (np.nan, np.nan)
+
     rows = []
     for point, group in realizations.groupby("point", sort=True):
         ok = group[group["status"] == "ok"]
@@ -254,9 +262,10 @@ def summarise(realizations: pd.DataFrame, parameters: list[str],
             row[f"{m}_mean"] = float(values.mean()) if n else np.nan
             row[f"{m}_std"] = std
             sem = std / np.sqrt(n) if n > 1 else np.nan
-            half = float(stdtrit(n - 1, 0.975)) * sem if n > 1 else np.nan
             row[f"{m}_sem"] = sem
-            row[f"{m}_ci95_lo"], row[f"{m}_ci95_hi"] = row[f"{m}_mean"] - half, row[f"{m}_mean"] + half
+            low, high = t_bounds(n)
+            mean = row[f"{m}_mean"]
+            row[f"{m}_ci95_lo"], row[f"{m}_ci95_hi"] = mean + low * sem, mean + high * sem
             row[f"{m}_q05"], row[f"{m}_q50"], row[f"{m}_q95"] = (float(v) for v in q)
         for name in limit_names(realizations):
             passed = int(ok[f"first_passage_{name}"].notna().sum())

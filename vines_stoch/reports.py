@@ -14,8 +14,9 @@ from scipy.special import ndtr
 
 from .fragility import stripes
 from .metrics import limit_names
-from .plotting import REPORT_EXTRA, pyplot
-from .store import read_metadata, read_results
+from .plotting import REPORT_EXTRA, counts, label, legend, pyplot
+from .plotting import save as save_figure
+from .results import read_results
 
 #: Metrics compared by default.
 COMPARED = ("edm", "e1_max", "energy_integral", "impacts")
@@ -38,13 +39,11 @@ class Run:
     @classmethod
     def read(cls, directory: str | Path, label: str | None = None) -> Run:
         directory = Path(directory)
-        realizations, summary = read_results(directory)  # (refuses results of two runs, fragility's too)
-        meta = read_metadata(directory / "summary.parquet")
+        results = read_results(directory)  # (refuses results of two runs, fragility's too)
+        meta = results.metadata
         scenario = tomllib.loads(meta["vines_stoch.scenario"])
-        history = directory / "history.parquet"
-        return cls(directory, label or scenario.get("name", directory.name), realizations, summary,
-                   pd.read_parquet(history) if history.is_file() else None, scenario,
-                   int(meta["vines_stoch.seed"]))
+        return cls(directory, label or scenario.get("name", directory.name), results.realizations,
+                   results.summary, results.history, scenario, int(meta["vines_stoch.seed"]))
 
     @property
     def swept(self) -> list[str]:
@@ -98,9 +97,10 @@ def markdown(frame: pd.DataFrame, digits: int = 4) -> str:
 
 def compare(runs: list[Run], metrics: tuple[str, ...] = COMPARED) -> pd.DataFrame:
     """Per sweep point and metric: each run's mean, and each later run's difference from the
-    first with its standard error.  Runs with the same seed and common random numbers are
-    paired realisation by realisation (standard error of the paired differences); otherwise
-    the errors of independent means are combined."""
+    first with its standard error and 95 % interval.  Runs with the same seed and common random
+    numbers are paired realisation by realisation (``scipy.stats.ttest_rel``: the Student-t
+    interval of the paired differences); otherwise the errors of independent means are combined
+    (a normal interval)."""
     first = runs[0]
     for run in runs[1:]:
         if len(run.summary) != len(first.summary):
@@ -116,25 +116,37 @@ def compare(runs: list[Run], metrics: tuple[str, ...] = COMPARED) -> pd.DataFram
             for run in runs:
                 row[run.label] = run.summary[f"{m}_mean"].iloc[p]
             for run in runs[1:]:
-                diff, se, paired = _difference(first, run, p, m)
+                diff, se, (low, high), paired = _difference(first, run, p, m)
                 row[f"{run.label} - {first.label}"] = diff
                 row[f"se ({run.label})"] = se
+                row[f"ci95 ({run.label})"] = f"[{low:.4g}, {high:.4g}]"
                 row[f"paired ({run.label})"] = "yes" if paired else "no"
             rows.append(row)
     return pd.DataFrame(rows)
 
 
-def _difference(a: Run, b: Run, point: int, metric: str) -> tuple[float, float, bool]:
+def _difference(a: Run, b: Run, point: int,
+                metric: str) -> tuple[float, float, tuple[float, float], bool]:
+    """``b - a`` of ``metric``'s mean at ``point``: the difference, its standard error, its 95 %
+    interval and whether the realisations were paired."""
+    from scipy.stats import norm, ttest_rel
+    from scipy.stats import t as student_t
+
     ra = a.realizations[(a.realizations["point"] == point) & (a.realizations["status"] == "ok")]
     rb = b.realizations[(b.realizations["point"] == point) & (b.realizations["status"] == "ok")]
     if a.seed == b.seed and a.common and b.common:
         joined = ra[["realization", metric]].merge(rb[["realization", metric]], on="realization")
         if len(joined) > 1:
-            d = (joined[f"{metric}_y"] - joined[f"{metric}_x"]).to_numpy(dtype=float)
-            return float(d.mean()), float(d.std(ddof=1) / math.sqrt(d.size)), True
+            y, x = joined[f"{metric}_y"].to_numpy(dtype=float), joined[f"{metric}_x"].to_numpy(dtype=float)
+            test = ttest_rel(y, x)
+            ci = test.confidence_interval(0.95)
+            se = 0.5 * (ci.high - ci.low) / student_t.ppf(0.975, test.df)  # (the interval's half-width)
+            return float(np.mean(y - x)), float(se), (float(ci.low), float(ci.high)), True
     sa, sb = a.summary[f"{metric}_sem"].iloc[point], b.summary[f"{metric}_sem"].iloc[point]
-    diff = b.summary[f"{metric}_mean"].iloc[point] - a.summary[f"{metric}_mean"].iloc[point]
-    return float(diff), float(math.hypot(sa, sb)), False
+    diff = float(b.summary[f"{metric}_mean"].iloc[point] - a.summary[f"{metric}_mean"].iloc[point])
+    se = float(math.hypot(sa, sb))
+    low, high = norm.interval(0.95, loc=diff, scale=se) if se > 0 else (diff, diff)
+    return diff, se, (float(low), float(high)), False
 
 
 def effective_range(run: Run, level: float = EDM_LEVEL) -> dict[str, object]:
@@ -173,46 +185,44 @@ def _point(run: Run, point: int | None) -> int:
 
 
 def _plots(runs: list[Run], out: Path, point: int | None) -> list[str]:
-    """Write the PNG plots (where matplotlib is installed); returns their file names."""
+    """Write the plots, PNG and SVG (where matplotlib is installed); returns the PNG files' names."""
     plt = pyplot(f"the plots of {out / 'report.md'}")
     if plt is None:
         return []
     files = []
+    tables = runs[0].scenario  # (the units of swept keys that depend on a load's or absorber's type)
 
     def save(fig, name: str) -> None:
-        fig.tight_layout()
-        fig.savefig(out / name, dpi=120)
-        plt.close(fig)
+        legend(fig.axes[0])
+        save_figure(fig, out / name)
         files.append(name)
 
-    fig, ax = plt.subplots(figsize=(6.4, 4.2))
+    fig, ax = plt.subplots()
     for run in runs:
         s = run.summary.sort_values("input_energy_mean")
         ax.plot(s["input_energy_mean"], s["edm_mean"], "o-", ms=3, label=run.label)
         ax.fill_between(s["input_energy_mean"], s["edm_ci95_lo"], s["edm_ci95_hi"], alpha=0.25)
     ax.axhline(EDM_LEVEL, color="grey", lw=0.8, ls="--")
-    ax.set(xscale="log", xlabel="input energy (mean)", ylabel="EDM (mean, 95 % band)",
+    ax.set(xscale="log", xlabel=label("input_energy_mean"), ylabel=f"{label('edm_mean')}, 95 % interval",
            title="Energy dissipation measure against input energy")
-    ax.legend()
     save(fig, "edm_vs_input_energy.png")
 
     keyed = [run for run in runs if len(run.swept) == 1 and run.axes]
     if keyed:
         key = keyed[0].axes[0]
-        fig, ax = plt.subplots(figsize=(6.4, 4.2))
+        fig, ax = plt.subplots()
         for run in keyed:
             s = run.summary.sort_values(key)
             ax.plot(s[key], s["energy_integral_mean"], "o-", ms=3, label=run.label)
             ax.fill_between(s[key], s["energy_integral_ci95_lo"].clip(lower=1e-300),
                             s["energy_integral_ci95_hi"], alpha=0.25)
-        ax.set(xscale="log", yscale="log", xlabel=key, ylabel="energy integral of E1 (mean)",
+        ax.set(xscale="log", yscale="log", xlabel=label(key, tables), ylabel=label("energy_integral_mean"),
                title="Energy integral of the primary")
-        ax.legend()
         save(fig, "energy_integral_vs_sweep.png")
 
         regimes = [run for run in keyed if run.realizations["regime"].notna().any()]
         if regimes:
-            fig, ax = plt.subplots(figsize=(6.4, 4.2))
+            fig, ax = plt.subplots()
             for run in regimes:
                 s = run.summary.sort_values(key)
                 ax.plot(s[key], s["e1_max_mean"], "o-", ms=3, label=run.label)
@@ -230,11 +240,11 @@ def _plots(runs: list[Run], out: Path, point: int | None) -> list[str]:
                     ax.axvspan(lo, hi, color=colors[names.index(r[p]) % 10], alpha=0.3, lw=0)
             for i, name in enumerate(names):
                 ax.plot([], [], "s", color=colors[i % 10], alpha=0.5, label=f"regime {name}")
-            ax.set(xlabel=key, ylabel="e1_max (mean)", title="Maximum primary energy with regimes")
-            ax.legend(fontsize=7)
+            ax.set(xlabel=label(key, tables), ylabel=label("e1_max_mean"),
+                   title="Maximum primary energy with regimes")
             save(fig, "e1_max_regimes.png")
 
-    fig, ax = plt.subplots(figsize=(6.4, 4.2))
+    fig, ax = plt.subplots()
     samples = {}
     for run in runs:
         p = _point(run, point)
@@ -245,15 +255,15 @@ def _plots(runs: list[Run], out: Path, point: int | None) -> list[str]:
     edges = np.histogram_bin_edges(pooled[np.isfinite(pooled)], bins=min(40, max(5, pooled.size // 8)))
     for name, edm in samples.items():
         ax.hist(edm, bins=edges, alpha=0.5, label=name)
-    ax.set(xlabel="EDM", ylabel="realisations", title="EDM distribution at one sweep point")
-    ax.legend(fontsize=8)
+    ax.set(xlabel=label("edm"), ylabel="realisations", title="EDM distribution at one sweep point")
+    counts(ax.yaxis)
     save(fig, "edm_histogram.png")
 
     shown = [(run, limit, run.intensity(limit)) for run in runs for limit in run.limits]
     shown = [(run, limit, key, stripes(run.realizations, limit, key)) for run, limit, key in shown
              if key is not None]
     if shown:  # exceedance against intensity, with the fragility curves fitted
-        fig, ax = plt.subplots(figsize=(6.4, 4.2))
+        fig, ax = plt.subplots()
         for run, limit, key, table in shown:
             err = np.vstack([table["fraction"] - table["fraction_lo"],
                              table["fraction_hi"] - table["fraction"]])
@@ -268,14 +278,14 @@ def _plots(runs: list[Run], out: Path, point: int | None) -> list[str]:
                         label=f"fragility: median {median:.4g}, beta {beta:.3g}")
         if all((table["im"] > 0).all() for *_, table in shown):
             ax.set_xscale("log")
-        ax.set(xlabel=", ".join(dict.fromkeys(key for _, _, key, _ in shown)), ylabel="P(exceed)",
-               ylim=(-0.02, 1.02), title="Exceedance probability against intensity")
-        ax.legend(fontsize=7)
+        ax.set(xlabel=", ".join(dict.fromkeys(label(key, tables) for _, _, key, _ in shown)),
+               ylabel="probability of exceeding the limit", ylim=(-0.02, 1.02),
+               title="Exceedance probability against intensity")
         save(fig, "exceedance.png")
 
     histories = [run for run in runs if run.history is not None and "e1_mean" in run.history.columns]
     if histories:
-        fig, ax = plt.subplots(figsize=(6.4, 4.2))
+        fig, ax = plt.subplots()
         shares = all(h.history.loc[h.history["point"] == _point(h, point), "e1_mean"].iloc[0] > 0
                      for h in histories)
         for run in histories:
@@ -289,11 +299,11 @@ def _plots(runs: list[Run], out: Path, point: int | None) -> list[str]:
                                 label=f"{run.label}: {_percent(quantiles[0])} to "
                                       f"{_percent(quantiles[-1])} % quantiles")
         if shares:  # energy given at t = 0 (impulse, initial state): what is left in the primary
-            ax.set(ylabel="E1(t) / E1(0)", title="Share of the initial energy left in the primary")
+            ax.set(ylabel="energy of the primary / its initial value [–] (e1 / e1(0))",
+                   title="Share of the initial energy left in the primary")
         else:
-            ax.set(ylabel="E1(t)", title="Primary energy over time")
-        ax.set(xlabel="t")
-        ax.legend(fontsize=8)
+            ax.set(ylabel=label("e1"), title="Primary energy over time")
+        ax.set(xlabel=label("t"))
         save(fig, "primary_energy_history.png")
     return files
 
@@ -336,7 +346,7 @@ def report(directories: list[str | Path], out: str | Path = "reports", labels: l
         except ValueError as exc:
             table = f"Not compared: {exc}."
         parts += ["## Comparison (later runs minus the first)", "", table, ""]
-    plots = ([f"![{f}]({f})" for f in files] if files
+    plots = ([f"![{f}]({f}) ([SVG]({Path(f).with_suffix('.svg')}))" for f in files] if files
              else [f"Not drawn: matplotlib is not installed; `{REPORT_EXTRA}` adds them."])
     parts += ["## Plots", ""] + plots + [""]
     path = folder / "report.md"

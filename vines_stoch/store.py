@@ -259,6 +259,18 @@ def png_text(path: Path) -> dict[str, str]:
     return found
 
 
+def svg_identifier(path: Path) -> str:
+    """The identifier (``dc:identifier``) of an SVG file's metadata that ``plotting.save``
+    writes, "" where there is none (read from the file's first 64 KiB)."""
+    try:
+        with path.open("rb") as stream:
+            head = stream.read(1 << 16).decode("utf-8", "replace")
+    except OSError:
+        return ""
+    start, end = head.find("<dc:identifier>"), head.find("</dc:identifier>")
+    return head[start + len("<dc:identifier>"):end] if 0 <= start < end else ""
+
+
 def _digest(arrays: Mapping[str, np.ndarray]) -> str:
     """sha256 of named arrays: each one's name, type, shape and bytes, in name order."""
     h = hashlib.sha256()
@@ -309,9 +321,11 @@ def _manifest(directory: Path) -> dict | None:
 
 def _written_here(path: Path) -> bool:
     """Whether this program wrote ``path``, a result file (its metadata, of any version) or a
-    fragility plot (its text entries hold a run key)."""
+    fragility plot (its text entries, or an SVG's identifier, hold a run key)."""
     if not path.is_file() or path.is_symlink():
         return False
+    if path.suffix == ".svg":
+        return svg_identifier(path).startswith(f"{KEY} ")
     return KEY in png_text(path) if path.suffix == ".png" else bool(_parquet_metadata(path))
 
 
@@ -361,7 +375,8 @@ def prepare_folder(directory: Path, key: str, chunks: int, source: str,
             raise ForeignFiles(f"{directory}: holds files vines-stoch did not write "
                                f"({_named(foreign, directory)}); a run never reads or deletes them: move "
                                "them out of the folder, or use another --out folder")
-        plots = [p for p in directory.glob("fragility_*.png") if _written_here(p)]
+        plots = [p for suffix in ("png", "svg") for p in directory.glob(f"fragility_*.{suffix}")
+                 if _written_here(p)]
         for path in entries + results + plots:
             path.unlink()
         mine = set()
@@ -438,12 +453,3 @@ def check_folder(directory: Path) -> str:
                            f"{manifest.get('source', 'another scenario')}): finish that run with --resume, "
                            "or run the results' scenario again into the folder")
     return key
-
-
-def read_results(directory: str | Path) -> tuple[pd.DataFrame, pd.DataFrame]:
-    """``(realizations, summary)`` of a finished run as pandas DataFrames (after ``check_folder``:
-    never the results of two runs)."""
-    directory = Path(directory)
-    check_folder(directory)
-    return (pd.read_parquet(directory / "realizations.parquet"),
-            pd.read_parquet(directory / "summary.parquet"))

@@ -25,11 +25,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-
-try:
-    import fcntl
-except ImportError:  # (no POSIX file locks: each process compiles on its own)
-    fcntl = None
+from filelock import FileLock
 
 #: The package's folder.
 PACKAGE = Path(__file__).resolve().parent.parent
@@ -144,8 +140,8 @@ def compile_once(dispatcher: Any, args: tuple, package: str = "numba.core") -> N
     compile it once, the others wait for it and load it (a cold step loop takes 5-20 s to
     compile; two at once take as long each on separate cores, or twice as long on one).  The
     lock is a file beside the cache, named by a hash of the function, its closure and the
-    argument types; where the cache's folder cannot be written, or there are no POSIX file
-    locks, it compiles unlocked."""
+    argument types (``filelock.FileLock``); where the cache's folder cannot be written, it
+    compiles unlocked."""
     from numba import typeof
 
     from . import frontend  # (on first use: the physics floor, built on this floor, never loads it)
@@ -158,27 +154,21 @@ def compile_once(dispatcher: Any, args: tuple, package: str = "numba.core") -> N
     identity = described(dispatcher) or repr((func.__module__, func.__qualname__,
                                               tuple(cell.cell_contents for cell in func.__closure__ or ())))
     key = hashlib.sha256(repr((identity, signature)).encode()).hexdigest()
-    handle = None
-    if fcntl is not None:
-        try:
-            folder = Path(dispatcher.stats.cache_path)
-            folder.mkdir(parents=True, exist_ok=True)
-            handle = open(folder / f"compile-{key[:16]}.lock", "a")
-        except (AttributeError, OSError, TypeError):  # (no cache folder to write)
-            pass
-    if handle is None:
+    # (the file lock first, then the compiler's: no thread holds the compiler's lock while it
+    # waits for another process)
+    try:
+        folder = Path(dispatcher.stats.cache_path)
+        folder.mkdir(parents=True, exist_ok=True)
+        lock = FileLock(folder / f"compile-{key[:16]}.lock")
+        lock.acquire()
+    except (AttributeError, OSError, TypeError):  # (no cache folder to write)
+        lock = None
+    try:
         with frontend.compiling(package):
             dispatcher.compile(signature)
-        return
-    with handle:
-        # (the file lock first, then the compiler's: no thread holds the compiler's lock while
-        # it waits for another process)
-        fcntl.flock(handle, fcntl.LOCK_EX)
-        try:
-            with frontend.compiling(package):
-                dispatcher.compile(signature)
-        finally:
-            fcntl.flock(handle, fcntl.LOCK_UN)
+    finally:
+        if lock is not None:
+            lock.release()
 
 
 @cache

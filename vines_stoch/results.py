@@ -1,0 +1,133 @@
+"""What a run gives back: ``Results`` (the tables of an ensemble, in memory or read from its
+folder) and ``Solution`` (the time histories of one realisation), and the scenario given to
+``run`` as a path, a dict or a validated ``Study``.
+
+Every quantity is in the units of the scenario file, SI by default (m, kg, s, N, J, rad/s):
+the program never converts units, so a file written in other consistent units gives its
+results in those (README, "Python API").
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Iterator, Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from .scenario import ScenarioError, Study, load_scenario, parse_scenario
+
+
+def as_study(scenario: Study | Mapping[str, Any] | str | os.PathLike) -> Study:
+    """``scenario`` as a validated Study: a Study as it is, a path read as a scenario file, a
+    dict of the file's tables validated as one (named ``<dict>`` in messages); ``TypeError``
+    for anything else, ``ScenarioError`` for a scenario with mistakes."""
+    if isinstance(scenario, Study):
+        return scenario
+    if isinstance(scenario, (str, os.PathLike)):
+        return load_scenario(scenario)
+    if isinstance(scenario, Mapping):
+        import tomlkit
+
+        try:
+            source = tomlkit.dumps(dict(scenario))
+        except (TypeError, ValueError) as exc:  # (a value TOML cannot hold)
+            raise ScenarioError(f"<dict>: not a scenario's tables ({exc})") from None
+        return parse_scenario(source, "<dict>")
+    raise TypeError(f"scenario = {_shown(scenario)}: give a scenario file's path, a dict of its tables "
+                    "or a Study (load_scenario)")
+
+
+def _shown(value: object) -> str:
+    """A value as named in a message: its repr, cut to 60 characters, and its type."""
+    text = repr(value)
+    return f"{text if len(text) <= 60 else text[:57] + '...'} ({type(value).__name__})"
+
+
+def check_whole(name: str, value: object, low: int, high: int | None = None,
+                allow_none: bool = True) -> None:
+    """Refuse ``value`` for the argument ``name`` unless it is a whole number in ``[low, high]``
+    (or None where ``allow_none``): ``TypeError`` for another type, ``ValueError`` out of range,
+    each naming the argument, the value and the range."""
+    if value is None and allow_none:
+        return
+    span = f"[{low}, {high}]" if high is not None else f">= {low}"
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
+        raise TypeError(f"{name} = {_shown(value)}: must be a whole number {span}"
+                        + (" or None" if allow_none else ""))
+    if value < low or (high is not None and value > high):
+        raise ValueError(f"{name} = {value}: must be a whole number {span}")
+
+
+@dataclass(eq=False)
+class Results:
+    """The tables of a finished run, as pandas DataFrames: ``realizations`` (one row per
+    realisation), ``summary`` (one row per sweep point), ``history`` (the ensemble statistics of
+    time histories, None unless ``[simulation.history]`` asks for them), ``paths`` (every
+    realisation's time histories, None unless ``run(..., paths=True)`` asked for them; never
+    stored in a folder), ``metadata`` (the provenance every result file carries) and
+    ``directory`` (the folder, None for a run in memory).  ``scenario`` is the Study run (read
+    from the metadata, on first use, for results read from a folder).
+
+    It unpacks as ``realizations, summary = results``, as the tuple ``run`` used to return."""
+
+    realizations: pd.DataFrame
+    summary: pd.DataFrame
+    history: pd.DataFrame | None = None
+    paths: pd.DataFrame | None = None
+    metadata: dict[str, str] = field(default_factory=dict)
+    directory: Path | None = None
+    study: Study | None = field(default=None, repr=False)
+
+    @property
+    def scenario(self) -> Study:
+        """The validated scenario of the run (its text as the metadata records it)."""
+        if self.study is None:
+            source = self.metadata.get("vines_stoch.source", "<results>")
+            self.study = parse_scenario(self.metadata["vines_stoch.scenario"], source, Path(source).parent)
+        return self.study
+
+    def __iter__(self) -> Iterator[pd.DataFrame]:
+        return iter((self.realizations, self.summary))
+
+    def __getitem__(self, index: int) -> pd.DataFrame:
+        return (self.realizations, self.summary)[index]
+
+    def __len__(self) -> int:
+        return 2
+
+
+def read_results(directory: str | Path) -> Results:
+    """The results of a finished run in ``directory`` (after ``store.check_folder``: never the
+    results of two runs), ``history`` where the run wrote one."""
+    from .store import check_folder, read_metadata
+
+    directory = Path(directory)
+    check_folder(directory)
+    history = directory / "history.parquet"
+    return Results(pd.read_parquet(directory / "realizations.parquet"),
+                   pd.read_parquet(directory / "summary.parquet"),
+                   pd.read_parquet(history) if history.is_file() else None,
+                   metadata=read_metadata(directory / "summary.parquet"), directory=directory)
+
+
+@dataclass(eq=False)
+class Solution:
+    """The time histories of one realisation (``solve``), as diffrax's ``Solution``: ``ts``
+    (s), ``ys`` by signal name (``x1``, ``e1``, ``x_k``, ``drift_k``: m, J), and ``metrics``,
+    the realisation's row of ``realizations.parquet`` (the same values as in an ensemble run
+    of the scenario)."""
+
+    ts: np.ndarray
+    ys: dict[str, np.ndarray]
+    metrics: pd.Series
+    point: int
+    realization: int
+    scenario: Study = field(repr=False)
+
+    def frame(self) -> pd.DataFrame:
+        """The histories as a table: ``t`` and one column per signal."""
+        return pd.DataFrame({"t": self.ts, **self.ys})
