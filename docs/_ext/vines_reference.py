@@ -194,8 +194,9 @@ def check_coverage(sections: list[tuple[str, str, type[BaseModel], list[Key]]],
 
 
 def _cell(text: str) -> str:
-    """Text for a Markdown table cell: pipes escaped, angle brackets not read as HTML."""
-    return text.replace("|", "\\|").replace("<", "&lt;").replace("\n", " ")
+    """Text for a Markdown table cell: pipes escaped, angle brackets outside code not read as HTML."""
+    parts = text.replace("|", "\\|").replace("\n", " ").split("`")
+    return "`".join(part if i % 2 else part.replace("<", "&lt;") for i, part in enumerate(parts))
 
 
 def scenario_reference() -> str:
