@@ -5,7 +5,7 @@ BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 CUDA_STAMP := $(VENV)/.installed-cuda
 
-.PHONY: run test lint bench bench-gpu seeds elcentro env clean clean-cache
+.PHONY: run test lint bench bench-gpu seeds elcentro env docs clean clean-cache
 
 $(STAMP): pyproject.toml
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
@@ -29,6 +29,17 @@ lint: $(STAMP)
 
 bench: $(STAMP)
 	$(BIN)/vines-stoch bench
+
+# The docs extra (Sphinx, myst-parser, sphinx-gallery, furo), installed once.
+DOCS_STAMP := $(VENV)/.installed-docs
+$(DOCS_STAMP): $(STAMP)
+	$(BIN)/python -m pip install --quiet -e ".[docs]"
+	touch $(DOCS_STAMP)
+
+# The documentation, into docs/_build/html: the scenario and CLI references are written from the
+# code, the examples in examples/ run (docs/conf.py). Nothing is fetched while it builds.
+docs: $(STAMP) $(DOCS_STAMP)
+	$(BIN)/python -m sphinx -b html -q docs docs/_build/html
 
 # The cuda extra (numba-cuda with the CUDA 12 compiler wheels), installed once.
 $(CUDA_STAMP): $(STAMP)
@@ -56,4 +67,5 @@ clean-cache:
 	find vines_stoch -name '*.nbi' -delete -o -name '*.nbc' -delete
 
 clean: clean-cache
-	rm -rf $(VENV) results .pytest_cache
+	rm -rf $(VENV) results .pytest_cache docs/_build docs/auto_examples docs/reference/cli.md \
+		docs/reference/scenario-keys.md

@@ -65,11 +65,11 @@ def _check_backend(backend: str) -> None:
 @app.command()
 def run(
     scenario: Path = typer.Argument(..., help="Scenario TOML file."),
-    out: Path | None = typer.Option(None, "--out", help="Output directory (overrides \\[output] directory)."),
+    out: Path | None = typer.Option(None, "--out", help="Output directory (overrides output.directory)."),
     workers: int | None = typer.Option(None, "--workers", min=1,
                                        help="Threads of the embedded scheduler (default: all cores)."),
     chunk: int | None = typer.Option(None, "--chunk", min=0,
-                                     help="Realisations per task (overrides \\[ensemble] chunk; "
+                                     help="Realisations per task (overrides ensemble.chunk; "
                                           "0 = automatic)."),
     resume: bool = typer.Option(False, "--resume",
                                 help="Keep the chunks an interrupted run of the same scenario finished."),
@@ -172,7 +172,7 @@ def loads(
     out: Path = typer.Argument(..., help="File to write: .AT2 (ground acceleration in g) "
                                          "or .csv (t, force, ground)."),
     seed: int | None = typer.Option(None, "--seed", min=0, max=2**63 - 1,
-                                    help="Seed (default: the scenario's \\[ensemble] seed)."),
+                                    help="Seed (default: the scenario's ensemble.seed)."),
     realization: int = typer.Option(0, "--realization", min=0, max=2**63 - 1,
                                     help="Realisation whose loads to write."),
     point: int = typer.Option(0, "--point", min=0, help="Sweep point."),
@@ -249,9 +249,9 @@ def report(
 
 @app.command()
 def fragility(
-    directory: Path = typer.Argument(..., help="Result directory of a run with \\[limits] "
+    directory: Path = typer.Argument(..., help="Result directory of a run with a limits table "
                                                "and a sweep over intensity."),
-    limit: str = typer.Option(..., "--limit", help="Name of the limit (a key of \\[limits])."),
+    limit: str = typer.Option(..., "--limit", help="Name of the limit (a key of the limits table)."),
     im: str = typer.Option(..., "--im",
                            help="Intensity measure: a column constant at each sweep point (a swept key)."),
     diverged: str = typer.Option("exclude", "--diverged",
@@ -314,7 +314,7 @@ def compare(
 
 @app.command()
 def optimize(
-    scenario: Path = typer.Argument(..., help="Scenario TOML file with an \\[optimize] table."),
+    scenario: Path = typer.Argument(..., help="Scenario TOML file with an optimize table."),
     out: Path | None = typer.Option(None, "--out",
                                     help="Output directory (default: <output directory>-optimum)."),
     workers: int | None = typer.Option(None, "--workers", min=1,

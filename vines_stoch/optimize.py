@@ -195,7 +195,7 @@ def optimize_scenario(study: Study, directory: Path, workers: int | None = None,
     """Optimise, then run the optimum as a normal scenario into ``directory`` (realisations,
     summary) next to ``optimum.toml``, ``optimization.parquet`` and ``report.md``."""
     if study.base.optimize is None:
-        raise ValueError(f"{study.source}: no [optimize] table (see README, 'Robust design')")
+        raise ValueError(f"{study.source}: no [optimize] table (see docs/guide/studies.md, 'Robust design')")
     best = optimize(study, directory, workers, echo)
     text = optimum_text(study, best.values, directory)
     (directory / "optimum.toml").write_text(text)

@@ -58,9 +58,3 @@ def test_run_names_the_loop_it_compiles_and_shows_the_scenarios_metrics(tmp_path
     header = done.stdout.splitlines()[1].split()
     assert header == ["loads.0.intensity", "n_ok", "n_failed", "edm_mean", "e1_max_mean", "p_roof",
                       "p_roof_lo", "p_roof_hi", "energy_residual_mean"]
-
-
-def test_help_names_the_limits_table():
-    done = subprocess.run([sys.executable, "-m", "vines_stoch.cli", "fragility", "--help"],
-                          capture_output=True, text=True, timeout=120, env={**os.environ, "COLUMNS": "200"})
-    assert "(a key of [limits])" in done.stdout

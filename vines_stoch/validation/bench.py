@@ -454,7 +454,7 @@ run replays the same fine normals and tree seed); time per path of the kernel.
 
 Measured strong order: Hertz contact {precision.strong_order(SAME_PATH_LEVELS, same_path['hertz'][0]):.2f},
 impacts {precision.strong_order(SAME_PATH_LEVELS, same_path['impact'][0]):.2f} \
-(README, "Schemes": 1 and 1/2 expected).
+(docs/numerics.md, "Schemes": 1 and 1/2 expected).
 
 ## SSVI design SS-1(60) of seed 003
 
