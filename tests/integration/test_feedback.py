@@ -3,7 +3,6 @@ speed, the total time, and the end-of-run table of the metrics the scenario is a
 
 from __future__ import annotations
 
-import os
 import re
 import subprocess
 import sys
