@@ -11,6 +11,7 @@ noise, grid, outputs and the three streams.
 
 from __future__ import annotations
 
+import copy
 from dataclasses import dataclass
 from typing import Any
 
@@ -21,12 +22,12 @@ from ..outputs import POINCARE_SAMPLES, SLOTS, new_metrics
 from ..schemes import SCHEMES
 from ..streams import Streams
 from .bundles import Absorbers, Bodies, Filters, Grid, Loads, Noise, Outputs
-from .carry import new_carry
+from .carry import SEED_HIGH, SEED_LOW, new_carry
 from .driver import Spec, step_loop
 from .kdk import kdk_step
 from .loads import load_path, stationary_start
 from .rk4 import rk4_step
-from .rng import STREAM_WORDS
+from .rng import STREAM_WORDS, uniform
 from .sra3 import sra3_step
 
 _NO_NORMALS = np.zeros(0)
@@ -128,6 +129,23 @@ def _streams_for(scene, replay: bool, streams: Streams | np.random.Generator | N
     return tuple(gens)
 
 
+def _streams_for_copy(gens: list, streams: Streams | np.random.Generator) -> tuple:
+    """The generators of a branch on ``streams``: each place a path's loop draws from (a
+    generator that is not the unused stream ``_UNUSED``) takes the stream of its purpose."""
+    if isinstance(streams, np.random.Generator):
+        streams = Streams.shared(streams)
+    chosen = (streams.increments, streams.bridge, streams.filter)
+    fresh = []
+    for name, old, new in zip(("increments", "bridge", "filter"), gens, chosen):
+        if old is _UNUSED or old is _UNDRAWN:
+            fresh.append(old)
+        elif new is None:
+            raise ValueError(f"branch: this path draws from the {name} stream; it is None")
+        else:
+            fresh.append(new)
+    return tuple(fresh)
+
+
 def loads_of(scene) -> Loads:
     """A scene's loads bundle (``kernels/loads.py``)."""
     return Loads(forces=scene.forces, series_t=scene.series_t, series_v=scene.series_v,
@@ -187,6 +205,30 @@ class Path:
     def t(self) -> float:
         """The time reached, ``step dt``."""
         return self.step * self.args[5].dt
+
+    def branch(self, streams: Streams | np.random.Generator | None = None) -> Path:
+        """A copy of this path at the step it has reached, to be run on by ``advance`` on its
+        own: the state, the filters' state, the metrics and accounts so far, the history rows,
+        the Poincare samples and the carry (restarts for rare-event splitting).  Without
+        ``streams`` the copy continues on copies of this path's generators (it runs on as this
+        path would, bitwise); with ``streams`` (as ``start_path`` takes them) its noise from here
+        on is theirs, and so is the seed of its Brownian trees (``brownian``), so that branches
+        on independent streams are independent from the branching state on."""
+        bodies, absorbers, loads, fl, noise, grid, outputs, *gens = self.args
+        outputs = outputs._replace(out=outputs.out.copy(), samples=outputs.samples.copy(),
+                                   history=outputs.history.copy(), carry=outputs.carry.copy())
+        if self.step > 0 and outputs.carry.shape[0] == 0:
+            raise ValueError("branch: this path keeps no carry (start_path(..., stretches=False))")
+        if streams is None:
+            gens = [copy.deepcopy(gen) for gen in gens]
+        else:
+            gens = list(_streams_for_copy(gens, streams))
+            if self.step > 0 and gens[1] is not _UNUSED:  # (drawn at the path's start: redrawn)
+                outputs.carry[SEED_HIGH], outputs.carry[SEED_LOW] = uniform(gens[1]), uniform(gens[1])
+        fl = fl._replace(z=fl.z.copy(), zn=fl.zn.copy(), draws=fl.draws.copy())
+        args = (bodies._replace(x=bodies.x.copy(), v=bodies.v.copy()), absorbers, loads, fl, noise, grid,
+                outputs, *gens)
+        return Path(self.kernel, args, self.step)
 
 
 def start_path(scene, streams: Streams | np.random.Generator | None = None, *,

@@ -12,6 +12,7 @@ import pytest
 from tests.helpers import example_data, scene_from
 from vines_stoch.kernels import advance, sample_buffer, simulate, start_path
 from vines_stoch.outputs import ENERGY_INT
+from vines_stoch.streams import Streams
 from vines_stoch.validation import scenes
 
 #: Example scenarios, shortened, and the scheme each runs with: the RK4 loop with Hertz contact
@@ -111,3 +112,50 @@ def test_advance_refuses_stops_outside_the_path_and_paths_without_a_carry():
     once.step = 10  # (as after a first stretch)
     with pytest.raises(ValueError, match="keeps no carry"):
         advance(once, 20)
+
+
+def _started(scene, split: int, seed: int = 7):
+    """A path with history rows and samples run to step ``split``."""
+    history = np.zeros((8, 2 + scene.n_floors))
+    path = start_path(scene, Streams.shared(np.random.default_rng(seed)), history=history,
+                      stride=scene.n_steps // 7, samples=sample_buffer(scene))
+    return advance(path, split)
+
+
+@pytest.mark.parametrize("case", ["rk4 Hertz contact, harmonic",
+                                  "kdk Hertz contact and impacts under white noise",
+                                  "kdk filtered ground motion with limits"])
+def test_a_branch_runs_on_as_its_path_would(case):
+    """A branch on copies of its path's generators is a restart from the path's state, time and
+    stream position: run on to the end, it and its path agree bitwise."""
+    scene = _example(*EXAMPLES[case])
+    path = _started(scene, scene.i0 + 1501)
+    twin = path.branch()
+    assert twin.step == path.step and twin.x is not path.x
+    for p in (path, twin):
+        advance(p, scene.n_steps)
+    for a, b in [(path.x, twin.x), (path.v, twin.v), (path.out, twin.out),
+                 (path.args[6].history, twin.args[6].history), (path.args[6].samples, twin.args[6].samples)]:
+        np.testing.assert_array_equal(a, b)
+
+
+@pytest.mark.parametrize("case", ["kdk Hertz contact and impacts under white noise",
+                                  "kdk filtered ground motion with limits"])
+def test_a_branch_on_new_streams_keeps_the_past_and_draws_its_own_future(case):
+    """Branches on other streams share the history rows before the branching step and go their
+    own ways after it (the Brownian trees' seed redrawn too); the same streams give the same
+    branch."""
+    scene = _example(*EXAMPLES[case])
+    split = scene.n_steps // 2
+    stride = scene.n_steps // 7
+    path = _started(scene, split)
+    first, second, again = (path.branch(Streams.shared(np.random.default_rng(s))) for s in (11, 12, 11))
+    for p in (path, first, second, again):
+        advance(p, scene.n_steps)
+    rows = split // stride + 1  # (the rows at or before the branching step)
+    past = [p.args[6].history[:rows] for p in (path, first, second)]
+    np.testing.assert_array_equal(past[0], past[1])
+    np.testing.assert_array_equal(past[0], past[2])
+    assert not np.array_equal(first.x, second.x) and not np.array_equal(first.x, path.x)
+    np.testing.assert_array_equal(first.out, again.out)
+    np.testing.assert_array_equal(first.x, again.x)
