@@ -31,14 +31,15 @@ import pandas as pd
 from . import history as hist
 from . import schedulers
 from .binding import binding
-from .kernels import needed_streams, sample_buffer, simulate
+from .kernels import DEFAULT_SIGNALS, needed_streams, sample_buffer, simulate
 from .metrics import METRICS, finish_table, ground_intensity, summarise
 from .outputs import POINCARE_SAMPLES
 from .progress import Progress
 from .results import Results, Solution, as_study, check_whole, read_results
-from .scenario import History, Study, history_signals
+from .scenario import History, Study
 from .scenario.fields import MAX_REALIZATIONS
 from .scene import Scene, build_scene
+from .signals import signal_names
 from .store import (
     CHECKPOINT,
     KEY,
@@ -82,7 +83,7 @@ def draw_parameters(study: Study, seed: int, point: int, realization: int,
 def run_chunk(scene: Scene, seed: int, point: int, start: int, stop: int,
               grid: tuple[int, int] | None = None, study: Study | None = None,
               common: bool = True,
-              signals: tuple[str, ...] = hist.SIGNALS) -> tuple[pd.DataFrame, np.ndarray | None]:
+              signals: tuple[str, ...] = DEFAULT_SIGNALS) -> tuple[pd.DataFrame, np.ndarray | None]:
     """Realisations ``start..stop-1`` of one sweep point: one metric row each and, when a
     history ``grid = (stride, size)`` is asked for, the paths of the history ``signals``
     ``(len(signals), size, stop - start)``.  With ``study`` (a study with uncertain parameters) each
@@ -91,8 +92,7 @@ def run_chunk(scene: Scene, seed: int, point: int, start: int, stop: int,
     ``common``: common random numbers across sweep points (see ``generator``)."""
     raws, scenes, samples_rows, drawn_rows, intensities = [], [], [], [], []
     paths = None if grid is None else np.full((len(signals), grid[1], stop - start), np.nan)
-    columns = len(hist.SIGNALS) + (scene.n_floors if hist.needs_floors(signals) else 0)
-    path = None if grid is None else np.full((grid[1], columns), np.nan)
+    path = None if grid is None else np.full((grid[1], len(signals)), np.nan)
     bound = binding(study, point) if study is not None else None
     for r in range(start, stop):
         drawn = draw_parameters(study, seed, point, r, common) if study is not None else {}
@@ -103,9 +103,10 @@ def run_chunk(scene: Scene, seed: int, point: int, start: int, stop: int,
             path.fill(np.nan)
         increments, bridge, filters = needed_streams(scene)
         gens = streams(seed, point, r, increments=increments, bridge=bridge, filters=filters, common=common)
-        raws.append(simulate(scene, gens, samples=samples, history=path, stride=grid[0] if grid else 1))
+        raws.append(simulate(scene, gens, samples=samples, history=path, stride=grid[0] if grid else 1,
+                             signals=signals))
         if paths is not None:
-            paths[:, :, r - start] = hist.select(path, signals)
+            paths[:, :, r - start] = path.T
         scenes.append(scene)
         samples_rows.append(samples)
         drawn_rows.append(drawn)
@@ -120,7 +121,7 @@ def run_chunk(scene: Scene, seed: int, point: int, start: int, stop: int,
 def run_chunk_cuda(scene: Scene, seed: int, point: int, start: int, stop: int,
                    grid: tuple[int, int] | None = None, study: Study | None = None,
                    common: bool = True,
-                   signals: tuple[str, ...] = hist.SIGNALS) -> tuple[pd.DataFrame, np.ndarray | None]:
+                   signals: tuple[str, ...] = DEFAULT_SIGNALS) -> tuple[pd.DataFrame, np.ndarray | None]:
     """``run_chunk`` on the GPU (``gpu.simulate_many``): the same table and paths, realisation
     ``r`` drawing from its Philox streams (``kernels/rng.py``) instead of the CPU's PCG64 streams
     (its uncertain parameters still come from the CPU's parameter stream)."""
@@ -131,14 +132,13 @@ def run_chunk_cuda(scene: Scene, seed: int, point: int, start: int, stop: int,
     drawn_rows = [draw_parameters(study, seed, point, r, common) if study is not None else {}
                   for r in range(start, stop)]
     scenes = [binding(study, point).scene(d) for d in drawn_rows] if study is not None else [scene] * n
-    columns = len(hist.SIGNALS) + (scene.n_floors if hist.needs_floors(signals) else 0)
     batch = gpu.simulate_many(scenes if study is not None else scene, seed, point, start, stop, common, grid,
-                              columns)
+                              signals)
     samples = list(batch.samples) if batch.samples.shape[1] else [None] * n
     # (the filter stream afresh: the ground path the realisation saw)
     intensities = [ground_intensity(s, philox_stream(seed, FILTER, r, point, common))
                    if s.im_period > 0 else {} for s, r in zip(scenes, range(start, stop))]
-    paths = None if grid is None else hist.select(batch.history.transpose(1, 2, 0), signals)
+    paths = None if grid is None else batch.history.transpose(2, 1, 0)
     return _table(batch.raw, scenes if study is not None else scene, samples, point, start, drawn_rows,
                   intensities), paths
 
@@ -497,7 +497,7 @@ def structure(scene: Scene) -> str:
 
 
 def prepare_loops(scenes: list[Scene], seed: int, common: bool, grid: tuple[int, int] | None = None,
-                  signals: tuple[str, ...] = hist.SIGNALS) -> None:
+                  signals: tuple[str, ...] = DEFAULT_SIGNALS) -> None:
     """Compile (or load from numba's cache on disk) the step loop of each structure among
     ``scenes`` that this process has not run yet, before any chunk starts, with one line each on
     standard error: which structure, and whether it was compiled (once: later runs load it) or
@@ -515,11 +515,10 @@ def prepare_loops(scenes: list[Scene], seed: int, common: bool, grid: tuple[int,
         increments, bridge, filters = needed_streams(scene)
         history = None
         if grid is not None:
-            columns = len(hist.SIGNALS) + (scene.n_floors if hist.needs_floors(signals) else 0)
-            history = np.full((grid[1], columns), np.nan)
+            history = np.full((grid[1], len(signals)), np.nan)
         gens = streams(seed, point, 0, increments=increments, bridge=bridge, filters=filters, common=common)
         advance(start_path(scene, gens, samples=sample_buffer(scene), history=history,
-                           stride=grid[0] if grid else 1, stretches=False), 0)
+                           stride=grid[0] if grid else 1, stretches=False, signals=signals), 0)
         loaded = sum(kernel.stats.cache_hits.values()) > hits
         print(f" {'loaded from the cache' if loaded else 'compiled (cached on disk for later runs)'} "
               f"in {time.monotonic() - start:.1f} s", file=sys.stderr, flush=True)
@@ -532,7 +531,7 @@ def _run(study: Study, directory: Path | None, o: _Options) -> Results | None:
     grid_spec = spec or (History() if o.paths else None)  # (the grid of the paths kept)
     the_plan = plan(study, o.chunk, o.realizations, o.backend, grid_spec)
     seed, target = base.ensemble.seed, base.ensemble.target_sem
-    signals = tuple(grid_spec.signals) if grid_spec else hist.SIGNALS
+    signals = tuple(grid_spec.signals) if grid_spec else DEFAULT_SIGNALS
     grids = [hist.grid(scene.n_steps, grid_spec.points) if grid_spec else None for scene in the_plan.scenes]
     key = run_key(study.text, the_plan.chunks, o.backend)
     keep = "--resume" if o.resume else "--shard" if o.shard is not None else None
@@ -713,14 +712,14 @@ def solve(scenario: Study | Mapping[str, Any] | str | os.PathLike, *, point: int
     """One realisation of a scenario with its time histories (``Solution``: ``ts``, ``ys`` by
     signal name, and its metrics, the same values as realisation ``realization`` of sweep point
     ``point`` in an ensemble run).  ``points``: rows of the time grid (default: every step);
-    ``signals``: any of ``x1``, ``e1``, ``x_k``, ``drift_k`` (default ``x1``, ``e1``)."""
+    ``signals``: any of ``signals.signal_names`` (default ``x1``, ``e1``)."""
     study = as_study(scenario)
     check_whole("point", point, 0, len(study.points) - 1, allow_none=False)
     check_whole("realization", realization, 0, 2**63 - 1, allow_none=False)
     check_whole("points", points, 2, 100_000_000)
     scene = build_scene(study.points[point])
-    signals = tuple(signals or hist.SIGNALS)
-    allowed = history_signals(scene.n_floors)
+    signals = tuple(signals or DEFAULT_SIGNALS)
+    allowed = signal_names(scene.n_floors, scene.kind.shape[0])
     for name in signals:
         if name not in allowed:
             raise ValueError(f"signals: {name!r} is not a signal of this scenario "

@@ -27,10 +27,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .kernels import kernel_for, simulate
+from .kernels import DEFAULT_SIGNALS, kernel_for, simulate
 from .kernels.rng import philox_stream, stream_key, stream_place
 from .outputs import POINCARE_SAMPLES, new_metrics
 from .scene import Scene
+from .signals import declare
 from .streams import BRIDGE, FILTER, INCREMENTS, Streams
 
 #: Threads of a block (one realisation each).
@@ -159,11 +160,11 @@ class Inputs:
     n_samples: int
     stride: int
     size: int
-    n_history: int
+    signals: np.ndarray
 
     @classmethod
     def of(cls, scenes: list[Scene], seed: int, point: int, common: bool, grid: tuple[int, int] | None,
-           n_history: int) -> Inputs:
+           signals: tuple[str, ...]) -> Inputs:
         scene = scenes[0]
         stride, size = grid if grid is not None else (1, 0)
         return cls(scene, len(scenes) > 1, _stack(scenes),
@@ -171,7 +172,7 @@ class Inputs:
                    new_metrics(scene.n_floors, scene.limits.shape[0]),
                    np.array([stream_key(seed, p) for p in (INCREMENTS, BRIDGE, FILTER)], np.uint64),
                    np.uint64(stream_place(0, point, common)), POINCARE_SAMPLES if scene.period > 0 else 0,
-                   stride, size, n_history)
+                   stride, size, declare(signals, scene.n_floors, scene.kind.shape[0]))
 
     @property
     def n_bodies(self) -> int:
@@ -181,30 +182,31 @@ class Inputs:
         """``m`` realisations' output arrays from ``empty(shape)``: metric rows, Poincare
         samples, history rows, filter scratch (state, next state, normals)."""
         return (empty((m, self.template.shape[0])), empty((m, self.n_samples, 2 * self.n_bodies + 2)),
-                empty((m, self.size, self.n_history)), empty((m, 3, self.stacked["phi"].shape[1])))
+                empty((m, self.size, self.signals.shape[0])), empty((m, 3, self.stacked["phi"].shape[1])))
 
     def row_bytes(self) -> int:
         """Device bytes a realisation takes (its outputs, and its own scene's arrays)."""
         own = sum(a[0].nbytes for a in self.stacked.values()) if self.per_path else 0
         return own + sum(8 * int(np.prod(a[1:])) for a in (o.shape for o in self.outputs(1, np.empty)))
 
-    def arguments(self, first: int, m: int, params: dict, shared: dict, normals, keys, template,
+    def arguments(self, first: int, m: int, params: dict, shared: dict, normals, keys, template, signals,
                   outputs: tuple) -> tuple:
         """The launcher's arguments, in its order (``kernels.launch.launcher``)."""
         scene = self.scene
         return (first, m, self.per_path, self.place, keys, *(params[k] for k in PER_PATH),
                 *(shared[k] for k in SHARED), normals, scene.dt, scene.n_steps, scene.i0, scene.period,
-                scene.sample_from, self.stride, template, *outputs)
+                scene.sample_from, self.stride, template, signals, *outputs)
 
 
-def launch_types(scene: Scene, grid: tuple[int, int] | None = None, n_history: int = 2) -> tuple:
+def launch_types(scene: Scene, grid: tuple[int, int] | None = None,
+                 signals: tuple[str, ...] = DEFAULT_SIGNALS) -> tuple:
     """numba types of the launcher's arguments for ``scene`` (for ``numba.cuda.compile_ptx``,
     which needs no GPU)."""
     import numba
 
-    inputs = Inputs.of([scene], 0, 0, True, grid, n_history)
+    inputs = Inputs.of([scene], 0, 0, True, grid, signals)
     args = inputs.arguments(0, 1, inputs.stacked, inputs.shared, np.zeros(0), inputs.keys, inputs.template,
-                            inputs.outputs(1, np.empty))
+                            inputs.signals, inputs.outputs(1, np.empty))
     return tuple(numba.typeof(a) for a in args)
 
 
@@ -218,10 +220,11 @@ def _compile_here(scene: Scene, seed: int, point: int, realization: int, common:
 
 
 def simulate_many(scenes: Scene | list[Scene], seed: int, point: int, start: int, stop: int,
-                  common: bool = True, grid: tuple[int, int] | None = None, n_history: int = 2) -> Batch:
+                  common: bool = True, grid: tuple[int, int] | None = None,
+                  signals: tuple[str, ...] = DEFAULT_SIGNALS) -> Batch:
     """Realisations ``start .. stop - 1`` of sweep point ``point`` on the GPU, in batches that
     fit its memory.  ``scenes``: the scene (or one per realisation, with uncertain parameters);
-    ``grid = (stride, size)``: history rows of ``n_history`` columns (``kernels.simulate``)."""
+    ``grid = (stride, size)``: history rows of the ``signals`` (``kernels.simulate``)."""
     require()
     from numba import cuda
 
@@ -232,7 +235,7 @@ def simulate_many(scenes: Scene | list[Scene], seed: int, point: int, start: int
     n = stop - start
     if len(scenes) > 1 and len(scenes) != n:
         raise ValueError(f"simulate_many: {len(scenes)} scenes for {n} realisations")
-    inputs = Inputs.of(scenes, seed, point, common, grid, n_history)
+    inputs = Inputs.of(scenes, seed, point, common, grid, signals)
     # (the simulator runs the CPU loop: the same arithmetic, its flags on the heap)
     launch = launcher(kernel_for(inputs.scene, gpu=not simulating()), inputs.n_bodies, simulating())
     if simulating():
@@ -241,13 +244,13 @@ def simulate_many(scenes: Scene | list[Scene], seed: int, point: int, start: int
     shared = {k: cuda.to_device(a) for k, a in inputs.shared.items()}
     device = None if inputs.per_path else {k: cuda.to_device(a) for k, a in inputs.stacked.items()}
     normals, keys = cuda.to_device(np.zeros(0)), cuda.to_device(inputs.keys)
-    template = cuda.to_device(inputs.template)
+    template, columns = cuda.to_device(inputs.template), cuda.to_device(inputs.signals)
     done = 0
     while done < n:
         m = _batch_size(inputs.row_bytes(), n - done)
         params = device or {k: cuda.to_device(a[done:done + m]) for k, a in inputs.stacked.items()}
         outputs = inputs.outputs(m, cuda.device_array)
-        args = inputs.arguments(start + done, m, params, shared, normals, keys, template, outputs)
+        args = inputs.arguments(start + done, m, params, shared, normals, keys, template, columns, outputs)
         if not simulating():  # (once a process: from the disk cache, or compiled with the faster front end)
             compile_once(launch, args, "numba.cuda.core")
         launch[math.ceil(m / THREADS), THREADS](*args)

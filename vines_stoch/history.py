@@ -1,6 +1,7 @@
 """Ensemble statistics of time histories without storing paths (history.parquet).
 
-Each realisation reports ``x1`` and ``E1`` on a decimated grid.  The realisations of a sweep
+Each realisation reports its signals (``x1`` and ``E1`` unless the scenario names others:
+``signals.py``) on a decimated grid.  The realisations of a sweep
 point are grouped into leaves of ``BLOCK`` consecutive realisations (by index, whatever the
 chunks), and leaves into a binary tree.  Every node holds the exact count, mean and sum of
 squared deviations (merged exactly, Chan et al.) and a sorted quantile buffer of at most
@@ -27,34 +28,6 @@ from .scenario import History, quantile_name
 
 #: Realisations per leaf, and the largest quantile buffer of a node.
 BLOCK = 512
-#: The first columns of a kernel's history rows (the roof's displacement, the structure's
-#: energy); with ``2 + n_floors`` columns the rows go on with every floor's displacement.
-SIGNALS = ("x1", "e1")
-
-
-def needs_floors(signals: list[str] | tuple[str, ...]) -> bool:
-    """True when ``signals`` name a floor's displacement or drift (the kernel then records
-    every floor)."""
-    return any(s not in SIGNALS for s in signals)
-
-
-def select(rows: np.ndarray, signals: list[str] | tuple[str, ...]) -> np.ndarray:
-    """The ``signals`` (``scenario.history_signals``) of a kernel's history rows ``(grid,
-    2 [+ n_floors])`` (or of many realisations' rows, ``(grid, 2 [+ n_floors], n)``), as
-    ``(len(signals), grid[, n])``: ``x1``, ``e1``, ``x_k``, ``drift_k = x_k - x_{k-1}``."""
-    out = np.empty((len(signals), rows.shape[0], *rows.shape[2:]))
-    for i, name in enumerate(signals):
-        if name in SIGNALS:
-            out[i] = rows[:, SIGNALS.index(name)]
-            continue
-        kind, k = name.rsplit("_", 1)
-        k = int(k)
-        out[i] = rows[:, 1 + k]
-        if kind == "drift" and k > 1:
-            out[i] -= rows[:, k]
-    return out
-
-
 def grid(n_steps: int, points: int) -> tuple[int, int]:
     """``(stride, size)`` of the history grid: rows at ``t = j stride dt``, ``j < size``, with
     ``stride`` the largest whole number of steps that gives at least ``points`` rows (or every

@@ -1,6 +1,7 @@
 """What a run records of each realisation: the raw metric vector's slots (filled by the step
 loops, turned into columns by ``metrics.finish_table``), the per-floor blocks, the codes of
-limits and status, and the Poincare samples kept for the regime."""
+limits and status, and the Poincare samples kept for the regime (the signals of its history rows:
+``signals.py``)."""
 
 from __future__ import annotations
 
@@ -49,3 +50,4 @@ def new_metrics(n_floors: int = 1, n_limits: int = 0) -> np.ndarray:
     out = np.zeros(passage_slots(n_floors) + n_limits)
     out[passage_slots(n_floors):] = np.nan
     return out
+

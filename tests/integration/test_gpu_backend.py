@@ -151,7 +151,7 @@ def test_history_rows_come_back():
     scene = scene_from(example_data("parallel_nes_impulse", "sweep"), changes={"simulation.duration": 5.0})
     history = np.full((11, 2), np.nan)
     simulate(scene, history=history, stride=100)
-    batch = gpu.simulate_many(scene, seed=0, point=0, start=0, stop=2, grid=(100, 11), n_history=2)
+    batch = gpu.simulate_many(scene, seed=0, point=0, start=0, stop=2, grid=(100, 11))
     for rows in batch.history:
         np.testing.assert_allclose(rows, history, rtol=1e-12, atol=0.0)
 

@@ -17,7 +17,7 @@ from scipy.stats import t as student_t
 
 from tests.helpers import cli, study_from, toml_text, two_dof_data
 from vines_stoch import ensemble, history, run
-from vines_stoch.kernels import simulate
+from vines_stoch.kernels import DEFAULT_SIGNALS, simulate
 from vines_stoch.scene import build_scene
 from vines_stoch.store import read_metadata
 
@@ -53,7 +53,7 @@ def test_history_equals_statistics_of_stored_paths(tmp_path):
     paths, t = stored_paths(study, 60)
     np.testing.assert_array_equal(h["t"], t)
     assert (h["n"] == 60).all() and (h["rank_error"] == 0).all()
-    for s, name in enumerate(history.SIGNALS):
+    for s, name in enumerate(DEFAULT_SIGNALS):
         np.testing.assert_allclose(h[f"{name}_mean"], paths[s].mean(axis=1), rtol=1e-12, atol=1e-15)
         np.testing.assert_allclose(h[f"{name}_std"], paths[s].std(axis=1, ddof=1), rtol=1e-11, atol=1e-15)
         for q in (0.05, 0.5, 0.95):
@@ -77,7 +77,7 @@ def test_history_tree_is_chunk_invariant_and_within_its_rank_bound(tmp_path, mon
     paths, _ = stored_paths(study_from(scenario(n=n)), n)
     bound = h["rank_error"].iloc[0]
     assert 0 < bound < 0.25
-    for s, name in enumerate(history.SIGNALS):
+    for s, name in enumerate(DEFAULT_SIGNALS):
         np.testing.assert_allclose(h[f"{name}_mean"], paths[s].mean(axis=1), rtol=1e-11, atol=1e-15)
         np.testing.assert_allclose(h[f"{name}_std"], paths[s].std(axis=1, ddof=1), rtol=1e-10, atol=1e-15)
         for q in (0.05, 0.5, 0.95):

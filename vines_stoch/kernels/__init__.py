@@ -12,6 +12,7 @@ noise, grid, outputs and the three streams.
 from __future__ import annotations
 
 import copy
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -20,6 +21,7 @@ import numpy as np
 from ..jit.cache import compile_once
 from ..outputs import POINCARE_SAMPLES, SLOTS, new_metrics
 from ..schemes import SCHEMES
+from ..signals import declare
 from ..streams import Streams
 from .bundles import Absorbers, Bodies, Filters, Grid, Loads, Noise, Outputs
 from .carry import SEED_HIGH, SEED_LOW, new_carry
@@ -38,6 +40,7 @@ _UNDRAWN = np.random.default_rng(0)
 #: the same loop (the same argument types: one compilation) on the CPU and on the simulator.
 _UNUSED = np.zeros(STREAM_WORDS, np.uint64)
 _NO_HISTORY = np.zeros((0, 2))
+_NO_SIGNALS = np.zeros((0, 2), np.int64)
 #: The carry of a path run in one go: none kept.
 _NO_CARRY = np.zeros(0)
 #: The loops this process has run, with the kinds of their generators (``cache.compile_once``
@@ -154,11 +157,12 @@ def loads_of(scene) -> Loads:
 
 def bundles(scene, x: np.ndarray, v: np.ndarray, fl: Filters, normals: np.ndarray, out: np.ndarray,
             samples: np.ndarray, history: np.ndarray, stride: int, gens: tuple, refine: int = 1,
-            carry: np.ndarray = _NO_CARRY) -> tuple:
+            carry: np.ndarray = _NO_CARRY, signals: np.ndarray = _NO_SIGNALS) -> tuple:
     """The kernels' arguments (``kernels/bundles.py``): bodies (masses, storey stiffnesses and
     dashpots, mass-proportional dashpots, state), absorbers (kinds, hosts, rows), loads, filters,
     noise (intensity per floor, replayed normals, replayed fine steps a step), grid, outputs
-    (with the limits whose first passages the metric vector records, and the ``carry`` of a
+    (the history rows with the ``signals`` they hold, ``signals.declare``; the limits whose first
+    passages the metric vector records, and the ``carry`` of a
     path run in stretches: ``kernels/carry.py``); then the three generators of ``gens``
     (increments, bridge, filter) as arguments of their own (see ``kernels/bundles.py``).  The grid
     runs the whole path from its start."""
@@ -171,7 +175,7 @@ def bundles(scene, x: np.ndarray, v: np.ndarray, fl: Filters, normals: np.ndarra
         Noise(sigma=scene.sigma, normals=normals, refine=refine),
         Grid(dt=scene.dt, n_steps=scene.n_steps, i0=scene.i0, period=scene.period,
              sample_from=scene.sample_from, stride=stride, first=0),
-        Outputs(out=out, samples=samples, history=history, limits=scene.limits, carry=carry),
+        Outputs(out=out, samples=samples, history=history, signals=signals, limits=scene.limits, carry=carry),
         *gens,
     )
 
@@ -231,10 +235,28 @@ class Path:
         return Path(self.kernel, args, self.step)
 
 
+#: The signals of a history given without names: the roof's displacement and ``E1``, then with
+#: ``2 + n_floors`` columns every floor's displacement.
+DEFAULT_SIGNALS = ("x1", "e1")
+
+
+def history_columns(scene, history: np.ndarray, signals: Sequence[str] | None) -> np.ndarray:
+    """The declared columns (``signals.declare``) of a history buffer: ``signals`` by name, one
+    column each, or without names ``DEFAULT_SIGNALS`` (and every floor's ``x_k`` where the buffer
+    has ``2 + n_floors`` columns)."""
+    nf = scene.n_floors
+    if signals is None:
+        signals = DEFAULT_SIGNALS + tuple(f"x_{k}" for k in range(1, nf + 1) if history.shape[1] == 2 + nf)
+    if history.ndim != 2 or history.shape[1] != len(signals):
+        raise ValueError(f"history: {history.shape[1] if history.ndim == 2 else history.shape} columns for "
+                         f"{len(signals)} signals ({', '.join(signals)})")
+    return declare(signals, nf, scene.kind.shape[0])
+
+
 def start_path(scene, streams: Streams | np.random.Generator | None = None, *,
                normals: np.ndarray | None = None, samples: np.ndarray | None = None,
                history: np.ndarray | None = None, stride: int = 1, refine: int = 1,
-               stretches: bool = True) -> Path:
+               stretches: bool = True, signals: Sequence[str] | None = None) -> Path:
     """A realisation of ``scene`` at its start (step 0, the scene's initial state), to be run
     by ``advance``; the arguments are those of ``simulate``.  With ``stretches`` the loop keeps
     its carry (``kernels/carry.py``), so that the path may be run in several stretches."""
@@ -255,8 +277,10 @@ def start_path(scene, streams: Streams | np.random.Generator | None = None, *,
     fl = filter_tuple(scene, gens[2])
     carry = (new_carry(scene.n_floors, scene.kind.shape[0], scene.forces.shape[0]) if stretches
              else _NO_CARRY)
-    args = bundles(scene, x, v, fl, normals if replay else _NO_NORMALS, out, samples,
-                   _NO_HISTORY if history is None else history, stride, gens, refine, carry)
+    history = _NO_HISTORY if history is None else history
+    columns = _NO_SIGNALS if history.shape[0] == 0 else history_columns(scene, history, signals)
+    args = bundles(scene, x, v, fl, normals if replay else _NO_NORMALS, out, samples, history, stride, gens,
+                   refine, carry, columns)
     return Path(kernel_for(scene), args)
 
 
@@ -289,7 +313,7 @@ def advance(path: Path, stop: int) -> Path:
 def simulate(scene, streams: Streams | np.random.Generator | None = None, *,
              normals: np.ndarray | None = None, final: np.ndarray | None = None,
              samples: np.ndarray | None = None, history: np.ndarray | None = None,
-             stride: int = 1, refine: int = 1) -> np.ndarray:
+             stride: int = 1, refine: int = 1, signals: Sequence[str] | None = None) -> np.ndarray:
     """Run one realisation of ``scene``; returns the raw metric vector (see ``SLOTS``).
 
     ``streams`` (``vines_stoch.streams.Streams``: increments, bridge draws, filter noise; or
@@ -302,13 +326,14 @@ def simulate(scene, streams: Streams | np.random.Generator | None = None, *,
     (``refine = 1``, ``dt / refine``) on the same normals and streams integrate the same path;
     ``final`` (shape ``(2, n_bodies)``) receives the final positions and velocities;
     ``samples`` (from ``sample_buffer``) receives the Poincare
-    samples of periodic scenes; ``history`` (shape ``(G, 2)`` or ``(G, 2 + n_floors)``)
-    receives the roof's ``x``, ``E1`` (and every floor's ``x``) at ``t = j stride dt``,
-    ``j < G`` (rows after a divergence keep their previous content).  (A path run in
-    stretches: ``start_path``, ``advance``.)
+    samples of periodic scenes; ``history`` (shape ``(G, len(signals))``) receives the
+    ``signals`` (names of ``signals.signal_names``: ``x1``, ``e1``, ``x_k``, ``v_k``,
+    ``drift_k``, ``xa_j``, ``va_j``, ``stroke_j``; without names, ``history_columns``) at
+    ``t = j stride dt``, ``j < G`` (rows after a divergence keep their previous content).  (A
+    path run in stretches: ``start_path``, ``advance``.)
     """
     path = start_path(scene, streams, normals=normals, samples=samples, history=history, stride=stride,
-                      refine=refine, stretches=False)
+                      refine=refine, stretches=False, signals=signals)
     advance(path, scene.n_steps)
     if final is not None:
         final[0], final[1] = path.x, path.v

@@ -85,12 +85,14 @@ class Grid(NamedTuple):
 
 
 class Outputs(NamedTuple):
-    """The raw metric vector, the Poincare samples, the history rows, the limits whose first
-    passages the metric vector records (``common.first_passages``), and the path's carry to its
-    next stretch (``kernels/carry.py``; empty: none kept)."""
+    """The raw metric vector, the Poincare samples, the history rows and the signals they hold
+    (``signals.declare``: a column each), the limits whose first passages the metric vector
+    records (``common.first_passages``), and the path's carry to its next stretch
+    (``kernels/carry.py``; empty: none kept)."""
 
     out: Any
     samples: Any
     history: Any
+    signals: Any
     limits: Any
     carry: Any

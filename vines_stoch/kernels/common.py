@@ -39,6 +39,7 @@ from ..physics.absorbers import (
 from ..physics.hertz import CONTACT_STEPS, contact_energy, contact_force_law, contact_substep, hertz_force
 from ..physics.impact import restitution_impact, sticks
 from ..physics.structure import host_of, primary_energy, structure_forces
+from ..signals import SIGNAL_DRIFT, SIGNAL_STROKE, SIGNAL_V, SIGNAL_VA, SIGNAL_X, SIGNAL_XA
 
 #: Impacts resolved inside one outer step before the rest of the step ignores the walls.
 MAX_EVENTS = 64
@@ -343,30 +344,42 @@ def block_end(i: int, n_steps: int, i0: int, h_next: int) -> int:
 
 
 @njit(**INLINE)
-def history_row(history, j: int, x, nf: int, e1: float) -> None:
-    """History row ``j``: the roof's displacement, ``E1`` and, when the buffer has the columns
-    (``2 + nf``), every floor's displacement (constant indices into the state: see
-    ``scratch``)."""
-    history[j, 0] = x[nf - 1]
-    history[j, 1] = e1
-    for k in range(nf):
-        if k + 2 < history.shape[1]:
-            history[j, k + 2] = x[k]
+def signal_value(code: int, index: int, x, v, nf: int, e1: float, host) -> float:
+    """A declared signal's value (``signals.declare``: ``code``, ``index``) in the state
+    ``x, v`` (``E1``: ``e1``; ``host``: the absorbers' host floors).  The state is read at
+    run-time indices by ``pick``, so that it stays in registers (``jit.intrinsics.pick``)."""
+    if code == SIGNAL_X or code == SIGNAL_XA:
+        return pick(x, index)
+    if code == SIGNAL_V or code == SIGNAL_VA:
+        return pick(v, index)
+    if code == SIGNAL_DRIFT:
+        return pick(x, index) - pick(x, index - 1) if index > 0 else pick(x, 0)
+    if code == SIGNAL_STROKE:
+        return pick(x, nf + index) - pick(x, host_of(host, index, nf))
+    return e1
 
 
 @njit(**INLINE)
-def start_history(history, stride, x, nf, e1) -> int:
+def history_row(history, j: int, signals, x, v, nf: int, e1: float, host) -> None:
+    """History row ``j``: the declared ``signals`` (rows ``(code, index)``, ``signals.declare``),
+    one column each."""
+    for c in range(signals.shape[0]):
+        history[j, c] = signal_value(signals[c, 0], signals[c, 1], x, v, nf, e1, host)
+
+
+@njit(**INLINE)
+def start_history(history, stride, signals, x, v, nf, e1, host) -> int:
     """Write the first history row (``t = 0``) when a history is kept; returns the step after
     which the next row is due (``-1``: never)."""
     if history.shape[0] == 0:
         return -1
-    history_row(history, 0, x, nf, e1)
+    history_row(history, 0, signals, x, v, nf, e1, host)
     return stride if history.shape[0] > 1 else -1
 
 
 @njit(**INLINE)
-def record_history(history, stride, step, x, nf, e1) -> int:
+def record_history(history, stride, step, signals, x, v, nf, e1, host) -> int:
     """Write the history row of ``t = step dt`` (``history_row``); returns the next due step."""
     j = step // stride
-    history_row(history, j, x, nf, e1)
+    history_row(history, j, signals, x, v, nf, e1, host)
     return step + stride if j + 1 < history.shape[0] else -1

@@ -29,7 +29,9 @@ Two constants say how a scheme's step meets the accounts: ``integrates`` (the st
 ``E1`` and ``x_k^2`` with its own stages and observes the peaks and first passages at its own
 sub-steps' ends, as RK4 at its located events; otherwise the driver observes every step's end
 and integrates by the trapezoid rule) and ``force_peaks`` (``acc`` holds floor forces, the
-peak accelerations being the peak forces over the masses).
+peak accelerations being the peak forces over the masses); a third, ``samples``, says whether
+the driver takes Poincare samples around the scheme's steps (where the scene asks for them:
+the deterministic scheme of regimes, ``scene.poincare_samples``; the others compile without).
 """
 
 from __future__ import annotations
@@ -104,6 +106,7 @@ class Step(NamedTuple):
     finish: Any
     integrates: bool
     force_peaks: bool
+    samples: bool
 
 
 @cache
@@ -116,6 +119,7 @@ def step_loop(plug: Step, spec: Spec):
     start, opening, check, step, save, finish = (plug.start, plug.opening, plug.check, plug.step, plug.save,
                                                  plug.finish)
     INTEGRATES = plug.integrates
+    SAMPLES = plug.samples
     FORCE_PEAKS = plug.force_peaks
     NB = spec.n_bodies
     NF = spec.n_floors
@@ -130,8 +134,8 @@ def step_loop(plug: Step, spec: Spec):
         kind, host, rows = absorbers.kind, absorbers.host, absorbers.rows
         dt, n_steps, i0, period, sample_from, stride, first = (grid.dt, grid.n_steps, grid.i0, grid.period,
                                                                 grid.sample_from, grid.stride, grid.first)
-        out, samples, history, limits, carry = (outputs.out, outputs.samples, outputs.history, outputs.limits,
-                                                outputs.carry)
+        out, samples, history, signals, limits, carry = (outputs.out, outputs.samples, outputs.history,
+                                                         outputs.signals, outputs.limits, outputs.carry)
         resume = first > 0  # a later stretch of the path: its state from ``carry``
         # the state (copied back at the end) on the stack (see ``jit.intrinsics.scratch``); copies
         # of it for the out-of-line calls and for the Poincare samples' interpolation
@@ -164,10 +168,10 @@ def step_loop(plug: Step, spec: Spec):
             restore_floors(carry, x_max, drift_max, acc_max, x2_integral)
         else:
             e1_prev = primary_energy(mass, storey_k, x, v, nf)
-            h_next = start_history(history, stride, x, nf, e1_prev)
+            h_next = start_history(history, stride, signals, x, v, nf, e1_prev, host)
             pending = limits.shape[0]  # limits not passed yet
             next_sample = 0
-        sampling = samples.shape[0] > 0
+        sampling = SAMPLES and samples.shape[0] > 0
         i = first
         inside = i0 == 0 or i0 < first
         while i < n_steps:
@@ -233,8 +237,9 @@ def step_loop(plug: Step, spec: Spec):
                                                 v, n_left, n_right)
             i = end
             if i == h_next:
-                h_next = record_history(history, stride, h_next, x, nf,
-                                        primary_energy(mass, storey_k, x, v, nf) if INTEGRATES else e1_prev)
+                h_next = record_history(history, stride, h_next, signals, x, v, nf,
+                                        primary_energy(mass, storey_k, x, v, nf) if INTEGRATES else e1_prev,
+                                        host)
         if carry.shape[0] > 0:  # the path's state for its next stretch, raw
             save_accounts(carry, work, d_primary, d_absorber, e_sum, e1_max, loss, n_left, n_right,
                           contact_time, peak_force)

@@ -583,4 +583,4 @@ def kdk_step(spec) -> Step:
         return (ag_next, replayed), (work, d_primary, d_absorber, e_sum, e1_max, loss_sum, n_left, n_right,
                                      contact_time, peak_force, pending)
 
-    return Step(start, opening, check, step, save, finish, integrates=False, force_peaks=True)
+    return Step(start, opening, check, step, save, finish, integrates=False, force_peaks=True, samples=False)

@@ -401,4 +401,4 @@ def rk4_step(spec) -> Step:
         return sc, (work, d_primary, d_absorber, e_integral, e1_max, loss_sum, n_left, n_right, contact_time,
                     peak_force, pending)
 
-    return Step(start, opening, check, step, save, finish, integrates=True, force_peaks=False)
+    return Step(start, opening, check, step, save, finish, integrates=True, force_peaks=False, samples=True)

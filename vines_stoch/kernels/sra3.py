@@ -210,4 +210,4 @@ def sra3_step(spec) -> Step:
         return (ag_next, replayed), (work, d_primary, d_absorber, e_sum, e1_max, loss, n_left, n_right,
                                      contact_time, peak_force, pending)
 
-    return Step(start, opening, check, step, save, finish, integrates=False, force_peaks=False)
+    return Step(start, opening, check, step, save, finish, integrates=False, force_peaks=False, samples=False)

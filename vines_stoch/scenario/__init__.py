@@ -60,7 +60,6 @@ from .settings import (
     Optimize,
     Output,
     Simulation,
-    history_signals,
     limit_metrics,
     quantile_name,
 )
@@ -75,6 +74,6 @@ __all__ = [
     "JenningsEnvelope", "Limit", "LinearAbsorber", "Load", "LognormalDistribution", "NormalDistribution",
     "Optimize", "Output", "Primary", "PulseTrainLoad", "Rayleigh", "RecordLoad", "SaragoniHartEnvelope",
     "Scenario", "ScenarioError", "Simulation", "Study", "TruncatedNormalDistribution", "UniformDistribution",
-    "WhiteNoiseLoad", "WindLoad", "get_path", "history_signals", "limit_metrics", "load_scenario",
+    "WhiteNoiseLoad", "WindLoad", "get_path", "limit_metrics", "load_scenario",
     "parse_scenario", "quantile_name", "set_path",
 ]

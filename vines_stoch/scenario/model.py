@@ -9,6 +9,7 @@ import numpy as np
 from pydantic import Field, model_validator
 
 from .. import schemes
+from ..signals import signal_names
 from .bodies import (
     Absorber,
     HertzAbsorber,
@@ -28,7 +29,6 @@ from .settings import (
     Optimize,
     Output,
     Simulation,
-    history_signals,
     limit_metrics,
 )
 
@@ -90,12 +90,13 @@ class Scenario(_Model):
                             "then each absorber)",
                         )
         if sim.history is not None:
-            allowed = history_signals(n)
+            allowed = signal_names(n, len(self.absorbers))
             for signal in sim.history.signals:
                 if signal not in allowed:
                     raise FieldError("simulation.history.signals", sim.history.signals,
-                                     f"{signal!r} is not a signal: give x1, e1, x_k or drift_k "
-                                     f"with k in [1, {n}]")
+                                     f"{signal!r} is not a signal: give x1, e1, x_k, v_k or drift_k "
+                                     f"with k in [1, {n}], or xa_j, va_j or stroke_j with j in "
+                                     f"[1, {len(self.absorbers)}] (absorbers in file order)")
         metrics = limit_metrics(n)
         for name, limit in self.limits.items():
             if not LIMIT_NAME.fullmatch(name):

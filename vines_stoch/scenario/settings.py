@@ -13,8 +13,10 @@ from .fields import MAX_REALIZATIONS, NonNegative, Positive, Real, _Model
 
 class History(_Model):
     """Ensemble statistics of time histories on a decimated grid (history.parquet): by default
-    the roof's displacement ``x1`` and the structure's energy ``e1``; ``signals`` may also name
-    a floor's displacement ``x_k`` or inter-storey drift ``drift_k`` (``k = 1..n``)."""
+    the roof's displacement ``x1`` and the structure's energy ``e1``; ``signals`` may name any
+    signal of ``signals.signal_names``: a floor's displacement ``x_k``, velocity ``v_k`` or
+    inter-storey drift ``drift_k`` (``k = 1..n``), an absorber's displacement ``xa_j``, velocity
+    ``va_j`` or stroke ``stroke_j`` (``j``: the absorbers in file order)."""
 
     points: Annotated[int, Field(ge=2, le=100_000)] = 1000
     quantiles: list[Annotated[float, Field(gt=0, lt=1, allow_inf_nan=False)]] = [0.05, 0.5, 0.95]
@@ -29,14 +31,6 @@ class History(_Model):
         if len({quantile_name(q) for q in self.quantiles}) != len(self.quantiles):
             raise FieldError("quantiles", self.quantiles, "must differ in their first 4 decimals")
         return self
-
-
-def history_signals(n_floors: int) -> list[str]:
-    """Signals a history can record on a primary with ``n_floors`` floors: the roof's
-    displacement ``x1``, the structure's energy ``e1``, each floor's displacement ``x_k`` and
-    inter-storey drift ``drift_k``."""
-    floors = range(1, n_floors + 1)
-    return ["x1", "e1", *(f"x_{k}" for k in floors), *(f"drift_{k}" for k in floors)]
 
 
 def quantile_name(q: float) -> str:

@@ -1,0 +1,58 @@
+"""The signals a run records at its history points (SCENARIOS.md, "Signals"), declared by name:
+``declare`` turns names into the columns the loop driver evaluates at each history point
+(``kernels.common.signal_value``), so a history holds just the signals asked for.  Plain Python
+(no numba): the scenario checks read ``signal_names``."""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+
+import numpy as np
+
+#: Signals a history row can hold (SCENARIOS.md, "Signals"): the name's stem, its code and what
+#: its number counts (floors or absorbers, from 1; none).  ``x1`` is the roof (as in the
+#: metrics), ``x_k`` floor ``k`` from the lowest; a signal is one entry here and one line of
+#: ``signal_value``.
+SIGNALS = {
+    "x": (0, "floor"),        # a floor's displacement
+    "v": (1, "floor"),        # a floor's velocity
+    "drift": (2, "floor"),    # a storey's drift, x_k - x_{k-1} (x_1 for the first)
+    "xa": (3, "absorber"),    # an absorber's displacement
+    "va": (4, "absorber"),    # an absorber's velocity
+    "stroke": (5, "absorber"),  # an absorber's displacement less its host floor's
+    "e1": (6, None),          # the structure's energy E1
+}
+(SIGNAL_X, SIGNAL_V, SIGNAL_DRIFT, SIGNAL_XA, SIGNAL_VA, SIGNAL_STROKE, SIGNAL_E1) = range(len(SIGNALS))
+
+
+def signal_names(n_floors: int, n_absorbers: int = 0) -> list[str]:
+    """The signals a structure of ``n_floors`` floors and ``n_absorbers`` absorbers can record."""
+    names = ["x1", "e1"]
+    for stem, (_, counts) in SIGNALS.items():
+        if counts is not None:
+            n = n_floors if counts == "floor" else n_absorbers
+            names += [f"{stem}_{k}" for k in range(1, n + 1)]
+    return names
+
+
+def declare(names: Iterable[str], n_floors: int, n_absorbers: int = 0) -> np.ndarray:
+    """The history columns of the signals ``names``: rows ``(code, index)`` (``index``: the
+    body, or the absorber for a stroke, from 0) that the loop driver evaluates at each history
+    point (``signal_value``).  A name that is not a signal (``signal_names``) is a ``ValueError``."""
+    allowed = signal_names(n_floors, n_absorbers)
+    rows = []
+    for name in names:
+        if name not in allowed:
+            raise ValueError(f"signals: {name!r} is not a signal of this structure "
+                             f"(allowed: {', '.join(allowed)})")
+        if name in ("x1", "e1"):
+            rows.append((SIGNAL_X, n_floors - 1) if name == "x1" else (SIGNAL_E1, 0))
+            continue
+        stem, k = name.rsplit("_", 1)
+        code, counts = SIGNALS[stem]
+        index = int(k) - 1
+        if counts == "absorber" and code != SIGNAL_STROKE:
+            index += n_floors
+        rows.append((code, index))
+    return np.array(rows, dtype=np.int64).reshape(len(rows), 2)
+
