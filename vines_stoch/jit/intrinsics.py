@@ -129,7 +129,8 @@ def _borrow(context, builder, ty, value):
     if isinstance(ty, types.BaseTuple):
         items = [_borrow(context, builder, t, builder.extract_value(value, i)) for i, t in enumerate(ty)]
         return context.make_tuple(builder, ty, items)
-    context.nrt.incref(builder, ty, value)  # (what is not an array: a new reference, as numba expects)
+    if context.enable_nrt:  # (what is not an array: a new reference, as numba expects; no NRT on a GPU)
+        context.nrt.incref(builder, ty, value)
     return value
 
 
