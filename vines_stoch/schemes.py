@@ -17,9 +17,9 @@ class Scheme:
     ``order``: deterministic order; ``strong_order``, ``weak_order``: with additive noise
     (None: not for noise); ``stability``: the largest ``omega dt`` at which it is stable on an
     undamped linear oscillator; ``noise``, ``impacts``, ``hertz``, ``filters``: what a scene
-    may contain; ``normals``: standard normals a step draws per noisy floor; ``kernel``: the
-    step loop that runs it (``kernels/<kernel>.py``); ``step``: the step that loop takes
-    (``kernels/<step>.py``); ``source``: where it comes from.
+    may contain; ``normals``: standard normals a step draws per noisy floor; ``step``: its
+    step, ``<step>_step`` of ``kernels/<step>.py``, which the one loop driver runs
+    (``kernels/driver.py``); ``source``: where it comes from.
     """
 
     name: str
@@ -32,7 +32,6 @@ class Scheme:
     hertz: bool
     filters: bool
     normals: int
-    kernel: str
     step: str
     source: str
 
@@ -40,7 +39,7 @@ class Scheme:
 SCHEMES: dict[str, Scheme] = {
     s.name: s for s in (
         Scheme("euler-maruyama", order=2, strong_order=1.0, weak_order=1.0, stability=2.0,
-               noise=True, impacts=True, hertz=True, filters=True, normals=1, kernel="kdk", step="kdk",
+               noise=True, impacts=True, hertz=True, filters=True, normals=1, step="kdk",
                source="Euler-Maruyama for additive noise (Kloeden and Platen, Numerical Solution of "
                       "Stochastic Differential Equations, Springer 1992, section 10.2) in kick-drift-kick "
                       "form (velocity Verlet: Swope, Andersen, Berens and Wilson, J. Chem. Phys. 76 (1982) "
@@ -48,10 +47,10 @@ SCHEMES: dict[str, Scheme] = {
                       "Hertz contact sub-stepped, both on a virtual Brownian tree (kernels/kdk.py, "
                       "kernels/brownian.py)"),
         Scheme("sra", order=3, strong_order=1.5, weak_order=2.0, stability=math.sqrt(3.0), noise=True,
-               impacts=False, hertz=False, filters=False, normals=2, kernel="kdk", step="sra3",
+               impacts=False, hertz=False, filters=False, normals=2, step="sra3",
                source="SRA3, Roessler (2010), SIAM J. Numer. Anal. 48(3) 922-952, doi:10.1137/09076636X"),
         Scheme("rk4", order=4, strong_order=None, weak_order=None, stability=2.0 * math.sqrt(2.0),
-               noise=False, impacts=True, hertz=True, filters=False, normals=0, kernel="rk4", step="rk4",
+               noise=False, impacts=True, hertz=True, filters=False, normals=0, step="rk4",
                source="classical Runge-Kutta (Kutta 1901; Hairer, Norsett and Wanner, Solving Ordinary "
                       "Differential Equations I, 2nd ed., Springer 1993, section II.1) with located impacts "
                       "and sub-stepped Hertz contact (kernels/rk4.py)"),

@@ -164,7 +164,8 @@ def test_readme_quick_start_prints_what_it_shows(tmp_path):
                           text=True, timeout=600)
     assert done.returncode == 0, done.stderr[-3000:]
     shown = _block("standard output names the files", "text")
-    assert done.stdout.splitlines()[0] == shown.splitlines()[0]  # the files and their row counts
+    first = [re.sub(r"; \d+\.\d s in all$", "", text.splitlines()[0]) for text in (done.stdout, shown)]
+    assert first[0] == first[1]  # the files and their row counts (the time taken aside)
     assert done.stdout.splitlines()[1].split() == shown.splitlines()[1].split()  # the columns
     got, want = _numbers(done.stdout), _numbers(shown)
     assert len(got) == len(want) == 15
@@ -183,6 +184,16 @@ def test_readme_quick_start_prints_what_it_shows(tmp_path):
     for g, w in zip(got, want):
         assert g == pytest.approx(w, rel=1e-4, abs=1e-6)
     assert (tmp_path / "edm.png").stat().st_size > 10_000
+
+
+def test_readme_python_lines_run():
+    """The README's lines for Python run as shown: a scenario in memory, one path's histories."""
+    code = _block("The same from Python", "python")
+    code += "\nprint(len(results.summary), solution.ts.shape[0])"
+    done = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True, timeout=600)
+    assert done.returncode == 0, done.stderr[-3000:]
+    rows, steps = map(int, done.stdout.split()[-2:])
+    assert rows == 15 and steps > 1000
 
 
 def test_readme_links_and_included_sections_exist():

@@ -12,6 +12,7 @@ noise, grid, outputs and the three streams.
 from __future__ import annotations
 
 import copy
+import importlib
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -26,11 +27,8 @@ from ..streams import Streams
 from .bundles import Absorbers, Bodies, Filters, Grid, Loads, Noise, Outputs
 from .carry import SEED_HIGH, SEED_LOW, new_carry
 from .driver import Spec, step_loop
-from .kdk import kdk_step
 from .loads import load_path, stationary_start
-from .rk4 import rk4_step
 from .rng import STREAM_WORDS, uniform
-from .sra3 import sra3_step
 
 _NO_NORMALS = np.zeros(0)
 #: The generator in the increments' place of a replayed path: never drawn from.
@@ -49,8 +47,11 @@ _NO_CARRY = np.zeros(0)
 _STARTED: set = set()
 
 
-#: Each scheme's step (``schemes.Scheme.step``): a ``driver.Step`` factory of ``kernels/<step>.py``.
-STEPS = {"kdk": kdk_step, "sra3": sra3_step, "rk4": rk4_step}
+def step_of(name: str):
+    """The ``driver.Step`` factory of the step a scheme names (``schemes.Scheme.step``): the
+    function ``<name>_step`` of ``kernels/<name>.py``, so that a new scheme is one file and one
+    line of the registry."""
+    return getattr(importlib.import_module(f"{__name__}.{name}"), f"{name}_step")
 
 
 def spec_of(scene, gpu: bool = False) -> Spec:
@@ -73,7 +74,7 @@ def kernel_for(scene, gpu: bool = False):
     """The compiled loop for a scene's scheme and structure: the loop driver around the
     scheme's step (``driver.step_loop``; ``gpu``: the loop the cuda backend compiles)."""
     spec = spec_of(scene, gpu)
-    return step_loop(STEPS[SCHEMES[scene.scheme].step](spec), spec)
+    return step_loop(step_of(SCHEMES[scene.scheme].step)(spec), spec)
 
 
 def sample_buffer(scene) -> np.ndarray:

@@ -12,7 +12,8 @@ from numba import njit
 
 from ..jit.flags import INLINE
 from .carry import GROUND_NEXT, restore_loads, restore_rows, save_loads, save_rows
-from .loads import advance_filters, excitation, rotations, turn
+from .common import attachment_forces, geometric_forces
+from .loads import advance_filters, excitation, phasors, rotations, turn
 from .rng import normal
 
 
@@ -154,3 +155,21 @@ def step_normals(i: int, parts: int, noise_scale, slot, noisy: int, normals, ref
                 else:
                     u2[k] = u
     return replayed
+
+
+@njit(**INLINE)
+def opening_forces(force, gl, x, v, acc, bodies, absorbers, nf: int, geometric: bool) -> None:
+    """Each floor's force at the metrics window's opening (the structure's, the attachments' and
+    the load at the step's start) into ``acc``, for the peaks; ``force``: scratch."""
+    attachment_forces(x, v, nf, bodies.storey_k, bodies.storey_c, bodies.floor_c, absorbers.host,
+                      absorbers.rows, force)
+    geometric_forces(x, nf, absorbers.host, absorbers.rows, force, geometric)
+    for k in range(nf):
+        acc[k] = force[k] + gl.load_next[k]
+
+
+@njit(**INLINE)
+def reset_phasors(gl, i: int, dt: float, ex) -> None:
+    """The harmonic rows' phasors set exactly at step ``i`` (every ``common.CHECK_EVERY`` steps:
+    the turned phasors' rounding stays below about 1e-13, ``loads``)."""
+    phasors(i * dt, ex.forces, gl.pc, gl.ps)

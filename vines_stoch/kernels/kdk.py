@@ -75,12 +75,14 @@ from .grid import (
     GridLoads,
     finish_loads,
     noise_scales,
+    opening_forces,
+    reset_phasors,
     save_grid_loads,
     start_loads,
     step_loads,
     step_normals,
 )
-from .loads import excitation, has_breaks, phasors
+from .loads import excitation, has_breaks
 from .rng import uniform
 
 #: Iterations of the bracketed search for the impact instant (Illinois method).
@@ -377,16 +379,12 @@ def kdk_step(spec) -> Step:
 
     @njit(**INLINE)
     def opening(own, x, v, inv_mass, acc, bodies, absorbers):
-        force = own.force
-        attachment_forces(x, v, NF, bodies.storey_k, bodies.storey_c, bodies.floor_c, absorbers.host,
-                          absorbers.rows, force)
-        geometric_forces(x, NF, absorbers.host, absorbers.rows, force, geometric)
-        for k in range(NF):
-            acc[k] = force[k] + own.gl.load_next[k]  # (the floors' forces: the driver's ``force_peaks``)
+        # (the floors' forces: the driver's ``force_peaks``)
+        opening_forces(own.force, own.gl, x, v, acc, bodies, absorbers, NF, geometric)
 
     @njit(**INLINE)
     def check(own, i, dt, ex):
-        phasors(i * dt, ex.forces, own.gl.pc, own.gl.ps)
+        reset_phasors(own.gl, i, dt, ex)
 
     @njit(**INLINE)
     def save(carry, own, sc):

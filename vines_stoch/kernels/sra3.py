@@ -31,12 +31,14 @@ from .grid import (
     GridLoads,
     finish_loads,
     noise_scales,
+    opening_forces,
+    reset_phasors,
     save_grid_loads,
     start_loads,
     step_loads,
     step_normals,
 )
-from .loads import has_breaks, phasors
+from .loads import has_breaks
 
 
 @njit(**INLINE)
@@ -158,16 +160,13 @@ def sra3_step(spec) -> Step:
 
     @njit(**INLINE)
     def opening(own, x, v, inv_mass, acc, bodies, absorbers):
-        force = own.force
-        attachment_forces(x, v, NF, bodies.storey_k, bodies.storey_c, bodies.floor_c, absorbers.host,
-                          absorbers.rows, force)
-        geometric_forces(x, NF, absorbers.host, absorbers.rows, force, geometric)
-        for k in range(NF):
-            acc[k] = (force[k] + own.gl.load_next[k]) * inv_mass[k]
+        opening_forces(own.force, own.gl, x, v, acc, bodies, absorbers, NF, geometric)
+        for k in range(NF):  # (accelerations)
+            acc[k] *= inv_mass[k]
 
     @njit(**INLINE)
     def check(own, i, dt, ex):
-        phasors(i * dt, ex.forces, own.gl.pc, own.gl.ps)
+        reset_phasors(own.gl, i, dt, ex)
 
     @njit(**INLINE)
     def save(carry, own, sc):
