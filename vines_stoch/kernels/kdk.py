@@ -281,8 +281,9 @@ class KdkState(NamedTuple):
     ``sigma sqrt(dt)``, its place among the noisy floors, the path at a sub-step's start, the
     step's normals, the sticking groups; the Brownian trees' descent memo; per absorber the
     wall it sticks to, the side it touches, a contact's balance over a sub-step and what it
-    owes (``contact_closing``); the noisy floors' count and the Brownian trees' seed (with its
-    halves, for the carry)."""
+    owes (``contact_closing``); the noisy floors' count, the Brownian trees' seed (with its
+    halves, for the carry) and whether the loads have kinks or jumps (``loads.has_breaks``,
+    found once a run)."""
 
     force: Any
     vn: Any
@@ -308,6 +309,7 @@ class KdkState(NamedTuple):
     seed: Any
     high: Any
     low: Any
+    piecewise: Any
 
 
 @cache
@@ -374,7 +376,8 @@ def kdk_step(spec) -> Step:
         ag_next = start_loads(gl, ex, fl, grid.dt, carry, resume, nf, na, filtered, ground)
         own = KdkState(scratch(NB), scratch(NB), scratch(NB), scratch(NB), gl, scratch(NF), scratch(NF),
                        scratch(NF), scratch(NF), noise_scale, slot, scratch(NF), scratch(NF), scratch(NF),
-                       scratch(NF), scratch(MEMO_SIZE), stuck, touching, held, owed, noisy, seed, high, low)
+                       scratch(NF), scratch(MEMO_SIZE), stuck, touching, held, owed, noisy, seed, high, low,
+                       has_breaks(ex))
         return own, (ag_next, replayed)
 
     @njit(**INLINE)
@@ -421,7 +424,7 @@ def kdk_step(spec) -> Step:
             pending = acct
         t_step = i * dt
         tm = t_step + 0.5 * dt
-        ag, ag_next, _ = step_loads(i, dt, gl, ex, fl, ag_next, has_breaks(ex), False, filtered, ground,
+        ag, ag_next, _ = step_loads(i, dt, gl, ex, fl, ag_next, own.piecewise, False, filtered, ground,
                                     gen_filter)
         # the step's Wiener increments on the noisy floors: one normal per noisy floor
         if has_noise:

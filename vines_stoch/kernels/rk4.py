@@ -202,7 +202,8 @@ class Rk4State(NamedTuple):
     stages' arrays stay in registers); per floor the loads, the sticking groups, the sub-step's
     ``x_k^2`` integrals and start accelerations, and the out-of-line calls' own; per absorber
     the wall it sticks to, the side it touches and a contact's debt (none here: the carry's
-    block stays zero)."""
+    block stays zero); whether the loads have kinks or jumps (``loads.has_breaks``, found once a
+    run)."""
 
     xn: Any
     vn: Any
@@ -222,6 +223,7 @@ class Rk4State(NamedTuple):
     stuck: Any
     touching: Any
     owed: Any
+    piecewise: Any
 
 
 @cache
@@ -251,7 +253,7 @@ def rk4_step(spec) -> Step:
             restore_absorbers(carry, NF, stuck, touching, owed)
         own = Rk4State(scratch(NB), scratch(NB), scratch(NB), scratch(NB), scratch(NB), scratch(NB),
                        scratch(NB), scratch(NF), scratch(NF), scratch(NF), scratch(NF), scratch(NF),
-                       scratch(NF), scratch(NF), scratch(NF), stuck, touching, owed)
+                       scratch(NF), scratch(NF), scratch(NF), stuck, touching, owed, has_breaks(ex))
         return own, 0
 
     @njit(**INLINE)
@@ -291,7 +293,7 @@ def rk4_step(spec) -> Step:
         stuck, touching = own.stuck, own.touching
         work, d_primary, d_absorber, e_integral, e1_max, loss_sum, n_left, n_right, contact_time, \
             peak_force, pending = acct
-        piecewise = has_breaks(ex)  # sub-steps end at the loads' kinks and jumps
+        piecewise = own.piecewise  # sub-steps end at the loads' kinks and jumps
         t = i * dt
         left = dt
         n_impacts = 0

@@ -110,7 +110,7 @@ class SraState(NamedTuple):
     velocities and the stages' accelerations, positions and velocities; the grid loads
     (``grid.GridLoads``, the midpoint's included); per floor ``sigma I1`` and ``sigma I10 / h``,
     the step's two normals, ``sigma sqrt(dt)`` and the place among the noisy floors; the noisy
-    floors' count."""
+    floors' count; whether the loads have kinks or jumps (``loads.has_breaks``, found once a run)."""
 
     force: Any
     vn: Any
@@ -128,6 +128,7 @@ class SraState(NamedTuple):
     noise_scale: Any
     slot: Any
     noisy: Any
+    piecewise: Any
 
 
 @cache
@@ -153,9 +154,8 @@ def sra3_step(spec) -> Step:
         ag_next = start_loads(gl, ex, fl, grid.dt, carry, resume, NF, absorbers.kind.shape[0], filtered,
                               ground)
         own = SraState(scratch(NB), scratch(NB), scratch(NB), scratch(NB), scratch(NB), scratch(NB),
-                       scratch(NB),
-                       scratch(NB), gl, scratch(NF), scratch(NF), scratch(NF), scratch(NF), noise_scale, slot,
-                       noisy)
+                       scratch(NB), scratch(NB), gl, scratch(NF), scratch(NF), scratch(NF), scratch(NF),
+                       noise_scale, slot, noisy, has_breaks(ex))
         return own, (ag_next, replayed)
 
     @njit(**INLINE)
@@ -187,7 +187,7 @@ def sra3_step(spec) -> Step:
         ag_next, replayed = sc
         work, d_primary, d_absorber, e_sum, e1_max, loss, n_left, n_right, contact_time, peak_force, \
             pending = acct
-        ag, ag_next, ag3 = step_loads(i, dt, gl, ex, fl, ag_next, has_breaks(ex), True, filtered, ground,
+        ag, ag_next, ag3 = step_loads(i, dt, gl, ex, fl, ag_next, own.piecewise, True, filtered, ground,
                                       gen_filter)
         # the step's two integrals on the noisy floors
         if has_noise:
