@@ -172,21 +172,43 @@ def compile_once(dispatcher: Any, args: tuple, package: str = "numba.core") -> N
 
 
 @cache
-def _stable_cuda_cache() -> type:
-    """numba-cuda's disk cache of kernels, its entries keyed by ``described`` of the closure."""
-    from numba.cuda.dispatcher import CUDACache
+def _stable_cache(gpu: bool) -> type:
+    """numba's disk cache of compiled functions (numba-cuda's, of kernels, where ``gpu``), its
+    entries keyed by ``described`` of the closure."""
+    if gpu:
+        from numba.cuda.dispatcher import CUDACache as base
+    else:
+        from numba.core.caching import FunctionCache as base
 
-    class StableCUDACache(CUDACache):
-        """numba-cuda's ``CUDACache`` whose index key (a hash of the function's bytecode and a
-        pickle of its closure's contents) reads, in place of the closure's contents, their
-        descriptions ``cells``."""
+    class StableCache(base):
+        """numba's cache whose index key (a hash of the function's bytecode and a pickle of its
+        closure's contents) reads, in place of the closure's contents, their descriptions
+        ``cells``."""
 
         def __init__(self, py_func: Any, cells: list[str]) -> None:
             super().__init__(py_func)
             self._py_func = types.FunctionType(py_func.__code__, {}, py_func.__name__, None,
                                                tuple(types.CellType(c) for c in cells))
 
-    return StableCUDACache
+    return StableCache
+
+
+def stable_cache(dispatcher: Any) -> bool:
+    """Key the disk cache of ``dispatcher`` (a step loop of this package compiled with
+    ``cache=True``) by ``described`` of its closure's contents in place of numba's pickle of
+    them: the loop driver closes over its scheme's step functions (``kernels.driver``), whose
+    dispatchers pickle with an identity drawn afresh in each process (numba's
+    ``_MemoMixin._uuid``), so that no process would find another's entries (each would compile
+    the loop again and add one).  Returns whether it is so keyed: not where a closure's content
+    has no such description (numba's own key then stands)."""
+    from numba.core.caching import FunctionCache
+
+    func = dispatcher.py_func
+    cells = [described(c.cell_contents) for c in func.__closure__ or ()]
+    if None in cells or not isinstance(getattr(dispatcher, "_cache", None), FunctionCache):
+        return False
+    dispatcher._cache = _stable_cache(False)(func, cells)
+    return True
 
 
 def cache_on_disk(dispatcher: Any) -> bool:
@@ -201,5 +223,5 @@ def cache_on_disk(dispatcher: Any) -> bool:
     cells = [described(c.cell_contents) for c in func.__closure__ or ()]
     if None in cells or not key_by_sources("numba.cuda.core"):
         return False
-    dispatcher._cache = _stable_cuda_cache()(func, cells)  # (as numba-cuda's ``enable_caching`` does)
+    dispatcher._cache = _stable_cache(True)(func, cells)  # (as numba-cuda's ``enable_caching`` does)
     return True

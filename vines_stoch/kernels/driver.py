@@ -41,6 +41,7 @@ from typing import Any, NamedTuple
 
 from numba import njit
 
+from ..jit.cache import stable_cache
 from ..jit.flags import KERNEL
 from ..jit.intrinsics import borrowed, copy_into, scratch
 from ..outputs import CONTACT_TIME, FINAL_ENERGY, PEAK_FORCE, STATUS, STATUS_DIVERGED
@@ -274,4 +275,5 @@ def step_loop(plug: Step, spec: Spec):
         out[FINAL_ENERGY] = stored_energy(xc, vc, mass, nf, storey_k, kind, host, rows)
         write_floor_metrics(out, nf, x_max, drift_max, acc_max, x2_integral)
 
+    stable_cache(kernel)  # (its closure holds the step's functions: see ``jit.cache.stable_cache``)
     return kernel

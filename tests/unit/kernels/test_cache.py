@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-from tests.helpers import example_data, scene_from
+from tests.helpers import ROOT, example_data, scene_from
 from vines_stoch.jit import cache
 from vines_stoch.kernels import _STARTED, kernel_for, simulate
 
@@ -151,3 +151,30 @@ def test_the_first_run_of_a_loop_in_a_process_compiles_nothing_more():
     count = len(kernel.overloads)
     simulate(scene, np.random.default_rng(0))
     assert any(s[0] is kernel for s in _STARTED) and len(kernel.overloads) == count
+
+
+#: A process that runs one short path of a scenario and prints its step loop's cache misses and
+#: hits (``NUMBA_CACHE_DIR`` names the cache).
+RUN_ONE = r'''
+import json, sys
+from tests.helpers import ROOT, example_data, scene_from
+from vines_stoch.kernels import kernel_for, simulate
+scene = scene_from(example_data("cubic_nes_impulse", "sweep"), changes={"simulation.duration": 0.1})
+simulate(scene)
+k = kernel_for(scene)
+print(json.dumps({"misses": sum(k.stats.cache_misses.values()), "hits": sum(k.stats.cache_hits.values())}))
+'''
+
+
+def test_a_step_loop_compiled_by_one_process_is_loaded_by_the_next(tmp_path):
+    """The loop driver closes over its scheme's step functions, which numba's own cache key
+    pickles with an identity new in each process: keyed by their descriptions
+    (``cache.stable_cache``), the second process loads what the first compiled."""
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "numba")}
+    runs = []
+    for _ in range(2):
+        done = subprocess.run([sys.executable, "-c", RUN_ONE], cwd=ROOT, env=env, capture_output=True,
+                              text=True, timeout=600)
+        assert done.returncode == 0, done.stderr[-2000:]
+        runs.append(json.loads(done.stdout.splitlines()[-1]))
+    assert runs == [{"misses": 1, "hits": 0}, {"misses": 0, "hits": 1}]
