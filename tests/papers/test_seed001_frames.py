@@ -12,7 +12,11 @@ to reproduce), so the checks are physics with independent references:
   state-transition solution of the piecewise-linear record (nine storeys);
 - the energy balance of each frame with its absorbers;
 - the absorbers reducing the roof's response: seed 001 calls the SSVI NES "the most effective and
-  efficient" (two and nine storeys) and Tables 4-5 list "optimal control devices" (three storeys).
+  efficient" (two and nine storeys) and Tables 4-5 list "optimal control devices" (three storeys);
+- each device of Tables 4-5 alone on the six- and four-column frames (``seed001_frame_devices``,
+  ``seed001_frame_vitmd``): its parameters as printed, and its cut of the roof's rms under the
+  same ground motions as the bare frame, at 3 standard errors; the zero-clearance VITMD against the
+  frame with its mass locked on the roof.
 """
 
 from __future__ import annotations
@@ -25,6 +29,7 @@ from scipy.linalg import eigh, expm
 
 from tests.helpers import ROOT, example_data, study_from
 from vines_stoch.ensemble import sample
+from vines_stoch.validation.reproduce import FRAME_DEVICES, FRAME_STIFFNESSES, ZERO_CLEARANCE, frame_devices
 
 SCENARIOS = ROOT / "scenarios"
 
@@ -269,7 +274,9 @@ def test_table2_rig_under_base_excitation():
     ``A / sqrt((w^2 - W^2)^2 + (2 z w W)^2)``: after 20 s, 7.2 decay times ``1 / (z w)``, the
     transient is below ``e^-7.2 = 7.5e-4`` of it.  With the NES: at A = 0.5 m/s^2 the ball's
     stroke stays inside the cavity (no impact, the LO's motion unchanged); at 1 and 2 m/s^2 it
-    impacts and its impacts take energy out, the balance closing to RK4's error."""
+    impacts and its impacts take energy out, the balance closing to RK4's error, yet the LO's
+    steady amplitude rises (measured by 12.6 % and 12.1 %; the header's claim, tested as more than
+    10 %)."""
     data = example_data("seed001_table2_rig")
     bare = {key: value for key, value in data.items() if key != "absorbers"}
     m, k, c = (data["primary"][key] for key in ("mass", "stiffness", "damping"))
@@ -283,4 +290,62 @@ def test_table2_rig_under_base_excitation():
     assert nes["impacts"].tolist()[0] == 0 and nes["x1_max"].iloc[0] == pytest.approx(alone["x1_max"].iloc[0],
                                                                                        rel=1e-12)
     assert (nes["impacts"].iloc[1:] > 50).all() and (nes["edm"].iloc[1:] > 0.05).all()
+    assert (nes["x1_max"].iloc[1:].to_numpy() > 1.1 * alone["x1_max"].iloc[1:].to_numpy()).all()
     assert nes["energy_residual"].abs().max() < 1e-9
+
+
+# ----------------------------------------------------------------------------- each device alone
+
+
+@cache
+def devices():
+    return frame_devices(SCENARIOS)
+
+
+@pytest.mark.parametrize("name", list(FRAME_DEVICES))
+def test_device_scenarios_carry_tables_3_to_5_as_printed(name):
+    points = study_from(example_data(name), directory=SCENARIOS).points
+    assert len(points) == len(FRAME_DEVICES[name])
+    for (label, frame, mass, damping, stiffness, clearance), point in zip(FRAME_DEVICES[name], points):
+        a = point.absorbers[0]
+        assert point.primary.masses == FRAMES[THREE][0] and a.floor == 3
+        assert tuple(point.primary.stiffnesses) == FRAME_STIFFNESSES[frame]
+        assert (a.mass, a.damping) == (mass, damping), label
+        if a.type == "cubic":  # the linear devices as k_lin, the nonlinear DM as the cubic k (N/m^3)
+            assert (a.stiffness, a.linear_stiffness) == ((stiffness, 0.0) if "nonlinear" in label
+                                                         else (0.0, stiffness)), label
+        else:  # the VITMD: 0 mm printed, run at ZERO_CLEARANCE
+            assert a.stiffness == stiffness and a.clearance == (clearance or ZERO_CLEARANCE), label
+
+
+def test_each_tuned_device_alone_cuts_the_roof_rms():
+    """Seed 001 prints no response (Tables 4-5 are "optimal" and "physical" devices): the cut of the
+    roof's rms displacement against the bare frame under the same 16 ground motions, tested at 3
+    standard errors (one-sided, 0.13 % a device).  Measured (cut, its standard error): six-column
+    31/4.7, 22/5.8, 23/6.8, 24/6.9 and 22/5.4 %; four-column nonlinear DM 22/3.5 %.  The four-column
+    Table 5 linear DM is tuned to 13.24 rad/s, above that frame's 9.86 rad/s: its cut (2.2/4.1 %)
+    is within 3 standard errors of none."""
+    for r in devices():
+        if r["name"] != "seed001_frame_devices":
+            continue
+        assert (r["rows"]["status"] == "ok").all() and r["impacts"] == 0
+        cut, error = r["x_rms_3"]
+        detuned = r["frame"] == "four-column" and "linear DM" in r["label"] and "non" not in r["label"]
+        assert (abs(cut) < 3 * error) if detuned else (cut > 3 * error), (r["label"], r["frame"], cut, error)
+
+
+def test_vitmd_alone_and_the_zero_clearance_limit():
+    """The VITMD impacts its stops on both frames.  Its 1.5 mm stops (six-column) keep its stroke far
+    below the TMD's: under this load it does not cut the roof's rms (measured -4.9 +- 7.6 %), tested
+    as no cut beyond 3 standard errors either way.  Zero clearance (four-column, printed 0 mm) locks
+    the mass on the roof: at 0.05 mm the roof's rms and peak of every realisation are within 3 % of
+    the frame with 4.58 kg more on the roof (measured 2.4 % and 1.8 %; the impacts' losses and the
+    residual stroke make the difference) while the bare frame is up to 52 % away."""
+    six, four = (r for r in devices() if r["name"] == "seed001_frame_vitmd")
+    for r in (six, four):
+        assert (r["rows"]["status"] == "ok").all() and (r["rows"]["impacts"] > 0).all()
+    cut, error = six["x_rms_3"]
+    assert abs(cut) < 3 * error
+    assert max(four["locked"].values()) < 0.03
+    bare = np.abs(four["rows"]["x_rms_3"].to_numpy() / four["bare"]["x_rms_3"].to_numpy() - 1.0).max()
+    assert bare > 10 * four["locked"]["x_rms_3"]
