@@ -265,7 +265,16 @@ def _front_end_warnings(caught: list) -> list[str]:
 
 def test_other_sources_keep_their_own_passes_and_say_so_once(monkeypatch):
     """A numba whose passes are not the verified ones keeps them (nothing replaced), and one
-    ``FrontEndWarning`` a process names them and the numba release."""
+    ``FrontEndWarning`` a process names them and the numba release.  numba's passes are stubbed
+    while this test holds numba's compiler lock: a compile in another thread of the process (a
+    worker of an earlier run) would otherwise run on the stubs, or save them as numba's own."""
+    from numba.core.compiler_lock import global_compiler_lock
+
+    with global_compiler_lock, monkeypatch.context() as patch:
+        _other_sources(patch)
+
+
+def _other_sources(monkeypatch):
     from importlib import metadata
 
     from numba.core import analysis, ssa
