@@ -21,7 +21,8 @@ from vines_stoch.validation.scenes import text as toml_text
 #: The repository's root folder (scenario examples under ``scenarios/``; ``../shared`` beside it).
 ROOT = Path(__file__).resolve().parents[1]
 
-__all__ = ["ROOT", "changed", "cli", "example_data", "raw_metrics", "scene_from", "study_from", "toml_text",
+__all__ = ["ROOT", "changed", "cli", "example_data", "raw_metrics", "scene_from",
+           "sdof_fragility_run", "study_from", "toml_text",
            "two_dof_data"]
 
 
@@ -75,3 +76,37 @@ def cli(*args: str) -> tuple[int, str]:
     finally:
         sys.argv = argv
     return code, err.getvalue()
+
+
+def sdof_fragility_run(folder: Path, name: str, realizations: int, points: int, samples: int) -> Path:
+    """Run a linear SDOF (1 Hz, 5 % damping) under white noise swept over ``points`` intensities
+    from 0.2 to 2.0, with the limit ``roof`` on ``x1_max`` at 0.25, through the command line
+    into ``folder / "run"``, then ``vines-stoch fragility`` on it with ``samples`` bootstrap
+    samples; returns the run's folder."""
+    scenario = folder / "s.toml"
+    scenario.write_text(f"""
+name = "{name}"
+[primary]
+mass = 1.0
+stiffness = 39.47841760435743
+damping = 0.6283185307179586
+[[loads]]
+type = "white-noise"
+intensity = 1.0
+[simulation]
+duration = 5.0
+dt = 0.005
+[ensemble]
+realizations = {realizations}
+seed = 3
+[sweep]
+"loads.0.intensity" = {{ logspace = [0.2, 2.0, {points}] }}
+[limits]
+roof = {{ metric = "x1_max", value = 0.25 }}
+""")
+    out = folder / "run"
+    assert cli("run", scenario, "--out", out, "--quiet")[0] == 0
+    code, err = cli("fragility", out, "--limit", "roof", "--im", "loads.0.intensity", "--samples",
+                    str(samples))
+    assert code == 0, err
+    return out

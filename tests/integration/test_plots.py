@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from scipy.special import ndtr
 
-from tests.helpers import cli
+from tests.helpers import cli, sdof_fragility_run
 from vines_stoch.fragility import band
 from vines_stoch.plotting import counts, label, legend, pyplot, save
 from vines_stoch.store import KEY, png_text, prepare_folder, svg_identifier
@@ -87,32 +87,7 @@ def test_band_of_identical_replicates_is_their_curve_and_a_step_for_beta_zero():
 
 def test_fragility_plot_has_its_band_units_and_svg(tmp_path):
     """A linear SDOF under white noise swept over intensity (as test_fragility's run)."""
-    text = """
-name = "sdof-band"
-[primary]
-mass = 1.0
-stiffness = 39.47841760435743
-damping = 0.6283185307179586
-[[loads]]
-type = "white-noise"
-intensity = 1.0
-[simulation]
-duration = 5.0
-dt = 0.005
-[ensemble]
-realizations = 100
-seed = 3
-[sweep]
-"loads.0.intensity" = { logspace = [0.2, 2.0, 5] }
-[limits]
-roof = { metric = "x1_max", value = 0.25 }
-"""
-    scenario = tmp_path / "s.toml"
-    scenario.write_text(text)
-    out = tmp_path / "run"
-    assert cli("run", scenario, "--out", out, "--quiet")[0] == 0
-    code, err = cli("fragility", out, "--limit", "roof", "--im", "loads.0.intensity", "--samples", "200")
-    assert code == 0, err
+    out = sdof_fragility_run(tmp_path, "sdof-band", realizations=100, points=5, samples=200)
     svg = (out / "fragility_roof.svg").read_text()
     assert "95 % bootstrap band" in svg and "load 1 noise intensity [N s^½] (loads.0.intensity)" in svg
     assert "probability of exceeding roof" in svg

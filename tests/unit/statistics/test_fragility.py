@@ -12,7 +12,7 @@ import pytest
 from scipy.optimize import minimize
 from scipy.special import log_ndtr, ndtr
 
-from tests.helpers import cli
+from tests.helpers import cli, sdof_fragility_run
 from vines_stoch.fragility import fit, probit_fit, stripes
 
 MEDIAN, BETA = 0.4, 0.5
@@ -135,32 +135,7 @@ def test_points_at_one_intensity_make_one_stripe():
 def test_fragility_command_on_a_run(tmp_path):
     """A linear SDOF under white noise swept over intensity: the exceedance of its peak
     displacement grows with the intensity; the command writes the table and the plot."""
-    text = """
-name = "sdof-fragility"
-[primary]
-mass = 1.0
-stiffness = 39.47841760435743
-damping = 0.6283185307179586
-[[loads]]
-type = "white-noise"
-intensity = 1.0
-[simulation]
-duration = 5.0
-dt = 0.005
-[ensemble]
-realizations = 200
-seed = 3
-[sweep]
-"loads.0.intensity" = { logspace = [0.2, 2.0, 6] }
-[limits]
-roof = { metric = "x1_max", value = 0.25 }
-"""
-    scenario = tmp_path / "s.toml"
-    scenario.write_text(text)
-    out = tmp_path / "run"
-    assert cli("run", scenario, "--out", out, "--quiet")[0] == 0
-    code, err = cli("fragility", out, "--limit", "roof", "--im", "loads.0.intensity", "--samples", "300")
-    assert code == 0, err
+    out = sdof_fragility_run(tmp_path, "sdof-fragility", realizations=200, points=6, samples=300)
     table = pd.read_parquet(out / "fragility.parquet")
     assert len(table) == 6 and (table["limit"] == "roof").all()
     first = table.iloc[0]
