@@ -1,5 +1,6 @@
 """Intrinsics of the step loops: arrays on the kernel's stack, constants made run-time values,
-item-wise copies, and reads and writes at a run-time index that keep stack arrays in registers.
+item-wise copies, reads and writes at a run-time index that keep stack arrays in registers, and
+the type of the arrays a loop owns or borrows for its whole run (``StackArray``).
 """
 
 from __future__ import annotations
@@ -7,10 +8,105 @@ from __future__ import annotations
 from llvmlite import ir
 from numba import njit, types
 from numba.core import cgutils
-from numba.extending import intrinsic
+from numba.core.datamodel.models import ArrayModel
+from numba.core.imputils import lower_cast
+from numba.extending import intrinsic, register_model
 from numba.np.arrayobj import make_array, populate_array
 
 from .flags import INLINE
+
+
+class StackArray(types.Array):
+    """A numba array whose memory the step loop owns (``scratch``) or borrows for its whole run
+    (``borrowed``): the same machine value as numba's arrays, typed apart so that its data
+    model shows no memory info to reference counting.  numba then emits no increment or
+    decrement for it at all: a null memory info made them no-ops at run time, but each was a
+    call in the loop's IR, which LLVM optimised before pruning it (the contact-under-noise loop
+    held 4,774 of them).  Views and copies of it are numba's arrays again (``Array.copy``)."""
+
+    def __init__(self, dtype, ndim, layout, readonly=False, name=None, aligned=True):
+        super().__init__(dtype, ndim, layout, readonly=readonly, aligned=aligned,
+                         name=name or f"stack array({dtype}, {ndim}d, {layout})")
+
+
+def _stack_array_model(base):
+    """The data model of ``StackArray`` over a target's array model ``base``: its members as
+    ``base``'s, none of them visible to reference counting."""
+
+    class StackArrayModel(base):
+        def traverse(self, builder):
+            return []
+
+        def inner_models(self):
+            return []
+
+    return StackArrayModel
+
+
+register_model(StackArray)(_stack_array_model(ArrayModel))
+
+
+@lower_cast(StackArray, types.Array)
+def _stack_to_array(context, builder, fromty, toty, val):
+    """A stack array where numba's array is expected (a variable that also holds one): the
+    same value."""
+    return val
+
+
+def register_cuda_model() -> None:
+    """``StackArray``'s data model in numba-cuda's registry too, where that is not numba's
+    (numba-cuda without numba keeps copies of its own); called by ``kernels/launch.py``, which
+    alone imports numba-cuda."""
+    from numba.core.datamodel import registry as core_registry
+    from numba.cuda.datamodel import models, registry
+
+    if registry.default_manager is not core_registry.default_manager:
+        registry.register_default(StackArray)(_stack_array_model(models.ArrayModel))
+
+
+def stack_type(ty: types.Type) -> types.Type:
+    """``ty`` with every array in it (nested in tuples and named tuples) a ``StackArray``."""
+    if isinstance(ty, types.Array):
+        return StackArray(ty.dtype, ty.ndim, ty.layout, readonly=not ty.mutable, aligned=ty.aligned)
+    if isinstance(ty, types.BaseTuple):
+        members = [stack_type(t) for t in ty.types]
+        cls = getattr(ty, "instance_class", None)
+        if isinstance(ty, types.NamedUniTuple | types.NamedTuple):
+            if all(m == members[0] for m in members):
+                return types.NamedUniTuple(members[0], len(members), cls)
+            return types.NamedTuple(members, cls)
+        if members and all(m == members[0] for m in members):
+            return types.UniTuple(members[0], len(members))
+        return types.Tuple(members)
+    return ty
+
+
+def plain_type(ty: types.Type) -> types.Type:
+    """``ty`` with every ``StackArray`` in it (nested in tuples) numba's array again."""
+    if isinstance(ty, StackArray):
+        return types.Array(ty.dtype, ty.ndim, ty.layout, readonly=not ty.mutable, aligned=ty.aligned)
+    if isinstance(ty, types.BaseTuple):
+        members = [plain_type(t) for t in ty.types]
+        if isinstance(ty, types.NamedUniTuple | types.NamedTuple):
+            return types.BaseTuple.from_types(members, ty.instance_class)
+        return types.BaseTuple.from_types(members)
+    return ty
+
+
+@intrinsic
+def plain(typingctx, value):
+    """``value`` (an array or a tuple of values) with its stack arrays (``StackArray``) typed as
+    numba's arrays: the arguments of an out-of-line function, which compiles for the argument
+    types it is called with (a loop's stack arrays and a caller's numpy arrays would compile it
+    twice).  The same machine value: a null memory info, which reference counting skips."""
+    target = plain_type(value)
+
+    def codegen(context, builder, signature, args):
+        if context.enable_nrt:  # (a new reference, as numba expects of a returned value)
+            context.nrt.incref(builder, target, args[0])
+        return args[0]
+
+    return target(value), codegen
 
 
 def _stack_array(dtype, size):
@@ -18,7 +114,7 @@ def _stack_array(dtype, size):
     if not isinstance(size, types.IntegerLiteral):
         return None
     n = size.literal_value
-    array_type = types.Array(dtype, 1, "C")
+    array_type = StackArray(dtype, 1, "C")
 
     def codegen(context, builder, signature, args):
         data = cgutils.alloca_once(builder, context.get_data_type(dtype), size=max(n, 1))
@@ -119,8 +215,8 @@ def any_set(a) -> bool:
 
 
 def _borrow(context, builder, ty, value):
-    """``value`` of type ``ty`` with each array in it (nested in tuples) as a view whose memory
-    info is null: reference counting skips it."""
+    """``value`` of type ``ty`` with each array in it (nested in tuples) as a ``StackArray``
+    view whose memory info is null."""
     if isinstance(ty, types.Array):
         array = make_array(ty)(context, builder, value)
         array.meminfo = cgutils.get_null_value(array.meminfo.type)
@@ -128,7 +224,7 @@ def _borrow(context, builder, ty, value):
         return array._getvalue()
     if isinstance(ty, types.BaseTuple):
         items = [_borrow(context, builder, t, builder.extract_value(value, i)) for i, t in enumerate(ty)]
-        return context.make_tuple(builder, ty, items)
+        return context.make_tuple(builder, stack_type(ty), items)
     if context.enable_nrt:  # (what is not an array: a new reference, as numba expects; no NRT on a GPU)
         context.nrt.incref(builder, ty, value)
     return value
@@ -137,13 +233,14 @@ def _borrow(context, builder, ty, value):
 @intrinsic
 def borrowed(typingctx, value):
     """``value`` (an array, or a tuple or named tuple holding arrays) with its arrays as views
-    that reference counting skips.  An inlined function that takes heap arrays and spans loops
-    costs an atomic increment and decrement of each a call (numba's pruning of reference
-    counts works within simple regions of the control flow); the step loop passes its bundles
-    and state to the scheme's step as borrowed views, once, outside the loop.  The views must
-    not outlive the values they borrow from (the loop's arguments, a state it keeps)."""
+    that reference counting skips (``StackArray``: no increment or decrement is emitted).  An
+    inlined function that takes heap arrays and spans loops costs an atomic increment and
+    decrement of each a call (numba's pruning of reference counts works within simple regions
+    of the control flow); the step loop takes its bundles and the scheme's state as borrowed
+    views, once, outside the loop.  The views must not outlive the values they borrow from
+    (the loop's arguments, a state it keeps)."""
 
     def codegen(context, builder, signature, args):
         return _borrow(context, builder, signature.args[0], args[0])
 
-    return value(value), codegen
+    return stack_type(value)(value), codegen

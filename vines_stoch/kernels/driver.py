@@ -43,7 +43,7 @@ from numba import njit
 
 from ..jit.cache import stable_cache
 from ..jit.flags import KERNEL
-from ..jit.intrinsics import borrowed, copy_into, scratch
+from ..jit.intrinsics import borrowed, copy_into, plain, scratch
 from ..outputs import CONTACT_TIME, FINAL_ENERGY, PEAK_FORCE, STATUS, STATUS_DIVERGED
 from ..physics.structure import primary_energy
 from .carry import (
@@ -128,7 +128,11 @@ def step_loop(plug: Step, spec: Spec):
     HERTZ = spec.has_hertz
 
     @njit(**KERNEL)
-    def kernel(bodies, absorbers, ex, fl, noise, grid, outputs, gen, gen_bridge, gen_filter):
+    def kernel(bodies_, absorbers_, ex_, fl_, noise_, grid_, outputs_, gen, gen_bridge, gen_filter):
+        # the bundles as borrowed views (``jit.intrinsics.borrowed``): no reference counting in
+        # the loop, nor in the steps it inlines
+        bodies, absorbers, ex, fl, noise, grid, outputs = borrowed(
+            (bodies_, absorbers_, ex_, fl_, noise_, grid_, outputs_))
         nb = NB
         nf = NF
         mass, storey_k = bodies.mass, bodies.storey_k
@@ -151,11 +155,7 @@ def step_loop(plug: Step, spec: Spec):
         acc_max, x2_integral = scratch(NF), scratch(NF)
         peaks = (x_max, drift_max, acc_max, x2_integral)
         kept, sc = start(bodies, absorbers, ex, fl, noise, grid, carry, resume, x, v, gen_bridge)
-        # the step's arguments as borrowed views (``jit.intrinsics.borrowed``): no reference
-        # counting in the step loop
-        own = borrowed(kept)
-        b_bodies, b_absorbers, b_ex, b_fl, b_noise, b_grid, b_outputs = borrowed(
-            (bodies, absorbers, ex, fl, noise, grid, outputs))
+        own = borrowed(kept)  # (the scheme's state: a borrowed view, as the bundles)
         # the accounts in registers, written to ``out`` once at the end (the trapezoid rule's
         # integrals as plain sums of the step ends' values, the window's ends at half weight)
         work = d_primary = d_absorber = e_sum = e1_max = 0.0
@@ -183,7 +183,7 @@ def step_loop(plug: Step, spec: Spec):
                 for b in range(nb):  # (copies for the out-of-line call: see ``stored_energy``)
                     xc[b] = x[b]
                     vc[b] = v[b]
-                work = stored_energy(xc, vc, mass, nf, storey_k, kind, host, rows)
+                work = stored_energy(*plain((xc, vc, mass, nf, storey_k, kind, host, rows)))
                 if INTEGRATES:
                     e1_max = primary_energy(mass, storey_k, x, v, nf)
                 else:
@@ -215,8 +215,8 @@ def step_loop(plug: Step, spec: Spec):
                         copy_into(vp, v)
                 acct = (work, d_primary, d_absorber, e_sum, e1_max, loss, n_left, n_right, contact_time,
                         peak_force, pending)
-                sc, acct = step(i, x, v, inv_mass, acc, own, sc, acct, inside, peaks, b_bodies, b_absorbers,
-                                b_ex, b_fl, b_noise, b_grid, b_outputs, gen, gen_filter)
+                sc, acct = step(i, x, v, inv_mass, acc, own, sc, acct, inside, peaks, bodies, absorbers, ex,
+                                fl, noise, grid, outputs, gen, gen_filter)
                 work, d_primary, d_absorber, e_sum, e1_max, loss, n_left, n_right, contact_time, peak_force, \
                     pending = acct
                 if not INTEGRATES:  # the step's end observed: the trapezoid sums, the peaks
@@ -272,7 +272,7 @@ def step_loop(plug: Step, spec: Spec):
         for b in range(nb):
             xc[b] = x[b]
             vc[b] = v[b]
-        out[FINAL_ENERGY] = stored_energy(xc, vc, mass, nf, storey_k, kind, host, rows)
+        out[FINAL_ENERGY] = stored_energy(*plain((xc, vc, mass, nf, storey_k, kind, host, rows)))
         write_floor_metrics(out, nf, x_max, drift_max, acc_max, x2_integral)
 
     stable_cache(kernel)  # (its closure holds the step's functions: see ``jit.cache.stable_cache``)

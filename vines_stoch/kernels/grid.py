@@ -78,38 +78,48 @@ def finish_loads(gl, fl) -> None:
 
 
 @njit(**INLINE)
-def step_loads(i: int, dt: float, gl, ex, fl, ag_next: float, piecewise: bool, mid: bool, filtered: bool,
-               ground: bool, gen_filter):
-    """The loads of step ``i``: ``load`` at its start (the last step's end, re-evaluated on
-    the step's own piece where the loads have breaks), ``load3`` at its midpoint (``mid``: the
-    Runge-Kutta step's), ``load_next`` at its end, the filters advanced over the step first;
-    returns the ground accelerations ``(start, end, midpoint)``."""
+def step_loads(i: int, dt: float, gl, ex, fl, ag_next: float, piecewise: bool, filtered: bool, ground: bool,
+               gen_filter) -> float:
+    """The loads at the start of step ``i`` into ``load`` (the last step's end, re-evaluated on
+    the step's own piece where the loads have breaks), the filters advanced over the step
+    first; returns the ground acceleration there.  The step's midpoint (``mid_loads``, the
+    Runge-Kutta step's) and end (``end_loads``) follow: separate functions, so that a step
+    compiles only the loads it reads."""
     t_step = i * dt
-    tm = t_step + 0.5 * dt
-    forces, series_t, series_v, series_ptr, series_target = (ex.forces, ex.series_t, ex.series_v,
-                                                             ex.series_ptr,
-                                                             ex.series_target)
-    z, zn, pc = gl.z, gl.zn, gl.pc
+    z, zn = gl.z, gl.zn
     if filtered:
         for r in range(z.shape[0]):
             z[r] = zn[r]
         advance_filters(z, zn, t_step, dt, fl.phi, fl.chol, fl.envelope, gen_filter, gl.draws)
     for k in range(gl.load.shape[0]):
         gl.load[k] = gl.load_next[k]
-    ag = ag_next
     if piecewise:  # re-evaluate each step's start on its own piece
-        ag = excitation(t_step, tm, 0.0, forces, series_t, series_v, series_ptr, series_target, filtered,
-                        fl.c_force, fl.c_ground, z, zn, pc, True, ground, gl.load)
-    ag3 = 0.0
-    if mid:
-        turn(pc, gl.ps, gl.hc, gl.hs, gl.mc, gl.ms)
-        ag3 = excitation(t_step + 0.5 * dt, tm, 0.5, forces, series_t, series_v, series_ptr, series_target,
-                         filtered, fl.c_force, fl.c_ground, z, zn, gl.mc, True, ground, gl.load3)
-    turn(pc, gl.ps, gl.rc, gl.rs, pc, gl.ps)
-    ag_next = excitation(t_step + dt, tm, 1.0, forces, series_t, series_v, series_ptr, series_target,
-                         filtered,
-                         fl.c_force, fl.c_ground, z, zn, pc, True, ground, gl.load_next)
-    return ag, ag_next, ag3
+        return excitation(t_step, t_step + 0.5 * dt, 0.0, ex.forces, ex.series_t, ex.series_v, ex.series_ptr,
+                          ex.series_target, filtered, fl.c_force, fl.c_ground, z, zn, gl.pc, True, ground,
+                          gl.load)
+    return ag_next
+
+
+@njit(**INLINE)
+def mid_loads(i: int, dt: float, gl, ex, fl, filtered: bool, ground: bool) -> float:
+    """The loads at the midpoint of step ``i`` into ``load3`` (after ``step_loads``, before
+    ``end_loads``: the phasors are the step's start's); returns the ground acceleration there."""
+    t_step = i * dt
+    turn(gl.pc, gl.ps, gl.hc, gl.hs, gl.mc, gl.ms)
+    return excitation(t_step + 0.5 * dt, t_step + 0.5 * dt, 0.5, ex.forces, ex.series_t, ex.series_v,
+                      ex.series_ptr, ex.series_target, filtered, fl.c_force, fl.c_ground, gl.z, gl.zn, gl.mc,
+                      True, ground, gl.load3)
+
+
+@njit(**INLINE)
+def end_loads(i: int, dt: float, gl, ex, fl, filtered: bool, ground: bool) -> float:
+    """The loads at the end of step ``i`` into ``load_next``, the phasors turned on to it;
+    returns the ground acceleration there."""
+    t_step = i * dt
+    turn(gl.pc, gl.ps, gl.rc, gl.rs, gl.pc, gl.ps)
+    return excitation(t_step + dt, t_step + 0.5 * dt, 1.0, ex.forces, ex.series_t, ex.series_v, ex.series_ptr,
+                      ex.series_target, filtered, fl.c_force, fl.c_ground, gl.z, gl.zn, gl.pc, True, ground,
+                      gl.load_next)
 
 
 @njit(**INLINE)

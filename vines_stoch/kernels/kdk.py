@@ -48,7 +48,7 @@ import numpy as np
 from numba import njit
 
 from ..jit.flags import INLINE
-from ..jit.intrinsics import any_set, int_scratch, scratch
+from ..jit.intrinsics import any_set, int_scratch, plain, scratch
 from ..outputs import CAPPED
 from ..physics.absorbers import CLEARANCE, HERTZ, RESTITUTION, WALL_HI, WALL_LO
 from ..physics.hertz import contact_energy, contact_force_law
@@ -73,6 +73,7 @@ from .energy import absorber_dissipation, impulse_work, momentum, structure_diss
 from .events import EXIT, NONE, event_ahead, gap_sign
 from .grid import (
     GridLoads,
+    end_loads,
     finish_loads,
     noise_scales,
     opening_forces,
@@ -424,8 +425,8 @@ def kdk_step(spec) -> Step:
             pending = acct
         t_step = i * dt
         tm = t_step + 0.5 * dt
-        ag, ag_next, _ = step_loads(i, dt, gl, ex, fl, ag_next, own.piecewise, False, filtered, ground,
-                                    gen_filter)
+        ag = step_loads(i, dt, gl, ex, fl, ag_next, own.piecewise, filtered, ground, gen_filter)
+        ag_next = end_loads(i, dt, gl, ex, fl, filtered, ground)
         # the step's Wiener increments on the noisy floors: one normal per noisy floor
         if has_noise:
             replayed = step_normals(i, 1, own.noise_scale, slot, own.noisy, normals, refine, replayed, gen,
@@ -454,7 +455,7 @@ def kdk_step(spec) -> Step:
             if has_hertz and not search:
                 capped = True
             elif has_hertz and any_set(touching):
-                s = min(left, contact_step(x, v, nf, mass, host, rows, touching))
+                s = min(left, contact_step(*plain((x, v, nf, mass, host, rows, touching))))
             if TREE:
                 increments(path, dw, off, s, left, w_at, sigma, normals, slot, memo, dws)
             else:

@@ -13,9 +13,12 @@ import numpy as np
 from numba import cuda, float64, njit, uint64
 
 from ..jit.cache import cache_on_disk
+from ..jit.intrinsics import register_cuda_model
 from .bundles import Absorbers, Bodies, Filters, Grid, Loads, Noise, Outputs
 from .loads import stationary_start
 from .rng import STREAM_WORDS, open_stream
+
+register_cuda_model()  # (the steps' stack arrays: ``jit.intrinsics.StackArray``)
 
 
 def _plain(array):

@@ -24,7 +24,7 @@ import numpy as np
 from numba import njit
 
 from ..jit.flags import INLINE, KERNEL
-from ..jit.intrinsics import any_set, int_scratch, pick, put, runtime_value, scratch
+from ..jit.intrinsics import any_set, int_scratch, pick, plain, put, runtime_value, scratch
 from ..outputs import CAPPED
 from ..physics.absorbers import CLEARANCE, DAMPING, RESTITUTION, WALL_HI, WALL_LO
 from ..physics.structure import host_of, primary_energy, structure_power
@@ -97,12 +97,13 @@ def wall_accelerations(x, v, t, nf, mass, inv_mass, storey_k, storey_c, floor_c,
                        group_sum, sticking, contact):
     """``accelerations`` at an instant (an impact, the end of a step with stuck absorbers),
     out of line: rare work that need not grow the step loop.  The floor count and the flags
-    reach it as run-time values (``jit.intrinsics.runtime_value``), so that it compiles once, not once
-    for each floor count and set of flags of the loops that call it."""
-    _wall_accelerations(x, v, t, runtime_value(nf), mass, inv_mass, storey_k, storey_c, floor_c, kind, host,
-                        rows, forces, series_t, series_v, series_ptr, series_target, stuck,
-                        runtime_value(release), acc, load, group_mass, group_sum, runtime_value(sticking),
-                        runtime_value(contact))
+    reach it as run-time values (``jit.intrinsics.runtime_value``) and the arrays as numba's
+    (``jit.intrinsics.plain``), so that it compiles once, not once for each floor count and set
+    of flags of the loops that call it."""
+    _wall_accelerations(*plain((x, v, t, runtime_value(nf), mass, inv_mass, storey_k, storey_c, floor_c, kind,
+                                host, rows, forces, series_t, series_v, series_ptr, series_target, stuck,
+                                runtime_value(release), acc, load, group_mass, group_sum,
+                                runtime_value(sticking), runtime_value(contact))))
 
 
 @njit(**KERNEL)
@@ -308,7 +309,7 @@ def rk4_step(spec) -> Step:
                 contact = has_hertz and any_set(touching)
                 h = left
                 if contact:
-                    h = min(left, contact_step(x, v, nf, mass, host, rows, touching))
+                    h = min(left, contact_step(*plain((x, v, nf, mass, host, rows, touching))))
                 if piecewise:  # sub-steps end at the loads' kinks and jumps
                     tb = next_break(t + 1e-9 * dt, ex)
                     if tb < t + h - 1e-9 * dt:
@@ -327,8 +328,8 @@ def rk4_step(spec) -> Step:
                 if (has_impact or has_hertz) and not capped:
                     for b in range(nb):
                         x_event[b] = xn[b]
-                    event_kind, q, side, tau, wall = next_event(x, x_event, h, nf, kind, host, rows, stuck,
-                                                                touching)
+                    event_kind, q, side, tau, wall = next_event(*plain((x, x_event, h, nf, kind, host, rows,
+                                                                        stuck, touching)))
                 if event_kind != NONE:
                     j, hf, sign = nf + q, host_of(host, q, nf), gap_sign(event_kind, side)
                     phase = 1

@@ -29,7 +29,9 @@ from .driver import Step
 from .energy import momentum
 from .grid import (
     GridLoads,
+    end_loads,
     finish_loads,
+    mid_loads,
     noise_scales,
     opening_forces,
     reset_phasors,
@@ -187,8 +189,9 @@ def sra3_step(spec) -> Step:
         ag_next, replayed = sc
         work, d_primary, d_absorber, e_sum, e1_max, loss, n_left, n_right, contact_time, peak_force, \
             pending = acct
-        ag, ag_next, ag3 = step_loads(i, dt, gl, ex, fl, ag_next, own.piecewise, True, filtered, ground,
-                                      gen_filter)
+        ag = step_loads(i, dt, gl, ex, fl, ag_next, own.piecewise, filtered, ground, gen_filter)
+        ag3 = mid_loads(i, dt, gl, ex, fl, filtered, ground)
+        ag_next = end_loads(i, dt, gl, ex, fl, filtered, ground)
         # the step's two integrals on the noisy floors
         if has_noise:
             replayed = step_normals(i, 2, noise_scale, own.slot, own.noisy, noise.normals, noise.refine,
