@@ -201,7 +201,7 @@ def write_report(study: Study, best: Optimum, summary: pd.DataFrame, directory: 
     columns = swept + ["n_ok", "n_failed", f"{metric}_mean", f"{metric}_ci95_lo", f"{metric}_ci95_hi"]
     goal = "maximise" if spec.sign < 0 else "minimise"
     skipped = int((history["infeasible"] != "").sum()) if "infeasible" in history else 0
-    evaluations = f"{len(history)} evaluations" + (f", {skipped} of them infeasible designs, not run"
+    evaluations = f"{len(history)} evaluations" + (f", {skipped} of them infeasible (not run)"
                                                    if skipped else "")
     text = "\n".join([
         f"# Optimisation of {study.name}", "",
