@@ -4,9 +4,12 @@ mean of a metric over a scenario's realisations and sweep points is best.
 Every candidate runs the same ensemble: with the scenario's seed and common random numbers,
 realisation ``r`` sees the same noise and the same uncertain-parameter draws at every candidate,
 so the sampled objective is a deterministic, smooth-as-the-physics function of the parameters
-and the optimiser is not misled by Monte Carlo noise.  The search works in coordinates scaled
-to ``[0, 1]`` per parameter (on the logarithm for ``scale = "log"``) with scipy.optimize's
-bounded Nelder-Mead or Powell methods.
+and the optimiser is not misled by Monte Carlo noise.  A candidate that is not a valid scenario
+(a rule between fields breaks: a 'from-primary' obstacle's offset < gap, ``dt`` past the
+stability limit of a stiffer design) is infeasible: the search sees an infinite objective there
+(an extreme barrier), and the candidate is recorded but never run and never the optimum.  The
+search works in coordinates scaled to ``[0, 1]`` per parameter (on the logarithm for
+``scale = "log"``) with scipy.optimize's bounded Nelder-Mead or Powell methods.
 """
 
 from __future__ import annotations
@@ -24,7 +27,7 @@ import pandas as pd
 from .ensemble import run, sample
 from .plotting import REPORT_EXTRA, pyplot
 from .reports import markdown
-from .scenario import Bound, Optimize, Study, parse_scenario, set_path
+from .scenario import Bound, Optimize, ScenarioError, Study, parse_scenario, set_path
 from .store import write_table
 
 #: Side of the starting simplex, in scaled coordinates (a fifth of each range).
@@ -68,11 +71,20 @@ def objective(frame: pd.DataFrame, metric: str) -> tuple[float, float, int]:
     return value, float(np.sqrt((sems ** 2).sum()) / points), int((frame["status"] != "ok").sum())
 
 
+def feasible(history: pd.DataFrame) -> pd.Series:
+    """Rows of an optimisation history that were run, with no failed realisation: the
+    candidates that may be the optimum."""
+    infeasible = history["infeasible"] if "infeasible" in history else pd.Series("", history.index)
+    return (history["n_failed"] == 0) & (infeasible == "")
+
+
 def optimize(study: Study, directory: Path, workers: int | None = None,
              echo: Callable[[str], None] = lambda line: None) -> Optimum:
     """Search ``study.base.optimize.parameters`` for the best objective; every evaluation is
     appended to ``directory/optimization.parquet`` as it finishes (an interrupted search keeps
-    its history).  Candidates with failed (diverged) realisations are rejected."""
+    its history).  Candidates with failed (diverged) realisations are rejected; candidates that
+    are not a valid scenario are infeasible (column ``infeasible``: the rule they break) and
+    are not run."""
     spec: Optimize = study.base.optimize
     keys = list(spec.parameters)
     bounds = [spec.parameters[k] for k in keys]
@@ -85,11 +97,21 @@ def optimize(study: Study, directory: Path, workers: int | None = None,
         key = tuple(values.values())
         if key in seen:
             return seen[key]
-        value, sem, failed = objective(sample(study.with_values(values), workers), spec.objective)
-        rows.append({"evaluation": len(rows), **values, spec.objective: value, "sem": sem,
-                     "n_failed": failed})
-        write_table(pd.DataFrame(rows), directory / "optimization.parquet")
         shown = ", ".join(f"{k} = {v:.6g}" for k, v in values.items())
+        try:
+            candidate = study.with_values(values)
+        except ScenarioError as exc:  # a rule between fields breaks: never run
+            rule = str(exc).split("\n")[0].removeprefix(f"{study.source}: ")
+            rows.append({"evaluation": len(rows), **values, spec.objective: math.nan, "sem": math.nan,
+                         "n_failed": 0, "infeasible": rule})
+            write_table(pd.DataFrame(rows), directory / "optimization.parquet")
+            echo(f"{len(rows):4d}  {shown}  infeasible: {rule}")
+            seen[key] = math.inf
+            return seen[key]
+        value, sem, failed = objective(sample(candidate, workers), spec.objective)
+        rows.append({"evaluation": len(rows), **values, spec.objective: value, "sem": sem,
+                     "n_failed": failed, "infeasible": ""})
+        write_table(pd.DataFrame(rows), directory / "optimization.parquet")
         echo(f"{len(rows):4d}  {shown}  {spec.objective} = {value:.6g} +- {sem:.2g}"
              + (f"  ({failed} failed: rejected)" if failed else ""))
         seen[key] = spec.sign * value if failed == 0 and math.isfinite(value) else math.inf
@@ -99,6 +121,11 @@ def optimize(study: Study, directory: Path, workers: int | None = None,
 
     u0 = np.array([to_unit(b, b.initial) for b in bounds])
     f0 = evaluate(u0)
+    if rows[0]["infeasible"]:  # (the scenario's validation refuses such a start first)
+        raise ValueError(f"{study.source}: optimize.parameters: the starting point "
+                         f"{dict(zip(keys, (b.initial for b in bounds)))} is not a valid design: "
+                         f"{rows[0]['infeasible']}; set each parameter's start (within [low, high]) "
+                         "where the design is valid")
     if not math.isfinite(f0):
         raise ValueError(f"{study.source}: optimize.parameters: the starting point "
                          f"{dict(zip(keys, (b.initial for b in bounds)))} has failed (diverged) "
@@ -115,7 +142,7 @@ def optimize(study: Study, directory: Path, workers: int | None = None,
     result = minimize(evaluate, u0, method="Nelder-Mead" if spec.method == "nelder-mead" else "Powell",
                       bounds=[(0.0, 1.0)] * len(u0), options=options)
     history = pd.DataFrame(rows)
-    good = history[history["n_failed"] == 0]
+    good = history[feasible(history)]
     best = good.loc[(spec.sign * good[spec.objective]).idxmin()]
     return Optimum({k: float(best[k]) for k in keys}, float(best[spec.objective]), float(best["sem"]),
                    history, str(result.message))
@@ -154,7 +181,7 @@ def write_report(study: Study, best: Optimum, summary: pd.DataFrame, directory: 
     plt = pyplot(str(directory / "objective_history.png"))
     if plt is not None:
         fig, ax = plt.subplots(figsize=(6.4, 3.6))
-        ok = history["n_failed"] == 0
+        ok = feasible(history)
         ax.errorbar(history["evaluation"][ok], history[metric][ok], yerr=1.96 * history["sem"][ok], fmt=".",
                     color="0.6", ecolor="0.8", label="candidate (95 % interval)")
         running = (spec.sign * history[metric].where(ok, math.inf)).cummin() * spec.sign
@@ -173,11 +200,14 @@ def write_report(study: Study, best: Optimum, summary: pd.DataFrame, directory: 
     swept = study.sweep_keys
     columns = swept + ["n_ok", "n_failed", f"{metric}_mean", f"{metric}_ci95_lo", f"{metric}_ci95_hi"]
     goal = "maximise" if spec.sign < 0 else "minimise"
+    skipped = int((history["infeasible"] != "").sum()) if "infeasible" in history else 0
+    evaluations = f"{len(history)} evaluations" + (f", {skipped} of them infeasible (not run)"
+                                                   if skipped else "")
     text = "\n".join([
         f"# Optimisation of {study.name}", "",
         f"Scenario `{study.source}`: {goal} the mean `{metric}` over {study.base.ensemble.realizations} "
         f"realisation(s) and {len(study.points)} sweep point(s) (seed {study.base.ensemble.seed}, common "
-        f"random numbers), {spec.method}, {len(history)} evaluations ({best.message}).", "",
+        f"random numbers), {spec.method}, {evaluations} ({best.message}).", "",
         "## Optimum", "", markdown(table), "",
         f"Objective at the optimum: {best.objective:.6g} (standard error {best.sem:.2g}). Candidates share "
         "their random numbers, so differences between them are far more precise than this error.", "",

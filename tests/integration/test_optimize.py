@@ -1,5 +1,6 @@
 """Robust design: the optimiser against the closed-form optimal tuning of a TMD under white
-noise, its output files, and the validation of ``[optimize]`` tables."""
+noise, its output files, the validation of ``[optimize]`` tables, and the candidates that break
+a rule between fields (infeasible: never run, never the optimum)."""
 
 from __future__ import annotations
 
@@ -9,9 +10,10 @@ import tomllib
 import pandas as pd
 import pytest
 
-from tests.helpers import cli, study_from, toml_text
+import vines_stoch.optimize
+from tests.helpers import cli, example_data, study_from, toml_text
 from vines_stoch import ScenarioError
-from vines_stoch.optimize import from_unit, to_unit
+from vines_stoch.optimize import from_unit, optimize, to_unit
 from vines_stoch.scenario import Bound
 
 MU = 0.05
@@ -110,3 +112,68 @@ def test_unknown_objective_lists_the_allowed_ones():
 def test_optimize_without_table_is_refused(write):
     code, err = cli("optimize", write(toml_text(TMD)))
     assert code == 2 and "no [optimize] table" in err
+
+
+#: Seed 002's single-sided Hertz absorber with a 'from-primary' obstacle: its offset D must stay
+#: below its gap C (the absorber would start inside the obstacle), a rule of the absorber.
+OBSTACLE = example_data("seed002_optimize_stage2", "optimize")
+D, C = "absorbers.0.offset", "absorbers.0.gap"
+
+
+def _obstacle(offset: dict, gap: dict):
+    return study_from(OBSTACLE, {"optimize": {"objective": "e1_max", "max_evaluations": 40,
+                                              "parameters": {D: offset, C: gap}}}, source="hertz.toml")
+
+
+def test_candidates_past_a_coupled_rule_are_never_run_nor_the_optimum(monkeypatch, tmp_path):
+    # overlapping ranges: D < C is kept by the absorber's own rule, candidate by candidate
+    study = _obstacle({"low": 0.0, "high": 0.2, "start": 0.02}, {"low": 0.04, "high": 0.4, "start": 0.3})
+    run: list[tuple[float, float]] = []
+
+    def sample(candidate, workers):  # stands in for the ensemble: the objective C - D drives D towards C
+        absorber = candidate.points[0].absorbers[0]
+        run.append((absorber.offset, absorber.gap))
+        return pd.DataFrame({"point": [0], "status": ["ok"], "e1_max": [absorber.gap - absorber.offset]})
+
+    monkeypatch.setattr(vines_stoch.optimize, "sample", sample)
+    best = optimize(study, tmp_path)
+    history = pd.read_parquet(tmp_path / "optimization.parquet")
+    skipped = history[history["infeasible"] != ""]
+    assert len(skipped) >= 3 and (skipped[D] >= skipped[C]).all()
+    assert skipped["infeasible"].str.startswith(f"{D} = ").all()
+    assert skipped["infeasible"].str.contains("must be < gap").all() and skipped["e1_max"].isna().all()
+    assert run and all(offset < gap for offset, gap in run)      # no infeasible candidate simulated
+    assert len(run) == len(history) - len(skipped)
+    assert best.values[D] < best.values[C]
+    assert best.objective == pytest.approx(best.values[C] - best.values[D])
+    assert best.objective == min(gap - offset for offset, gap in run)
+    assert best.objective < 0.05                                  # the search went up to the constraint
+
+
+def test_a_start_design_past_a_coupled_rule_is_named():
+    with pytest.raises(ScenarioError) as err:
+        _obstacle({"low": 0.0, "high": 0.2, "start": 0.13}, {"low": 0.04, "high": 0.4, "start": 0.1244})
+    assert str(err.value) == (
+        "hertz.toml: optimize.parameters: the start design (absorbers.0.offset = 0.13, absorbers.0.gap = "
+        "0.1244) is not valid: absorbers.0.offset = 0.13: must be < gap (0.1244) with obstacle = "
+        "'from-primary' (the absorber would start inside the obstacle); set each parameter's start "
+        "(within [low, high]) where the design is valid")
+
+
+@pytest.mark.parametrize("parameters, message", [
+    # no candidate can take D = 0.5: C stays below 0.4
+    ({D: {"low": 0.0, "high": 0.5, "start": 0.1}, C: {"low": 0.04, "high": 0.4, "start": 0.2}},
+     f"optimize.parameters.{D} = {{'low': 0.0, 'high': 0.5, 'start': 0.1}}: the bound 0.5 is not allowed: "
+     "the value must be < gap (0.2) with obstacle = 'from-primary' (the absorber would start inside the "
+     "obstacle) (with the other optimised parameters at their starts; no corner of their ranges allows it "
+     "either)"),
+    # C alone: D stays at the file's 0.1002
+    ({C: {"low": 0.04, "high": 0.4, "start": 0.2}},
+     f"optimize.parameters.{C} = {{'low': 0.04, 'high': 0.4, 'start': 0.2}}: the bound 0.04 is not allowed: "
+     f"{D} = 0.1002: must be < gap (0.04) with obstacle = 'from-primary'"),
+])
+def test_bounds_no_candidate_can_take_are_named(parameters, message):
+    with pytest.raises(ScenarioError) as err:
+        study_from(OBSTACLE, {"optimize": {"objective": "e1_max", "parameters": parameters}},
+                   source="hertz.toml")
+    assert str(err.value).startswith(f"hertz.toml: {message}")

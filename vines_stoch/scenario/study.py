@@ -4,6 +4,7 @@ parameters checked at both ends of their ranges, and its record files read once.
 from __future__ import annotations
 
 import copy
+import itertools
 import math
 import os
 import re
@@ -81,6 +82,31 @@ def _check_values(data: dict[str, Any], key: str, ends: tuple[float, float], whe
             rule = str(exc).split("\n")[0].rsplit(": ", 1)[-1]
             raise ScenarioError(format_error(source, where, spec,
                                              message.format(end=end, rule=rule))) from None
+
+
+def _invalid(data: dict[str, Any], values: dict[str, float], source: str) -> ScenarioError | None:
+    """Why the file with the fields named by ``values`` set is not a valid scenario (its first
+    mistake; None: it is valid)."""
+    variant = copy.deepcopy(data)
+    for key, value in values.items():
+        set_path(variant, key, value)
+    variant.pop("uncertain", None)
+    variant.pop("optimize", None)
+    try:
+        _validate(variant, source)
+    except ScenarioError as exc:
+        return exc
+    return None
+
+
+def _mistake(exc: ScenarioError, source: str) -> str:
+    """The first mistake of ``exc`` without the file's name: ``key = value: rule``."""
+    line = str(exc).split("\n")[0]
+    return line[len(source) + 2:] if line.startswith(source + ": ") else line
+
+
+#: Corners of the other optimised parameters' ranges a bound is tried with, at most (ten others).
+MAX_CORNERS = 2**10
 
 
 def _stability(scenario: Scenario) -> str | None:
@@ -280,6 +306,9 @@ class Study:
             with mistakes.kept():
                 self._check_steps((bound.low, bound.high), f"optimize.parameters.{STEP}", parameters[STEP],
                                   "the bound {end:g}{point} is not allowed: {rule}")
+        if not mistakes and tuned is not None:
+            with mistakes.kept():
+                self._check_start(tuned, source)
         mistakes.raise_any()
         self._check_work(source)
         self.warnings = accuracy.warnings(source, self.points, self.grid, self.base.ensemble.realizations)
@@ -346,9 +375,66 @@ class Study:
         if self._integer(key):
             raise ScenarioError(format_error(source, where, spec, "names an integer field, and the optimiser "
                                              "moves parameters continuously: sweep it instead"))
-        bound = base.optimize.parameters[key]
-        _check_values(data, key, (bound.low, bound.high), where, spec, source,
-                      "the bound {end:g} is not allowed: the value {rule}")
+        parameters = base.optimize.parameters
+        others = {k: b for k, b in parameters.items() if k != key and self._settable(data, k)}
+        for end in (parameters[key].low, parameters[key].high):
+            why = self._bound_refusal(data, key, end, others, source)
+            if why is not None:
+                raise ScenarioError(format_error(source, where, spec,
+                                                 f"the bound {end:g} is not allowed: {why}"))
+
+    def _settable(self, data: dict[str, Any], key: str) -> bool:
+        """True when dotted ``key`` names an existing numeric field that is neither swept nor uncertain."""
+        if key in self.sweep_keys or key in self.uncertain_keys:
+            return False
+        try:
+            value = get_path(data, key)
+        except (KeyError, IndexError, ValueError, TypeError):
+            return False
+        return isinstance(value, (int, float)) and not isinstance(value, bool)
+
+    @staticmethod
+    def _bound_refusal(data: dict[str, Any], key: str, end: float, others: dict[str, Any],
+                       source: str) -> str | None:
+        """Why no candidate design with ``key`` at ``end`` is valid (None: one is).  The design is
+        tried with the ``others`` (optimised parameters: their Bounds) at their starts, then at the
+        corners of their ranges: a rule that checks fields against each other (the offset < gap
+        of a 'from-primary' obstacle) may refuse the bound at some of them, and the search then
+        skips those candidates as infeasible; a bound no candidate can take is a mistake."""
+        starts = {k: b.initial for k, b in others.items()}
+        corners = itertools.product(*((b.low, b.high) for b in others.values()))
+        first = _invalid(data, {**starts, key: end}, source)
+        if first is None:
+            return None
+        for corner in itertools.islice(corners, MAX_CORNERS):
+            if _invalid(data, {**dict(zip(others, corner)), key: end}, source) is None:
+                return None
+        line = _mistake(first, source)
+        why = f"the value {line.rsplit(': ', 1)[-1]}" if line.partition(" = ")[0] == key else line
+        tried = (" (with the other optimised parameters at their starts; no corner of their ranges "
+                 "allows it either)") if others else ""
+        return why + tried
+
+    def _check_start(self, tuned: Any, source: str) -> None:
+        """The start design (every optimised parameter of ``tuned``, the Optimize table, at its
+        start) must be a valid scenario at every sweep point: the search starts there, and
+        candidates that are not valid are infeasible."""
+        starts = {k: b.initial for k, b in tuned.parameters.items()}
+        for values, data in zip(self.grid, self._point_data):
+            variant = copy.deepcopy(data)
+            for key, value in starts.items():
+                set_path(variant, key, value)
+            variant.pop("uncertain", None)
+            variant.pop("optimize", None)
+            try:
+                _check_stability(self._read_records(_validate(variant, source), source), source)
+            except ScenarioError as exc:
+                at = f" at sweep point {values}" if values else ""
+                shown = ", ".join(f"{k} = {v:g}" for k, v in starts.items())
+                raise ScenarioError(format_error(
+                    source, "optimize.parameters", MISSING,
+                    f"the start design ({shown}) is not valid{at}: {_mistake(exc, source)}; set each "
+                    "parameter's start (within [low, high]) where the design is valid")) from None
 
     def _check_steps(self, ends: tuple[float, float], where: str, spec: Any, message: str) -> None:
         """``dt`` at either of ``ends`` must be stable at every sweep point (``message``, formatted
