@@ -15,7 +15,7 @@ import numpy as np
 from numba import njit
 
 from ..jit.flags import INLINE, KERNEL
-from ..jit.intrinsics import pick, put
+from ..jit.intrinsics import pick, plain, put, runtime_value
 from ..outputs import ACC_MAX_K, DRIFT_MAX_K, SLOTS, X1_MAX, X1_SQ_INT, X_MAX_K, X_SQ_INT_K, passage_slots
 from ..physics.absorbers import (
     CLEARANCE,
@@ -362,7 +362,15 @@ def signal_value(code: int, index: int, x, v, nf: int, e1: float, host) -> float
 @njit(**INLINE)
 def history_row(history, j: int, signals, x, v, nf: int, e1: float, host) -> None:
     """History row ``j``: the declared ``signals`` (rows ``(code, index)``, ``signals.declare``),
-    one column each."""
+    one column each.  Out of line (``_history_row``: rare work, a row every ``stride`` steps,
+    whose inlined copies of ``signal_value`` cost every loop compile time), so callers pass
+    copies of a state kept in registers (see ``stored_energy``)."""
+    _history_row(*plain((history, j, signals, x, v, runtime_value(nf), e1, host)))
+
+
+@njit(**KERNEL)
+def _history_row(history, j: int, signals, x, v, nf: int, e1: float, host) -> None:
+    """``history_row``'s body, compiled once for every loop."""
     for c in range(signals.shape[0]):
         history[j, c] = signal_value(signals[c, 0], signals[c, 1], x, v, nf, e1, host)
 

@@ -169,7 +169,10 @@ def step_loop(plug: Step, spec: Spec):
             restore_floors(carry, x_max, drift_max, acc_max, x2_integral)
         else:
             e1_prev = primary_energy(mass, storey_k, x, v, nf)
-            h_next = start_history(history, stride, signals, x, v, nf, e1_prev, host)
+            for b in range(nb):  # (copies for the out-of-line call: see ``common.history_row``)
+                xc[b] = x[b]
+                vc[b] = v[b]
+            h_next = start_history(history, stride, signals, xc, vc, nf, e1_prev, host)
             pending = limits.shape[0]  # limits not passed yet
             next_sample = 0
         sampling = SAMPLES and samples.shape[0] > 0
@@ -205,7 +208,7 @@ def step_loop(plug: Step, spec: Spec):
             end = block_end(i, n_steps, i0, h_next)
             begin = i
             for i in range(begin, end):
-                if sampling:
+                if SAMPLES and sampling:  # (``SAMPLES`` first: without, nothing of it is compiled)
                     if GPU:  # (on the CPU this loop ran 6 % slower than a slice copy; copy_into matches one)
                         for b in range(nb):
                             xp[b] = x[b]
@@ -232,13 +235,16 @@ def step_loop(plug: Step, spec: Spec):
                                                      inv_mass,
                                                      FORCE_PEAKS, e1_max, out)
                     e1_prev = e1
-                if sampling:
+                if SAMPLES and sampling:
                     next_sample = record_sample(samples, next_sample, sample_from, period, i * dt, dt, xp,
                                                 vp, x,
                                                 v, n_left, n_right)
             i = end
             if i == h_next:
-                h_next = record_history(history, stride, h_next, signals, x, v, nf,
+                for b in range(nb):  # (copies for the out-of-line call: see ``common.history_row``)
+                    xc[b] = x[b]
+                    vc[b] = v[b]
+                h_next = record_history(history, stride, h_next, signals, xc, vc, nf,
                                         primary_energy(mass, storey_k, x, v, nf) if INTEGRATES else e1_prev,
                                         host)
         if carry.shape[0] > 0:  # the path's state for its next stretch, raw
