@@ -72,12 +72,8 @@ def _check_values(data: dict[str, Any], key: str, ends: tuple[float, float], whe
     """Validate the file with ``key`` set to each of ``ends``; on failure raise ``message``
     (formatted with ``end`` and the field's ``rule``) at ``where`` (whose value is ``spec``)."""
     for end in ends:
-        variant = copy.deepcopy(data)
-        set_path(variant, key, end)
-        variant.pop("uncertain", None)
-        variant.pop("optimize", None)
         try:
-            _validate(variant, source)
+            _validate(_variant(data, {key: end}), source)
         except ScenarioError as exc:
             rule = str(exc).split("\n")[0].rsplit(": ", 1)[-1]
             raise ScenarioError(format_error(source, where, spec,
@@ -87,16 +83,22 @@ def _check_values(data: dict[str, Any], key: str, ends: tuple[float, float], whe
 def _invalid(data: dict[str, Any], values: dict[str, float], source: str) -> ScenarioError | None:
     """Why the file with the fields named by ``values`` set is not a valid scenario (its first
     mistake; None: it is valid)."""
+    try:
+        _validate(_variant(data, values), source)
+    except ScenarioError as exc:
+        return exc
+    return None
+
+
+def _variant(data: dict[str, Any], values: dict[str, Any]) -> dict[str, Any]:
+    """A copy of the file's tables with the fields named by ``values`` set: one design, without
+    the uncertain and optimize tables (the values a study varies)."""
     variant = copy.deepcopy(data)
     for key, value in values.items():
         set_path(variant, key, value)
     variant.pop("uncertain", None)
     variant.pop("optimize", None)
-    try:
-        _validate(variant, source)
-    except ScenarioError as exc:
-        return exc
-    return None
+    return variant
 
 
 def _mistake(exc: ScenarioError, source: str) -> str:
@@ -421,13 +423,9 @@ class Study:
         candidates that are not valid are infeasible."""
         starts = {k: b.initial for k, b in tuned.parameters.items()}
         for values, data in zip(self.grid, self._point_data):
-            variant = copy.deepcopy(data)
-            for key, value in starts.items():
-                set_path(variant, key, value)
-            variant.pop("uncertain", None)
-            variant.pop("optimize", None)
             try:
-                _check_stability(self._read_records(_validate(variant, source), source), source)
+                design = _validate(_variant(data, starts), source)
+                _check_stability(self._read_records(design, source), source)
             except ScenarioError as exc:
                 at = f" at sweep point {values}" if values else ""
                 shown = ", ".join(f"{k} = {v:g}" for k, v in starts.items())
