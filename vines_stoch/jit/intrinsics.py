@@ -64,33 +64,32 @@ def register_cuda_model() -> None:
         registry.register_default(StackArray)(_stack_array_model(models.ArrayModel))
 
 
+def _arrays_as(ty: types.Type, array) -> types.Type:
+    """``ty`` with every array in it (nested in tuples and named tuples) replaced by
+    ``array(that array's type)``."""
+    if isinstance(ty, types.Array):
+        return array(ty)
+    if isinstance(ty, types.BaseTuple):
+        members = [_arrays_as(t, array) for t in ty.types]
+        homogeneous = bool(members) and all(m == members[0] for m in members)
+        if isinstance(ty, types.NamedUniTuple | types.NamedTuple):
+            if homogeneous:
+                return types.NamedUniTuple(members[0], len(members), ty.instance_class)
+            return types.NamedTuple(members, ty.instance_class)
+        return types.UniTuple(members[0], len(members)) if homogeneous else types.Tuple(members)
+    return ty
+
+
 def stack_type(ty: types.Type) -> types.Type:
     """``ty`` with every array in it (nested in tuples and named tuples) a ``StackArray``."""
-    if isinstance(ty, types.Array):
-        return StackArray(ty.dtype, ty.ndim, ty.layout, readonly=not ty.mutable, aligned=ty.aligned)
-    if isinstance(ty, types.BaseTuple):
-        members = [stack_type(t) for t in ty.types]
-        cls = getattr(ty, "instance_class", None)
-        if isinstance(ty, types.NamedUniTuple | types.NamedTuple):
-            if all(m == members[0] for m in members):
-                return types.NamedUniTuple(members[0], len(members), cls)
-            return types.NamedTuple(members, cls)
-        if members and all(m == members[0] for m in members):
-            return types.UniTuple(members[0], len(members))
-        return types.Tuple(members)
-    return ty
+    return _arrays_as(ty, lambda a: StackArray(a.dtype, a.ndim, a.layout, readonly=not a.mutable,
+                                               aligned=a.aligned))
 
 
 def plain_type(ty: types.Type) -> types.Type:
     """``ty`` with every ``StackArray`` in it (nested in tuples) numba's array again."""
-    if isinstance(ty, StackArray):
-        return types.Array(ty.dtype, ty.ndim, ty.layout, readonly=not ty.mutable, aligned=ty.aligned)
-    if isinstance(ty, types.BaseTuple):
-        members = [plain_type(t) for t in ty.types]
-        if isinstance(ty, types.NamedUniTuple | types.NamedTuple):
-            return types.BaseTuple.from_types(members, ty.instance_class)
-        return types.BaseTuple.from_types(members)
-    return ty
+    return _arrays_as(ty, lambda a: types.Array(a.dtype, a.ndim, a.layout, readonly=not a.mutable,
+                                                aligned=a.aligned) if isinstance(a, StackArray) else a)
 
 
 @intrinsic

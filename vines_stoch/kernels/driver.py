@@ -42,7 +42,7 @@ from typing import Any, NamedTuple
 from numba import njit
 
 from ..jit.cache import stable_cache
-from ..jit.flags import KERNEL
+from ..jit.flags import INLINE, KERNEL
 from ..jit.intrinsics import borrowed, copy_into, plain, scratch
 from ..outputs import CONTACT_TIME, FINAL_ENERGY, PEAK_FORCE, STATUS, STATUS_DIVERGED
 from ..physics.structure import primary_energy
@@ -110,6 +110,16 @@ class Step(NamedTuple):
     samples: bool
 
 
+@njit(**INLINE)
+def copy_state(x, v, xc, vc) -> None:
+    """The state ``x, v`` into ``xc, vc``: the copies an out-of-line call takes
+    (``common.stored_energy``, ``common.history_row``), so that its address reaches no call and
+    the state stays in registers."""
+    for b in range(x.shape[0]):
+        xc[b] = x[b]
+        vc[b] = v[b]
+
+
 @cache
 def step_loop(plug: Step, spec: Spec):
     """The step loop of a scheme's ``Step`` specialised to ``spec``.  It takes the bundles
@@ -169,9 +179,7 @@ def step_loop(plug: Step, spec: Spec):
             restore_floors(carry, x_max, drift_max, acc_max, x2_integral)
         else:
             e1_prev = primary_energy(mass, storey_k, x, v, nf)
-            for b in range(nb):  # (copies for the out-of-line call: see ``common.history_row``)
-                xc[b] = x[b]
-                vc[b] = v[b]
+            copy_state(x, v, xc, vc)
             h_next = start_history(history, stride, signals, xc, vc, nf, e1_prev, host)
             pending = limits.shape[0]  # limits not passed yet
             next_sample = 0
@@ -183,9 +191,7 @@ def step_loop(plug: Step, spec: Spec):
             # the divergence check, history rows
             if i == i0:
                 inside = True
-                for b in range(nb):  # (copies for the out-of-line call: see ``stored_energy``)
-                    xc[b] = x[b]
-                    vc[b] = v[b]
+                copy_state(x, v, xc, vc)
                 work = stored_energy(*plain((xc, vc, mass, nf, storey_k, kind, host, rows)))
                 if INTEGRATES:
                     e1_max = primary_energy(mass, storey_k, x, v, nf)
@@ -241,9 +247,7 @@ def step_loop(plug: Step, spec: Spec):
                                                 v, n_left, n_right)
             i = end
             if i == h_next:
-                for b in range(nb):  # (copies for the out-of-line call: see ``common.history_row``)
-                    xc[b] = x[b]
-                    vc[b] = v[b]
+                copy_state(x, v, xc, vc)
                 h_next = record_history(history, stride, h_next, signals, xc, vc, nf,
                                         primary_energy(mass, storey_k, x, v, nf) if INTEGRATES else e1_prev,
                                         host)
@@ -275,9 +279,7 @@ def step_loop(plug: Step, spec: Spec):
         if HERTZ:
             out[CONTACT_TIME] = contact_time
             out[PEAK_FORCE] = peak_force
-        for b in range(nb):
-            xc[b] = x[b]
-            vc[b] = v[b]
+        copy_state(x, v, xc, vc)
         out[FINAL_ENERGY] = stored_energy(*plain((xc, vc, mass, nf, storey_k, kind, host, rows)))
         write_floor_metrics(out, nf, x_max, drift_max, acc_max, x2_integral)
 
