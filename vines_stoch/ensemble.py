@@ -502,23 +502,24 @@ def prepare_loops(scenes: list[Scene], seed: int, common: bool, grid: tuple[int,
     ``scenes`` that this process has not run yet, before any chunk starts, with one line each on
     standard error: which structure, and whether it was compiled (once: later runs load it) or
     loaded.  A path of no steps runs each loop with the argument types of ``run_chunk``."""
-    from .kernels import advance, kernel_for, start_path
+    from .kernels import advance, start_path
 
     seen = set()
     for point, scene in enumerate(scenes):
-        kernel = kernel_for(scene)
-        if kernel in seen or kernel.overloads:
-            continue
-        seen.add(kernel)
-        print(f"step loop: {structure(scene)}: compiling or loading ...", end="", file=sys.stderr, flush=True)
-        hits, start = sum(kernel.stats.cache_hits.values()), time.monotonic()
         increments, bridge, filters = needed_streams(scene)
         history = None
         if grid is not None:
             history = np.full((grid[1], len(signals)), np.nan)
         gens = streams(seed, point, 0, increments=increments, bridge=bridge, filters=filters, common=common)
-        advance(start_path(scene, gens, samples=sample_buffer(scene), history=history,
-                           stride=grid[0] if grid else 1, stretches=False, signals=signals), 0)
+        path = start_path(scene, gens, samples=sample_buffer(scene), history=history,
+                          stride=grid[0] if grid else 1, stretches=False, signals=signals)
+        kernel = path.kernel  # (the loop of the structure, recording what the run asks: ``outputs.Record``)
+        if kernel in seen or kernel.overloads:
+            continue
+        seen.add(kernel)
+        print(f"step loop: {structure(scene)}: compiling or loading ...", end="", file=sys.stderr, flush=True)
+        hits, start = sum(kernel.stats.cache_hits.values()), time.monotonic()
+        advance(path, 0)
         loaded = sum(kernel.stats.cache_hits.values()) > hits
         print(f" {'loaded from the cache' if loaded else 'compiled (cached on disk for later runs)'} "
               f"in {time.monotonic() - start:.1f} s", file=sys.stderr, flush=True)

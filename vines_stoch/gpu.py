@@ -29,7 +29,7 @@ import numpy as np
 
 from .kernels import DEFAULT_SIGNALS, kernel_for, simulate
 from .kernels.rng import philox_stream, stream_key, stream_place
-from .outputs import POINCARE_SAMPLES, new_metrics
+from .outputs import EVENT_COLUMNS, POINCARE_SAMPLES, Record, new_events, new_metrics
 from .scene import Scene
 from .signals import declare
 from .streams import BRIDGE, FILTER, INCREMENTS, Streams
@@ -103,11 +103,13 @@ def device_name() -> str:
 class Batch:
     """What came back of a batch of realisations: raw metric rows ``(n, slots)``, Poincare
     samples ``(n, samples, 2 n_bodies + 2)`` (none: ``(n, 0, ...)``), history rows ``(n, grid,
-    columns)`` (none: ``(n, 0, 2)``)."""
+    columns)`` (none: ``(n, 0, 2)``), event logs ``(n, capacity, len(EVENT_COLUMNS))`` (none:
+    ``(n, 0, ...)``)."""
 
     raw: np.ndarray
     samples: np.ndarray
     history: np.ndarray
+    events: np.ndarray
 
 
 def _array(scene: Scene, name: str):
@@ -161,10 +163,11 @@ class Inputs:
     stride: int
     size: int
     signals: np.ndarray
+    n_events: int
 
     @classmethod
     def of(cls, scenes: list[Scene], seed: int, point: int, common: bool, grid: tuple[int, int] | None,
-           signals: tuple[str, ...]) -> Inputs:
+           signals: tuple[str, ...], events: int = 0) -> Inputs:
         scene = scenes[0]
         stride, size = grid if grid is not None else (1, 0)
         return cls(scene, len(scenes) > 1, _stack(scenes),
@@ -172,17 +175,23 @@ class Inputs:
                    new_metrics(scene.n_floors, scene.limits.shape[0]),
                    np.array([stream_key(seed, p) for p in (INCREMENTS, BRIDGE, FILTER)], np.uint64),
                    np.uint64(stream_place(0, point, common)), POINCARE_SAMPLES if scene.period > 0 else 0,
-                   stride, size, declare(signals, scene.n_floors, scene.kind.shape[0]))
+                   stride, size, declare(signals, scene.n_floors, scene.kind.shape[0]), events)
 
     @property
     def n_bodies(self) -> int:
         return self.scene.mass.shape[0]
 
+    @property
+    def record(self) -> Record:
+        """What the launches record beyond the metrics (``outputs.Record``)."""
+        return Record.of(self.scene, self.size, self.n_events)
+
     def outputs(self, m: int, empty) -> tuple:
         """``m`` realisations' output arrays from ``empty(shape)``: metric rows, Poincare
-        samples, history rows, filter scratch (state, next state, normals)."""
+        samples, history rows, event logs, filter scratch (state, next state, normals)."""
         return (empty((m, self.template.shape[0])), empty((m, self.n_samples, 2 * self.n_bodies + 2)),
-                empty((m, self.size, self.signals.shape[0])), empty((m, 3, self.stacked["phi"].shape[1])))
+                empty((m, self.size, self.signals.shape[0])), empty((m, self.n_events, len(EVENT_COLUMNS))),
+                empty((m, 3, self.stacked["phi"].shape[1])))
 
     def row_bytes(self) -> int:
         """Device bytes a realisation takes (its outputs, and its own scene's arrays)."""
@@ -199,32 +208,36 @@ class Inputs:
 
 
 def launch_types(scene: Scene, grid: tuple[int, int] | None = None,
-                 signals: tuple[str, ...] = DEFAULT_SIGNALS) -> tuple:
+                 signals: tuple[str, ...] = DEFAULT_SIGNALS, events: int = 0) -> tuple:
     """numba types of the launcher's arguments for ``scene`` (for ``numba.cuda.compile_ptx``,
     which needs no GPU)."""
     import numba
 
-    inputs = Inputs.of([scene], 0, 0, True, grid, signals)
+    inputs = Inputs.of([scene], 0, 0, True, grid, signals, events)
     args = inputs.arguments(0, 1, inputs.stacked, inputs.shared, np.zeros(0), inputs.keys, inputs.template,
                             inputs.signals, inputs.outputs(1, np.empty))
     return tuple(numba.typeof(a) for a in args)
 
 
-def _compile_here(scene: Scene, seed: int, point: int, realization: int, common: bool) -> None:
+def _compile_here(scene: Scene, seed: int, point: int, realization: int, common: bool,
+                  record: Record) -> None:
     """Compile the step loop that the simulator's threads call in this thread, by running
     ``realization`` on the CPU with its Philox streams: the simulator's block manager polls its
     threads in a busy loop, and a loop compiled inside a simulated thread shares the GIL with
     that poller (the contact-noise scene's loop: 106 s there, 24 s here)."""
     simulate(scene, Streams(*(philox_stream(seed, p, realization, point, common)
-                              for p in (INCREMENTS, BRIDGE, FILTER))))
+                              for p in (INCREMENTS, BRIDGE, FILTER))),
+             history=np.full((2, 2), np.nan) if record.history else None,
+             events=new_events(1) if record.events else None)
 
 
 def simulate_many(scenes: Scene | list[Scene], seed: int, point: int, start: int, stop: int,
                   common: bool = True, grid: tuple[int, int] | None = None,
-                  signals: tuple[str, ...] = DEFAULT_SIGNALS) -> Batch:
+                  signals: tuple[str, ...] = DEFAULT_SIGNALS, events: int = 0) -> Batch:
     """Realisations ``start .. stop - 1`` of sweep point ``point`` on the GPU, in batches that
     fit its memory.  ``scenes``: the scene (or one per realisation, with uncertain parameters);
-    ``grid = (stride, size)``: history rows of the ``signals`` (``kernels.simulate``)."""
+    ``grid = (stride, size)``: history rows of the ``signals`` (``kernels.simulate``); ``events``:
+    the rows of each realisation's event log (``outputs.EVENT_COLUMNS``; 0: none kept)."""
     require()
     from numba import cuda
 
@@ -235,12 +248,13 @@ def simulate_many(scenes: Scene | list[Scene], seed: int, point: int, start: int
     n = stop - start
     if len(scenes) > 1 and len(scenes) != n:
         raise ValueError(f"simulate_many: {len(scenes)} scenes for {n} realisations")
-    inputs = Inputs.of(scenes, seed, point, common, grid, signals)
+    inputs = Inputs.of(scenes, seed, point, common, grid, signals, events)
     # (the simulator runs the CPU loop: the same arithmetic, its flags on the heap)
-    launch = launcher(kernel_for(inputs.scene, gpu=not simulating()), inputs.n_bodies, simulating())
+    launch = launcher(kernel_for(inputs.scene, gpu=not simulating(), record=inputs.record), inputs.n_bodies,
+                      simulating())
     if simulating():
-        _compile_here(scenes[0], seed, point, start, common)
-    raw, samples, history, _ = inputs.outputs(n, np.empty)
+        _compile_here(scenes[0], seed, point, start, common, inputs.record)
+    raw, samples, history, logs, _ = inputs.outputs(n, np.empty)
     shared = {k: cuda.to_device(a) for k, a in inputs.shared.items()}
     device = None if inputs.per_path else {k: cuda.to_device(a) for k, a in inputs.stacked.items()}
     normals, keys = cuda.to_device(np.zeros(0)), cuda.to_device(inputs.keys)
@@ -259,8 +273,10 @@ def simulate_many(scenes: Scene | list[Scene], seed: int, point: int, start: int
             samples[done:done + m] = outputs[1].copy_to_host()
         if inputs.size:
             history[done:done + m] = outputs[2].copy_to_host()
+        if inputs.n_events:
+            logs[done:done + m] = outputs[3].copy_to_host()
         done += m
-    return Batch(raw, samples, history)
+    return Batch(raw, samples, history, logs)
 
 
 __all__ = ["Batch", "GPUUnavailable", "Inputs", "device_name", "launch_types", "require", "simulate_many",

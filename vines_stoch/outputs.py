@@ -1,9 +1,13 @@
-"""What a run records of each realisation: the raw metric vector's slots (filled by the step
-loops, turned into columns by ``metrics.finish_table``), the per-floor blocks, the codes of
-limits and status, and the Poincare samples kept for the regime (the signals of its history rows:
-``signals.py``)."""
+"""What a run records of each realisation, declared in one place: the raw metric vector's slots
+(filled by the step loops, turned into columns by ``metrics.finish_table``), the per-floor
+blocks, the codes of limits and status, the Poincare samples kept for the regime, the event
+log's columns (the signals of its history rows: ``signals.py``), and ``Record``, what a run asks
+its loop to record beyond the metrics: its loop compiles only that (a scene pays only for
+what it asks)."""
 
 from __future__ import annotations
+
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit
@@ -51,3 +55,35 @@ def new_metrics(n_floors: int = 1, n_limits: int = 0) -> np.ndarray:
     out[passage_slots(n_floors):] = np.nan
     return out
 
+
+
+#: Columns of a realisation's event log, one row an event (an impact, or the onset of a Hertz
+#: contact) in the metrics window, in the order they happen: the time, the absorber (from 0),
+#: the wall (-1 left, +1 right), the absorber's velocity relative to its host floor just before
+#: the event, and the energy the event took out (the impact's loss; 0 for a Hertz contact's
+#: onset, the contact being elastic).  Row ``k`` is the ``k``-th event the ``impacts`` metric
+#: counts, so rows past the log's length are counted but not logged.
+EVENT_COLUMNS = ("t", "absorber", "side", "speed", "loss")
+EVENT_T, EVENT_ABSORBER, EVENT_SIDE, EVENT_SPEED, EVENT_LOSS = range(len(EVENT_COLUMNS))
+
+
+class Record(NamedTuple):
+    """What a run records beyond the metric vector, the step loop's compile-time flags: the
+    first passages of limits (the scene has limits), history rows (of declared signals,
+    ``signals.declare``), the event log.  The Poincare samples are the scheme's (``driver.Step``).
+    A loop compiles the code of a record only when it is asked for."""
+
+    passages: bool = False
+    history: bool = False
+    events: bool = False
+
+    @classmethod
+    def of(cls, scene, history_rows: int = 0, event_rows: int = 0) -> Record:
+        """What a run of ``scene`` keeping ``history_rows`` history rows and ``event_rows`` rows
+        of event log records."""
+        return cls(passages=scene.limits.shape[0] > 0, history=history_rows > 0, events=event_rows > 0)
+
+
+def new_events(capacity: int) -> np.ndarray:
+    """An empty event log of ``capacity`` rows (``EVENT_COLUMNS``; NaN: no event)."""
+    return np.full((capacity, len(EVENT_COLUMNS)), np.nan)

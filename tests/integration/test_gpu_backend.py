@@ -20,6 +20,7 @@ from tests.integration.test_ensemble import DATA
 from vines_stoch import gpu, kernels, run
 from vines_stoch.kernels import SLOTS, kernel_for, sample_buffer, simulate
 from vines_stoch.kernels.rng import philox_stream
+from vines_stoch.outputs import Record, new_events
 from vines_stoch.store import read_metadata
 from vines_stoch.streams import BRIDGE, FILTER, INCREMENTS, Streams, streams
 from vines_stoch.validation import bench_gpu
@@ -96,8 +97,8 @@ def test_the_simulated_threads_find_the_loop_compiled(monkeypatch):
             calls.append((threading.current_thread() is threading.main_thread(),
                           len(self.loop.overloads) - before))
 
-    def recording(scene, gpu=False):
-        return Recording(kernel_for(scene, gpu))
+    def recording(scene, gpu=False, record=Record()):
+        return Recording(kernel_for(scene, gpu, record))
 
     monkeypatch.setattr(gpu, "kernel_for", recording)
     monkeypatch.setattr(kernels, "kernel_for", recording)
@@ -154,6 +155,18 @@ def test_history_rows_come_back():
     batch = gpu.simulate_many(scene, seed=0, point=0, start=0, stop=2, grid=(100, 11))
     for rows in batch.history:
         np.testing.assert_allclose(rows, history, rtol=1e-12, atol=0.0)
+
+
+def test_event_logs_come_back():
+    """Each thread's event log is the CPU loop's on the same Philox streams, bitwise."""
+    scene = contact_noise()
+    batch = gpu.simulate_many(scene, seed=4, point=0, start=1, stop=3, events=40)
+    assert batch.events.shape == (2, 40, 5)
+    for i, r in enumerate(range(1, 3)):
+        events = new_events(40)
+        simulate(scene, philox_streams(4, r), events=events)
+        np.testing.assert_array_equal(batch.events[i], events)
+    assert (np.isfinite(batch.events[:, :, 0]).sum(axis=1) > 1).all()
 
 
 def test_uncertain_parameters_run_a_scene_a_realisation():

@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 
 from ..jit.cache import compile_once
-from ..outputs import POINCARE_SAMPLES, SLOTS, new_metrics
+from ..outputs import EVENT_COLUMNS, POINCARE_SAMPLES, SLOTS, Record, new_events, new_metrics
 from ..schemes import SCHEMES
 from ..signals import declare
 from ..streams import Streams
@@ -39,6 +39,7 @@ _UNDRAWN = np.random.default_rng(0)
 _UNUSED = np.zeros(STREAM_WORDS, np.uint64)
 _NO_HISTORY = np.zeros((0, 2))
 _NO_SIGNALS = np.zeros((0, 2), np.int64)
+_NO_EVENTS = new_events(0)
 #: The carry of a path run in one go: none kept.
 _NO_CARRY = np.zeros(0)
 #: The loops this process has run, with the kinds of their generators (``cache.compile_once``
@@ -54,11 +55,11 @@ def step_of(name: str):
     return getattr(importlib.import_module(f"{__name__}.{name}"), f"{name}_step")
 
 
-def spec_of(scene, gpu: bool = False) -> Spec:
-    """What a scene's loop is specialised to (``driver.Spec``); what its scheme does not use is
-    left out (white noise and filtered loads of the RK4 step, the load rows and filter states of
-    steps that read neither from the grid), so that one loop serves the scenes that differ only
-    there."""
+def spec_of(scene, gpu: bool = False, record: Record = Record()) -> Spec:
+    """What a scene's loop is specialised to (``driver.Spec``), recording what ``record`` asks
+    beyond the metrics (``outputs.Record``); what its scheme does not use is left out (white
+    noise and filtered loads of the RK4 step, the load rows and filter states of steps that read
+    neither from the grid), so that one loop serves the scenes that differ only there."""
     step = SCHEMES[scene.scheme].step
     grid = step != "rk4"
     return Spec(n_bodies=scene.mass.shape[0], n_floors=scene.n_floors,
@@ -67,13 +68,15 @@ def spec_of(scene, gpu: bool = False) -> Spec:
                 has_noise=scene.has_white_noise and grid, has_impact=scene.has_impact,
                 has_hertz=scene.has_hertz,
                 filtered=scene.has_filters and grid, ground=scene.has_ground and grid,
-                geometric=scene.has_geometric, gpu=gpu)
+                geometric=scene.has_geometric, gpu=gpu, passages=record.passages, history=record.history,
+                events=record.events)
 
 
-def kernel_for(scene, gpu: bool = False):
+def kernel_for(scene, gpu: bool = False, record: Record = Record()):
     """The compiled loop for a scene's scheme and structure: the loop driver around the
-    scheme's step (``driver.step_loop``; ``gpu``: the loop the cuda backend compiles)."""
-    spec = spec_of(scene, gpu)
+    scheme's step (``driver.step_loop``; ``gpu``: the loop the cuda backend compiles), recording
+    what ``record`` asks (``outputs.Record``)."""
+    spec = spec_of(scene, gpu, record)
     return step_loop(step_of(SCHEMES[scene.scheme].step)(spec), spec)
 
 
@@ -158,15 +161,16 @@ def loads_of(scene) -> Loads:
 
 def bundles(scene, x: np.ndarray, v: np.ndarray, fl: Filters, normals: np.ndarray, out: np.ndarray,
             samples: np.ndarray, history: np.ndarray, stride: int, gens: tuple, refine: int = 1,
-            carry: np.ndarray = _NO_CARRY, signals: np.ndarray = _NO_SIGNALS) -> tuple:
+            carry: np.ndarray = _NO_CARRY, signals: np.ndarray = _NO_SIGNALS,
+            events: np.ndarray = _NO_EVENTS) -> tuple:
     """The kernels' arguments (``kernels/bundles.py``): bodies (masses, storey stiffnesses and
     dashpots, mass-proportional dashpots, state), absorbers (kinds, hosts, rows), loads, filters,
     noise (intensity per floor, replayed normals, replayed fine steps a step), grid, outputs
     (the history rows with the ``signals`` they hold, ``signals.declare``; the limits whose first
-    passages the metric vector records, and the ``carry`` of a
-    path run in stretches: ``kernels/carry.py``); then the three generators of ``gens``
-    (increments, bridge, filter) as arguments of their own (see ``kernels/bundles.py``).  The grid
-    runs the whole path from its start."""
+    passages the metric vector records, the ``carry`` of a path run in stretches:
+    ``kernels/carry.py``, the event log ``events``: ``outputs.EVENT_COLUMNS``); then the three
+    generators of ``gens`` (increments, bridge, filter) as arguments of their own (see
+    ``kernels/bundles.py``).  The grid runs the whole path from its start."""
     return (
         Bodies(mass=scene.mass, storey_k=scene.storey_k, storey_c=scene.storey_c, floor_c=scene.floor_c,
                x=x, v=v),
@@ -176,7 +180,8 @@ def bundles(scene, x: np.ndarray, v: np.ndarray, fl: Filters, normals: np.ndarra
         Noise(sigma=scene.sigma, normals=normals, refine=refine),
         Grid(dt=scene.dt, n_steps=scene.n_steps, i0=scene.i0, period=scene.period,
              sample_from=scene.sample_from, stride=stride, first=0),
-        Outputs(out=out, samples=samples, history=history, signals=signals, limits=scene.limits, carry=carry),
+        Outputs(out=out, samples=samples, history=history, signals=signals, limits=scene.limits, carry=carry,
+                events=events),
         *gens,
     )
 
@@ -214,14 +219,15 @@ class Path:
     def branch(self, streams: Streams | np.random.Generator | None = None) -> Path:
         """A copy of this path at the step it has reached, to be run on by ``advance`` on its
         own: the state, the filters' state, the metrics and accounts so far, the history rows,
-        the Poincare samples and the carry (restarts for rare-event splitting).  Without
+        the Poincare samples, the event log and the carry (restarts for rare-event splitting).  Without
         ``streams`` the copy continues on copies of this path's generators (it runs on as this
         path would, bitwise); with ``streams`` (as ``start_path`` takes them) its noise from here
         on is theirs, and so is the seed of its Brownian trees (``brownian``), so that branches
         on independent streams are independent from the branching state on."""
         bodies, absorbers, loads, fl, noise, grid, outputs, *gens = self.args
         outputs = outputs._replace(out=outputs.out.copy(), samples=outputs.samples.copy(),
-                                   history=outputs.history.copy(), carry=outputs.carry.copy())
+                                   history=outputs.history.copy(), carry=outputs.carry.copy(),
+                                   events=outputs.events.copy())
         if self.step > 0 and outputs.carry.shape[0] == 0:
             raise ValueError("branch: this path keeps no carry (start_path(..., stretches=False))")
         if streams is None:
@@ -257,7 +263,8 @@ def history_columns(scene, history: np.ndarray, signals: Sequence[str] | None) -
 def start_path(scene, streams: Streams | np.random.Generator | None = None, *,
                normals: np.ndarray | None = None, samples: np.ndarray | None = None,
                history: np.ndarray | None = None, stride: int = 1, refine: int = 1,
-               stretches: bool = True, signals: Sequence[str] | None = None) -> Path:
+               stretches: bool = True, signals: Sequence[str] | None = None,
+               events: np.ndarray | None = None) -> Path:
     """A realisation of ``scene`` at its start (step 0, the scene's initial state), to be run
     by ``advance``; the arguments are those of ``simulate``.  With ``stretches`` the loop keeps
     its carry (``kernels/carry.py``), so that the path may be run in several stretches."""
@@ -280,9 +287,13 @@ def start_path(scene, streams: Streams | np.random.Generator | None = None, *,
              else _NO_CARRY)
     history = _NO_HISTORY if history is None else history
     columns = _NO_SIGNALS if history.shape[0] == 0 else history_columns(scene, history, signals)
+    events = _NO_EVENTS if events is None else events
+    if events.ndim != 2 or events.shape[1] != len(EVENT_COLUMNS):
+        raise ValueError(f"events: an event log has shape (rows, {len(EVENT_COLUMNS)}) (outputs.new_events), "
+                         f"not {events.shape}")
     args = bundles(scene, x, v, fl, normals if replay else _NO_NORMALS, out, samples, history, stride, gens,
-                   refine, carry, columns)
-    return Path(kernel_for(scene), args)
+                   refine, carry, columns, events)
+    return Path(kernel_for(scene, record=Record.of(scene, history.shape[0], events.shape[0])), args)
 
 
 def advance(path: Path, stop: int) -> Path:
@@ -314,7 +325,8 @@ def advance(path: Path, stop: int) -> Path:
 def simulate(scene, streams: Streams | np.random.Generator | None = None, *,
              normals: np.ndarray | None = None, final: np.ndarray | None = None,
              samples: np.ndarray | None = None, history: np.ndarray | None = None,
-             stride: int = 1, refine: int = 1, signals: Sequence[str] | None = None) -> np.ndarray:
+             stride: int = 1, refine: int = 1, signals: Sequence[str] | None = None,
+             events: np.ndarray | None = None) -> np.ndarray:
     """Run one realisation of ``scene``; returns the raw metric vector (see ``SLOTS``).
 
     ``streams`` (``vines_stoch.streams.Streams``: increments, bridge draws, filter noise; or
@@ -330,11 +342,14 @@ def simulate(scene, streams: Streams | np.random.Generator | None = None, *,
     samples of periodic scenes; ``history`` (shape ``(G, len(signals))``) receives the
     ``signals`` (names of ``signals.signal_names``: ``x1``, ``e1``, ``x_k``, ``v_k``,
     ``drift_k``, ``xa_j``, ``va_j``, ``stroke_j``; without names, ``history_columns``) at
-    ``t = j stride dt``, ``j < G`` (rows after a divergence keep their previous content).  (A
-    path run in stretches: ``start_path``, ``advance``.)
+    ``t = j stride dt``, ``j < G`` (rows after a divergence keep their previous content);
+    ``events`` (from ``outputs.new_events``) receives the event log, the impacts and Hertz
+    contacts' onsets in the metrics window (``outputs.EVENT_COLUMNS``), as many as it has rows.
+    Each of these is compiled into the loop only when asked for (``outputs.Record``).  (A path
+    run in stretches: ``start_path``, ``advance``.)
     """
     path = start_path(scene, streams, normals=normals, samples=samples, history=history, stride=stride,
-                      refine=refine, stretches=False, signals=signals)
+                      refine=refine, stretches=False, signals=signals, events=events)
     advance(path, scene.n_steps)
     if final is not None:
         final[0], final[1] = path.x, path.v

@@ -87,8 +87,10 @@ class Grid(NamedTuple):
 class Outputs(NamedTuple):
     """The raw metric vector, the Poincare samples, the history rows and the signals they hold
     (``signals.declare``: a column each), the limits whose first passages the metric vector
-    records (``common.first_passages``), and the path's carry to its next stretch
-    (``kernels/carry.py``; empty: none kept)."""
+    records (``common.first_passages``), the path's carry to its next stretch
+    (``kernels/carry.py``; empty: none kept) and the event log (``outputs.EVENT_COLUMNS``;
+    empty: none kept).  What of these a loop writes is compiled in only where the run asks for
+    it (``outputs.Record``)."""
 
     out: Any
     samples: Any
@@ -96,3 +98,4 @@ class Outputs(NamedTuple):
     signals: Any
     limits: Any
     carry: Any
+    events: Any

@@ -16,7 +16,21 @@ from numba import njit
 
 from ..jit.flags import INLINE, KERNEL
 from ..jit.intrinsics import pick, plain, put, runtime_value
-from ..outputs import ACC_MAX_K, DRIFT_MAX_K, SLOTS, X1_MAX, X1_SQ_INT, X_MAX_K, X_SQ_INT_K, passage_slots
+from ..outputs import (
+    ACC_MAX_K,
+    DRIFT_MAX_K,
+    EVENT_ABSORBER,
+    EVENT_LOSS,
+    EVENT_SIDE,
+    EVENT_SPEED,
+    EVENT_T,
+    SLOTS,
+    X1_MAX,
+    X1_SQ_INT,
+    X_MAX_K,
+    X_SQ_INT_K,
+    passage_slots,
+)
 from ..physics.absorbers import (
     CLEARANCE,
     DAMPING,
@@ -237,6 +251,20 @@ def resolve_impact(mass, v, nf: int, a: int, side: int, gain: float, restitution
     v[h] = vh
     put(v, j, vj)
     return loss
+
+
+@njit(**INLINE)
+def log_event(events, counted: float, t: float, a: int, side: int, speed: float, loss: float) -> None:
+    """Row ``counted`` of the event log (``outputs.EVENT_COLUMNS``: the events counted so far
+    in the window, before this one): absorber ``a`` meets its ``side`` wall at ``t`` with
+    relative velocity ``speed``, losing ``loss``; past the log's length nothing is written."""
+    k = int(counted)
+    if k < events.shape[0]:
+        events[k, EVENT_T] = t
+        events[k, EVENT_ABSORBER] = a
+        events[k, EVENT_SIDE] = side
+        events[k, EVENT_SPEED] = speed
+        events[k, EVENT_LOSS] = loss
 
 
 @njit(**INLINE)

@@ -81,7 +81,9 @@ class Spec(NamedTuple):
     """What a loop is specialised to (compile-time constants): the numbers of bodies, floors,
     closed-form load rows and filter states (the sizes of its arrays on the stack), white
     noise, impact and Hertz absorbers, filtered loads, ground acceleration, geometric
-    attachments, and the cuda backend's loop (per-absorber flags on the stack)."""
+    attachments, the cuda backend's loop (per-absorber flags on the stack), and what the run
+    records beyond the metrics (``outputs.Record``: first passages, history rows, the event
+    log), whose code the loop holds only where asked."""
 
     n_bodies: int
     n_floors: int
@@ -94,6 +96,9 @@ class Spec(NamedTuple):
     ground: bool
     geometric: bool
     gpu: bool
+    passages: bool
+    history: bool
+    events: bool
 
 
 class Step(NamedTuple):
@@ -136,6 +141,8 @@ def step_loop(plug: Step, spec: Spec):
     NF = spec.n_floors
     GPU = spec.gpu
     HERTZ = spec.has_hertz
+    PASSAGES = spec.passages  # (what the run records: ``outputs.Record``)
+    HISTORY = spec.history
 
     @njit(**KERNEL)
     def kernel(bodies_, absorbers_, ex_, fl_, noise_, grid_, outputs_, gen, gen_bridge, gen_filter):
@@ -179,9 +186,11 @@ def step_loop(plug: Step, spec: Spec):
             restore_floors(carry, x_max, drift_max, acc_max, x2_integral)
         else:
             e1_prev = primary_energy(mass, storey_k, x, v, nf)
-            copy_state(x, v, xc, vc)
-            h_next = start_history(history, stride, signals, xc, vc, nf, e1_prev, host)
-            pending = limits.shape[0]  # limits not passed yet
+            h_next = -1
+            if HISTORY:
+                copy_state(x, v, xc, vc)
+                h_next = start_history(history, stride, signals, xc, vc, nf, e1_prev, host)
+            pending = limits.shape[0] if PASSAGES else 0  # limits not passed yet
             next_sample = 0
         sampling = SAMPLES and samples.shape[0] > 0
         i = first
@@ -202,7 +211,7 @@ def step_loop(plug: Step, spec: Spec):
                         x2_integral[k] = 0.5 * x[k] * x[k]
                 opening(own, x, v, inv_mass, acc, bodies, absorbers)
                 floor_peaks(x, nf, acc, x_max, drift_max, acc_max)
-                if pending > 0:
+                if PASSAGES and pending > 0:
                     pending = first_passages(limits, i * dt, nf, x_max, drift_max, acc_max, inv_mass,
                                              FORCE_PEAKS,
                                              e1_max, out)
@@ -236,7 +245,7 @@ def step_loop(plug: Step, spec: Spec):
                         for k in range(nf):
                             x2_integral[k] += x[k] * x[k]
                         floor_peaks(x, nf, acc, x_max, drift_max, acc_max)
-                        if pending > 0:
+                        if PASSAGES and pending > 0:
                             pending = first_passages(limits, i * dt + dt, nf, x_max, drift_max, acc_max,
                                                      inv_mass,
                                                      FORCE_PEAKS, e1_max, out)
@@ -246,7 +255,7 @@ def step_loop(plug: Step, spec: Spec):
                                                 vp, x,
                                                 v, n_left, n_right)
             i = end
-            if i == h_next:
+            if HISTORY and i == h_next:
                 copy_state(x, v, xc, vc)
                 h_next = record_history(history, stride, h_next, signals, xc, vc, nf,
                                         primary_energy(mass, storey_k, x, v, nf) if INTEGRATES else e1_prev,

@@ -64,6 +64,7 @@ from .common import (
     contact_step,
     geometric_forces,
     keep_in_cavities,
+    log_event,
     pin_to_walls,
     resolve_impact,
     stick_together,
@@ -343,6 +344,7 @@ def kdk_step(spec) -> Step:
     NR = spec.n_rows
     NZ = spec.n_states
     GPU = spec.gpu
+    LOG = spec.events and (has_impact or has_hertz)  # the event log (``outputs.Record``)
 
     @njit(**INLINE)
     def start(bodies, absorbers, ex, fl, noise, grid, carry, resume, x, v, gen_bridge):
@@ -560,6 +562,8 @@ def kdk_step(spec) -> Step:
             if has_hertz and hit >= 0 and kind[hit] == HERTZ:  # onto or off the contact surface
                 h = host_of(host, hit, nf)
                 j = nf + hit
+                if LOG and inside and hit_event != EXIT:
+                    log_event(outputs.events, n_left + n_right - 1.0, t, hit, side, v[j] - v[h], 0.0)
                 x[j] = x[h] + hit_wall
                 touching[hit] = 0 if hit_event == EXIT else side
             elif has_impact and hit >= 0:  # the impact, at t + s
@@ -567,11 +571,14 @@ def kdk_step(spec) -> Step:
                 gain = (force[j] / mass[j] - (force[h] + load_end[h]) / mass[h]) * dt
                 # the last impact a step may resolve ends a chatter sequence: inelastic collapse
                 last = n_impacts == MAX_EVENTS - 1
+                speed = v[j] - v[h]
                 loss = resolve_impact(mass, v, nf, hit, side, gain, rows[hit, RESTITUTION], last,
                                       stuck, host)
                 n_impacts += 1
                 if inside:
                     loss_sum += loss
+                    if LOG:
+                        log_event(outputs.events, n_left + n_right - 1.0, t, hit, side, speed, loss)
                 capped = capped or last
         if (has_impact or has_hertz) and capped:
             out[CAPPED] += 1

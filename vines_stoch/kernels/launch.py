@@ -43,7 +43,7 @@ def launcher(kernel, n_bodies: int, simulated: bool):
     def launch(first, n, per_path, place, keys, mass, storey_k, storey_c, floor_c, x0, v0, rows, forces,
                sigma, limits, phi, chol, envelope, c_force, c_ground, p0, kind, host, series_t, series_v,
                series_ptr, series_target, normals, dt, n_steps, i0, period, sample_from, stride, template,
-               signals, out, samples, history, work):
+               signals, out, samples, history, events, work):
         t = cuda.grid(1)
         if t >= n:
             return
@@ -72,6 +72,10 @@ def launcher(kernel, n_bodies: int, simulated: bool):
         for a in range(own_history.shape[0]):
             for b in range(own_history.shape[1]):
                 own_history[a, b] = np.nan
+        own_events = plain(events[t])
+        for a in range(own_events.shape[0]):
+            for b in range(own_events.shape[1]):
+                own_events[a, b] = np.nan
         z, zn, draws = plain(work[t, 0]), plain(work[t, 1]), plain(work[t, 2])
         f0 = plain(p0[p])
         stationary_start(f0, fil, z, draws)
@@ -86,7 +90,7 @@ def launcher(kernel, n_bodies: int, simulated: bool):
                Grid(dt=dt, n_steps=n_steps, i0=i0, period=period, sample_from=sample_from, stride=stride,
                     first=0),
                Outputs(out=row, samples=own_samples, history=own_history, signals=plain(signals),
-                       limits=plain(limits[p]), carry=row[:0]),
+                       limits=plain(limits[p]), carry=row[:0], events=own_events),
                inc, bri, fil)
 
     if not simulated:

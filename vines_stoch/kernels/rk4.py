@@ -41,6 +41,7 @@ from .common import (
     floor_peaks,
     geometric_forces,
     keep_in_cavities,
+    log_event,
     pin_to_walls,
     resolve_impact,
     stick_together,
@@ -241,6 +242,8 @@ def rk4_step(spec) -> Step:
     GPU = spec.gpu
     GEO = GEOMETRIC_FORCES if spec.geometric else 0
     has_impact, has_hertz = spec.has_impact, spec.has_hertz
+    PASSAGES = spec.passages  # (what the run records: ``outputs.Record``)
+    LOG = spec.events and (has_impact or has_hertz)
 
     @njit(**INLINE)
     def start(bodies, absorbers, ex, fl, noise, grid, carry, resume, x, v, gen_bridge):
@@ -354,7 +357,7 @@ def rk4_step(spec) -> Step:
                 # peaks: the state at the sub-step's end, the accelerations at its start
                 floor_peaks(xn, nf, a0, x_max, drift_max, acc_max)
                 e1_max = max(e1_max, primary_energy(mass, storey_k, xn, vn, nf))
-                if pending > 0:
+                if PASSAGES and pending > 0:
                     pending = first_passages(limits, t + h, nf, x_max, drift_max, acc_max, inv_mass, False,
                                              e1_max, out)
             for b in range(nb):
@@ -380,13 +383,18 @@ def rk4_step(spec) -> Step:
                                    (HERTZ_FORCES if contact else 0) | GEO)
                 # the last impact a step may resolve ends a chatter sequence: inelastic collapse
                 gain = (pick(acc_wall, j) - acc_wall[hf]) * dt
+                speed = pick(v, j) - v[hf]
                 loss = resolve_impact(mass, v, nf, q, side, gain, rows[q, RESTITUTION],
                                       n_impacts >= MAX_EVENTS, stuck, host)
                 if inside:
                     loss_sum += loss
                     e1_max = max(e1_max, primary_energy(mass, storey_k, x, v, nf))
+                    if LOG:
+                        log_event(outputs.events, n_left + n_right, t, q, side, speed, loss)
             elif has_hertz and event_kind == ONSET:
                 touching[q] = side
+                if LOG and inside:
+                    log_event(outputs.events, n_left + n_right, t, q, side, pick(v, j) - v[hf], 0.0)
             elif has_hertz and event_kind == EXIT:
                 touching[q] = 0
             if inside and (event_kind == IMPACT_EVENT or event_kind == ONSET):

@@ -1,5 +1,5 @@
 """A path run in stretches (``kernels.start_path``, ``kernels.advance``) ends in the state, with
-the metrics, history rows and Poincare samples of the same path run in one go, bitwise: the step
+the metrics, history rows, Poincare samples and event log of the same path run in one go, bitwise: the step
 loops carry their accumulators and hidden state across a split (``kernels/carry.py``), and the
 generators continue where the last stretch stopped.  The splits fall before, at and after the
 metrics window's opening, off the divergence checks' grid (1024 steps) and across it."""
@@ -11,7 +11,7 @@ import pytest
 
 from tests.helpers import example_data, scene_from
 from vines_stoch.kernels import advance, sample_buffer, simulate, start_path
-from vines_stoch.outputs import ENERGY_INT
+from vines_stoch.outputs import ENERGY_INT, new_events
 from vines_stoch.streams import Streams
 from vines_stoch.validation import scenes
 
@@ -44,21 +44,23 @@ def _sra():
 
 
 def _run(scene, stops, seed: int = 7):
-    """State, metrics, history and samples of the path run to each of ``stops`` in turn (one
-    stop: in one go, by ``simulate``)."""
+    """State, metrics, history, samples and event log of the path run to each of ``stops`` in
+    turn (one stop: in one go, by ``simulate``)."""
     history = np.zeros((8, 2 + scene.n_floors))
     samples = sample_buffer(scene)
+    events = new_events(64)
     stride = scene.n_steps // 7
     if len(stops) == 1:
         final = np.zeros((2, scene.mass.shape[0]))
         out = simulate(scene, np.random.default_rng(seed), final=final, history=history, stride=stride,
-                       samples=samples)
-        return final[0], final[1], out, history, samples
-    path = start_path(scene, np.random.default_rng(seed), history=history, stride=stride, samples=samples)
+                       samples=samples, events=events)
+        return final[0], final[1], out, history, samples, events
+    path = start_path(scene, np.random.default_rng(seed), history=history, stride=stride, samples=samples,
+                      events=events)
     for stop in stops:
         advance(path, stop)
     assert path.step == scene.n_steps and path.t == scene.n_steps * scene.dt
-    return path.x, path.v, path.out, history, samples
+    return path.x, path.v, path.out, history, samples, events
 
 
 def _splits(scene) -> list[int]:
@@ -115,10 +117,10 @@ def test_advance_refuses_stops_outside_the_path_and_paths_without_a_carry():
 
 
 def _started(scene, split: int, seed: int = 7):
-    """A path with history rows and samples run to step ``split``."""
+    """A path with history rows, samples and an event log run to step ``split``."""
     history = np.zeros((8, 2 + scene.n_floors))
     path = start_path(scene, Streams.shared(np.random.default_rng(seed)), history=history,
-                      stride=scene.n_steps // 7, samples=sample_buffer(scene))
+                      stride=scene.n_steps // 7, samples=sample_buffer(scene), events=new_events(64))
     return advance(path, split)
 
 
@@ -135,8 +137,10 @@ def test_a_branch_runs_on_as_its_path_would(case):
     for p in (path, twin):
         advance(p, scene.n_steps)
     for a, b in [(path.x, twin.x), (path.v, twin.v), (path.out, twin.out),
-                 (path.args[6].history, twin.args[6].history), (path.args[6].samples, twin.args[6].samples)]:
+                 (path.args[6].history, twin.args[6].history), (path.args[6].samples, twin.args[6].samples),
+                 (path.args[6].events, twin.args[6].events)]:
         np.testing.assert_array_equal(a, b)
+    assert path.args[6].events is not twin.args[6].events
 
 
 @pytest.mark.parametrize("case", ["kdk Hertz contact and impacts under white noise",

@@ -1,0 +1,138 @@
+"""What a run records beyond the metrics (``outputs.Record``): the event log against the metrics
+it details and the Newton impact's closed-form loss, the same numbers whatever a run asks to
+record, and a loop that holds the code of only what its run records."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from tests.helpers import ROOT, example_data, scene_from
+from vines_stoch.kernels import simulate
+from vines_stoch.outputs import (
+    EVENT_ABSORBER,
+    EVENT_LOSS,
+    EVENT_SIDE,
+    EVENT_SPEED,
+    EVENT_T,
+    SLOTS,
+    new_events,
+)
+from vines_stoch.physics.absorbers import HERTZ, IMPACT, RESTITUTION
+
+_S = {name: i for i, name in enumerate(SLOTS)}
+
+#: Scenes with impacts and Hertz contact in both event schemes: the RK4 step (deterministic
+#: impacts beside a cubic NES; the double-sided Hertz NES under harmonic force) and the
+#: kick-drift-kick step (deterministic impacts; Hertz contact and plastic impacts under white
+#: noise, on the Brownian tree).
+CASES = {
+    "rk4 impacts": ("parallel_nes_impulse", "rk4", 10.0),
+    "rk4 Hertz contact": ("seed003_ds20", "rk4", 10.0),
+    "kdk impacts": ("parallel_nes_impulse", "euler-maruyama", 10.0),
+    "kdk Hertz contact and impacts under noise": ("contact_noise_parallel", None, 3.0),
+}
+
+
+def _scene(name: str, scheme: str | None, duration: float):
+    data = example_data(name)
+    data.pop("sweep", None)
+    changes = {"simulation.duration": duration, "simulation.metrics_from": duration / 4}
+    if scheme is not None:
+        changes["simulation.scheme"] = scheme
+    return scene_from(data, changes=changes)
+
+
+@pytest.mark.parametrize("case", list(CASES))
+def test_the_event_log_details_the_impacts_the_metrics_count(case):
+    scene = _scene(*CASES[case])
+    events = new_events(100_000)
+    out = simulate(scene, np.random.default_rng(3), events=events)
+    logged = events[np.isfinite(events[:, EVENT_T])]
+    assert np.isnan(events[len(logged):]).all()  # the rows in order, the rest untouched
+    assert len(logged) == out[_S["impacts"]] > 0
+    side = logged[:, EVENT_SIDE]
+    assert (side == -1).sum() == out[_S["impacts_left"]] and (side == 1).sum() == out[_S["impacts_right"]]
+    t = logged[:, EVENT_T]
+    assert (np.diff(t) >= 0).all()
+    assert scene.i0 * scene.dt <= t[0] and t[-1] <= scene.n_steps * scene.dt
+    # the losses, in the order the loop added them, sum to the impact loss exactly
+    total = 0.0
+    for loss in logged[:, EVENT_LOSS]:
+        total += loss
+    assert total == out[_S["impact_loss"]]
+    a = logged[:, EVENT_ABSORBER].astype(int)
+    kind = scene.kind[a]
+    assert set(kind) <= {IMPACT, HERTZ}
+    speed = logged[:, EVENT_SPEED]
+    if CASES[case][1] == "rk4":  # each absorber moving into the wall it meets (kick-drift-kick:
+        assert (side * speed > 0).all()  # the velocity after the closing kick, which a slow impact's loads
+        # may have turned, is the one the impact map acts on)
+    assert (logged[kind == HERTZ, EVENT_LOSS] == 0.0).all()  # (Hertz contact: elastic)
+    # an impact loses what the Newton map takes, (1 - e^2) mu u^2 / 2 (Wei et al. eqs. 2-3), or
+    # mu u^2 / 2 when it starts sticking (e = 0)
+    impacts = kind == IMPACT
+    if impacts.any():
+        host = scene.host[a[impacts]]
+        m1, ma = scene.mass[host], scene.mass[scene.n_floors + a[impacts]]
+        mu_u2 = 0.5 * m1 * ma / (m1 + ma) * speed[impacts] ** 2
+        e = scene.rows[a[impacts], RESTITUTION]
+        elastic = np.isclose(logged[impacts, EVENT_LOSS], (1 - e**2) * mu_u2, rtol=1e-12, atol=0.0)
+        plastic = np.isclose(logged[impacts, EVENT_LOSS], mu_u2, rtol=1e-12, atol=0.0)
+        assert (elastic | plastic).all()
+
+
+@pytest.mark.parametrize("case", ["rk4 impacts", "kdk impacts", "kdk harmonic and white noise"])
+def test_what_a_run_records_changes_no_number(case):
+    """The records write into their own arrays, never into the state or the accounts: a run
+    that keeps an event log and history rows ends with the metrics and state of one that keeps
+    none.  The two are different loops, whose compiler may fuse different multiply-adds (the
+    kernels allow contraction: ``jit.flags.KERNEL``), so they agree to the last bits, within
+    1e-9 relative as the shipped numbers do (``tests/integration/test_numbers_hold.py``): on
+    this scene, whose paths are not chaotic."""
+    if case == "kdk harmonic and white noise":
+        scene = _scene("seed000_harmonic_noise_none", None, 10.0)
+    else:
+        scene = _scene(*CASES[case])
+    bare_final, kept_final = np.zeros((2, scene.mass.shape[0])), np.zeros((2, scene.mass.shape[0]))
+    bare = simulate(scene, np.random.default_rng(5), final=bare_final)
+    kept = simulate(scene, np.random.default_rng(5), final=kept_final, events=new_events(7),
+                    history=np.zeros((5, 2)), stride=scene.n_steps // 4)
+    scale = np.abs(bare[np.isfinite(bare)]).max()
+    np.testing.assert_allclose(kept, bare, rtol=1e-9, atol=1e-12 * scale)
+    np.testing.assert_allclose(kept_final, bare_final, rtol=1e-9, atol=1e-12 * np.abs(bare_final).max())
+
+
+#: A process that compiles the loop of a short cubic-NES path bare and with history rows (into
+#: the cache ``NUMBA_CACHE_DIR`` names, fresh: code loaded from a cache shows no IR) and prints,
+#: for each, whether its IR calls the out-of-line history row and the IR's length.
+COMPILE_BOTH = r'''
+import json
+import numpy as np
+from tests.helpers import example_data, scene_from
+from vines_stoch.kernels import kernel_for, simulate
+from vines_stoch.outputs import Record
+scene = scene_from(example_data("cubic_nes_impulse", "sweep"), changes={"simulation.duration": 0.1})
+simulate(scene)
+simulate(scene, history=np.zeros((3, 2)), stride=10)
+ir = [next(iter(kernel_for(scene, record=r).overloads.values())).library.get_llvm_str()
+      for r in (Record(), Record(history=True))]
+print(json.dumps([["_history_row" in text, len(text)] for text in ir]))
+'''
+
+
+def test_a_loop_holds_only_what_its_run_records(tmp_path):
+    """A scene pays only for what it asks: the loop of a run that keeps no history rows holds
+    none of their code (it never calls the out-of-line history row), and is the smaller."""
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "numba")}
+    done = subprocess.run([sys.executable, "-c", COMPILE_BOTH], cwd=ROOT, env=env, capture_output=True,
+                          text=True, timeout=600)
+    assert done.returncode == 0, done.stderr[-2000:]
+    (bare_calls, bare_size), (kept_calls, kept_size) = json.loads(done.stdout.splitlines()[-1])
+    assert not bare_calls and kept_calls
+    assert bare_size < kept_size
