@@ -10,10 +10,11 @@ from typing import Any, NamedTuple
 
 from numba import njit
 
-from ..jit.flags import INLINE
+from ..jit.flags import INLINE, KERNEL
+from ..jit.intrinsics import plain, runtime_value
 from .carry import GROUND_NEXT, restore_loads, restore_rows, save_loads, save_rows
 from .common import attachment_forces, geometric_forces
-from .loads import advance_filters, excitation, phasors, rotations, turn
+from .loads import advance_filters, copy_into, excitation, phasors, rotations, turn
 from .rng import normal
 
 
@@ -21,8 +22,8 @@ class GridLoads(NamedTuple):
     """The floors' loads at the step's start, end, an event inside it and its midpoint; the
     harmonic rows' phasors (cos, sin) at the step's start and midpoint and their turns over a
     step and half a step (``loads.turn``); the filter state, its next state and the normals'
-    scratch (on the stack: heap arrays passed to the inlined load functions cost reference
-    counting in the step loop)."""
+    scratch; copies of the filter states and a load for ``event_loads`` (on the stack: heap
+    arrays passed to the inlined load functions cost reference counting in the step loop)."""
 
     load: Any
     load_next: Any
@@ -39,6 +40,9 @@ class GridLoads(NamedTuple):
     z: Any
     zn: Any
     draws: Any
+    z_copy: Any
+    zn_copy: Any
+    load_copy: Any
 
 
 @njit(**INLINE)
@@ -120,6 +124,32 @@ def end_loads(i: int, dt: float, gl, ex, fl, filtered: bool, ground: bool) -> fl
     return excitation(t_step + dt, t_step + 0.5 * dt, 1.0, ex.forces, ex.series_t, ex.series_v, ex.series_ptr,
                       ex.series_target, filtered, fl.c_force, fl.c_ground, gl.z, gl.zn, gl.pc, True, ground,
                       gl.load_next)
+
+
+@njit(**INLINE)
+def event_loads(t: float, tm: float, theta: float, gl, ex, fl, filtered: bool, ground: bool) -> float:
+    """The loads at ``t`` inside a step (a sub-step's end at an event: ``theta`` of the way
+    through the step, its piece chosen at ``tm``) into ``load_end``; returns the ground
+    acceleration there.  Out of line (``_event_loads``): events are rare, and the inlined
+    loads in the event loop cost the ground-motion contact scene 10 % of its speed; the call
+    takes copies of the filter states, so that they stay in registers (see
+    ``common.stored_energy``)."""
+    copy_into(gl.z_copy, gl.z)
+    copy_into(gl.zn_copy, gl.zn)
+    ag = _event_loads(*plain((t, tm, theta, ex.forces, ex.series_t, ex.series_v, ex.series_ptr,
+                              ex.series_target, runtime_value(filtered), fl.c_force, fl.c_ground, gl.z_copy,
+                              gl.zn_copy, runtime_value(ground), gl.load_copy)))
+    copy_into(gl.load_end, gl.load_copy)
+    return ag
+
+
+@njit(**KERNEL)
+def _event_loads(t, tm, theta, forces, series_t, series_v, series_ptr, series_target, filtered, c_force,
+                 c_ground, z, zn, ground, load) -> float:
+    """``event_loads``'s body, compiled once for every loop (the harmonic rows from their
+    closed form: ``z`` stands in for the phasors, unread)."""
+    return excitation(t, tm, theta, forces, series_t, series_v, series_ptr, series_target, filtered, c_force,
+                      c_ground, z, zn, z, False, ground, load)
 
 
 @njit(**INLINE)

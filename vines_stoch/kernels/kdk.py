@@ -75,6 +75,7 @@ from .events import EXIT, NONE, event_ahead, gap_sign
 from .grid import (
     GridLoads,
     end_loads,
+    event_loads,
     finish_loads,
     noise_scales,
     opening_forces,
@@ -84,7 +85,7 @@ from .grid import (
     step_loads,
     step_normals,
 )
-from .loads import excitation, has_breaks
+from .loads import has_breaks
 from .rng import uniform
 
 #: Iterations of the bracketed search for the impact instant (Illinois method).
@@ -353,7 +354,7 @@ def kdk_step(spec) -> Step:
         gl = GridLoads(scratch(NF), scratch(NF), scratch(NF), scratch(0), scratch(NR), scratch(NR),
                        scratch(0),
                        scratch(0), scratch(NR), scratch(NR), scratch(0), scratch(0), scratch(NZ), scratch(NZ),
-                       scratch(NZ))
+                       scratch(NZ), scratch(NZ), scratch(NZ), scratch(NF))
         noise_scale, slot = scratch(NF), scratch(NF)
         noisy = noise_scales(noise.sigma, grid.dt, noise_scale, slot)
         # the seed of the Brownian trees inside the steps (``brownian``)
@@ -410,14 +411,11 @@ def kdk_step(spec) -> Step:
         na = NA
         mass, storey_k, storey_c, floor_c = bodies.mass, bodies.storey_k, bodies.storey_c, bodies.floor_c
         kind, host, rows = absorbers.kind, absorbers.host, absorbers.rows
-        forces, series_t, series_v, series_ptr, series_target = (ex.forces, ex.series_t, ex.series_v,
-                                                                 ex.series_ptr, ex.series_target)
-        c_force, c_ground = fl.c_force, fl.c_ground
         sigma, normals, refine = noise.sigma, noise.normals, noise.refine
         dt = grid.dt
         out = outputs.out
         force, vn, vt, vh, gl = own.force, own.vn, own.vt, own.vh, own.gl
-        load, load_next, load_end, pc, z, zn = gl.load, gl.load_next, gl.load_end, gl.pc, gl.z, gl.zn
+        load, load_next, load_end = gl.load, gl.load_next, gl.load_end
         dw, dws, dwh, dwc, w_at = own.dw, own.dws, own.dwh, own.dwc, own.w_at
         slot, memo, stuck, touching = own.slot, own.memo, own.stuck, own.touching
         held, owed = own.held, own.owed
@@ -514,9 +512,7 @@ def kdk_step(spec) -> Step:
             # slower)
             ag_end = ag_next
             if (has_impact or has_hertz) and s < left:
-                ag_end = excitation(t + s, tm, (t + s - t_step) / dt, forces, series_t, series_v,
-                                    series_ptr, series_target, filtered, c_force, c_ground, z, zn, pc,
-                                    False, ground, load_end)
+                ag_end = event_loads(t + s, tm, (t + s - t_step) / dt, gl, ex, fl, filtered, ground)
             else:
                 for k in range(nf):
                     load_end[k] = load_next[k]

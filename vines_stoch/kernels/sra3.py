@@ -149,7 +149,7 @@ def sra3_step(spec) -> Step:
     def start(bodies, absorbers, ex, fl, noise, grid, carry, resume, x, v, gen_bridge):
         gl = GridLoads(scratch(NF), scratch(NF), scratch(NF), scratch(NF), scratch(NR), scratch(NR),
                        scratch(NR), scratch(NR), scratch(NR), scratch(NR), scratch(NR), scratch(NR),
-                       scratch(NZ), scratch(NZ), scratch(NZ))
+                       scratch(NZ), scratch(NZ), scratch(NZ), scratch(0), scratch(0), scratch(0))
         noise_scale, slot = scratch(NF), scratch(NF)
         noisy = noise_scales(noise.sigma, grid.dt, noise_scale, slot)
         replayed = int(carry[REPLAYED]) if resume else 0

@@ -26,6 +26,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.linalg import expm, solve_continuous_lyapunov
 
+from .loads import ENVELOPE_COLUMNS, ENVELOPE_FIRST
+
 
 @dataclass(frozen=True)
 class Filter:
@@ -150,13 +152,15 @@ def _sqrt_psd(cov: np.ndarray) -> np.ndarray:
 
 def block_diagonal(filters: list[Filter], dt: float, n_floors: int = 1) -> dict[str, np.ndarray]:
     """Kernel arrays of all filtered loads, stacked block-diagonally: ``phi``, ``chol``
-    (step transition and noise root), ``envelope`` (one row per state), ``c_force`` (one
+    (step transition and noise root), ``envelope`` (one row per state: ``loads.ENVELOPE_COLUMNS``),
+    ``c_force`` (one
     read-out row per floor; a filter with a ``profile`` reads out on every floor) and
     ``c_ground`` (one row), ``p0`` (root of the stationary covariance, zero for filters that
     start from rest)."""
     n = sum(f.a.shape[0] for f in filters)
     arrays = {name: np.zeros((n, n)) for name in ("phi", "chol", "p0")}
-    arrays.update(envelope=np.zeros((n, 4)), c_force=np.zeros((n_floors, n)), c_ground=np.zeros((1, n)))
+    arrays.update(envelope=np.zeros((n, ENVELOPE_COLUMNS)), c_force=np.zeros((n_floors, n)),
+                  c_ground=np.zeros((1, n)))
     k = 0
     for f in filters:
         m = f.a.shape[0]
@@ -164,7 +168,8 @@ def block_diagonal(filters: list[Filter], dt: float, n_floors: int = 1) -> dict[
         arrays["phi"][s, s], arrays["chol"][s, s] = transition(f.a, f.b, dt)
         if f.stationary:
             arrays["p0"][s, s] = _sqrt_psd(stationary_covariance(f.a, f.b))
-        arrays["envelope"][s] = f.envelope
+        arrays["envelope"][s, :ENVELOPE_FIRST] = f.envelope
+        arrays["envelope"][k, ENVELOPE_FIRST] = 1.0
         if f.ground:
             arrays["c_ground"][0, s] = f.c
         elif f.profile is not None:

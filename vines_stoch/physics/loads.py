@@ -18,6 +18,10 @@ FORCE_ROW, FLOOR = 7, 6
 GROUND = -1
 #: Envelope kinds of filter rows (``filters.STATIONARY`` etc.).
 STATIONARY, JENNINGS, SARAGONI_HART = 0, 1, 2
+#: Columns of a filter state's envelope row: the kind and three parameters (``envelope``), then
+#: 1 on a filter's first state, whose envelope its other states share (0 on those): the filter
+#: step evaluates an envelope once a filter (``filters.block_diagonal``).
+ENVELOPE_COLUMNS, ENVELOPE_FIRST = 5, 4
 
 
 @njit(**INLINE)
