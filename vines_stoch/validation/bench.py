@@ -38,10 +38,12 @@ from numba import njit
 
 from ..ensemble import run
 from ..jit.flags import KERNEL
-from ..kernels import load_history, simulate
+from ..kernels import load_history, needed_streams, simulate
 from ..outputs import ABSORBER_DISS, E1_MAX, FINAL_ENERGY, IMPACT_LOSS, INPUT, PRIMARY_DISS
 from ..physics.hertz import hertz_constant
 from ..records import G, write_at2
+from ..scene import build_scene
+from ..streams import streams
 from . import precision, scenes, stability
 from .bench_gpu import replace_section, section_of
 from .reference import hertz_reference
@@ -163,14 +165,19 @@ SAME_PATH_LEVELS = [6, 7, 8, 9, 10, 11]
 #: Contact under noise: the SSVI design SS-2(20) of seed 003 under Clough-Penzien ground motion
 #: (intensity 0.3) and the steel-on-steel double-sided NES beside a plastic impact NES under
 #: harmonic + white noise (the example scenarios), run at one sweep point with ``n`` paths.
+#: The header of the contact scenes' table.
+CONTACT_HEADER = ("| scene | M path-steps/s | ratio to the smooth scene (`run`) | ratio of the step loops | "
+                  "contacts and impacts a path | max abs energy residual |\n"
+                  "| --- | ---: | ---: | ---: | ---: | ---: |")
 CONTACT_SCENES = {"SSVI SS-2(20) under ground motion": ("scenarios/seed003_ss_ground_motion.toml", 1),
                   "steel-on-steel DSVI + plastic impact NES, harmonic + white noise":
                       ("scenarios/contact_noise_parallel.toml", 0)}
 
 
-def _contact_rates(n_paths: int, directory: Path) -> list[tuple[str, float, float, float]]:
-    """``(scene, path-steps/s, max abs energy residual, contacts a path)`` of ``vines_stoch.run``
-    with one thread on the ``CONTACT_SCENES``."""
+def _contact_rates(n_paths: int, directory: Path) -> list[tuple[str, float, float, float, float]]:
+    """``(scene, path-steps/s, max abs energy residual, contacts a path, step loop ratio)`` of
+    ``vines_stoch.run`` with one thread on the ``CONTACT_SCENES``; the last, the scene's step
+    loop (``simulate``) against the smooth scene's, one path of each in turn (``_loop_ratio``)."""
     from ..scenario import load_scenario
 
     rows = []
@@ -185,8 +192,30 @@ def _contact_rates(n_paths: int, directory: Path) -> list[tuple[str, float, floa
         sim = one.points[0].simulation
         rows.append((name, n_paths * sim.duration / sim.dt / elapsed,
                      float(realizations["energy_residual"].abs().max()),
-                     float(realizations["impacts"].mean())))
+                     float(realizations["impacts"].mean()), _loop_ratio(build_scene(one.points[0]))))
     return rows
+
+
+def _loop_ratio(scene, rounds: int = 20) -> float:
+    """Path-steps/s of ``scene``'s step loop over the smooth scene's, one smooth path and about as
+    many steps of ``scene`` in turn (paths seeded as in an ensemble), so that both see the same
+    machine: a run's fixed costs (its folder, its tables) weigh on short paths, the loops'
+    ratio is the engine's."""
+    smooth = scenes.scene("smooth", {"ensemble.realizations": 1})
+    increments, bridge, filters = needed_streams(scene)
+    per = max(1, round(smooth.n_steps / scene.n_steps))
+    seconds = [0.0, 0.0]
+    for r in range(-1, rounds):  # round -1 compiles or loads the loops
+        start = time.perf_counter()
+        simulate(smooth, np.random.default_rng(r + 2))
+        middle = time.perf_counter()
+        for q in range(per):
+            simulate(scene, streams(1, 0, (r + 1) * per + q, increments=increments, bridge=bridge,
+                                    filters=filters))
+        if r >= 0:
+            seconds[0] += middle - start
+            seconds[1] += time.perf_counter() - middle
+    return (per * scene.n_steps / seconds[1]) / (smooth.n_steps / seconds[0])
 
 
 def _ssvi() -> dict[str, float]:
@@ -434,12 +463,14 @@ seed 000 under harmonic + white noise, impacts split on the Brownian tree of the
 
 `vines_stoch.run` with one thread on the example scenarios (one sweep point, {n_paths} paths;
 kick-drift-kick, contacts sub-stepped, every sub-step on the Brownian tree of its step), as
-ratios to the smooth scene's 1-thread `run` above.
+ratios to the smooth scene's 1-thread `run` above; and the step loops' ratio, each scene's
+`simulate` against the smooth scene's, one path of each in turn (the smooth paths are 200,000
+steps long, the SSVI's 30,000: a run's fixed costs, its folder and tables, weigh more on short
+paths).
 
-| scene | M path-steps/s | ratio to the smooth scene | contacts and impacts a path | max abs energy residual |
-| --- | ---: | ---: | ---: | ---: |
-{chr(10).join(f"| {name} | {rate / 1e6:.2f} | {rate / api1:.2f} | {hits:.0f} | {res:.1e} |"
-              for name, rate, res, hits in contact)}
+{CONTACT_HEADER}
+{chr(10).join(f"| {name} | {rate / 1e6:.2f} | {rate / api1:.2f} | {loops:.2f} | {hits:.0f} | {res:.1e} |"
+              for name, rate, res, hits, loops in contact)}
 
 Work-precision on one Brownian path (`precision.same_path_errors`): LPO m = k = 1, c = 0.02 with
 a double-sided Hertz absorber (K = 7e5 N/m^1.5) or an impact absorber (r = 0.9), white noise 0.1,
