@@ -44,7 +44,7 @@ SIMULATED_BATCH = 64
 #: launcher takes them; the others are one for the whole ensemble.
 PER_PATH = ("mass", "storey_k", "storey_c", "floor_c", "x0", "v0", "rows", "forces", "sigma", "limits",
             "phi", "chol", "envelope", "c_force", "c_ground", "p0")
-SHARED = ("kind", "host", "series_t", "series_v", "series_ptr", "series_target")
+SHARED = ("kind", "host", "series_t", "series_v", "series_ptr", "series_target", "reductions")
 _FILTER_KEYS = ("phi", "chol", "envelope", "c_force", "c_ground", "p0")
 
 
@@ -172,7 +172,7 @@ class Inputs:
         stride, size = grid if grid is not None else (1, 0)
         return cls(scene, len(scenes) > 1, _stack(scenes),
                    {name: np.ascontiguousarray(getattr(scene, name)) for name in SHARED},
-                   new_metrics(scene.n_floors, scene.limits.shape[0]),
+                   new_metrics(scene.n_floors, scene.limits.shape[0], scene.reductions.shape[0]),
                    np.array([stream_key(seed, p) for p in (INCREMENTS, BRIDGE, FILTER)], np.uint64),
                    np.uint64(stream_place(0, point, common)), POINCARE_SAMPLES if scene.period > 0 else 0,
                    stride, size, declare(signals, scene.n_floors, scene.kind.shape[0]), events)

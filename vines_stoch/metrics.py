@@ -10,6 +10,7 @@ import pandas as pd
 
 from .outputs import ACC_MAX_K, DRIFT_MAX_K, SLOTS, STATUS_DIVERGED, X_MAX_K, X_SQ_INT_K, passage_slots
 from .scene import Scene
+from .signals import METRIC_NAME, REDUCE_MEAN, REDUCE_RMS, REDUCTION_SLOTS
 
 #: Metric columns of realizations.parquet, in order (then the per-floor columns of
 #: ``floor_metrics``); each gets summary statistics.
@@ -39,11 +40,14 @@ def floor_metrics(n_floors: int) -> list[str]:
 
 
 def metric_columns(frame: pd.DataFrame) -> list[str]:
-    """The metric columns present in a realisations table: ``METRICS``, then the floors'."""
+    """The metric columns present in a realisations table: ``METRICS``, the floors', then the
+    declared ones (``[output] metrics``: ``signals.METRIC_NAME``)."""
     n = 0
     while f"x_max_{n + 1}" in frame.columns:
         n += 1
-    return list(METRICS) + floor_metrics(n)
+    declared = [c for c in frame.columns
+                if isinstance(c, str) and METRIC_NAME.fullmatch(c) and c not in METRICS]
+    return list(METRICS) + floor_metrics(n) + declared
 
 
 def regime(samples: np.ndarray, omega: float) -> str | None:
@@ -136,6 +140,18 @@ def finish_table(raw: np.ndarray, scene: Scene | Sequence[Scene],
     passages = passage_slots(nf)
     for limit, name in enumerate(scene.limit_names):  # (NaN where a limit never passed)
         columns[f"first_passage_{name}"] = raw[:, passages + limit]
+    declared = passages + len(scene.limit_names)
+    dt = scene.dt if scenes is None else np.array([s.dt for s in scenes])
+    for r, name in enumerate(scene.metric_names):  # (``signals.declare_metrics``)
+        folded, last = raw[:, declared + REDUCTION_SLOTS * r], raw[:, declared + REDUCTION_SLOTS * r + 1]
+        op = scene.reductions[r, 2]
+        with np.errstate(invalid="ignore", over="ignore", divide="ignore"):
+            if op == REDUCE_MEAN:  # (the trapezoid rule: the last step end at half weight, as x1_rms)
+                folded = (folded - 0.5 * last) * dt / window
+            elif op == REDUCE_RMS:
+                folded = rms((folded - 0.5 * last * last) * dt)
+        columns[name] = folded
+        finite &= np.isfinite(folded)
     ok = finite & (slot["status"] != STATUS_DIVERGED)
     # string columns as codes into their few values (far faster than a string a row)
     columns["status"] = pd.Series(["diverged", "ok"]).array.take(ok.astype(np.intp))

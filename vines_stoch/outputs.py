@@ -13,6 +13,7 @@ import numpy as np
 from numba import njit
 
 from .jit.flags import INLINE
+from .signals import REDUCTION_SLOTS
 
 #: Slots of the raw metric vector a kernel fills; ``metrics.finish_table`` turns it into columns.
 SLOTS = (
@@ -48,11 +49,13 @@ def passage_slots(nf: int) -> int:
     return len(SLOTS) + len(FLOOR_SLOTS) * nf
 
 
-def new_metrics(n_floors: int = 1, n_limits: int = 0) -> np.ndarray:
+def new_metrics(n_floors: int = 1, n_limits: int = 0, n_declared: int = 0) -> np.ndarray:
     """A raw metric vector of a primary with ``n_floors`` floors: zeros, then NaN in the
-    first-passage slots of ``n_limits`` limits."""
-    out = np.zeros(passage_slots(n_floors) + n_limits)
-    out[passage_slots(n_floors):] = np.nan
+    first-passage slots of ``n_limits`` limits, then the slots of ``n_declared`` declared
+    metrics (``signals.REDUCTION_SLOTS`` each; zero until the window opens)."""
+    base = passage_slots(n_floors)
+    out = np.zeros(base + n_limits + REDUCTION_SLOTS * n_declared)
+    out[base:base + n_limits] = np.nan
     return out
 
 
@@ -68,20 +71,23 @@ EVENT_T, EVENT_ABSORBER, EVENT_SIDE, EVENT_SPEED, EVENT_LOSS = range(len(EVENT_C
 
 
 class Record(NamedTuple):
-    """What a run records beyond the metric vector, the step loop's compile-time flags: the
+    """What a run records beyond the built-in metrics, the step loop's compile-time flags: the
     first passages of limits (the scene has limits), history rows (of declared signals,
-    ``signals.declare``), the event log.  The Poincare samples are the scheme's (``driver.Step``).
+    ``signals.declare``), the event log, the declared metrics (``signals.declare_metrics``).
+    The Poincare samples are the scheme's (``driver.Step``).
     A loop compiles the code of a record only when it is asked for."""
 
     passages: bool = False
     history: bool = False
     events: bool = False
+    declared: bool = False
 
     @classmethod
     def of(cls, scene, history_rows: int = 0, event_rows: int = 0) -> Record:
         """What a run of ``scene`` keeping ``history_rows`` history rows and ``event_rows`` rows
         of event log records."""
-        return cls(passages=scene.limits.shape[0] > 0, history=history_rows > 0, events=event_rows > 0)
+        return cls(passages=scene.limits.shape[0] > 0, history=history_rows > 0, events=event_rows > 0,
+                   declared=scene.reductions.shape[0] > 0)
 
 
 def new_events(capacity: int) -> np.ndarray:

@@ -50,6 +50,7 @@ from .scenario import (
     WhiteNoiseLoad,
     WindLoad,
 )
+from .signals import declare_metrics
 
 
 @dataclass(frozen=True)
@@ -84,6 +85,9 @@ class Scene:
     sample_from: float = 0.0  # time of the first Poincare sample
     limits: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))  # (n_limits, 3) rows: limit_row
     limit_names: tuple[str, ...] = ()      # the limits' names, in the rows' order
+    reductions: np.ndarray = field(default_factory=lambda: np.zeros((0, 3), np.int64))  # declared metrics:
+    # rows (code, index, reduction) of signals.declare_metrics, after the limits in the metric vector
+    metric_names: tuple[str, ...] = ()     # the declared metrics' names, in the rows' order
     im_period: float = 0.0    # period (s) and damping of the sa column ([intensity_measures]; 0: none)
     im_damping: float = 0.05
 
@@ -270,6 +274,8 @@ def build_scene(scenario: Scenario) -> Scene:
         limits=np.array([limit_row(limit.metric, limit.value, nf) for limit in scenario.limits.values()],
                         dtype=float).reshape(-1, 3),
         limit_names=tuple(scenario.limits),
+        reductions=declare_metrics(scenario.output.metrics, nf, len(absorbers)),
+        metric_names=tuple(scenario.output.metrics),
         **({"im_period": scenario.intensity_measures.period,
             "im_damping": scenario.intensity_measures.damping}
            if scenario.intensity_measures else {}),

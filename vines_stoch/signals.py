@@ -1,10 +1,13 @@
 """The signals a run records at its history points (SCENARIOS.md, "Signals"), declared by name:
 ``declare`` turns names into the columns the loop driver evaluates at each history point
-(``kernels.common.signal_value``), so a history holds just the signals asked for.  Plain Python
-(no numba): the scenario checks read ``signal_names``."""
+(``kernels.common.signal_value``), so a history holds just the signals asked for; and the
+metrics a scene declares as a signal's reduction over the metrics window (``[output] metrics``,
+``<signal>_<reduction>``: ``declare_metrics``), which the driver folds in at every step's end.
+Plain Python (no numba): the scenario checks read ``signal_names``."""
 
 from __future__ import annotations
 
+import re
 from collections.abc import Iterable
 
 import numpy as np
@@ -56,3 +59,39 @@ def declare(names: Iterable[str], n_floors: int, n_absorbers: int = 0) -> np.nda
         rows.append((code, index))
     return np.array(rows, dtype=np.int64).reshape(len(rows), 2)
 
+
+
+#: How a declared metric reduces its signal ``q`` over the metrics window (``[output] metrics``),
+#: by name and code: ``peak`` the largest ``|q|``, ``max`` and ``min`` the largest and smallest
+#: ``q``, ``mean`` and ``rms`` the time average of ``q`` and the root of that of ``q^2`` (the
+#: trapezoid rule over the step ends, as ``x1_rms``).
+REDUCTIONS = {"peak": 0, "max": 1, "min": 2, "mean": 3, "rms": 4}
+REDUCE_PEAK, REDUCE_MAX, REDUCE_MIN, REDUCE_MEAN, REDUCE_RMS = range(len(REDUCTIONS))
+#: Raw metric slots a declared metric takes: what it folds, and the signal at the last step end.
+REDUCTION_SLOTS = 2
+#: The names of declared metrics: ``<signal>_<reduction>``.
+METRIC_NAME = re.compile(rf"(x1|e1|({'|'.join(stem for stem, (_, n) in SIGNALS.items() if n)})_[1-9][0-9]*)"
+                         rf"_({'|'.join(REDUCTIONS)})")
+#: The built-in metric columns (``metrics.METRICS``) that read as a declared metric's name: a
+#: declared metric may not take them (``tests/unit/statistics`` checks the list).
+BUILT_IN = ("x1_max", "x1_rms", "e1_max")
+
+
+def declare_metrics(names: Iterable[str], n_floors: int, n_absorbers: int = 0,
+                    taken: Iterable[str] = BUILT_IN) -> np.ndarray:
+    """The rows ``(code, index, reduction)`` of the declared metrics ``names``, each
+    ``<signal>_<reduction>`` (a signal of ``signal_names``, a reduction of ``REDUCTIONS``:
+    ``stroke_1_peak``, ``va_2_rms``, ``e1_mean``), that the loop driver folds in at every step's
+    end.  A name that is none, or one of ``taken`` (the built-in metric columns: ``BUILT_IN``),
+    is a ``ValueError`` saying what is allowed."""
+    rows = []
+    for name in names:
+        signal, _, reduction = name.rpartition("_")
+        if name in taken:
+            raise ValueError(f"metrics: {name!r} is a built-in metric already")
+        if reduction not in REDUCTIONS or not signal:
+            raise ValueError(f"metrics: {name!r} must be <signal>_<reduction>, the reduction one of "
+                             f"{', '.join(REDUCTIONS)}")
+        (code, index), = declare([signal], n_floors, n_absorbers)
+        rows.append((code, index, REDUCTIONS[reduction]))
+    return np.array(rows, dtype=np.int64).reshape(len(rows), 3)

@@ -169,6 +169,17 @@ def test_event_logs_come_back():
     assert (np.isfinite(batch.events[:, :, 0]).sum(axis=1) > 1).all()
 
 
+def test_declared_metrics_come_back():
+    """A scene's declared metrics (``[output] metrics``) fill each thread's metric row as the CPU
+    loop's on the same Philox streams, bitwise."""
+    scene = scene_from(example_data("contact_noise_parallel"),
+                       changes={"simulation.duration": 1.0, "output.metrics": ["stroke_1_peak", "va_2_rms"]})
+    batch = gpu.simulate_many(scene, seed=4, point=0, start=1, stop=3)
+    for i, r in enumerate(range(1, 3)):
+        np.testing.assert_array_equal(batch.raw[i], simulate(scene, philox_streams(4, r)))
+    assert (batch.raw[:, -4] > 0).all()  # (stroke_1_peak's slot)
+
+
 def test_uncertain_parameters_run_a_scene_a_realisation():
     base = example_data("parallel_nes_impulse", "sweep")
     scenes = [scene_from(base, changes={"simulation.duration": 5.0, "absorbers.0.stiffness": k})

@@ -69,7 +69,7 @@ def spec_of(scene, gpu: bool = False, record: Record = Record()) -> Spec:
                 has_hertz=scene.has_hertz,
                 filtered=scene.has_filters and grid, ground=scene.has_ground and grid,
                 geometric=scene.has_geometric, gpu=gpu, passages=record.passages, history=record.history,
-                events=record.events)
+                events=record.events, declared=record.declared)
 
 
 def kernel_for(scene, gpu: bool = False, record: Record = Record()):
@@ -181,7 +181,7 @@ def bundles(scene, x: np.ndarray, v: np.ndarray, fl: Filters, normals: np.ndarra
         Grid(dt=scene.dt, n_steps=scene.n_steps, i0=scene.i0, period=scene.period,
              sample_from=scene.sample_from, stride=stride, first=0),
         Outputs(out=out, samples=samples, history=history, signals=signals, limits=scene.limits, carry=carry,
-                events=events),
+                events=events, reductions=scene.reductions),
         *gens,
     )
 
@@ -268,7 +268,7 @@ def start_path(scene, streams: Streams | np.random.Generator | None = None, *,
     """A realisation of ``scene`` at its start (step 0, the scene's initial state), to be run
     by ``advance``; the arguments are those of ``simulate``.  With ``stretches`` the loop keeps
     its carry (``kernels/carry.py``), so that the path may be run in several stretches."""
-    out = new_metrics(scene.n_floors, scene.limits.shape[0])
+    out = new_metrics(scene.n_floors, scene.limits.shape[0], scene.reductions.shape[0])
     x, v = scene.x0.copy(), scene.v0.copy()
     if samples is None:
         samples = sample_buffer(scene)

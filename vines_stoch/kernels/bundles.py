@@ -88,9 +88,10 @@ class Outputs(NamedTuple):
     """The raw metric vector, the Poincare samples, the history rows and the signals they hold
     (``signals.declare``: a column each), the limits whose first passages the metric vector
     records (``common.first_passages``), the path's carry to its next stretch
-    (``kernels/carry.py``; empty: none kept) and the event log (``outputs.EVENT_COLUMNS``;
-    empty: none kept).  What of these a loop writes is compiled in only where the run asks for
-    it (``outputs.Record``)."""
+    (``kernels/carry.py``; empty: none kept), the event log (``outputs.EVENT_COLUMNS``;
+    empty: none kept) and the declared metrics the metric vector records after the first
+    passages (``signals.declare_metrics``).  What of these a loop writes is compiled in only
+    where the run asks for it (``outputs.Record``)."""
 
     out: Any
     samples: Any
@@ -99,3 +100,4 @@ class Outputs(NamedTuple):
     limits: Any
     carry: Any
     events: Any
+    reductions: Any

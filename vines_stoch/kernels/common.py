@@ -53,7 +53,19 @@ from ..physics.absorbers import (
 from ..physics.hertz import CONTACT_STEPS, contact_energy, contact_force_law, contact_substep, hertz_force
 from ..physics.impact import restitution_impact, sticks
 from ..physics.structure import host_of, primary_energy, structure_forces
-from ..signals import SIGNAL_DRIFT, SIGNAL_STROKE, SIGNAL_V, SIGNAL_VA, SIGNAL_X, SIGNAL_XA
+from ..signals import (
+    REDUCE_MAX,
+    REDUCE_MEAN,
+    REDUCE_MIN,
+    REDUCE_PEAK,
+    REDUCTION_SLOTS,
+    SIGNAL_DRIFT,
+    SIGNAL_STROKE,
+    SIGNAL_V,
+    SIGNAL_VA,
+    SIGNAL_X,
+    SIGNAL_XA,
+)
 
 #: Impacts resolved inside one outer step before the rest of the step ignores the walls.
 MAX_EVENTS = 64
@@ -419,3 +431,26 @@ def record_history(history, stride, step, signals, x, v, nf, e1, host) -> int:
     j = step // stride
     history_row(history, j, signals, x, v, nf, e1, host)
     return step + stride if j + 1 < history.shape[0] else -1
+
+
+@njit(**INLINE)
+def fold_declared(reductions, out, at: int, x, v, nf: int, e1: float, host, opening: bool) -> None:
+    """Fold a step end's state into the declared metrics (rows ``(code, index, reduction)``,
+    ``signals.declare_metrics``; slots from ``at``, ``signals.REDUCTION_SLOTS`` each): peaks,
+    extremes, sums of the signal or its square; at the metrics window's ``opening``, each
+    signal's first value (a sum's at half weight: the trapezoid rule).  The last slot keeps the
+    signal, whose half weight ``metrics.finish_table`` takes off the sums at the window's end."""
+    for r in range(reductions.shape[0]):
+        q = signal_value(reductions[r, 0], reductions[r, 1], x, v, nf, e1, host)
+        op = reductions[r, 2]
+        j = at + REDUCTION_SLOTS * r
+        if op == REDUCE_PEAK:
+            out[j] = abs(q) if opening else max(out[j], abs(q))
+        elif op == REDUCE_MAX:
+            out[j] = q if opening else max(out[j], q)
+        elif op == REDUCE_MIN:
+            out[j] = q if opening else min(out[j], q)
+        else:
+            w = q if op == REDUCE_MEAN else q * q
+            out[j] = 0.5 * w if opening else out[j] + w
+        out[j + 1] = q

@@ -44,7 +44,7 @@ from numba import njit
 from ..jit.cache import stable_cache
 from ..jit.flags import INLINE, KERNEL
 from ..jit.intrinsics import borrowed, copy_into, plain, scratch
-from ..outputs import CONTACT_TIME, FINAL_ENERGY, PEAK_FORCE, STATUS, STATUS_DIVERGED
+from ..outputs import CONTACT_TIME, FINAL_ENERGY, PEAK_FORCE, STATUS, STATUS_DIVERGED, passage_slots
 from ..physics.structure import primary_energy
 from .carry import (
     E1_PREV,
@@ -62,6 +62,7 @@ from .common import (
     diverged,
     first_passages,
     floor_peaks,
+    fold_declared,
     record_history,
     record_sample,
     start_history,
@@ -82,8 +83,8 @@ class Spec(NamedTuple):
     closed-form load rows and filter states (the sizes of its arrays on the stack), white
     noise, impact and Hertz absorbers, filtered loads, ground acceleration, geometric
     attachments, the cuda backend's loop (per-absorber flags on the stack), and what the run
-    records beyond the metrics (``outputs.Record``: first passages, history rows, the event
-    log), whose code the loop holds only where asked."""
+    records beyond the built-in metrics (``outputs.Record``: first passages, history rows, the
+    event log, declared metrics), whose code the loop holds only where asked."""
 
     n_bodies: int
     n_floors: int
@@ -99,6 +100,7 @@ class Spec(NamedTuple):
     passages: bool
     history: bool
     events: bool
+    declared: bool
 
 
 class Step(NamedTuple):
@@ -143,6 +145,7 @@ def step_loop(plug: Step, spec: Spec):
     HERTZ = spec.has_hertz
     PASSAGES = spec.passages  # (what the run records: ``outputs.Record``)
     HISTORY = spec.history
+    DECLARED = spec.declared
 
     @njit(**KERNEL)
     def kernel(bodies_, absorbers_, ex_, fl_, noise_, grid_, outputs_, gen, gen_bridge, gen_filter):
@@ -158,6 +161,8 @@ def step_loop(plug: Step, spec: Spec):
                                                                 grid.sample_from, grid.stride, grid.first)
         out, samples, history, signals, limits, carry = (outputs.out, outputs.samples, outputs.history,
                                                          outputs.signals, outputs.limits, outputs.carry)
+        reductions = outputs.reductions
+        declared_at = passage_slots(NF) + limits.shape[0]  # (the declared metrics' slots)
         resume = first > 0  # a later stretch of the path: its state from ``carry``
         # the state (copied back at the end) on the stack (see ``jit.intrinsics.scratch``); copies
         # of it for the out-of-line calls and for the Poincare samples' interpolation
@@ -211,6 +216,8 @@ def step_loop(plug: Step, spec: Spec):
                         x2_integral[k] = 0.5 * x[k] * x[k]
                 opening(own, x, v, inv_mass, acc, bodies, absorbers)
                 floor_peaks(x, nf, acc, x_max, drift_max, acc_max)
+                if DECLARED:
+                    fold_declared(reductions, out, declared_at, x, v, nf, e1_max, host, True)
                 if PASSAGES and pending > 0:
                     pending = first_passages(limits, i * dt, nf, x_max, drift_max, acc_max, inv_mass,
                                              FORCE_PEAKS,
@@ -250,6 +257,10 @@ def step_loop(plug: Step, spec: Spec):
                                                      inv_mass,
                                                      FORCE_PEAKS, e1_max, out)
                     e1_prev = e1
+                if DECLARED and inside:
+                    fold_declared(reductions, out, declared_at, x, v, nf,
+                                  primary_energy(mass, storey_k, x, v, nf) if INTEGRATES else e1_prev, host,
+                                  False)
                 if SAMPLES and sampling:
                     next_sample = record_sample(samples, next_sample, sample_from, period, i * dt, dt, xp,
                                                 vp, x,

@@ -42,8 +42,8 @@ def launcher(kernel, n_bodies: int, simulated: bool):
     @cuda.jit
     def launch(first, n, per_path, place, keys, mass, storey_k, storey_c, floor_c, x0, v0, rows, forces,
                sigma, limits, phi, chol, envelope, c_force, c_ground, p0, kind, host, series_t, series_v,
-               series_ptr, series_target, normals, dt, n_steps, i0, period, sample_from, stride, template,
-               signals, out, samples, history, events, work):
+               series_ptr, series_target, reductions, normals, dt, n_steps, i0, period, sample_from, stride,
+               template, signals, out, samples, history, events, work):
         t = cuda.grid(1)
         if t >= n:
             return
@@ -90,7 +90,8 @@ def launcher(kernel, n_bodies: int, simulated: bool):
                Grid(dt=dt, n_steps=n_steps, i0=i0, period=period, sample_from=sample_from, stride=stride,
                     first=0),
                Outputs(out=row, samples=own_samples, history=own_history, signals=plain(signals),
-                       limits=plain(limits[p]), carry=row[:0], events=own_events),
+                       limits=plain(limits[p]), carry=row[:0], events=own_events,
+                       reductions=plain(reductions)),
                inc, bri, fil)
 
     if not simulated:

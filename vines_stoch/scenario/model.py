@@ -9,7 +9,7 @@ import numpy as np
 from pydantic import Field, model_validator
 
 from .. import schemes
-from ..signals import signal_names
+from ..signals import declare_metrics, signal_names
 from .bodies import (
     Absorber,
     HertzAbsorber,
@@ -97,6 +97,15 @@ class Scenario(_Model):
                                      f"{signal!r} is not a signal: give x1, e1, x_k, v_k or drift_k "
                                      f"with k in [1, {n}], or xa_j, va_j or stroke_j with j in "
                                      f"[1, {len(self.absorbers)}] (absorbers in file order)")
+        for metric in self.output.metrics:
+            try:
+                declare_metrics([metric], n, len(self.absorbers))
+            except ValueError as exc:
+                raise FieldError("output.metrics", self.output.metrics,
+                                 f"{str(exc).removeprefix('metrics: ')}: give <signal>_<reduction>, the "
+                                 f"signal x1, e1, x_k, v_k or drift_k with k in [1, {n}], or xa_j, va_j or "
+                                 f"stroke_j with j in [1, {len(self.absorbers)}], the reduction peak, max, "
+                                 "min, mean or rms") from None
         metrics = limit_metrics(n)
         for name, limit in self.limits.items():
             if not LIMIT_NAME.fullmatch(name):

@@ -152,6 +152,18 @@ class IntensityMeasures(_Model):
 
 
 class Output(_Model):
-    """Where results go (default ``results/<name>``)."""
+    """Where results go (default ``results/<name>``), and the metrics declared beside the
+    built-in ones: ``metrics`` names each ``<signal>_<reduction>``, a signal of the history's
+    (``x1``, ``e1``, ``x_k``, ``v_k``, ``drift_k``, ``xa_j``, ``va_j``, ``stroke_j``) reduced
+    over the metrics window by ``peak`` (largest absolute value), ``max``, ``min``, ``mean`` or
+    ``rms``: ``stroke_1_peak`` is absorber 1's largest stroke.  Each is a column of
+    realizations.parquet with its statistics in summary.parquet."""
 
     directory: str | None = None
+    metrics: list[str] = []
+
+    @model_validator(mode="after")
+    def _distinct(self) -> Output:
+        if len(set(self.metrics)) != len(self.metrics):
+            raise FieldError("metrics", self.metrics, "must not repeat a metric")
+        return self
