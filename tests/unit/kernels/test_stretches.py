@@ -28,8 +28,12 @@ EXAMPLES = {
 }
 
 
+#: Declared metrics (``[output] metrics``), folded into the metric vector at every step end.
+DECLARED = ["x_1_rms", "e1_mean", "v_1_peak"]
+
+
 def _example(name: str, scheme: str | None):
-    changes = {"simulation.duration": 10.0, "simulation.metrics_from": 2.5}
+    changes = {"simulation.duration": 10.0, "simulation.metrics_from": 2.5, "output.metrics": DECLARED}
     if scheme is not None:
         changes["simulation.scheme"] = scheme
     data = example_data(name)
@@ -95,7 +99,7 @@ def test_a_stretch_leaves_the_metrics_of_the_path_so_far():
     advance(path, 4000)
     shorter = scene_from(example_data("parallel_nes_impulse", "sweep"),
                          changes={"simulation.duration": 4.0, "simulation.metrics_from": 2.5,
-                                  "simulation.scheme": "euler-maruyama"})
+                                  "simulation.scheme": "euler-maruyama", "output.metrics": DECLARED})
     assert shorter.n_steps == 4000
     so_far = simulate(shorter)
     np.testing.assert_array_equal(path.out, so_far)
