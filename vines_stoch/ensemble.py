@@ -33,7 +33,7 @@ from . import schedulers
 from .binding import binding
 from .kernels import DEFAULT_SIGNALS, needed_streams, sample_buffer, simulate
 from .metrics import METRICS, finish_table, ground_intensity, summarise
-from .outputs import POINCARE_SAMPLES
+from .outputs import EVENT_COLUMNS, EVENT_T, POINCARE_SAMPLES, new_events
 from .progress import Progress
 from .results import Results, Solution, as_study, check_whole, read_results
 from .scenario import History, Study
@@ -95,7 +95,7 @@ def run_chunk(scene: Scene, seed: int, point: int, start: int, stop: int,
     realisation runs its own scene (``binding``: the point's scene with the drawn values set), its
     drawn values in columns named by their keys.
     ``common``: common random numbers across sweep points (see ``generator``)."""
-    raws, scenes, samples_rows, drawn_rows, intensities = [], [], [], [], []
+    raws, scenes, samples_rows, drawn_rows, intensities, logs = [], [], [], [], [], []
     paths = None if grid is None else np.full((len(signals), grid[1], stop - start), np.nan)
     path = None if grid is None else np.full((grid[1], len(signals)), np.nan)
     bound = binding(study, point) if study is not None else None
@@ -108,8 +108,10 @@ def run_chunk(scene: Scene, seed: int, point: int, start: int, stop: int,
             path.fill(np.nan)
         increments, bridge, filters = needed_streams(scene)
         gens = streams(seed, point, r, increments=increments, bridge=bridge, filters=filters, common=common)
+        log = new_events(scene.event_rows) if scene.event_rows else None
         raws.append(simulate(scene, gens, samples=samples, history=path, stride=grid[0] if grid else 1,
-                             signals=signals))
+                             signals=signals, events=log))
+        logs.append(log)
         if paths is not None:
             paths[:, :, r - start] = path.T
         scenes.append(scene)
@@ -120,7 +122,7 @@ def run_chunk(scene: Scene, seed: int, point: int, start: int, stop: int,
                                                            filters=filters, common=common))
                            if scene.im_period > 0 else {})
     return _table(np.stack(raws), scenes if study is not None else scene, samples_rows, point, start,
-                  drawn_rows, intensities), paths
+                  drawn_rows, intensities, logs), paths
 
 
 def run_chunk_cuda(scene: Scene, seed: int, point: int, start: int, stop: int,
@@ -138,20 +140,23 @@ def run_chunk_cuda(scene: Scene, seed: int, point: int, start: int, stop: int,
                   for r in range(start, stop)]
     scenes = [binding(study, point).scene(d) for d in drawn_rows] if study is not None else [scene] * n
     batch = gpu.simulate_many(scenes if study is not None else scene, seed, point, start, stop, common, grid,
-                              signals)
+                              signals, scene.event_rows)
     samples = list(batch.samples) if batch.samples.shape[1] else [None] * n
     # (the filter stream afresh: the ground path the realisation saw)
     intensities = [ground_intensity(s, philox_stream(seed, FILTER, r, point, common))
                    if s.im_period > 0 else {} for s, r in zip(scenes, range(start, stop))]
     paths = None if grid is None else batch.history.transpose(2, 1, 0)
     return _table(batch.raw, scenes if study is not None else scene, samples, point, start, drawn_rows,
-                  intensities), paths
+                  intensities, list(batch.events)), paths
 
 
 def _table(raw: np.ndarray, scenes: Scene | list[Scene], samples: list, point: int, start: int,
-           drawn_rows: list[dict[str, float]], intensities: list[dict[str, float]]) -> pd.DataFrame:
+           drawn_rows: list[dict[str, float]], intensities: list[dict[str, float]],
+           logs: list[np.ndarray | None]) -> pd.DataFrame:
     """A chunk's table: point, realisation, drawn parameters, the metrics (``finish_table``),
-    then the intensity measures where the scene asks for them."""
+    then the intensity measures where the scene asks for them, and the event logs where it keeps
+    them (``logs``: one a realisation, or None), as list columns ``event_<column>`` (a chunk's
+    part holds them; ``_events`` makes them events.parquet's rows)."""
     frame = finish_table(raw, scenes, samples)
     front = {"point": np.full(raw.shape[0], point, dtype=np.int64),
              "realization": np.arange(start, start + raw.shape[0], dtype=np.int64),
@@ -160,7 +165,33 @@ def _table(raw: np.ndarray, scenes: Scene | list[Scene], samples: list, point: i
         frame.insert(i, key, values)
     for key in next((m for m in intensities if m), {}):  # sa, pga
         frame[key] = np.array([m.get(key, np.nan) for m in intensities], dtype=float)
+    if logs and logs[0] is not None and logs[0].shape[0]:
+        kept = [log[np.isfinite(log[:, EVENT_T])] for log in logs]
+        for c, name in enumerate(EVENT_COLUMNS):
+            frame[f"event_{name}"] = [log[:, c] for log in kept]
     return frame
+
+
+def _events(realizations: pd.DataFrame, sweep_keys: list[str]) -> tuple[pd.DataFrame, pd.DataFrame]:
+    """The realisations table without its event log columns (``_table``), and events.parquet's
+    rows: point, the swept values, realisation, then each event's ``t``, ``absorber`` (from 1, in
+    file order), ``wall`` (``"left"`` or ``"right"``), ``speed`` (the absorber's velocity relative
+    to its host floor just before the event) and ``loss`` (the energy it took out)."""
+    logged = [f"event_{name}" for name in EVENT_COLUMNS]
+    counts = realizations[logged[0]].map(len).to_numpy()
+    ids = ["point", *sweep_keys, "realization"]
+    events = pd.DataFrame({key: np.repeat(realizations[key].to_numpy(), counts) for key in ids})
+
+    def joined(name: str) -> np.ndarray:
+        return np.concatenate([np.asarray(v, dtype=float) for v in realizations[f"event_{name}"]] or [[]])
+
+    events["t"] = joined("t")
+    events["absorber"] = joined("absorber").astype(np.int64) + 1
+    events["wall"] = pd.Series(["left", "right"], dtype="string").array.take(
+        (joined("side") > 0).astype(np.intp))
+    events["speed"] = joined("speed")
+    events["loss"] = joined("loss")
+    return realizations.drop(columns=logged), events
 
 
 @dataclass
@@ -521,7 +552,8 @@ def prepare_loops(scenes: list[Scene], seed: int, common: bool, grid: tuple[int,
             history = np.full((grid[1], len(signals)), np.nan)
         gens = streams(seed, point, 0, increments=increments, bridge=bridge, filters=filters, common=common)
         path = start_path(scene, gens, samples=sample_buffer(scene), history=history,
-                          stride=grid[0] if grid else 1, stretches=False, signals=signals)
+                          stride=grid[0] if grid else 1, stretches=False, signals=signals,
+                          events=new_events(scene.event_rows) if scene.event_rows else None)
         kernel = path.kernel  # (the loop of the structure, recording what the run asks: ``outputs.Record``)
         if kernel in seen or kernel.overloads:
             continue
@@ -669,6 +701,9 @@ def _consolidate(study: Study, the_plan: Plan, states: list[PointState], directo
                 path_rows.append(_path_rows(study, the_plan.scenes[c[0]], grids[c[0]], c,
                                             kept_paths[c][:, :, :n], signals))
     realizations_df = _in_file_types(pd.concat(kept, ignore_index=True))
+    events_df = None
+    if "event_t" in realizations_df.columns:
+        realizations_df, events_df = _events(realizations_df, study.sweep_keys)
     summary_df = summarise(realizations_df, study.sweep_keys, study.base.simulation.residual_tolerance)
     history_df = None
     if spec:
@@ -684,12 +719,16 @@ def _consolidate(study: Study, the_plan: Plan, states: list[PointState], directo
     paths_df = pd.concat(path_rows, ignore_index=True) if kept_paths is not None else None
     if directory is None:
         history_df = None if history_df is None else _in_file_types(history_df)
-        return Results(realizations_df, _in_file_types(summary_df), history_df, paths_df, meta, None, study)
+        events_df = None if events_df is None else _in_file_types(events_df)
+        return Results(realizations_df, _in_file_types(summary_df), history_df, paths_df, meta, None, study,
+                       events_df)
     write_table(realizations_df, directory / "realizations.parquet", meta)
     write_table(summary_df, directory / "summary.parquet", meta)
     if history_df is not None:
         write_table(history_df, directory / "history.parquet",
                     {**meta, "vines_stoch.history_block": str(hist.BLOCK)})
+    if events_df is not None:
+        write_table(events_df, directory / "events.parquet", meta)
     results = read_results(directory)
     results.paths, results.study = paths_df, study
     return results

@@ -68,8 +68,9 @@ class Results:
     realisation), ``summary`` (one row per sweep point), ``history`` (the ensemble statistics of
     time histories, None unless ``[simulation.history]`` asks for them), ``paths`` (every
     realisation's time histories, None unless ``run(..., paths=True)`` asked for them; never
-    stored in a folder), ``metadata`` (the provenance every result file carries) and
-    ``directory`` (the folder, None for a run in memory).  ``scenario`` is the Study run (read
+    stored in a folder), ``metadata`` (the provenance every result file carries),
+    ``directory`` (the folder, None for a run in memory) and ``events`` (the event logs of
+    events.parquet, None unless ``[output] events`` asks for them).  ``scenario`` is the Study run (read
     from the metadata, on first use, for results read from a folder).
 
     It unpacks as ``realizations, summary = results``, as the tuple ``run`` used to return."""
@@ -81,6 +82,7 @@ class Results:
     metadata: dict[str, str] = field(default_factory=dict)
     directory: Path | None = None
     study: Study | None = field(default=None, repr=False)
+    events: pd.DataFrame | None = None
 
     @property
     def scenario(self) -> Study:
@@ -102,16 +104,17 @@ class Results:
 
 def read_results(directory: str | Path) -> Results:
     """The results of a finished run in ``directory`` (after ``store.check_folder``: never the
-    results of two runs), ``history`` where the run wrote one."""
+    results of two runs), ``history`` and ``events`` where the run wrote them."""
     from .store import check_folder, read_metadata
 
     directory = Path(directory)
     check_folder(directory)
-    history = directory / "history.parquet"
+    history, events = directory / "history.parquet", directory / "events.parquet"
     return Results(pd.read_parquet(directory / "realizations.parquet"),
                    pd.read_parquet(directory / "summary.parquet"),
                    pd.read_parquet(history) if history.is_file() else None,
-                   metadata=read_metadata(directory / "summary.parquet"), directory=directory)
+                   metadata=read_metadata(directory / "summary.parquet"), directory=directory,
+                   events=pd.read_parquet(events) if events.is_file() else None)
 
 
 @dataclass(eq=False)

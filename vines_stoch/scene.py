@@ -88,6 +88,7 @@ class Scene:
     reductions: np.ndarray = field(default_factory=lambda: np.zeros((0, 3), np.int64))  # declared metrics:
     # rows (code, index, reduction) of signals.declare_metrics, after the limits in the metric vector
     metric_names: tuple[str, ...] = ()     # the declared metrics' names, in the rows' order
+    event_rows: int = 0       # rows of a realisation's event log ([output] events; 0: none kept)
     im_period: float = 0.0    # period (s) and damping of the sa column ([intensity_measures]; 0: none)
     im_damping: float = 0.05
 
@@ -276,6 +277,7 @@ def build_scene(scenario: Scenario) -> Scene:
         limit_names=tuple(scenario.limits),
         reductions=declare_metrics(scenario.output.metrics, nf, len(absorbers)),
         metric_names=tuple(scenario.output.metrics),
+        event_rows=scenario.output.events,
         **({"im_period": scenario.intensity_measures.period,
             "im_damping": scenario.intensity_measures.damping}
            if scenario.intensity_measures else {}),

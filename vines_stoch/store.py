@@ -54,7 +54,8 @@ def _dependency_versions() -> str:
 #: Metadata key of the run key, in every part and result file.
 KEY = "vines_stoch.run_key"
 #: The result files a run (or ``vines-stoch fragility``) writes into its folder.
-RESULTS = ("summary.parquet", "realizations.parquet", "history.parquet", "fragility.parquet")
+RESULTS = ("summary.parquet", "realizations.parquet", "history.parquet", "events.parquet",
+           "fragility.parquet")
 #: The parts' manifest (the run key and the number of chunks) and the history statistics'
 #: checkpoint, in ``DIR/parts``.
 MANIFEST, CHECKPOINT = "manifest.json", "history.npz"

@@ -226,6 +226,17 @@ def test_a_cuda_run_writes_the_cpu_tables_from_its_own_streams(tmp_path):
     pd.testing.assert_frame_equal(again, realizations, check_exact=True)
 
 
+def test_a_cuda_run_writes_its_event_logs(tmp_path):
+    study = study_from(changed(ENSEMBLE, {"output.events": 10_000, "ensemble.realizations": 6}))
+    results = run(study, tmp_path, backend="cuda")
+    events, realizations = results.events, results.realizations
+    assert len(events) == realizations["impacts"].sum() > 0
+    counts = events.groupby(["point", "realization"]).size()
+    for (point, r), n in counts.items():
+        row = realizations[(realizations["point"] == point) & (realizations["realization"] == r)].iloc[0]
+        assert n == row["impacts"]
+
+
 def test_a_cuda_run_resumes_only_its_own_parts(tmp_path):
     study = study_from(ENSEMBLE)
     first, _ = run(study, tmp_path, backend="cuda", chunk=10)

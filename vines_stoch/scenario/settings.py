@@ -151,16 +151,23 @@ class IntensityMeasures(_Model):
     damping: Annotated[float, Field(ge=0, lt=1, allow_inf_nan=False)] = 0.05
 
 
+#: Most rows of a realisation's event log (``[output] events``).
+MAX_EVENT_ROWS = 1_000_000
+
+
 class Output(_Model):
     """Where results go (default ``results/<name>``), and the metrics declared beside the
     built-in ones: ``metrics`` names each ``<signal>_<reduction>``, a signal of the history's
     (``x1``, ``e1``, ``x_k``, ``v_k``, ``drift_k``, ``xa_j``, ``va_j``, ``stroke_j``) reduced
     over the metrics window by ``peak`` (largest absolute value), ``max``, ``min``, ``mean`` or
     ``rms``: ``stroke_1_peak`` is absorber 1's largest stroke.  Each is a column of
-    realizations.parquet with its statistics in summary.parquet."""
+    realizations.parquet with its statistics in summary.parquet.  ``events``: the impacts and
+    Hertz contact onsets of each realisation in the metrics window, up to this many, into
+    events.parquet (time, absorber, wall, relative velocity, energy lost; 0: none kept)."""
 
     directory: str | None = None
     metrics: list[str] = []
+    events: Annotated[int, Field(ge=0, le=MAX_EVENT_ROWS)] = 0
 
     @model_validator(mode="after")
     def _distinct(self) -> Output:
