@@ -56,6 +56,14 @@ def scene_from(data: Mapping[str, Any], point: int = 0, changes: Mapping[str, An
     return build_scene(study_from(data, changes).points[point])
 
 
+def example_scene(name: str, changes: Mapping[str, Any], scheme: str | None = None):
+    """The scene of the example scenario ``scenarios/<name>.toml`` without its sweep, with
+    ``changes`` (dotted keys) applied and run by ``scheme`` (None: the file's)."""
+    data = example_data(name)
+    data.pop("sweep", None)
+    return scene_from(data, changes={**changes, **({"simulation.scheme": scheme} if scheme else {})})
+
+
 def raw_metrics(scene, generator=None, **options) -> dict[str, float]:
     """Raw kernel slots of one realisation, by name (``options``: those of ``simulate``, e.g.
     ``final``)."""

@@ -9,7 +9,7 @@ import pytest
 
 from tests.helpers import ROOT
 from vines_stoch.plotting import available
-from vines_stoch.validation.reproduce import reproduce
+from vines_stoch.validation.reproduce import TABLE_1, _spans, _steady_zone, design, reproduce
 
 
 def test_one_section_writes_its_table_and_figures(tmp_path):
@@ -31,3 +31,19 @@ def test_one_section_writes_its_table_and_figures(tmp_path):
 def test_an_unknown_section_is_refused(tmp_path):
     with pytest.raises(ValueError, match="unknown section 'seed004': the sections are seed002, seed003"):
         reproduce(ROOT / "scenarios", tmp_path / "seed-tables.md", sections=("seed004",))
+
+
+def test_an_impact_zone_is_the_walls_the_absorber_met():
+    """Seed 003 Figs. 3-4, 8: a run's zone is read from the impacts counted on each wall over the
+    steady window: a Table 1 double-sided design at the resonance meets both obstacles (the
+    paper's T,1,1 zone), and far below it neither (T,0,0, its white zone)."""
+    *parameters, _ = next(iter(TABLE_1.values()))
+    e1, regime, zone = _steady_zone(design(ROOT / "scenarios", "seed003_ds60", *parameters, frequency=6.3))
+    assert zone == "bilateral" and regime == "T,1,1"
+    e1, regime, zone = _steady_zone(design(ROOT / "scenarios", "seed003_ds60", *parameters, frequency=5.0))
+    assert zone == "none" and regime == "T,0,0"
+
+
+def test_zones_are_reported_as_spans_of_the_sweep():
+    assert _spans([5.0, 5.1, 5.2, 5.5, 5.6, 7.0]) == "5-5.2, 5.5-5.6, 7"
+    assert _spans([]) == "-"

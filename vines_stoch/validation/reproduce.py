@@ -2,10 +2,10 @@
 ``tests/papers`` tests hold is run again and written beside the paper's value into
 ``reports/seed-tables.md`` (source, paper, ours, difference), and the figures into
 ``reports/figures/``: seed 002 Table 3 and the regimes of Tables 1-2, seed 003 Tables 1-6 and its
-Figs. 2 and 7 (E1max against frequency, m2 = 60 and 20 kg), seed 001's three-storey frames with each
-device of Tables 4-5 alone and its Table 2 rig, and seed 000's threshold (Figs. 3-4) and forced
-responses (Figs. 7-11).  The printed values live here, once; the
-tests import them."""
+Figs. 2 and 7 (E1max against frequency, m2 = 60 and 20 kg) and Figs. 3-4 and 8 (impact zones),
+seed 001's three-storey frames with each device of Tables 4-5 alone and its Table 2 rig, and seed
+000's threshold (Figs. 3-4) and forced responses (Figs. 7-11).  The printed values live here,
+once; the tests import them."""
 
 from __future__ import annotations
 
@@ -104,8 +104,19 @@ def _row(scenario: Scenario) -> Mapping[str, Any]:
 
 def _steady(scenario: Scenario) -> tuple[float, str]:
     """``e1_max`` and regime of one deterministic scenario."""
+    e1, regime, _ = _steady_zone(scenario)
+    return e1, regime
+
+
+def _steady_zone(scenario: Scenario) -> tuple[float, str, str]:
+    """``e1_max``, regime and impact zone of one deterministic scenario: ``"bilateral"`` where
+    the absorber meets both walls (or obstacles) over the metrics window, ``"left"`` or
+    ``"right"`` where it meets one (the left wall of a single-sided absorber is the primary
+    itself), ``"none"`` where it moves without impacts (seed 003 Figs. 3-4, 8)."""
     row = _row(scenario)
-    return float(row["e1_max"]), str(row["regime"])
+    left, right = int(row["impacts_left"]), int(row["impacts_right"])
+    zone = "bilateral" if left and right else "left" if left else "right" if right else "none"
+    return float(row["e1_max"]), str(row["regime"]), zone
 
 
 def _points(scenarios: Path, name: str, changes: Mapping[str, Any] | None = None,
@@ -201,10 +212,10 @@ def seed002(scenarios: Path, figures: Path) -> list[str]:
 
 
 def seed003(scenarios: Path, figures: Path) -> list[str]:
-    """Tables 1-6, Fig. 2 (m2 = 60 kg) and Fig. 7 (m2 = 20 kg)."""
+    """Tables 1-6, Figs. 2-4 (m2 = 60 kg) and Figs. 7-8 (m2 = 20 kg)."""
     e1_primary, _ = _steady(_points(scenarios, "seed003_primary")[0])
     lines = [
-        "## Seed 003: Tables 1-6, Figs. 2 and 7", "",
+        "## Seed 003: Tables 1-6, Figs. 2-4, 7-8", "",
         "Lizunov, Pogorelova, Postnikova, Gerashchenko (2024). Primary m1 = 1000 kg, k1 = 3.95e4 N/m, "
         "c1 = 452 N s/m, force",
         "800 cos(6.3 t) N, from rest; E1max is the maximum of m1 v1^2/2 + k1 x1^2/2 over [100, 400] s "
@@ -276,6 +287,7 @@ def _e1max_frequency(scenarios: Path, figures: Path, mass: int, alone: list[floa
     figure, says, printed = E1MAX_FIGURES[mass]
     curves: dict[str, list[float]] = {}
     regimes: dict[str, set[str]] = {}
+    zones: dict[str, list[str]] = {}
     missed = []   # the designs that miss the paper at 6.3 rad/s
     for side in ("ss", "ds"):
         name = f"seed003_{side}{mass}.toml"
@@ -283,13 +295,14 @@ def _e1max_frequency(scenarios: Path, figures: Path, mass: int, alone: list[floa
         for label, e1_paper, point in zip(labels, paper, load_scenario(scenarios / name).points):
             a = point.absorbers[0]
             offset = SS_4_60[3] if label == "SS-4(60)" else a.offset
-            runs = [_steady(design(scenarios, name.removesuffix(".toml"), a.mass, a.stiffness, a.damping,
-                                   offset, a.gap, w)) for w in E1MAX_FREQUENCIES]
+            runs = [_steady_zone(design(scenarios, name.removesuffix(".toml"), a.mass, a.stiffness,
+                                        a.damping, offset, a.gap, w)) for w in E1MAX_FREQUENCIES]
             label = f"{label}, D = {offset:g} m" if offset != a.offset else label
             if abs(runs[E1MAX_FREQUENCIES.index(6.3)][0] / e1_paper - 1.0) > MATCH:
                 missed.append(label)
-            curves[label] = [e for e, _ in runs]
-            regimes[label] = {r for _, r in runs}
+            curves[label] = [e for e, _, _ in runs]
+            regimes[label] = {r for _, r, _ in runs}
+            zones[label] = [z for _, _, z in runs]
     what = f"seed003_fig{figure.split()[-1]}_e1max_frequency_m{mass}.png"
     plt = pyplot(what)
     if plt is not None:
@@ -309,7 +322,8 @@ def _e1max_frequency(scenarios: Path, figures: Path, mass: int, alone: list[floa
     worst = {label: max(values) for label, values in curves.items()}
     ss = sorted({r for label, found in regimes.items() if label.startswith("SS") for r in found})
     ds = sorted({r for label, found in regimes.items() if label.startswith("DS") for r in found})
-    return [f"### {figure} (m2 = {mass} kg): E1max against frequency", "",
+    return [*_impact_zones(figures, mass, zones), "",
+            f"### {figure} (m2 = {mass} kg): E1max against frequency", "",
             f"Figure: `figures/{what}`, {len(E1MAX_FREQUENCIES)} frequencies from {E1MAX_FREQUENCIES[0]:g} "
             f"to {E1MAX_FREQUENCIES[-1]:g} rad/s, the designs as in the table above"
             f"{' (' + ', '.join(missed) + ' as printed: off the paper at 6.3 rad/s)' if missed else ''}. "
@@ -320,6 +334,77 @@ def _e1max_frequency(scenarios: Path, figures: Path, mass: int, alone: list[floa
             f"{'every' if max(worst.values()) < peak else 'not every'} design cuts the peak.",
             f"Regimes met by the single-sided designs: {', '.join(ss)}; by the double-sided designs: "
             f"{', '.join(ds)} (`modulated` is the paper's AM)."]
+
+
+#: The seed 003 primary's mass (kg) and stiffness (N/m).
+PRIMARY_M, PRIMARY_K = 1000.0, 3.95e4
+#: Seed 003's maps of bilateral and unilateral impacts against frequency, by damper mass (kg): the
+#: figures and what the paper's text says of them.
+ZONE_FIGURES = {
+    60: ("Figs. 3-4", "bilateral impacts in zones bounded near the resonance (T,1,1; AM with bilateral "
+                      "impacts for the single-sided designs), unilateral direct impacts on the primary "
+                      "beside them for the single-sided designs, no impacts (T,0,0) elsewhere"),
+    20: ("Fig. 8", "narrow zones of bilateral impacts")}
+#: Colours of the impact zones (the paper's: pink bilateral, light green unilateral, white none).
+ZONE_COLOURS = {"bilateral": "#f4a6c0", "left": "#b9e4a8", "right": "#8fd0e8", "none": "#ffffff"}
+
+
+def _impact_zones(figures: Path, mass: int, zones: Mapping[str, list[str]]) -> list[str]:
+    """Seed 003 Figs. 3-4 (``mass`` 60) or Fig. 8 (20): where each design meets both walls, one or
+    none over the frequency sweep of ``_e1max_frequency`` (``zones``: one zone a frequency, by
+    design), as a map and as the frequency spans of each zone."""
+    figure, says = ZONE_FIGURES[mass]
+    what = f"seed003_fig{figure.split()[-1].replace('-', '_')}_impact_zones_m{mass}.png"
+    plt = pyplot(what)
+    step = E1MAX_FREQUENCIES[1] - E1MAX_FREQUENCIES[0]
+    if plt is not None:
+        fig, axes = plt.subplots(1, 2, figsize=(10.0, 3.6), sharex=True)
+        for ax, side in zip(axes, ("SS", "DS")):
+            labels = [label for label in zones if label.startswith(side)]
+            for y, label in enumerate(labels):
+                for w, zone in zip(E1MAX_FREQUENCIES, zones[label]):
+                    ax.add_patch(plt.Rectangle((w - step / 2, y - 0.4), step, 0.8, color=ZONE_COLOURS[zone],
+                                               ec="0.85", lw=0.3))
+            ax.set(yticks=range(len(labels)), yticklabels=labels, ylim=(-0.6, len(labels) - 0.4),
+                   xlim=(E1MAX_FREQUENCIES[0] - step, E1MAX_FREQUENCIES[-1] + step),
+                   xlabel="forcing frequency (rad/s)", title=f"{side}VI NES, m2 = {mass} kg")
+        handles = [plt.Rectangle((0, 0), 1, 1, color=c, ec="0.6") for c in ZONE_COLOURS.values()]
+        fig.legend(handles, ["bilateral impacts", "left wall only (SSVI: the primary)", "right only",
+                             "no impacts"], loc="lower center", ncol=4, fontsize=8)
+        fig.tight_layout(rect=(0, 0.08, 1, 1))
+        fig.savefig(figures / what, dpi=120)
+        plt.close(fig)
+    lines = [f"### {figure} (m2 = {mass} kg): impact zones against frequency", "",
+             f"Figure: `figures/{what}` (steady window, the designs and frequencies of the E1max sweep "
+             f"below). The paper shows {says}.", "",
+             "| design | bilateral impacts (rad/s) | one wall only (rad/s) | no impacts (rad/s) |",
+             "|---|---|---|---|"]
+    for label, found in zones.items():
+        spans = [_spans([w for w, z in zip(E1MAX_FREQUENCIES, found) if z in kinds])
+                 for kinds in (("bilateral",), ("left", "right"), ("none",))]
+        lines.append(f"| {label} | {' | '.join(spans)} |")
+    both = [w for found in zones.values() for w, z in zip(E1MAX_FREQUENCIES, found) if z == "bilateral"]
+    one = {side: sum(any(z in ("left", "right") for z in found) for label, found in zones.items()
+                     if label.startswith(side)) for side in ("SS", "DS")}
+    count = {side: sum(label.startswith(side) for label in zones) for side in ("SS", "DS")}
+    natural = math.sqrt(PRIMARY_K / PRIMARY_M)
+    head = (f"Ours: bilateral impacts between {min(both):g} and {max(both):g} rad/s (the primary alone's "
+            f"natural frequency: {natural:.2f} rad/s)" if both else "Ours: no bilateral impacts")
+    return [*lines, "", f"{head}; impacts on one wall only for {one['SS']} of the {count['SS']} single-sided "
+                        f"and {one['DS']} of the {count['DS']} double-sided designs."]
+
+
+def _spans(frequencies: list[float]) -> str:
+    """Runs of consecutive sweep frequencies as ``a-b`` spans ("-" for none)."""
+    if not frequencies:
+        return "-"
+    step = E1MAX_FREQUENCIES[1] - E1MAX_FREQUENCIES[0]
+    runs, start = [], frequencies[0]
+    for prev, w in zip(frequencies, frequencies[1:] + [None]):
+        if w is None or w - prev > 1.5 * step:
+            runs.append(f"{start:g}" if start == prev else f"{start:g}-{prev:g}")
+            start = w
+    return ", ".join(runs)
 
 
 # ----------------------------------------------------------------------------- seed 001

@@ -12,7 +12,7 @@ import sys
 import numpy as np
 import pytest
 
-from tests.helpers import ROOT, example_data, scene_from
+from tests.helpers import ROOT, example_scene
 from vines_stoch.kernels import simulate
 from vines_stoch.outputs import (
     EVENT_ABSORBER,
@@ -40,12 +40,8 @@ CASES = {
 
 
 def _scene(name: str, scheme: str | None, duration: float):
-    data = example_data(name)
-    data.pop("sweep", None)
-    changes = {"simulation.duration": duration, "simulation.metrics_from": duration / 4}
-    if scheme is not None:
-        changes["simulation.scheme"] = scheme
-    return scene_from(data, changes=changes)
+    return example_scene(name, {"simulation.duration": duration, "simulation.metrics_from": duration / 4},
+                         scheme)
 
 
 @pytest.mark.parametrize("case", list(CASES))

@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from tests.helpers import example_data, scene_from
+from tests.helpers import example_data, example_scene, scene_from
 from vines_stoch.kernels import advance, sample_buffer, simulate, start_path
 from vines_stoch.outputs import ENERGY_INT, new_events
 from vines_stoch.streams import Streams
@@ -33,12 +33,8 @@ DECLARED = ["x_1_rms", "e1_mean", "v_1_peak"]
 
 
 def _example(name: str, scheme: str | None):
-    changes = {"simulation.duration": 10.0, "simulation.metrics_from": 2.5, "output.metrics": DECLARED}
-    if scheme is not None:
-        changes["simulation.scheme"] = scheme
-    data = example_data(name)
-    data.pop("sweep", None)
-    return scene_from(data, changes=changes)
+    return example_scene(name, {"simulation.duration": 10.0, "simulation.metrics_from": 2.5,
+                                "output.metrics": DECLARED}, scheme)
 
 
 def _sra():

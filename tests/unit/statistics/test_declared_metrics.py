@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from tests.helpers import example_data, scene_from, study_from
+from tests.helpers import example_data, example_scene, study_from
 from vines_stoch.ensemble import run
 from vines_stoch.kernels import simulate
 from vines_stoch.metrics import METRICS, finish_table, floor_metrics
@@ -26,12 +26,8 @@ CASES = {"kdk, noise": ("parallel_nes_noise", None), "rk4": ("parallel_nes_impul
 
 
 def _scene(name: str, scheme: str | None):
-    data = example_data(name)
-    data.pop("sweep", None)
-    changes = {"simulation.duration": 4.0, "simulation.metrics_from": 1.0, "output.metrics": DECLARED}
-    if scheme is not None:
-        changes["simulation.scheme"] = scheme
-    return scene_from(data, changes=changes)
+    return example_scene(name, {"simulation.duration": 4.0, "simulation.metrics_from": 1.0,
+                                "output.metrics": DECLARED}, scheme)
 
 
 @pytest.mark.parametrize("case", list(CASES))
