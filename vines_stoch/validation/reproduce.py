@@ -2,10 +2,10 @@
 ``tests/papers`` tests hold is run again and written beside the paper's value into
 ``reports/seed-tables.md`` (source, paper, ours, difference), and the figures into
 ``reports/figures/``: seed 002 Table 3 and the regimes of Tables 1-2, seed 003 Tables 1-6 and its
-Figs. 2, 7 and 10 (E1max against frequency, m2 = 60, 20 and 10 kg) and Figs. 3-4, 8 and 11 (impact
-zones), seed 001's three-storey frames with each device of Tables 4-5 alone and its Table 2 rig,
-and seed 000's threshold (Figs. 3-4) and forced responses (Figs. 7-11).  The printed values live
-here, once; the tests import them."""
+Figs. 2, 7 and 10 (E1max against frequency, m2 = 60, 20 and 10 kg), Figs. 3-4, 8 and 11 (impact
+zones) and Fig. 13 (Table 6's "normal" designs), seed 001's three-storey frames with each device of
+Tables 4-5 alone and its Table 2 rig, and seed 000's threshold (Figs. 3-4) and forced responses
+(Figs. 7-11).  The printed values live here, once; the tests import them."""
 
 from __future__ import annotations
 
@@ -98,7 +98,11 @@ E1MAX_FIGURES = {
          "T,0,0, T,1,0, 2T,2,2, 3T,3,1, T,1,1 and 2T,1,0 (single-sided; Table 4), T,0,0, T,1,1, 3T,2,2, AM "
          "and chaos (double-sided)"),
     10: ("Fig. 10", "good mitigation by designs of huge clearance and small damping, with irregular motions",
-         "T,0,0, T,1,0 and chaos (single-sided; Table 5), T,0,0, T,1,1, AM and chaos (double-sided)")}
+         "T,0,0, T,1,0 and chaos (single-sided; Table 5), T,0,0, T,1,1, AM and chaos (double-sided)"),
+    "normal": ("Fig. 13", "very weak mitigation by the \"normal\" designs against the \"strange\" ones",
+               "none (Table 6 prints the designs only)")}
+#: The key of Table 6's "normal" 10 kg designs among the mass classes (Fig. 13).
+NORMAL = "normal"
 
 # ----------------------------------------------------------------------------- running
 
@@ -218,10 +222,10 @@ def seed002(scenarios: Path, figures: Path) -> list[str]:
 
 
 def seed003(scenarios: Path, figures: Path) -> list[str]:
-    """Tables 1-6, Figs. 2-4 (m2 = 60 kg), 7-8 (20 kg) and 10-11 (10 kg)."""
+    """Tables 1-6, Figs. 2-4 (m2 = 60 kg), 7-8 (20 kg), 10-11 (10 kg) and 13 (Table 6)."""
     e1_primary, _ = _steady(_points(scenarios, "seed003_primary")[0])
     lines = [
-        "## Seed 003: Tables 1-6, Figs. 2-4, 7-8, 10-11", "",
+        "## Seed 003: Tables 1-6, Figs. 2-4, 7-8, 10-11, 13", "",
         "Lizunov, Pogorelova, Postnikova, Gerashchenko (2024). Primary m1 = 1000 kg, k1 = 3.95e4 N/m, "
         "c1 = 452 N s/m, force",
         "800 cos(6.3 t) N, from rest; E1max is the maximum of m1 v1^2/2 + k1 x1^2/2 over [100, 400] s "
@@ -286,11 +290,27 @@ def seed003(scenarios: Path, figures: Path) -> list[str]:
     return lines + [""]
 
 
-def _class_designs(scenarios: Path, mass: int) -> list[tuple[str, str, tuple, float | None]]:
+def _tag(mass: int | str) -> str:
+    """A mass class in file names: ``m60``; ``m10_normal`` for Table 6's designs."""
+    return "m10_normal" if mass == NORMAL else f"m{mass}"
+
+
+def _class(mass: int | str) -> str:
+    """A mass class in titles: ``m2 = 60 kg``; Table 6's designs with their references."""
+    return "m2 = 10 kg, normal and strange" if mass == NORMAL else f"m2 = {mass} kg"
+
+
+def _class_designs(scenarios: Path, mass: int | str) -> list[tuple[str, str, tuple, float | None]]:
     """The designs of one seed 003 mass class: label, scenario their geometry comes from, (m2, k2,
     c2, D, C) and the E1max printed for them at 6.3 rad/s (None where the paper prints none of
     theirs): the 60 and 20 kg classes from their scenarios (SS-4(60) with D = 0.0759 m), the 10 kg
-    class from Table 5."""
+    class from Table 5; ``"normal"``: Table 6's "normal" 10 kg designs beside the first "strange" ones
+    of Table 5 (Fig. 13)."""
+    if mass == NORMAL:
+        return ([(f"{label} (normal)", name, tuple(parameters), None) for label, (name, *parameters) in
+                 TABLE_6.items()]
+                + [("SS-1(10) (strange)", "seed003_ss20", TABLE_5_SS["SS-1(10)"], None),
+                   ("DS-1(10) (strange)", TABLE_SCENARIOS["Table 5"], TABLE_5["DS-1(10)"][:5], None)])
     if mass == 10:
         return ([(label, "seed003_ss20", parameters, None) for label, parameters in TABLE_5_SS.items()]
                 + [(label, TABLE_SCENARIOS["Table 5"], tuple(values[:5]), values[5])
@@ -307,7 +327,7 @@ def _class_designs(scenarios: Path, mass: int) -> list[tuple[str, str, tuple, fl
     return found
 
 
-def _e1max_frequency(scenarios: Path, figures: Path, mass: int, alone: list[float]) -> list[str]:
+def _e1max_frequency(scenarios: Path, figures: Path, mass: int | str, alone: list[float]) -> list[str]:
     """Seed 003 Fig. 2 (``mass`` 60), Fig. 7 (20) or Fig. 10 (10): steady E1max against frequency of
     the designs of one mass class (``_class_designs``) beside the primary ``alone``, with the
     regimes met along the sweep."""
@@ -323,7 +343,7 @@ def _e1max_frequency(scenarios: Path, figures: Path, mass: int, alone: list[floa
         curves[label] = [e for e, _, _ in runs]
         regimes[label] = {r for _, r, _ in runs}
         zones[label] = [z for _, _, z in runs]
-    what = f"seed003_fig{figure.split()[-1]}_e1max_frequency_m{mass}.png"
+    what = f"seed003_fig{figure.split()[-1]}_e1max_frequency_{_tag(mass)}.png"
     plt = pyplot(what)
     if plt is not None:
         fig, axes = plt.subplots(1, 2, figsize=(10.0, 4.0), sharey=True)
@@ -332,7 +352,7 @@ def _e1max_frequency(scenarios: Path, figures: Path, mass: int, alone: list[floa
             for label, values in curves.items():
                 if label.startswith(side):
                     ax.plot(E1MAX_FREQUENCIES, values, "-o", markersize=3, label=label)
-            ax.set(xlabel="forcing frequency (rad/s)", title=f"{side}VI NES, m2 = {mass} kg")
+            ax.set(xlabel="forcing frequency (rad/s)", title=f"{side}VI NES, {_class(mass)}")
             ax.legend(fontsize=8)
         axes[0].set_ylabel("steady E1max (J)")
         fig.tight_layout()
@@ -343,12 +363,12 @@ def _e1max_frequency(scenarios: Path, figures: Path, mass: int, alone: list[floa
     ss = sorted({r for label, found in regimes.items() if label.startswith("SS") for r in found})
     ds = sorted({r for label, found in regimes.items() if label.startswith("DS") for r in found})
     return [*_impact_zones(figures, mass, zones), "",
-            f"### {figure} (m2 = {mass} kg): E1max against frequency", "",
+            f"### {figure} ({_class(mass)}): E1max against frequency", "",
             f"Figure: `figures/{what}`, {len(E1MAX_FREQUENCIES)} frequencies from {E1MAX_FREQUENCIES[0]:g} "
             f"to {E1MAX_FREQUENCIES[-1]:g} rad/s, the designs as in the table above"
             f"{' (' + ', '.join(missed) + ' as printed: off the paper at 6.3 rad/s)' if missed else ''}. "
             f"Of its {figure} the "
-            f"paper says {says}; its table lists the regimes {printed}.",
+            f"paper says {says}; the regimes its tables list: {printed}.",
             f"Ours: the primary alone peaks at {peak:.0f} J; the highest E1max of any design over the "
             f"sweep is {max(worst.values()):.0f} J ({max(worst, key=worst.get)}): "
             f"{'every' if max(worst.values()) < peak else 'not every'} design cuts the peak.",
@@ -367,17 +387,20 @@ ZONE_FIGURES = {
     20: ("Fig. 8", "narrow zones of bilateral impacts"),
     10: ("Fig. 11", "extremely narrow zones of bilateral impacts; the single-sided designs impact the "
                     "primary alone over a wider range, the double-sided ones move shockless (T,0,0) "
-                    "elsewhere")}
+                    "elsewhere"),
+    "normal": ("Fig. 13", "for the \"normal\" designs, narrow zones of bilateral impacts near the resonance, "
+                          "the single-sided design's unilateral direct impacts on the primary over the rest "
+                          "of the range, the double-sided design shockless elsewhere")}
 #: Colours of the impact zones (the paper's: pink bilateral, light green unilateral, white none).
 ZONE_COLOURS = {"bilateral": "#f4a6c0", "left": "#b9e4a8", "right": "#8fd0e8", "none": "#ffffff"}
 
 
-def _impact_zones(figures: Path, mass: int, zones: Mapping[str, list[str]]) -> list[str]:
+def _impact_zones(figures: Path, mass: int | str, zones: Mapping[str, list[str]]) -> list[str]:
     """Seed 003 Figs. 3-4 (``mass`` 60), Fig. 8 (20) or Fig. 11 (10): where each design meets both
     walls, one or none over the frequency sweep of ``_e1max_frequency`` (``zones``: one zone a frequency, by
     design), as a map and as the frequency spans of each zone."""
     figure, says = ZONE_FIGURES[mass]
-    what = f"seed003_fig{figure.split()[-1].replace('-', '_')}_impact_zones_m{mass}.png"
+    what = f"seed003_fig{figure.split()[-1].replace('-', '_')}_impact_zones_{_tag(mass)}.png"
     plt = pyplot(what)
     step = E1MAX_FREQUENCIES[1] - E1MAX_FREQUENCIES[0]
     if plt is not None:
@@ -390,14 +413,14 @@ def _impact_zones(figures: Path, mass: int, zones: Mapping[str, list[str]]) -> l
                                                ec="0.85", lw=0.3))
             ax.set(yticks=range(len(labels)), yticklabels=labels, ylim=(-0.6, len(labels) - 0.4),
                    xlim=(E1MAX_FREQUENCIES[0] - step, E1MAX_FREQUENCIES[-1] + step),
-                   xlabel="forcing frequency (rad/s)", title=f"{side}VI NES, m2 = {mass} kg")
+                   xlabel="forcing frequency (rad/s)", title=f"{side}VI NES, {_class(mass)}")
         handles = [plt.Rectangle((0, 0), 1, 1, color=c, ec="0.6") for c in ZONE_COLOURS.values()]
         fig.legend(handles, ["bilateral impacts", "left wall only (SSVI: the primary)", "right only",
                              "no impacts"], loc="lower center", ncol=4, fontsize=8)
         fig.tight_layout(rect=(0, 0.08, 1, 1))
         fig.savefig(figures / what, dpi=120)
         plt.close(fig)
-    lines = [f"### {figure} (m2 = {mass} kg): impact zones against frequency", "",
+    lines = [f"### {figure} ({_class(mass)}): impact zones against frequency", "",
              f"Figure: `figures/{what}` (steady window, the designs and frequencies of the E1max sweep "
              f"below). The paper shows {says}.", "",
              "| design | bilateral impacts (rad/s) | one wall only (rad/s) | no impacts (rad/s) |",
