@@ -79,7 +79,9 @@ import copy
 import hashlib
 import importlib
 import inspect
+import linecache
 import os
+import re
 import warnings
 from collections import defaultdict
 from collections.abc import Iterator
@@ -210,10 +212,29 @@ def _source_hash(*objects: Any) -> str:
     h = hashlib.sha256()
     try:
         for obj in objects:
-            h.update(inspect.getsource(obj).encode())
+            h.update(_source(obj).encode())
     except (OSError, TypeError):
         return ""
     return h.hexdigest()[:16]
+
+
+def _source(obj: Any) -> str:
+    """``inspect.getsource(obj)``, a class's found without ``ast``: CPython 3.11 finds a class by
+    parsing its whole module, and its parser's shared recursion count can fail a parse that runs
+    beside another thread's (``SystemError: AST constructor recursion depth mismatch``,
+    python/cpython#106905; seen in a dask worker compiling a loop).  The class statement (with its
+    decorators) is found in the module's lines by name instead, and its block by ``inspect``'s
+    tokenizer, as ``inspect.getsource`` cuts it."""
+    if not inspect.isclass(obj):
+        return inspect.getsource(obj)
+    lines = linecache.getlines(inspect.getsourcefile(obj) or "")
+    statement = re.compile(rf"\s*class\s+{re.escape(obj.__name__)}\b")
+    for number, line in enumerate(lines):
+        if statement.match(line):
+            while number > 0 and lines[number - 1].lstrip().startswith("@"):
+                number -= 1
+            return "".join(inspect.getblock(lines[number:]))
+    raise OSError(f"could not find class {obj.__qualname__}")
 
 
 def live_map_as_bits(cfg, blocks: dict, var_use_map: dict, var_def_map: dict, forward: list,

@@ -504,3 +504,23 @@ def test_what_holds_no_memory_is_neither_released_nor_zeroed():
     zeroed_own, own = _zeroed_slots(nullcontext)
     assert 0 < zeroed_fast < zeroed_own  # (the constant's stores are left)
     assert fast == own
+
+
+def test_a_class_s_source_is_read_without_parsing_its_module(monkeypatch):
+    """The verified hashes read numba's SSA classes: ``frontend._source`` gives the text of
+    ``inspect.getsource`` without the module-wide ``ast.parse`` whose shared recursion count
+    fails beside another thread's parse on CPython 3.11 (python/cpython#106905)."""
+    import ast
+    import inspect
+
+    from numba.core import ssa
+
+    classes = [getattr(ssa, name) for name in frontend.SSA_PARTS if inspect.isclass(getattr(ssa, name))]
+    assert len(classes) == 2
+    expected = [inspect.getsource(c) for c in classes]
+
+    def refuse(*args, **kwargs):
+        raise AssertionError("ast.parse called")
+
+    monkeypatch.setattr(ast, "parse", refuse)
+    assert [frontend._source(c) for c in classes] == expected
