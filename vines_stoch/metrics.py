@@ -8,7 +8,16 @@ from collections.abc import Sequence
 import numpy as np
 import pandas as pd
 
-from .outputs import ACC_MAX_K, DRIFT_MAX_K, SLOTS, STATUS_DIVERGED, X_MAX_K, X_SQ_INT_K, passage_slots
+from .outputs import (
+    ACC_MAX_K,
+    DRIFT_MAX_K,
+    SLOTS,
+    STATUS_DIVERGED,
+    X_MAX_K,
+    X_SQ_INT_K,
+    declared_slots,
+    passage_slots,
+)
 from .scene import Scene
 from .signals import METRIC_NAME, REDUCE_MEAN, REDUCE_RMS, REDUCTION_SLOTS
 
@@ -140,7 +149,7 @@ def finish_table(raw: np.ndarray, scene: Scene | Sequence[Scene],
     passages = passage_slots(nf)
     for limit, name in enumerate(scene.limit_names):  # (NaN where a limit never passed)
         columns[f"first_passage_{name}"] = raw[:, passages + limit]
-    declared = passages + len(scene.limit_names)
+    declared = declared_slots(nf, len(scene.limit_names))
     dt = scene.dt if scenes is None else np.array([s.dt for s in scenes])
     for r, name in enumerate(scene.metric_names):  # (``signals.declare_metrics``)
         folded, last = raw[:, declared + REDUCTION_SLOTS * r], raw[:, declared + REDUCTION_SLOTS * r + 1]

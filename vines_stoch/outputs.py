@@ -49,12 +49,19 @@ def passage_slots(nf: int) -> int:
     return len(SLOTS) + len(FLOOR_SLOTS) * nf
 
 
+@njit(**INLINE)
+def declared_slots(nf: int, n_limits: int) -> int:
+    """Index of the first declared metric's slots (``signals.REDUCTION_SLOTS`` each), after the
+    first passages of ``n_limits`` limits."""
+    return passage_slots(nf) + n_limits
+
+
 def new_metrics(n_floors: int = 1, n_limits: int = 0, n_declared: int = 0) -> np.ndarray:
     """A raw metric vector of a primary with ``n_floors`` floors: zeros, then NaN in the
     first-passage slots of ``n_limits`` limits, then the slots of ``n_declared`` declared
     metrics (``signals.REDUCTION_SLOTS`` each; zero until the window opens)."""
     base = passage_slots(n_floors)
-    out = np.zeros(base + n_limits + REDUCTION_SLOTS * n_declared)
+    out = np.zeros(declared_slots(n_floors, n_limits) + REDUCTION_SLOTS * n_declared)
     out[base:base + n_limits] = np.nan
     return out
 

@@ -44,7 +44,7 @@ from numba import njit
 from ..jit.cache import stable_cache
 from ..jit.flags import INLINE, KERNEL
 from ..jit.intrinsics import borrowed, copy_into, plain, scratch
-from ..outputs import CONTACT_TIME, FINAL_ENERGY, PEAK_FORCE, STATUS, STATUS_DIVERGED, passage_slots
+from ..outputs import CONTACT_TIME, FINAL_ENERGY, PEAK_FORCE, STATUS, STATUS_DIVERGED, declared_slots
 from ..physics.structure import primary_energy
 from .carry import (
     E1_PREV,
@@ -162,7 +162,7 @@ def step_loop(plug: Step, spec: Spec):
         out, samples, history, signals, limits, carry = (outputs.out, outputs.samples, outputs.history,
                                                          outputs.signals, outputs.limits, outputs.carry)
         reductions = outputs.reductions
-        declared_at = passage_slots(NF) + limits.shape[0]  # (the declared metrics' slots)
+        declared_at = declared_slots(NF, limits.shape[0])
         resume = first > 0  # a later stretch of the path: its state from ``carry``
         # the state (copied back at the end) on the stack (see ``jit.intrinsics.scratch``); copies
         # of it for the out-of-line calls and for the Poincare samples' interpolation

@@ -13,16 +13,9 @@ import numpy as np
 import pytest
 
 from tests.helpers import ROOT, example_scene
+from vines_stoch import outputs
 from vines_stoch.kernels import simulate
-from vines_stoch.outputs import (
-    EVENT_ABSORBER,
-    EVENT_LOSS,
-    EVENT_SIDE,
-    EVENT_SPEED,
-    EVENT_T,
-    SLOTS,
-    new_events,
-)
+from vines_stoch.outputs import SLOTS, new_events
 from vines_stoch.physics.absorbers import HERTZ, IMPACT, RESTITUTION
 
 _S = {name: i for i, name in enumerate(SLOTS)}
@@ -49,27 +42,27 @@ def test_the_event_log_details_the_impacts_the_metrics_count(case):
     scene = _scene(*CASES[case])
     events = new_events(100_000)
     out = simulate(scene, np.random.default_rng(3), events=events)
-    logged = events[np.isfinite(events[:, EVENT_T])]
+    logged = events[np.isfinite(events[:, outputs.EVENT_T])]
     assert np.isnan(events[len(logged):]).all()  # the rows in order, the rest untouched
     assert len(logged) == out[_S["impacts"]] > 0
-    side = logged[:, EVENT_SIDE]
+    side = logged[:, outputs.EVENT_SIDE]
     assert (side == -1).sum() == out[_S["impacts_left"]] and (side == 1).sum() == out[_S["impacts_right"]]
-    t = logged[:, EVENT_T]
+    t = logged[:, outputs.EVENT_T]
     assert (np.diff(t) >= 0).all()
     assert scene.i0 * scene.dt <= t[0] and t[-1] <= scene.n_steps * scene.dt
     # the losses, in the order the loop added them, sum to the impact loss exactly
     total = 0.0
-    for loss in logged[:, EVENT_LOSS]:
+    for loss in logged[:, outputs.EVENT_LOSS]:
         total += loss
     assert total == out[_S["impact_loss"]]
-    a = logged[:, EVENT_ABSORBER].astype(int)
+    a = logged[:, outputs.EVENT_ABSORBER].astype(int)
     kind = scene.kind[a]
     assert set(kind) <= {IMPACT, HERTZ}
-    speed = logged[:, EVENT_SPEED]
+    speed = logged[:, outputs.EVENT_SPEED]
     if CASES[case][1] == "rk4":  # each absorber moving into the wall it meets (kick-drift-kick:
         assert (side * speed > 0).all()  # the velocity after the closing kick, which a slow impact's loads
         # may have turned, is the one the impact map acts on)
-    assert (logged[kind == HERTZ, EVENT_LOSS] == 0.0).all()  # (Hertz contact: elastic)
+    assert (logged[kind == HERTZ, outputs.EVENT_LOSS] == 0.0).all()  # (Hertz contact: elastic)
     # an impact loses what the Newton map takes, (1 - e^2) mu u^2 / 2 (Wei et al. eqs. 2-3), or
     # mu u^2 / 2 when it starts sticking (e = 0)
     impacts = kind == IMPACT
@@ -78,8 +71,8 @@ def test_the_event_log_details_the_impacts_the_metrics_count(case):
         m1, ma = scene.mass[host], scene.mass[scene.n_floors + a[impacts]]
         mu_u2 = 0.5 * m1 * ma / (m1 + ma) * speed[impacts] ** 2
         e = scene.rows[a[impacts], RESTITUTION]
-        elastic = np.isclose(logged[impacts, EVENT_LOSS], (1 - e**2) * mu_u2, rtol=1e-12, atol=0.0)
-        plastic = np.isclose(logged[impacts, EVENT_LOSS], mu_u2, rtol=1e-12, atol=0.0)
+        elastic = np.isclose(logged[impacts, outputs.EVENT_LOSS], (1 - e**2) * mu_u2, rtol=1e-12, atol=0.0)
+        plastic = np.isclose(logged[impacts, outputs.EVENT_LOSS], mu_u2, rtol=1e-12, atol=0.0)
         assert (elastic | plastic).all()
 
 
@@ -89,7 +82,7 @@ def test_what_a_run_records_changes_no_number(case):
     that keeps an event log and history rows ends with the metrics and state of one that keeps
     none.  The two are different loops, whose compiler may fuse different multiply-adds (the
     kernels allow contraction: ``jit.flags.KERNEL``), so they agree to the last bits, within
-    1e-9 relative as the shipped numbers do (``tests/integration/test_numbers_hold.py``): on
+    1e-9 relative as the shipped numbers do (``test_numbers_hold``): on
     this scene, whose paths are not chaotic."""
     if case == "kdk harmonic and white noise":
         scene = _scene("seed000_harmonic_noise_none", None, 10.0)
@@ -125,7 +118,7 @@ print(json.dumps([["_history_row" in text, len(text)] for text in ir]))
 def test_a_loop_holds_only_what_its_run_records(tmp_path):
     """A scene pays only for what it asks: the loop of a run that keeps no history rows holds
     none of their code (it never calls the out-of-line history row), and is the smaller."""
-    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "numba")}
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "numba"), "PYTHONPATH": str(ROOT)}
     done = subprocess.run([sys.executable, "-c", COMPILE_BOTH], cwd=ROOT, env=env, capture_output=True,
                           text=True, timeout=600)
     assert done.returncode == 0, done.stderr[-2000:]
