@@ -31,9 +31,10 @@ import pandas as pd
 from . import history as hist
 from . import schedulers
 from .binding import binding
-from .kernels import DEFAULT_SIGNALS, needed_streams, sample_buffer, simulate
-from .metrics import METRICS, finish_table, ground_intensity, summarise
-from .outputs import EVENT_COLUMNS, EVENT_T, POINCARE_SAMPLES, new_events
+from .kernels import DEFAULT_SIGNALS, kernel_for
+from .kernels.chunk import chunk_loop, ground_paths, parameter_draws, seed_keys, simulate_chunk
+from .metrics import METRICS, finish_table, ground_intensities, summarise
+from .outputs import EVENT_COLUMNS, EVENT_T, POINCARE_SAMPLES, Record
 from .progress import Progress
 from .results import Results, Solution, as_study, check_whole, read_results
 from .scenario import History, Study
@@ -53,7 +54,7 @@ from .store import (
     write_arrays,
     write_table,
 )
-from .streams import FILTER, PARAMETERS, generator, streams
+from .streams import generator
 
 #: Target work of one chunk, in path-steps (about 0.1-0.3 s of compute).
 CHUNK_STEPS = 5_000_000
@@ -78,11 +79,24 @@ GPU_CHUNK_BYTES = 1 << 29
 BACKENDS = ("cpu", "cuda")
 
 
+def chunk_parameters(study: Study, seed: int, point: int, start: int, stop: int,
+                     common: bool = True) -> dict[str, np.ndarray]:
+    """Values of the uncertain parameters of realisations ``start .. stop - 1``, by key in file
+    order (one draw a parameter of each realisation's parameter stream, in one compiled call:
+    ``kernels.chunk.parameter_draws``)."""
+    dists = study.base.uncertain
+    draws = np.zeros((stop - start, len(dists)))
+    normal = np.array([d.normal for d in dists.values()], np.bool_)
+    parameter_draws(seed_keys(seed), point, start, common, normal, draws)
+    return {key: np.asarray(dist.value(draws[:, k]), dtype=float)
+            for k, (key, dist) in enumerate(dists.items())}
+
+
 def draw_parameters(study: Study, seed: int, point: int, realization: int,
                     common: bool = True) -> dict[str, float]:
-    """Values of the uncertain parameters of one realisation, in file order."""
-    gen = generator(seed, point, realization, PARAMETERS, common)
-    return {key: float(dist.draw(gen)) for key, dist in study.base.uncertain.items()}
+    """Values of the uncertain parameters of one realisation, in file order (``chunk_parameters``)."""
+    drawn = chunk_parameters(study, seed, point, realization, realization + 1, common)
+    return {key: float(values[0]) for key, values in drawn.items()}
 
 
 def run_chunk(scene: Scene, seed: int, point: int, start: int, stop: int,
@@ -91,38 +105,33 @@ def run_chunk(scene: Scene, seed: int, point: int, start: int, stop: int,
               signals: tuple[str, ...] = DEFAULT_SIGNALS) -> tuple[pd.DataFrame, np.ndarray | None]:
     """Realisations ``start..stop-1`` of one sweep point: one metric row each and, when a
     history ``grid = (stride, size)`` is asked for, the paths of the history ``signals``
-    ``(len(signals), size, stop - start)``.  With ``study`` (a study with uncertain parameters) each
+    ``(len(signals), size, stop - start)``.  The realisations run in one compiled call
+    (``kernels.chunk.simulate_chunk``).  With ``study`` (a study with uncertain parameters) each
     realisation runs its own scene (``binding``: the point's scene with the drawn values set), its
     drawn values in columns named by their keys.
     ``common``: common random numbers across sweep points (see ``generator``)."""
-    raws, scenes, samples_rows, drawn_rows, intensities, logs = [], [], [], [], [], []
-    paths = None if grid is None else np.full((len(signals), grid[1], stop - start), np.nan)
-    path = None if grid is None else np.full((grid[1], len(signals)), np.nan)
-    bound = binding(study, point) if study is not None else None
-    for r in range(start, stop):
-        drawn = draw_parameters(study, seed, point, r, common) if study is not None else {}
-        if drawn:
-            scene = bound.scene(drawn)
-        samples = sample_buffer(scene)
-        if path is not None:
-            path.fill(np.nan)
-        increments, bridge, filters = needed_streams(scene)
-        gens = streams(seed, point, r, increments=increments, bridge=bridge, filters=filters, common=common)
-        log = new_events(scene.event_rows) if scene.event_rows else None
-        raws.append(simulate(scene, gens, samples=samples, history=path, stride=grid[0] if grid else 1,
-                             signals=signals, events=log))
-        logs.append(log)
-        if paths is not None:
-            paths[:, :, r - start] = path.T
-        scenes.append(scene)
-        samples_rows.append(samples)
-        drawn_rows.append(drawn)
-        # (the filter stream afresh: the ground path the realisation saw)
-        intensities.append(ground_intensity(scene, streams(seed, point, r, increments=False, bridge=False,
-                                                           filters=filters, common=common))
-                           if scene.im_period > 0 else {})
-    return _table(np.stack(raws), scenes if study is not None else scene, samples_rows, point, start,
-                  drawn_rows, intensities, logs), paths
+    if study is None:
+        drawn, scenes = {}, scene
+        parts = [simulate_chunk(scene, seed, point, start, stop, common, grid, signals, scene.event_rows,
+                                scene.im_period > 0)]
+        intensities = ground_intensities(scene, parts[0].ground)
+    else:
+        drawn = chunk_parameters(study, seed, point, start, stop, common)
+        bound = binding(study, point)
+        scenes = [bound.scene({key: float(values[j]) for key, values in drawn.items()})
+                  for j in range(stop - start)]
+        parts = [simulate_chunk(s, seed, point, r, r + 1, common, grid, signals, s.event_rows,
+                                s.im_period > 0) for r, s in zip(range(start, stop), scenes)]
+        intensities = _joined([ground_intensities(s, part.ground) for s, part in zip(scenes, parts)])
+    raw, samples, history, events = (np.concatenate([getattr(part, name) for part in parts])
+                                     for name in ("raw", "samples", "history", "events"))
+    paths = None if grid is None else history.transpose(2, 1, 0)
+    return _table(raw, scenes, samples, point, start, drawn, intensities, events), paths
+
+
+def _joined(rows: list[dict[str, np.ndarray]]) -> dict[str, np.ndarray]:
+    """Per-realisation columns (``ground_intensities`` of one realisation each) joined."""
+    return {key: np.concatenate([row[key] for row in rows]) for key in rows[0]} if rows else {}
 
 
 def run_chunk_cuda(scene: Scene, seed: int, point: int, start: int, stop: int,
@@ -133,39 +142,41 @@ def run_chunk_cuda(scene: Scene, seed: int, point: int, start: int, stop: int,
     ``r`` drawing from its Philox streams (``kernels/rng.py``) instead of the CPU's PCG64 streams
     (its uncertain parameters still come from the CPU's parameter stream)."""
     from . import gpu
-    from .kernels.rng import philox_stream
 
     n = stop - start
-    drawn_rows = [draw_parameters(study, seed, point, r, common) if study is not None else {}
-                  for r in range(start, stop)]
-    scenes = [binding(study, point).scene(d) for d in drawn_rows] if study is not None else [scene] * n
-    batch = gpu.simulate_many(scenes if study is not None else scene, seed, point, start, stop, common, grid,
-                              signals, scene.event_rows)
-    samples = list(batch.samples) if batch.samples.shape[1] else [None] * n
-    # (the filter stream afresh: the ground path the realisation saw)
-    intensities = [ground_intensity(s, philox_stream(seed, FILTER, r, point, common))
-                   if s.im_period > 0 else {} for s, r in zip(scenes, range(start, stop))]
+    drawn = chunk_parameters(study, seed, point, start, stop, common) if study is not None else {}
+    bound = binding(study, point) if study is not None else None
+    scenes = ([bound.scene({key: float(values[j]) for key, values in drawn.items()}) for j in range(n)]
+              if study is not None else scene)
+    batch = gpu.simulate_many(scenes, seed, point, start, stop, common, grid, signals, scene.event_rows)
+    # (the filter streams afresh: the ground paths the realisations saw)
+    def intensities_of(s: Scene, first: int, last: int) -> dict[str, np.ndarray]:
+        paths = ground_paths(s, seed, point, first, last, common, philox=True) if s.im_period > 0 else None
+        return ground_intensities(s, paths)
+
+    intensities = (intensities_of(scene, start, stop) if study is None else
+                   _joined([intensities_of(s, r, r + 1) for s, r in zip(scenes, range(start, stop))]))
     paths = None if grid is None else batch.history.transpose(2, 1, 0)
-    return _table(batch.raw, scenes if study is not None else scene, samples, point, start, drawn_rows,
-                  intensities, list(batch.events)), paths
+    return _table(batch.raw, scenes, batch.samples, point, start, drawn, intensities, batch.events), paths
 
 
-def _table(raw: np.ndarray, scenes: Scene | list[Scene], samples: list, point: int, start: int,
-           drawn_rows: list[dict[str, float]], intensities: list[dict[str, float]],
-           logs: list[np.ndarray | None]) -> pd.DataFrame:
-    """A chunk's table: point, realisation, drawn parameters, the metrics (``finish_table``),
-    then the intensity measures where the scene asks for them, and the event logs where it keeps
-    them (``logs``: one a realisation, or None), as list columns ``event_<column>`` (a chunk's
-    part holds them; ``_events`` makes them events.parquet's rows)."""
-    frame = finish_table(raw, scenes, samples)
+def _table(raw: np.ndarray, scenes: Scene | list[Scene], samples: np.ndarray, point: int, start: int,
+           drawn: dict[str, np.ndarray], intensities: dict[str, np.ndarray],
+           logs: np.ndarray) -> pd.DataFrame:
+    """A chunk's table: point, realisation, drawn parameters (``drawn``: by key, one a row), the
+    metrics (``finish_table``, ``samples``: the Poincare samples, ``(rows, samples, columns)``),
+    then the intensity measures where the scene asks for them (``intensities``), and the event
+    logs where it keeps them (``logs``: ``(rows, log rows, EVENT_COLUMNS)``), as list columns
+    ``event_<column>`` (a chunk's part holds them; ``_events`` makes them events.parquet's rows)."""
+    frame = finish_table(raw, scenes, samples if samples.shape[1] else None)
     front = {"point": np.full(raw.shape[0], point, dtype=np.int64),
              "realization": np.arange(start, start + raw.shape[0], dtype=np.int64),
-             **{key: np.array([d[key] for d in drawn_rows], dtype=float) for key in drawn_rows[0]}}
+             **{key: np.asarray(values, dtype=float) for key, values in drawn.items()}}
     for i, (key, values) in enumerate(front.items()):
         frame.insert(i, key, values)
-    for key in next((m for m in intensities if m), {}):  # sa, pga
-        frame[key] = np.array([m.get(key, np.nan) for m in intensities], dtype=float)
-    if logs and logs[0] is not None and logs[0].shape[0]:
+    for key, values in intensities.items():  # sa, pga
+        frame[key] = values
+    if logs.shape[1]:
         kept = [log[np.isfinite(log[:, EVENT_T])] for log in logs]
         for c, name in enumerate(EVENT_COLUMNS):
             frame[f"event_{name}"] = [log[:, c] for log in kept]
@@ -541,27 +552,17 @@ def prepare_loops(scenes: list[Scene], seed: int, common: bool, grid: tuple[int,
     """Compile (or load from numba's cache on disk) the step loop of each structure among
     ``scenes`` that this process has not run yet, before any chunk starts, with one line each on
     standard error: which structure, and whether it was compiled (once: later runs load it) or
-    loaded.  A path of no steps runs each loop with the argument types of ``run_chunk``."""
-    from .kernels import advance, start_path
-
+    loaded.  A chunk of no realisations runs each loop with the argument types of ``run_chunk``."""
     seen = set()
     for point, scene in enumerate(scenes):
-        increments, bridge, filters = needed_streams(scene)
-        history = None
-        if grid is not None:
-            history = np.full((grid[1], len(signals)), np.nan)
-        gens = streams(seed, point, 0, increments=increments, bridge=bridge, filters=filters, common=common)
-        path = start_path(scene, gens, samples=sample_buffer(scene), history=history,
-                          stride=grid[0] if grid else 1, stretches=False, signals=signals,
-                          events=new_events(scene.event_rows) if scene.event_rows else None)
-        kernel = path.kernel  # (the loop of the structure, recording what the run asks: ``outputs.Record``)
-        if kernel in seen or kernel.overloads:
+        run = chunk_loop(kernel_for(scene, record=Record.of(scene, grid[1] if grid else 0, scene.event_rows)))
+        if run in seen or run.overloads:
             continue
-        seen.add(kernel)
+        seen.add(run)
         print(f"step loop: {structure(scene)}: compiling or loading ...", end="", file=sys.stderr, flush=True)
-        hits, start = sum(kernel.stats.cache_hits.values()), time.monotonic()
-        advance(path, 0)
-        loaded = sum(kernel.stats.cache_hits.values()) > hits
+        hits, start = sum(run.stats.cache_hits.values()), time.monotonic()
+        simulate_chunk(scene, seed, point, 0, 0, common, grid, signals, scene.event_rows, scene.im_period > 0)
+        loaded = sum(run.stats.cache_hits.values()) > hits
         print(f" {'loaded from the cache' if loaded else 'compiled (cached on disk for later runs)'} "
               f"in {time.monotonic() - start:.1f} s", file=sys.stderr, flush=True)
 

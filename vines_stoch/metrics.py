@@ -65,21 +65,38 @@ def regime(samples: np.ndarray, omega: float) -> str | None:
     period): the smallest ``n <= MAX_PERIOD`` with which the samples repeat, and the left and
     right impacts over the last ``n`` periods.  ``"aperiodic"`` when none repeats (amplitude
     modulated or chaotic motion); None without samples."""
-    rows = samples[~np.isnan(samples[:, 0])]
-    nb = (samples.shape[1] - 2) // 2
-    if rows.shape[0] < 3:
-        return None
-    state = np.hstack([rows[:, :nb], rows[:, nb:2 * nb] / omega])
-    scale = float(np.abs(state).max()) or 1.0
-    for n in range(1, MAX_PERIOD + 1):
-        if rows.shape[0] < 2 * n + 1:
-            break
-        if np.abs(state[n:] - state[:-n]).max() <= PERIODIC_TOLERANCE * scale:
-            # impacts per n periods, averaged over every whole cycle sampled
-            cycles = (rows.shape[0] - 1) // n
-            left, right = (rows[-1, 2 * nb:] - rows[-1 - cycles * n, 2 * nb:]) / cycles
-            return f"{'' if n == 1 else n}T,{left:.0f},{right:.0f}"
-    return "aperiodic"
+    return regimes(samples[np.newaxis], np.array([omega]))[0]
+
+
+def regimes(samples: np.ndarray, omega: np.ndarray) -> list[str | None]:
+    """``regime`` of the Poincare samples of each realisation (``samples``: ``(rows, samples,
+    columns)``, each row's samples a prefix of it, NaN after; ``omega``: one a row), with numpy
+    over the rows that hold as many samples (a chunk's realisations: one pass)."""
+    nb = (samples.shape[2] - 2) // 2
+    counts = (~np.isnan(samples[:, :, 0])).sum(axis=1)
+    found: list[str | None] = [None] * samples.shape[0]
+    for count in np.unique(counts[counts >= 3]):
+        where = np.flatnonzero(counts == count)
+        rows = samples[where, :count]
+        state = np.concatenate([rows[:, :, :nb], rows[:, :, nb:2 * nb] / omega[where, None, None]], axis=2)
+        scale = np.abs(state).max(axis=(1, 2))
+        scale[scale == 0] = 1.0
+        period = np.zeros(where.shape[0], np.int64)  # (0: none found yet)
+        for n in range(1, min(MAX_PERIOD, (count - 1) // 2) + 1):
+            repeats = np.abs(state[:, n:] - state[:, :-n]).max(axis=(1, 2)) <= PERIODIC_TOLERANCE * scale
+            period[(period == 0) & repeats] = n
+        # impacts per n periods, averaged over every whole cycle sampled
+        n = np.maximum(period, 1)
+        cycles = (count - 1) // n
+        earlier = rows[np.arange(where.shape[0]), count - 1 - cycles * n, 2 * nb:]
+        impacts = (rows[:, -1, 2 * nb:] - earlier) / cycles[:, None]
+        labels: dict[tuple, str] = {}
+        for i, p, (left, right) in zip(where, period, impacts):
+            key = (p, left, right) if p else (0,)
+            if key not in labels:
+                labels[key] = f"{'' if p == 1 else p}T,{left:.0f},{right:.0f}" if p else "aperiodic"
+            found[i] = labels[key]
+    return found
 
 
 def finish_table(raw: np.ndarray, scene: Scene | Sequence[Scene],
@@ -165,13 +182,29 @@ def finish_table(raw: np.ndarray, scene: Scene | Sequence[Scene],
     # string columns as codes into their few values (far faster than a string a row)
     columns["status"] = pd.Series(["diverged", "ok"]).array.take(ok.astype(np.intp))
     codes, labels = np.zeros(n, dtype=np.intp), {None: 0}
-    if samples is not None:
-        for i in np.flatnonzero(ok):
-            if samples[i] is not None and samples[i].size:
-                period = scene.period if scenes is None else scenes[i].period
-                codes[i] = labels.setdefault(regime(samples[i], 2.0 * np.pi / period), len(labels))
+    stacked = _stacked(samples, n)
+    if stacked is not None:
+        kept = np.flatnonzero(ok)
+        period = (np.full(n, scene.period) if scenes is None else np.array([s.period for s in scenes]))[kept]
+        for i, label in zip(kept, regimes(stacked[kept], 2.0 * np.pi / period)):
+            codes[i] = labels.setdefault(label, len(labels))
     columns["regime"] = pd.array(list(labels), dtype="string").take(codes)
     return pd.DataFrame(columns)
+
+
+def _stacked(samples: Sequence[np.ndarray | None] | np.ndarray | None, n: int) -> np.ndarray | None:
+    """Rows' Poincare samples as one array ``(n, samples, columns)`` (a row given None or none:
+    NaN), or None where no row has any."""
+    if isinstance(samples, np.ndarray):
+        return samples if samples.ndim == 3 and samples.shape[1] else None
+    given = [np.asarray(s, dtype=float) for s in samples or () if s is not None and np.size(s)]
+    if not given:
+        return None
+    stacked = np.full((n, *given[0].shape), np.nan)
+    for i, s in enumerate(samples):
+        if s is not None and np.size(s):
+            stacked[i] = s
+    return stacked
 
 
 def finish(raw: np.ndarray, scene: Scene, samples: np.ndarray | None = None) -> dict[str, float | str | None]:
@@ -183,15 +216,24 @@ def finish(raw: np.ndarray, scene: Scene, samples: np.ndarray | None = None) -> 
 
 
 def ground_intensity(scene: Scene, streams) -> dict[str, float]:
-    """``sa`` (pseudo-spectral acceleration at ``scene.im_period``, ``im_damping``) and ``pga``
-    of the ground acceleration of a realisation on the scene's time grid, from its streams (a
+    """``sa`` and ``pga`` (``ground_intensities``) of one realisation, from its streams (a
     fresh copy of those it ran with: ``kernels.load_history`` gives the same path)."""
     from .kernels import load_history
-    from .physics.spectra import peak, pseudo_acceleration
 
     _, _, ground = load_history(scene, streams)
-    return {"sa": pseudo_acceleration(ground, scene.dt, scene.im_period, scene.im_damping),
-            "pga": peak(ground)}
+    return {key: float(values[0]) for key, values in ground_intensities(scene, ground[np.newaxis]).items()}
+
+
+def ground_intensities(scene: Scene, ground: np.ndarray | None) -> dict[str, np.ndarray]:
+    """``sa`` (pseudo-spectral acceleration at ``scene.im_period``, ``im_damping``) and ``pga``
+    of ground acceleration paths on the scene's time grid (``ground``: one a row), or nothing
+    where the scene asks for no intensity measure."""
+    from .physics.spectra import peak, pseudo_acceleration
+
+    if scene.im_period <= 0 or ground is None:
+        return {}
+    sa = pseudo_acceleration(ground, scene.dt, scene.im_period, scene.im_damping)
+    return {"sa": np.asarray(sa, dtype=float), "pga": np.asarray(peak(ground), dtype=float)}
 
 
 def undefined_notes(ok: pd.DataFrame, metrics: list[str]) -> str:

@@ -28,11 +28,12 @@ from .bundles import Absorbers, Bodies, Filters, Grid, Loads, Noise, Outputs
 from .carry import SEED_HIGH, SEED_LOW, new_carry
 from .driver import Spec, step_loop
 from .loads import load_path, stationary_start
+from .pcg import new_stream, set_state, state_of
 from .rng import STREAM_WORDS, uniform
 
 _NO_NORMALS = np.zeros(0)
-#: The generator in the increments' place of a replayed path: never drawn from.
-_UNDRAWN = np.random.default_rng(0)
+#: The stream in the increments' place of a replayed path: never drawn from.
+_UNDRAWN = new_stream()
 #: A stream the kernel has no use for: an empty Philox stream (``rng.philox_stream``), never drawn
 #: from.  The cuda backend passes Philox streams in every place, so a deterministic scene runs
 #: the same loop (the same argument types: one compilation) on the CPU and on the simulator.
@@ -43,8 +44,8 @@ _NO_EVENTS = new_events(0)
 #: The carry of a path run in one go: none kept.
 _NO_CARRY = np.zeros(0)
 #: The loops this process has run, with the kinds of their generators (``cache.compile_once``
-#: saw them first: a loop given numpy Generators and then Philox stream arrays compiles twice,
-#: both times with the faster front end).
+#: saw them first: a loop given PCG64 and then Philox streams compiles twice, both times with
+#: the faster front end).
 _STARTED: set = set()
 
 
@@ -94,10 +95,9 @@ def filter_tuple(scene, generator: np.random.Generator | np.ndarray | None) -> F
     then the next state's and the normals' scratch (``loads.advance_filters``)."""
     f = scene.filters
     z = np.zeros(f["phi"].shape[0])
-    if isinstance(generator, np.ndarray) and z.shape[0]:
+    if z.shape[0] and generator is not None:  # (a sum in a fixed order, not a BLAS product: the
+        # same bits on every machine; no generator: from rest, as ``chunk.simulate_chunk`` starts)
         stationary_start(f["p0"], generator, z, np.zeros(z.shape[0]))
-    elif z.shape[0] and f["p0"].any():
-        z = f["p0"] @ generator.standard_normal(z.shape[0])
     return Filters(phi=f["phi"], chol=f["chol"], envelope=f["envelope"], c_force=f["c_force"],
                    c_ground=f["c_ground"], z=z, zn=z.copy(), draws=np.zeros(z.shape[0]))
 
@@ -110,15 +110,14 @@ def needed_streams(scene, replay: bool = False) -> tuple[bool, bool, bool]:
     return white and not replay, white and (scene.has_impact or scene.has_hertz), scene.has_filters
 
 
-def _streams_for(scene, replay: bool, streams: Streams | np.random.Generator | None) -> tuple:
-    """The kernel's generators (increments, bridge, filter).  A numpy Generator is passed only
-    where the kernel draws from it, an empty Philox stream elsewhere (``_UNUSED``: numba's
-    unboxing of a Generator costs about 6 us a call, half the set-up of a short run, an array's
-    next to nothing); a Philox stream (an array, ``rng.philox_stream``, as on the GPU) is passed
-    all the same, so that the loop is the one the cuda backend runs.  A replayed path keeps a
-    generator (``_UNDRAWN``, or the Philox stream given) in the increments' place, so that it
-    runs the kernel a drawn path runs (the same argument types) and not a specialisation of its
-    own."""
+def _streams_for(scene, replay: bool, streams: Streams | np.random.Generator | None) -> tuple[tuple, tuple]:
+    """The kernel's generators (increments, bridge, filter), and the numpy generators they stand
+    for (``_as_streams``).  A generator is passed only where the kernel draws from it, an empty
+    Philox stream elsewhere (``_UNUSED``: an array costs next to nothing to pass); a Philox stream
+    (an array, ``rng.philox_stream``, as on the GPU) is passed all the same, so that the loop is
+    the one the cuda backend runs.  A replayed path keeps a stream (``_UNDRAWN``, or the Philox
+    stream given) in the increments' place, so that it runs the kernel a drawn path runs (the
+    same argument types) and not a specialisation of its own."""
     wanted = needed_streams(scene, replay)
     if isinstance(streams, np.random.Generator):
         streams = Streams.shared(streams)
@@ -133,10 +132,35 @@ def _streams_for(scene, replay: bool, streams: Streams | np.random.Generator | N
     gens = [gen if want or isinstance(gen, np.ndarray) else _UNUSED for want, gen in zip(wanted, chosen)]
     if replay and scene.has_white_noise and gens[0] is _UNUSED:
         gens[0] = _UNDRAWN
-    return tuple(gens)
+    return _as_streams(gens)
 
 
-def _streams_for_copy(gens: list, streams: Streams | np.random.Generator) -> tuple:
+def _as_streams(gens: Sequence) -> tuple[tuple, tuple]:
+    """``gens`` with each numpy Generator of a ``PCG64`` bit generator replaced by its stream
+    (``pcg.state_of``: the loop an ensemble runs, and the same numbers; one stream for a
+    generator given in several places), and the pairs ``(generator, stream)`` whose state goes
+    back to the generator after each use (``_sync``)."""
+    pairs: dict[int, tuple] = {}
+    out = []
+    for gen in gens:
+        if isinstance(gen, np.random.Generator):
+            pair = pairs.setdefault(id(gen), (gen, state_of(gen)))
+            gen = gen if pair[1] is None else pair[1]
+        out.append(gen)
+    return tuple(out), tuple(pair for pair in pairs.values() if pair[1] is not None)
+
+
+def _sync(sources: tuple, back: bool = True) -> None:
+    """The streams of ``sources`` (``_as_streams``) written back to their generators (``back``),
+    or read from them again (a user may draw from a generator between two stretches)."""
+    for gen, stream in sources:
+        if back:
+            set_state(gen, stream)
+        else:
+            state_of(gen, stream)
+
+
+def _streams_for_copy(gens: list, streams: Streams | np.random.Generator) -> tuple[tuple, tuple]:
     """The generators of a branch on ``streams``: each place a path's loop draws from (a
     generator that is not the unused stream ``_UNUSED``) takes the stream of its purpose."""
     if isinstance(streams, np.random.Generator):
@@ -150,7 +174,7 @@ def _streams_for_copy(gens: list, streams: Streams | np.random.Generator) -> tup
             raise ValueError(f"branch: this path draws from the {name} stream; it is None")
         else:
             fresh.append(new)
-    return tuple(fresh)
+    return _as_streams(fresh)
 
 
 def loads_of(scene) -> Loads:
@@ -195,6 +219,8 @@ class Path:
     kernel: Any
     args: tuple
     step: int = 0
+    #: The numpy generators the path's streams stand for, with the streams (``_as_streams``).
+    sources: tuple = ()
 
     @property
     def x(self) -> np.ndarray:
@@ -230,16 +256,21 @@ class Path:
                                    events=outputs.events.copy())
         if self.step > 0 and outputs.carry.shape[0] == 0:
             raise ValueError("branch: this path keeps no carry (start_path(..., stretches=False))")
+        sources = ()
         if streams is None:
-            gens = [copy.deepcopy(gen) for gen in gens]
+            _sync(self.sources, back=False)
+            gens = list(copy.deepcopy(gens))  # (one copy of a stream given in several places)
         else:
-            gens = list(_streams_for_copy(gens, streams))
+            gens, sources = _streams_for_copy(gens, streams)
+            gens = list(gens)
             if self.step > 0 and gens[1] is not _UNUSED:  # (drawn at the path's start: redrawn)
+                _sync(sources, back=False)
                 outputs.carry[SEED_HIGH], outputs.carry[SEED_LOW] = uniform(gens[1]), uniform(gens[1])
+                _sync(sources)
         fl = fl._replace(z=fl.z.copy(), zn=fl.zn.copy(), draws=fl.draws.copy())
         args = (bodies._replace(x=bodies.x.copy(), v=bodies.v.copy()), absorbers, loads, fl, noise, grid,
                 outputs, *gens)
-        return Path(self.kernel, args, self.step)
+        return Path(self.kernel, args, self.step, sources)
 
 
 #: The signals of a history given without names: the roof's displacement and ``E1``, then with
@@ -281,8 +312,9 @@ def start_path(scene, streams: Streams | np.random.Generator | None = None, *,
         raise ValueError(f"normals: need {needed} values, got {normals.shape[0]}")
     if replay and scene.has_filters:
         raise ValueError("normals: a replayed Brownian path drives white noise only, not filtered loads")
-    gens = _streams_for(scene, replay, streams)
+    gens, sources = _streams_for(scene, replay, streams)
     fl = filter_tuple(scene, gens[2])
+    _sync(sources)
     carry = (new_carry(scene.n_floors, scene.kind.shape[0], scene.forces.shape[0]) if stretches
              else _NO_CARRY)
     history = _NO_HISTORY if history is None else history
@@ -293,7 +325,8 @@ def start_path(scene, streams: Streams | np.random.Generator | None = None, *,
                          f"not {events.shape}")
     args = bundles(scene, x, v, fl, normals if replay else _NO_NORMALS, out, samples, history, stride, gens,
                    refine, carry, columns, events)
-    return Path(kernel_for(scene, record=Record.of(scene, history.shape[0], events.shape[0])), args)
+    return Path(kernel_for(scene, record=Record.of(scene, history.shape[0], events.shape[0])), args,
+                sources=sources)
 
 
 def advance(path: Path, stop: int) -> Path:
@@ -313,11 +346,13 @@ def advance(path: Path, stop: int) -> Path:
     if stop == path.step and stop > 0:  # (a path of no steps still writes its metrics)
         return path
     args = (*path.args[:5], grid._replace(n_steps=stop, first=path.step), *path.args[6:])
-    started = (path.kernel, *(type(gen) for gen in args[7:]))
+    started = (path.kernel, *((type(gen), getattr(gen, "dtype", None)) for gen in args[7:]))
     if started not in _STARTED:  # the first run in this process: compiled by one process at a time
         compile_once(path.kernel, args)
         _STARTED.add(started)
+    _sync(path.sources, back=False)
     path.kernel(*args)
+    _sync(path.sources)
     path.step = stop
     return path
 
@@ -372,7 +407,9 @@ def load_history(
     gen = streams if isinstance(streams, (np.random.Generator, np.ndarray)) else streams.filter
     if gen is None:
         gen = np.random.default_rng(0)  # a scene without filters draws nothing
+    (gen,), sources = _as_streams([gen])
     load_path(loads_of(scene), filter_tuple(scene, gen), scene.dt, n, gen, force, ground)
+    _sync(sources)
     return scene.dt * np.arange(n + 1), force, ground
 
 

@@ -1,5 +1,7 @@
-"""Random draws of the kernels from either kind of stream: a numpy ``Generator`` (the CPU
-ensembles, ``streams.py``) or a counter-based Philox stream (the GPU ensembles, ``gpu.py``).
+"""Random draws of the kernels from each kind of stream: a PCG64 stream (the CPU ensembles,
+``streams.py``; ``pcg.py``: numpy's generator in compiled code, a ``pcg.PCG_DTYPE`` record
+array), a counter-based Philox stream (the GPU ensembles, ``gpu.py``) or a numpy ``Generator``
+(of a bit generator other than ``PCG64``, passed by a user).
 
 A Philox stream is a ``uint64`` array of ``STREAM_WORDS``: the key (two 32-bit words, from the
 seed and the purpose), the stream's place (the realisation, and the sweep point without common
@@ -12,7 +14,8 @@ Box-Muller cosine of one block's two 53-bit uniforms (Box and Muller, Ann. Math.
 (1958) 610, doi:10.1214/aoms/1177706645).
 
 The kernels call ``normal`` and ``uniform``; numba picks the implementation by the stream's
-type when it compiles a kernel, and plain Python (the CUDA simulator) by ``isinstance``.
+type when it compiles a kernel, and plain Python (the CUDA simulator) by ``isinstance`` and
+the array's dtype.
 """
 
 from __future__ import annotations
@@ -24,6 +27,7 @@ from numba import njit, types
 from numba.extending import overload
 
 from ..jit.flags import INLINE
+from .pcg import PCG_DTYPE, pcg_normal, pcg_uniform
 
 #: Words of a Philox stream: key, place, blocks drawn.
 STREAM_WORDS = 3
@@ -87,18 +91,24 @@ def open_stream(stream, key, place) -> None:
 
 
 def normal(gen) -> float:
-    """One standard normal from ``gen`` (a numpy Generator or a Philox stream)."""
-    return philox_normal(gen) if isinstance(gen, np.ndarray) else gen.standard_normal()
+    """One standard normal from ``gen`` (a PCG64 or Philox stream, or a numpy Generator)."""
+    if isinstance(gen, np.ndarray):
+        return pcg_normal(gen) if gen.dtype == PCG_DTYPE else philox_normal(gen)
+    return gen.standard_normal()
 
 
 def uniform(gen) -> float:
-    """One uniform in ``[0, 1)`` from ``gen`` (a numpy Generator or a Philox stream)."""
-    return philox_uniform(gen) if isinstance(gen, np.ndarray) else gen.random()
+    """One uniform in ``[0, 1)`` from ``gen`` (a PCG64 or Philox stream, or a numpy Generator)."""
+    if isinstance(gen, np.ndarray):
+        return pcg_uniform(gen) if gen.dtype == PCG_DTYPE else philox_uniform(gen)
+    return gen.random()
 
 
 @overload(normal)
 def _normal(gen):
     if isinstance(gen, types.Array):
+        if isinstance(gen.dtype, types.Record):
+            return lambda gen: pcg_normal(gen)
         return lambda gen: philox_normal(gen)
     return lambda gen: gen.standard_normal()
 
@@ -106,6 +116,8 @@ def _normal(gen):
 @overload(uniform)
 def _uniform(gen):
     if isinstance(gen, types.Array):
+        if isinstance(gen.dtype, types.Record):
+            return lambda gen: pcg_uniform(gen)
         return lambda gen: philox_uniform(gen)
     return lambda gen: gen.random()
 

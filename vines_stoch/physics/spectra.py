@@ -40,7 +40,8 @@ def uniform(times: np.ndarray, values: np.ndarray) -> tuple[np.ndarray, float]:
 def displacement(ag: np.ndarray, dt: float, period: float, damping: float = DAMPING) -> np.ndarray:
     """Relative displacement at the samples of an oscillator of ``period`` (s) and ``damping``
     at rest at the first sample under the ground acceleration ``ag`` (samples ``dt`` apart,
-    linear in between)."""
+    linear in between; a path a row where ``ag`` has two dimensions, each filtered on its own
+    as a one-dimensional ``ag`` is, bitwise)."""
     ag = np.asarray(ag, dtype=float)
     omega = 2.0 * math.pi / period
     # exp of [[A, B, 0], [0, 0, 1/h], [0, 0, 0]] h: Phi, int e^{A(h-s)} B ds, int e^{A(h-s)} B s/h ds
@@ -53,22 +54,28 @@ def displacement(ag: np.ndarray, dt: float, period: float, damping: float = DAMP
     p, q = gamma0 - gamma1, gamma1
     c = np.array([[1.0, 0.0]])
     num, den = ss2tf(phi, phi @ q + p, c, c @ q)
-    u = lfilter(num[0], den, ag)
-    if ag.size and ag[0] != 0.0:  # the free response of W_0 = -Q a_0
+    u = lfilter(num[0], den, ag, axis=-1)
+    moving = ag[..., 0] != 0.0 if ag.shape[-1] else np.zeros(ag.shape[:-1], bool)
+    if np.any(moving):  # the free response of W_0 = -Q a_0 (of the paths not at rest)
         num0, _ = ss2tf(phi, -(phi @ q), c, -(c @ q))
-        kick = np.zeros_like(ag)
-        kick[0] = ag[0]
-        u += lfilter(num0[0], den, kick)
+        kick = np.zeros_like(ag[moving])
+        kick[..., 0] = ag[moving][..., 0]
+        u[moving] += lfilter(num0[0], den, kick, axis=-1)
     return u
 
 
-def pseudo_acceleration(ag: np.ndarray, dt: float, period: float, damping: float = DAMPING) -> float:
-    """``Sa(T, zeta) = omega^2 max |u|`` of the ground acceleration ``ag`` (its units)."""
+def pseudo_acceleration(ag: np.ndarray, dt: float, period: float,
+                        damping: float = DAMPING) -> float | np.ndarray:
+    """``Sa(T, zeta) = omega^2 max |u|`` of the ground acceleration ``ag`` (its units; one a
+    row where ``ag`` has two dimensions)."""
     omega = 2.0 * math.pi / period
-    u = displacement(ag, dt, period, damping)
-    return float(omega**2 * np.abs(u).max()) if u.size else 0.0
+    u = np.abs(displacement(ag, dt, period, damping))
+    sa = omega**2 * u.max(axis=-1) if u.shape[-1] else np.zeros(u.shape[:-1])
+    return float(sa) if np.ndim(sa) == 0 else sa
 
 
-def peak(ag: np.ndarray) -> float:
-    """Peak ground acceleration ``max |a_g|``."""
-    return float(np.abs(ag).max()) if len(ag) else 0.0
+def peak(ag: np.ndarray) -> float | np.ndarray:
+    """Peak ground acceleration ``max |a_g|`` (one a row where ``ag`` has two dimensions)."""
+    ag = np.abs(np.asarray(ag, dtype=float))
+    pga = ag.max(axis=-1) if ag.shape[-1] else np.zeros(ag.shape[:-1])
+    return float(pga) if np.ndim(pga) == 0 else pga

@@ -1,9 +1,15 @@
-"""Distributions of uncertain parameters (``[uncertain]``)."""
+"""Distributions of uncertain parameters (``[uncertain]``).
+
+A realisation draws each parameter, in file order, as one number of its parameter stream
+(``streams.PARAMETERS``): a standard normal where the distribution's ``normal`` is set, else a
+uniform on ``[0, 1)`` (``kernels.chunk.parameter_draws``, a chunk's draws in one compiled call),
+and ``value`` turns the draw into the parameter's value.
+"""
 
 from __future__ import annotations
 
 import math
-from typing import Annotated, Literal
+from typing import Annotated, ClassVar, Literal
 
 import numpy as np
 from pydantic import Field, model_validator
@@ -30,8 +36,11 @@ class NormalDistribution(_Model):
         """The range of the draws in practice: ``REACH`` standard deviations."""
         return self.mean - REACH * self.std, self.mean + REACH * self.std
 
-    def draw(self, gen: np.random.Generator) -> float:
-        return self.mean + self.std * gen.standard_normal()
+    normal: ClassVar[bool] = True
+
+    def value(self, z: np.ndarray) -> np.ndarray:
+        """The values of standard normal draws ``z``."""
+        return self.mean + self.std * z
 
 
 class LognormalDistribution(_Model):
@@ -49,13 +58,20 @@ class LognormalDistribution(_Model):
         s = math.sqrt(math.log1p(self.cov ** 2))
         return self.median * math.exp(-REACH * s), self.median * math.exp(min(REACH * s, 700.0))
 
-    def draw(self, gen: np.random.Generator) -> float:
-        return self.median * math.exp(math.sqrt(math.log1p(self.cov ** 2)) * gen.standard_normal())
+    normal: ClassVar[bool] = True
+
+    def value(self, z: np.ndarray) -> np.ndarray:
+        """The values of standard normal draws ``z`` (``math.exp`` a value: the same bits on
+        every machine, where numpy's vector ``exp`` differs by a SIMD target)."""
+        s = math.sqrt(math.log1p(self.cov ** 2))
+        flat = np.asarray(z, dtype=float).ravel()
+        return np.array([self.median * math.exp(s * zk) for zk in flat]).reshape(np.shape(z))
 
 
 class _Bounded(_Model):
     low: Real
     high: Real
+    normal: ClassVar[bool] = False
 
     @model_validator(mode="after")
     def _order(self) -> _Bounded:
@@ -75,8 +91,9 @@ class UniformDistribution(_Bounded):
 
     distribution: Literal["uniform"]
 
-    def draw(self, gen: np.random.Generator) -> float:
-        return self.low + (self.high - self.low) * gen.random()
+    def value(self, u: np.ndarray) -> np.ndarray:
+        """The values of uniform draws ``u``."""
+        return self.low + (self.high - self.low) * u
 
 
 class TruncatedNormalDistribution(_Bounded):
@@ -86,11 +103,12 @@ class TruncatedNormalDistribution(_Bounded):
     mean: Real
     std: Positive
 
-    def draw(self, gen: np.random.Generator) -> float:
+    def value(self, u: np.ndarray) -> np.ndarray:
+        """The values of uniform draws ``u``."""
         from scipy.stats import truncnorm
 
         a, b = (self.low - self.mean) / self.std, (self.high - self.mean) / self.std
-        return float(truncnorm.ppf(gen.random(), a, b, loc=self.mean, scale=self.std))
+        return truncnorm.ppf(u, a, b, loc=self.mean, scale=self.std)
 
 
 Distribution = Annotated[

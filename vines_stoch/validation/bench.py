@@ -354,6 +354,60 @@ def _distributed_overhead(directory: Path, n: int = 10_000) -> tuple[float, floa
     return t_embedded, t_distributed, same
 
 
+#: Short and long paths of the linear oscillator under white noise (``scenes/linear.toml`` at dt
+#: = 0.01): (steps, realisations) each, the same path-steps for the last two.
+SHORT_PATHS = {"10-step paths": (10, 100_000), "1,000-step paths": (1_000, 50_000),
+               "100,000-step paths": (100_000, 500)}
+_PATH_RATE = """
+import sys, time
+from vines_stoch.ensemble import run
+from vines_stoch.validation import scenes
+steps, n, workers, rounds = (int(a) for a in sys.argv[1:5])
+study = scenes.study("linear", {"simulation.dt": 0.01, "simulation.duration": steps * 0.01,
+                                "simulation.metrics_from": 0.0, "ensemble.realizations": n})
+run(study, workers=workers, realizations=min(n, 64))  # (the loop loaded, the threads started)
+best = float("inf")
+for _ in range(rounds):
+    start = time.perf_counter()
+    results = run(study, workers=workers)
+    best = min(best, time.perf_counter() - start)
+    assert len(results.realizations) == n
+print(best)
+"""
+
+
+def _path_seconds(steps: int, n: int, workers: int, rounds: int = 3, copies: int = 1) -> float:
+    """Best of ``rounds`` wall times of ``vines_stoch.run`` in memory of ``n`` realisations of
+    ``steps`` steps (``SHORT_PATHS``) on ``workers`` threads, in a fresh process; with ``copies``
+    processes running it side by side, their mean."""
+    command = [sys.executable, "-c", _PATH_RATE, str(steps), str(n), str(workers), str(rounds)]
+    jobs = [subprocess.Popen(command, stdout=subprocess.PIPE, text=True) for _ in range(copies)]
+    times = [float(job.communicate()[0].split()[-1]) for job in jobs]
+    assert all(job.returncode == 0 for job in jobs)
+    return sum(times) / len(times)
+
+
+def _short_paths() -> dict[str, float]:
+    """Path-steps/s of one worker on short and long paths (``SHORT_PATHS``), the fixed cost of a
+    realisation (10-step paths, less their steps at the long paths' rate), and the scaling from
+    one worker to two on 1,000- and 100,000-step paths beside the host's own: two processes of
+    one worker side by side against one alone."""
+    figures = {}
+    for name, (steps, n) in SHORT_PATHS.items():
+        figures[name] = steps * n / _path_seconds(steps, n, 1)
+    long_rate = figures["100,000-step paths"]
+    steps, n = SHORT_PATHS["10-step paths"]
+    figures["fixed cost (us)"] = (steps * n / figures["10-step paths"] - steps * n / long_rate) / n * 1e6
+    for name in ("1,000-step paths", "100,000-step paths"):
+        steps, n = SHORT_PATHS[name]
+        one, two = _path_seconds(steps, n, 1), _path_seconds(steps, n, 2)
+        alone = _path_seconds(steps, n, 1, rounds=2)
+        side_by_side = _path_seconds(steps, n, 1, rounds=2, copies=2)
+        figures[f"{name}: 2 workers"] = one / two
+        figures[f"{name}: 2 processes"] = 2 * alone / side_by_side
+    return figures
+
+
 def _startup(directory: Path) -> list[tuple[str, float, float]]:
     """Wall time of ``vines-stoch run`` in a fresh process on a cold numba cache (first run:
     compilation) and again on the warm cache: rows ``(scenario, cold s, cached s)``."""

@@ -21,7 +21,15 @@ import pytest
 from tests.helpers import example_data, scene_from, study_from, two_dof_data
 from vines_stoch.ensemble import draw_parameters, run_chunk
 from vines_stoch.kernels import needed_streams, sample_buffer, simulate
-from vines_stoch.metrics import finish, finish_table, ground_intensity, regime
+from vines_stoch.metrics import (
+    MAX_PERIOD,
+    PERIODIC_TOLERANCE,
+    finish,
+    finish_table,
+    ground_intensity,
+    regime,
+    regimes,
+)
 from vines_stoch.outputs import (
     ACC_MAX_K,
     DRIFT_MAX_K,
@@ -327,3 +335,43 @@ def test_run_chunk_table_matches_per_realisation_rows(case):
         assert list(got.columns[-2:]) == ["sa", "pga"]
     if case == "uncertain-periodic":
         assert got["regime"].notna().all() and got["regime"].nunique() > 1
+
+
+def _regime_of_one(samples: np.ndarray, omega: float) -> str | None:
+    """MODEL.md section 4's regime of one realisation, written out as a loop (the oracle of
+    ``metrics.regimes``, which runs a chunk's rows together)."""
+    rows = samples[~np.isnan(samples[:, 0])]
+    nb = (samples.shape[1] - 2) // 2
+    if rows.shape[0] < 3:
+        return None
+    state = np.hstack([rows[:, :nb], rows[:, nb:2 * nb] / omega])
+    scale = float(np.abs(state).max()) or 1.0
+    for n in range(1, MAX_PERIOD + 1):
+        if rows.shape[0] < 2 * n + 1:
+            break
+        if np.abs(state[n:] - state[:-n]).max() <= PERIODIC_TOLERANCE * scale:
+            cycles = (rows.shape[0] - 1) // n
+            left, right = (rows[-1, 2 * nb:] - rows[-1 - cycles * n, 2 * nb:]) / cycles
+            return f"{'' if n == 1 else n}T,{left:.0f},{right:.0f}"
+    return "aperiodic"
+
+
+def test_regimes_of_a_chunk_are_each_rows():
+    """Rows of 1T, 2T, 3T and 8T orbits, aperiodic and resting rows, with fewer samples kept (a
+    shorter window: NaN after them; two samples: none), and per-row forcing frequencies."""
+    rng = np.random.default_rng(4)
+    rows = []
+    for k, n in enumerate([1, 2, 3, 8, 1, 2]):
+        rows.append(orbit(n))
+        rows.append(orbit(n) + rng.normal(0.0, 0.05, size=orbit(n).shape) * [1, 1, 1, 1, 0, 0])
+        short = orbit(n)
+        short[5 + 3 * k:] = np.nan
+        rows.append(short)
+    rows.append(np.zeros_like(orbit(1)))
+    rows.append(orbit(1))
+    rows[-1][2:] = np.nan  # (two samples: no regime)
+    samples = np.stack(rows)
+    omega = rng.uniform(0.5, 2.0, samples.shape[0])
+    got = regimes(samples, omega)
+    assert got == [_regime_of_one(s, w) for s, w in zip(samples, omega)]
+    assert {"T,1,0", "2T,1,0", "8T,1,0", "aperiodic", None} <= set(got)

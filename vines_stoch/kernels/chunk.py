@@ -1,0 +1,225 @@
+"""A chunk of realisations in one compiled call: the loop over realisations runs inside compiled
+code, with the GIL released, deriving each realisation's streams from (seed, purpose, point,
+realisation) there and writing its metric row, Poincare samples, history rows, event log and
+ground-motion path into arrays made once a chunk.
+
+A realisation's streams are those of ``streams.streams`` (``pcg.seed_stream``: numpy's
+``SeedSequence`` and ``PCG64`` in compiled code), its state starts from the scene's initial
+state and its filters from their stationary law (``loads.stationary_start``), as ``simulate``
+starts them: a chunk's rows are bitwise those of ``simulate`` run realisation by realisation
+(``tests/unit/kernels/test_chunk.py``), so the numbers depend on no chunk size or worker count.
+A chunk pays no Python per realisation: about 0.2 us a realisation of fixed cost against about
+60 us with a Python call a realisation (``make bench``, "short paths").
+"""
+
+from __future__ import annotations
+
+from functools import cache, lru_cache
+from typing import NamedTuple
+
+import numpy as np
+from numba import njit, types
+from numba.extending import overload
+
+from ..jit.cache import compile_once, stable_cache
+from ..jit.flags import INLINE, KERNEL
+from ..outputs import EVENT_COLUMNS, Record, new_metrics
+from ..streams import BRIDGE, FILTER, INCREMENTS, PARAMETERS
+from . import (
+    _NO_CARRY,
+    _NO_HISTORY,
+    _NO_SIGNALS,
+    _UNUSED,
+    bundles,
+    filter_tuple,
+    history_columns,
+    kernel_for,
+    loads_of,
+    needed_streams,
+    sample_buffer,
+)
+from .bundles import Outputs
+from .loads import load_path, stationary_start
+from .pcg import PCG_DTYPE, POOL_SIZE, new_stream, pcg_normal, pcg_uniform, seed_pool, seed_stream
+from .rng import open_stream, stream_key
+
+#: The purposes of a kernel's three streams, in their order (increments, bridge, filter).
+PURPOSES = np.array([INCREMENTS, BRIDGE, FILTER], np.int64)
+
+
+def reseed(stream, keys, purpose, point, realization, common, pool, words) -> None:
+    """Set ``stream`` to the start of realisation ``realization``'s stream of ``purpose``: a
+    PCG64 stream (``keys``: ``seed_keys``) or a Philox stream (``keys``: ``philox_keys``);
+    ``pool`` and ``words`` are scratch.  (Compiled code only: ``_reseed``.)"""
+    raise NotImplementedError("reseed runs in compiled code")
+
+
+@overload(reseed, jit_options=INLINE)
+def _reseed(stream, keys, purpose, point, realization, common, pool, words):
+    if isinstance(stream, types.Array) and isinstance(stream.dtype, types.Record):
+        def pcg(stream, keys, purpose, point, realization, common, pool, words):
+            seed_stream(stream, keys[:POOL_SIZE], keys[POOL_SIZE], purpose, point, realization, common, pool,
+                        words)
+        return pcg
+
+    def philox(stream, keys, purpose, point, realization, common, pool, words):
+        place = np.uint64(realization)
+        if not common:  # (``rng.stream_place``)
+            place |= np.uint64(point) << np.uint64(32)
+        open_stream(stream, keys[purpose], place)
+    return philox
+
+
+@lru_cache(maxsize=64)
+def seed_keys(seed: int) -> np.ndarray:
+    """The keys of a seed's PCG64 streams (``reseed``): ``SeedSequence``'s pool of the seed and
+    its running constant (``pcg.seed_pool``)."""
+    pool, hash_const = seed_pool(seed)
+    keys = np.append(pool, np.uint64(hash_const))
+    keys.flags.writeable = False
+    return keys
+
+
+@lru_cache(maxsize=64)
+def philox_keys(seed: int) -> np.ndarray:
+    """The keys of a seed's Philox streams (``reseed``), one a purpose (``rng.stream_key``)."""
+    keys = np.array([stream_key(seed, purpose) for purpose in range(4)], np.uint64)
+    keys.flags.writeable = False
+    return keys
+
+
+@njit(**KERNEL)
+def ground_loop(ex, fl, dt, n_steps, gen_filter, filtered, keys, point, start, common, p0, ground, force):
+    """The ground acceleration paths realisations ``start ..`` saw (``load_path``), one a row of
+    ``ground``: their filters started and driven again from the start of their filter streams."""
+    pool, words = np.zeros(POOL_SIZE, np.uint64), np.zeros(8, np.uint64)
+    for j in range(ground.shape[0]):
+        if filtered:
+            reseed(gen_filter, keys, FILTER, point, start + j, common, pool, words)
+        if fl.z.shape[0] > 0:
+            stationary_start(p0, gen_filter, fl.z, fl.draws)
+        load_path(ex, fl, dt, n_steps, gen_filter, force, ground[j])
+
+
+def ground_paths(scene, seed: int, point: int, start: int, stop: int, common: bool = True,
+                 philox: bool = False) -> np.ndarray:
+    """The ground acceleration paths of realisations ``start .. stop - 1`` (``(n, n_steps +
+    1)``), from their filter streams: PCG64 (the CPU's, as ``simulate_chunk(..., ground=True)``
+    gives them) or Philox (``philox``: the cuda backend's, ``rng.philox_stream``)."""
+    filtered = needed_streams(scene)[2]
+    gen = (np.zeros(3, np.uint64) if philox else new_stream()) if filtered else _UNUSED
+    ground = np.zeros((stop - start, scene.n_steps + 1))
+    keys = philox_keys(seed) if philox else seed_keys(seed)
+    force = np.zeros((scene.n_steps + 1, scene.n_floors))
+    ground_loop(loads_of(scene), filter_tuple(scene, None), scene.dt, scene.n_steps, gen, filtered, keys,
+                point, start, common, scene.filters["p0"], ground, force)
+    return ground
+
+
+@cache
+def chunk_loop(kernel):
+    """The compiled chunk of ``kernel`` (a step loop, ``kernel_for``): it runs realisations
+    ``start .. start + raw.shape[0] - 1`` of a sweep point, realisation ``j`` of the chunk into
+    ``raw[j]`` (preset to the metric vector's start), ``samples[j]``, ``history[j]`` and
+    ``events[j]`` (preset to NaN), drawing from its streams of the purposes ``wanted`` (the
+    others keep the unused stream they are given)."""
+
+    @njit(**KERNEL)
+    def run(bodies, absorbers, ex, fl, noise, grid, outputs, gen, gen_bridge, gen_filter, keys, point, start,
+            common, wanted, x0, v0, p0, raw, samples, history, events):
+        pool, words = np.zeros(POOL_SIZE, np.uint64), np.zeros(8, np.uint64)
+        nb = x0.shape[0]
+        for j in range(raw.shape[0]):
+            r = start + j
+            if wanted[0]:
+                reseed(gen, keys, PURPOSES[0], point, r, common, pool, words)
+            if wanted[1]:
+                reseed(gen_bridge, keys, PURPOSES[1], point, r, common, pool, words)
+            if wanted[2]:
+                reseed(gen_filter, keys, PURPOSES[2], point, r, common, pool, words)
+            for b in range(nb):
+                bodies.x[b] = x0[b]
+                bodies.v[b] = v0[b]
+            if fl.z.shape[0] > 0:
+                stationary_start(p0, gen_filter, fl.z, fl.draws)
+            out = Outputs(raw[j], samples[j], history[j], outputs.signals, outputs.limits, outputs.carry,
+                          events[j], outputs.reductions)
+            kernel(bodies, absorbers, ex, fl, noise, grid, out, gen, gen_bridge, gen_filter)
+
+    stable_cache(run)  # (its closure holds the step loop: see ``jit.cache.stable_cache``)
+    return run
+
+
+class Chunk(NamedTuple):
+    """What a chunk's realisations recorded, one a row: the raw metric vectors (``SLOTS``...),
+    the Poincare samples, the history rows (``(n, points, signals)``), the event logs and the
+    ground acceleration paths (``(n, n_steps + 1)``; no rows where not asked for)."""
+
+    raw: np.ndarray
+    samples: np.ndarray
+    history: np.ndarray
+    events: np.ndarray
+    ground: np.ndarray
+
+
+#: Chunk loops this process has run (``cache.compile_once`` saw them first).
+_STARTED: set = set()
+
+
+def simulate_chunk(scene, seed: int, point: int, start: int, stop: int, common: bool = True,
+                   history: tuple[int, int] | None = None, signals: tuple[str, ...] | None = None,
+                   event_rows: int = 0, ground: bool = False) -> Chunk:
+    """Realisations ``start .. stop - 1`` of ``scene`` at sweep point ``point`` on the streams of
+    ``seed`` (``streams.streams``; ``common``: common random numbers), in one compiled call:
+    what ``simulate`` gives for each, bitwise.  ``history = (stride, size)`` keeps ``size``
+    history rows of ``signals`` (``signals.declare``) every ``stride`` steps; ``event_rows``
+    rows of event log; ``ground`` each realisation's ground acceleration path (for ``sa`` and
+    ``pga``)."""
+    n = stop - start
+    wanted = np.array(needed_streams(scene), np.bool_)
+    gens = tuple(new_stream() if w else _UNUSED for w in wanted)
+    stride, size = history or (1, 0)
+    template = _NO_HISTORY if size == 0 else np.zeros((1, len(signals)))
+    columns = _NO_SIGNALS if size == 0 else history_columns(scene, template, signals)
+    out0 = new_metrics(scene.n_floors, scene.limits.shape[0], scene.reductions.shape[0])
+    raw = np.tile(out0, (n, 1))
+    buffer = sample_buffer(scene)
+    samples = np.full((n, *buffer.shape), np.nan)
+    history_rows = np.full((n, size, columns.shape[0]), np.nan)
+    events = np.full((n, event_rows, len(EVENT_COLUMNS)), np.nan)
+    # (the bundles of one path: the state and filter buffers the loop reuses; the outputs'
+    # buffers stand for their types, each realisation writing into its rows of the arrays above)
+    args = bundles(scene, scene.x0.copy(), scene.v0.copy(), filter_tuple(scene, None), np.zeros(0), out0,
+                   buffer, template, stride, gens, 1, _NO_CARRY, columns,
+                   np.zeros((0, len(EVENT_COLUMNS))))
+    kernel = kernel_for(scene, record=Record.of(scene, size, event_rows))
+    run = chunk_loop(kernel)
+    call = (*args, seed_keys(seed), point, start, common, wanted, scene.x0, scene.v0, scene.filters["p0"],
+            raw, samples, history_rows, events)
+    started = (run, *(g.dtype for g in gens))
+    if started not in _STARTED:
+        compile_once(run, call)
+        _STARTED.add(started)
+    run(*call)
+    ground_rows = (ground_paths(scene, seed, point, start, stop, common) if ground
+                   else np.zeros((0, scene.n_steps + 1)))
+    return Chunk(raw, samples, history_rows, events, ground_rows)
+
+
+@njit(**KERNEL)
+def parameter_draws(keys, point: int, start: int, common: bool, normal, out) -> None:
+    """The draws of uncertain parameters of realisations ``start ..`` (a row of ``out`` each):
+    in each realisation's parameter stream (``streams.PARAMETERS``), one draw a parameter in
+    file order, a standard normal where ``normal`` is set, else a uniform (the draws of
+    ``scenario.distributions``)."""
+    stream = np.zeros(1, PCG_DTYPE)
+    pool, words = np.zeros(POOL_SIZE, np.uint64), np.zeros(8, np.uint64)
+    for j in range(out.shape[0]):
+        seed_stream(stream, keys[:POOL_SIZE], keys[POOL_SIZE], PARAMETERS, point, start + j, common, pool,
+                    words)
+        for k in range(out.shape[1]):
+            out[j, k] = pcg_normal(stream) if normal[k] else pcg_uniform(stream)
+
+
+__all__ = ["Chunk", "chunk_loop", "ground_paths", "parameter_draws", "philox_keys", "reseed", "seed_keys",
+           "simulate_chunk"]
