@@ -457,6 +457,7 @@ def main(out: Path = Path("reports/benchmarks.md"), n_paths: int = 200) -> str:
         memory = {n: _peak_memory(n, Path(tmp) / f"history{n}") for n in (10_000, 100_000)}
         overhead = _distributed_overhead(Path(tmp))
         startup = _startup(Path(tmp))
+    short = _short_paths()
     floors = _floors()
     ssvi = _ssvi()
     same_path = {kind: precision.same_path_errors(kind, SAME_PATH_LEVELS, paths=20)
@@ -512,6 +513,30 @@ seed 000 under harmonic + white noise, impacts split on the Brownian tree of the
 | runner | threads | M path-steps/s | ratio to the smooth scene (1 thread) | max abs energy residual |
 | --- | ---: | ---: | ---: | ---: |
 | `vines_stoch.run` | 1 | {impact1 / 1e6:.1f} | {impact1 / api1:.2f} | {res_impact:.1e} |
+
+## Short paths and worker scaling
+
+`vines_stoch.run` in memory on a linear oscillator under white noise (`scenes/linear.toml`,
+dt = 0.01), one worker unless said, each figure the best of three runs in a fresh process: a
+chunk of realisations runs in one compiled call with the GIL released (`kernels/chunk.py`),
+its streams made inside it.
+
+| paths | realisations | M path-steps/s (1 worker) | ratio to 100,000-step paths |
+| --- | ---: | ---: | ---: |
+{chr(10).join(f"| {name} | {SHORT_PATHS[name][1]:,} | {short[name] / 1e6:.1f} | "
+              f"{short[name] / short['100,000-step paths']:.2f} |" for name in SHORT_PATHS)}
+
+Fixed cost of a realisation (the 10-step paths' time per realisation less their steps at the
+100,000-step paths' rate): {short["fixed cost (us)"]:.2f} us.
+
+| paths | 2 workers / 1 worker | host: 2 processes side by side / 1 alone |
+| --- | ---: | ---: |
+{chr(10).join(f"| {name} | {short[name + ': 2 workers']:.2f} | {short[name + ': 2 processes']:.2f} |"
+              for name in ("1,000-step paths", "100,000-step paths"))}
+
+The host column is the machine's own scaling: two independent processes of one worker each
+against one alone (shared caches, memory bandwidth and turbo clocks), the ceiling of the
+program's.
 
 ## Contact under noise
 
