@@ -123,7 +123,8 @@ def run_chunk(scene: Scene, seed: int, point: int, start: int, stop: int,
         parts = [simulate_chunk(s, seed, point, r, r + 1, common, grid, signals, s.event_rows,
                                 s.im_period > 0) for r, s in zip(range(start, stop), scenes)]
         intensities = _joined([ground_intensities(s, part.ground) for s, part in zip(scenes, parts)])
-    raw, samples, history, events = (np.concatenate([getattr(part, name) for part in parts])
+    raw, samples, history, events = (getattr(parts[0], name) if len(parts) == 1 else
+                                     np.concatenate([getattr(part, name) for part in parts])
                                      for name in ("raw", "samples", "history", "events"))
     paths = None if grid is None else history.transpose(2, 1, 0)
     return _table(raw, scenes, samples, point, start, drawn, intensities, events), paths
