@@ -148,11 +148,13 @@ def step_loop(plug: Step, spec: Spec):
     DECLARED = spec.declared
 
     @njit(**KERNEL)
-    def kernel(bodies_, absorbers_, ex_, fl_, noise_, grid_, outputs_, gen, gen_bridge, gen_filter):
-        # the bundles as borrowed views (``jit.intrinsics.borrowed``): no reference counting in
-        # the loop, nor in the steps it inlines
+    def kernel(bodies_, absorbers_, ex_, fl_, noise_, grid_, outputs_, gen_, gen_bridge_, gen_filter_):
+        # the bundles and the streams as borrowed views (``jit.intrinsics.borrowed``): no
+        # reference counting in the loop, nor in the steps it inlines (a stream array passed to a
+        # draw in a branch cost two atomic operations a draw, a quarter of a smooth step)
         bodies, absorbers, ex, fl, noise, grid, outputs = borrowed(
             (bodies_, absorbers_, ex_, fl_, noise_, grid_, outputs_))
+        gen, gen_bridge, gen_filter = borrowed((gen_, gen_bridge_, gen_filter_))
         nb = NB
         nf = NF
         mass, storey_k = bodies.mass, bodies.storey_k

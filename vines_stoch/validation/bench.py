@@ -39,6 +39,8 @@ from numba import njit
 from ..ensemble import run
 from ..jit.flags import KERNEL
 from ..kernels import load_history, needed_streams, simulate
+from ..kernels.pcg import state_of
+from ..kernels.rng import normal
 from ..outputs import ABSORBER_DISS, E1_MAX, FINAL_ENERGY, IMPACT_LOSS, INPUT, PRIMARY_DISS
 from ..physics.hertz import hertz_constant
 from ..records import G, write_at2
@@ -71,7 +73,7 @@ def minimal_kdk(n_steps: int, dt: float, gen, metrics: bool = False, recurrence:
             pc, ps = np.cos(i * dt), np.sin(i * dt)
         u, w = x2 - x1, v2 - v1
         f = -u * u * u - 0.01 * w
-        dw = s * gen.standard_normal()
+        dw = s * normal(gen)
         v1n = v1 + h * (load - x1 - f) + dw
         v2n = v2 + h * f / 0.05
         if metrics:
@@ -114,7 +116,7 @@ def minimal_euler(n_steps: int, dt: float, gen) -> float:
     for i in range(n_steps):
         u = x2 - x1
         f = -u * u * u - 0.01 * (v2 - v1)
-        v1 += dt * (0.1 * np.cos(i * dt) - x1 - f) + s * gen.standard_normal()
+        v1 += dt * (0.1 * np.cos(i * dt) - x1 - f) + s * normal(gen)
         v2 += dt * f / 0.05
         x1 += dt * v1
         x2 += dt * v2
@@ -131,11 +133,12 @@ def _step_loop_rates(n_paths: int, n_steps: int = 200_000, dt: float = 1e-3,
     scene = scenes.scene("smooth", {"ensemble.realizations": 1})
     assert scene.n_steps == n_steps and scene.dt == dt
     runners = {
-        "roofline": lambda gen: minimal_kdk(n_steps, dt, gen, False),
-        "roofline with metrics": lambda gen: minimal_kdk(n_steps, dt, gen, True),
-        "recurrence roofline": lambda gen: minimal_kdk(n_steps, dt, gen, False, True),
-        "recurrence roofline with metrics": lambda gen: minimal_kdk(n_steps, dt, gen, True, True),
-        "euler": lambda gen: minimal_euler(n_steps, dt, gen),
+        # (the rooflines draw from the generator's state as the step loops do: ``pcg.state_of``)
+        "roofline": lambda gen: minimal_kdk(n_steps, dt, state_of(gen), False),
+        "roofline with metrics": lambda gen: minimal_kdk(n_steps, dt, state_of(gen), True),
+        "recurrence roofline": lambda gen: minimal_kdk(n_steps, dt, state_of(gen), False, True),
+        "recurrence roofline with metrics": lambda gen: minimal_kdk(n_steps, dt, state_of(gen), True, True),
+        "euler": lambda gen: minimal_euler(n_steps, dt, state_of(gen)),
         "step loop": lambda gen: simulate(scene, gen),
     }
     runners = {name: runner for name, runner in runners.items() if only is None or name in only}
