@@ -38,19 +38,19 @@ def _seeded(pool0, hash0, purpose, point, realization, common):
 
 
 @njit
+def _draws(stream, n, normals=True):
+    out = np.empty(n)
+    for i in range(n):
+        out[i] = pcg_normal(stream) if normals else pcg_uniform(stream)
+    return out
+
+
 def _normals(stream, n):
-    out = np.empty(n)
-    for i in range(n):
-        out[i] = pcg_normal(stream)
-    return out
+    return _draws(stream, n)
 
 
-@njit
 def _uniforms(stream, n):
-    out = np.empty(n)
-    for i in range(n):
-        out[i] = pcg_uniform(stream)
-    return out
+    return _draws(stream, n, False)
 
 
 def _numpy(seed: int, key: tuple) -> np.random.Generator:
