@@ -4,19 +4,18 @@ record, and a loop that holds the code of only what its run records."""
 
 from __future__ import annotations
 
-import json
-import os
-import subprocess
-import sys
-
 import numpy as np
 import pytest
+from numba.core.caching import NullCache
 
-from tests.helpers import ROOT, example_scene
+from tests.helpers import example_scene
 from vines_stoch import outputs
-from vines_stoch.kernels import simulate
-from vines_stoch.outputs import SLOTS, new_events
+from vines_stoch.jit.cache import compile_once
+from vines_stoch.kernels import simulate, spec_of, start_path, step_of
+from vines_stoch.kernels.driver import step_loop
+from vines_stoch.outputs import SLOTS, Record, new_events
 from vines_stoch.physics.absorbers import HERTZ, IMPACT, RESTITUTION
+from vines_stoch.schemes import SCHEMES
 
 _S = {name: i for i, name in enumerate(SLOTS)}
 
@@ -97,31 +96,21 @@ def test_what_a_run_records_changes_no_number(case):
     np.testing.assert_allclose(kept_final, bare_final, rtol=1e-9, atol=1e-12 * np.abs(bare_final).max())
 
 
-#: A process that compiles the loop of a short cubic-NES path bare and with history rows (into
-#: the cache ``NUMBA_CACHE_DIR`` names, fresh: code loaded from a cache shows no IR) and prints,
-#: for each, whether its IR calls the out-of-line history row and the IR's length.
-COMPILE_BOTH = r'''
-import json
-import numpy as np
-from tests.helpers import example_data, scene_from
-from vines_stoch.kernels import kernel_for, simulate
-from vines_stoch.outputs import Record
-scene = scene_from(example_data("cubic_nes_impulse", "sweep"), changes={"simulation.duration": 0.1})
-simulate(scene)
-simulate(scene, history=np.zeros((3, 2)), stride=10)
-ir = [next(iter(kernel_for(scene, record=r).overloads.values())).library.get_llvm_str()
-      for r in (Record(), Record(history=True))]
-print(json.dumps([["_history_row" in text, len(text)] for text in ir]))
-'''
+def _fresh_ir(scene, history: np.ndarray | None) -> str:
+    """The IR of the loop of a path of ``scene`` (with ``history`` rows, or none) compiled afresh:
+    a copy of its loop kept out of numba's cache (code loaded from a cache shows no IR)."""
+    path = start_path(scene, history=history, stride=10, stretches=False)
+    spec = spec_of(scene, record=Record.of(scene, 0 if history is None else history.shape[0]))
+    fresh = step_loop.__wrapped__(step_of(SCHEMES[scene.scheme].step)(spec), spec)
+    fresh._cache = NullCache()
+    compile_once(fresh, path.args)
+    return next(iter(fresh.overloads.values())).library.get_llvm_str()
 
 
-def test_a_loop_holds_only_what_its_run_records(tmp_path):
+def test_a_loop_holds_only_what_its_run_records():
     """A scene pays only for what it asks: the loop of a run that keeps no history rows holds
     none of their code (it never calls the out-of-line history row), and is the smaller."""
-    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "numba"), "PYTHONPATH": str(ROOT)}
-    done = subprocess.run([sys.executable, "-c", COMPILE_BOTH], cwd=ROOT, env=env, capture_output=True,
-                          text=True, timeout=600)
-    assert done.returncode == 0, done.stderr[-2000:]
-    (bare_calls, bare_size), (kept_calls, kept_size) = json.loads(done.stdout.splitlines()[-1])
-    assert not bare_calls and kept_calls
-    assert bare_size < kept_size
+    scene = example_scene("cubic_nes_impulse", {"simulation.duration": 0.1})
+    bare, kept = _fresh_ir(scene, None), _fresh_ir(scene, np.zeros((3, 2)))
+    assert "_history_row" not in bare and "_history_row" in kept
+    assert len(bare) < len(kept)
