@@ -112,17 +112,15 @@ def run_chunk(scene: Scene, seed: int, point: int, start: int, stop: int,
     ``common``: common random numbers across sweep points (see ``generator``)."""
     if study is None:
         drawn, scenes = {}, scene
-        parts = [simulate_chunk(scene, seed, point, start, stop, common, grid, signals, scene.event_rows,
-                                scene.im_period > 0)]
-        intensities = ground_intensities(scene, parts[0].ground)
+        parts = [simulate_chunk(scene, seed, point, start, stop, common, grid, signals, scene.event_rows)]
     else:
         drawn = chunk_parameters(study, seed, point, start, stop, common)
         bound = binding(study, point)
         scenes = [bound.scene({key: float(values[j]) for key, values in drawn.items()})
                   for j in range(stop - start)]
-        parts = [simulate_chunk(s, seed, point, r, r + 1, common, grid, signals, s.event_rows,
-                                s.im_period > 0) for r, s in zip(range(start, stop), scenes)]
-        intensities = _joined([ground_intensities(s, part.ground) for s, part in zip(scenes, parts)])
+        parts = [simulate_chunk(s, seed, point, r, r + 1, common, grid, signals, s.event_rows)
+                 for r, s in zip(range(start, stop), scenes)]
+    intensities = _intensities(scenes, seed, point, start, stop, common)
     raw, samples, history, events = (getattr(parts[0], name) if len(parts) == 1 else
                                      np.concatenate([getattr(part, name) for part in parts])
                                      for name in ("raw", "samples", "history", "events"))
@@ -130,8 +128,18 @@ def run_chunk(scene: Scene, seed: int, point: int, start: int, stop: int,
     return _table(raw, scenes, samples, point, start, drawn, intensities, events), paths
 
 
-def _joined(rows: list[dict[str, np.ndarray]]) -> dict[str, np.ndarray]:
-    """Per-realisation columns (``ground_intensities`` of one realisation each) joined."""
+def _intensities(scenes: Scene | list[Scene], seed: int, point: int, start: int, stop: int, common: bool,
+                 philox: bool = False) -> dict[str, np.ndarray]:
+    """``sa`` and ``pga`` of realisations ``start .. stop - 1`` (``scenes``: the point's, or one a
+    realisation) from the ground paths they saw, their filter streams replayed (``ground_paths``:
+    PCG64, or the cuda backend's Philox streams with ``philox``); none where no scene asks."""
+    def of(s: Scene, first: int, last: int) -> dict[str, np.ndarray]:
+        paths = ground_paths(s, seed, point, first, last, common, philox) if s.im_period > 0 else None
+        return ground_intensities(s, paths)
+
+    if isinstance(scenes, Scene):
+        return of(scenes, start, stop)
+    rows = [of(s, r, r + 1) for s, r in zip(scenes, range(start, stop))]
     return {key: np.concatenate([row[key] for row in rows]) for key in rows[0]} if rows else {}
 
 
@@ -150,13 +158,7 @@ def run_chunk_cuda(scene: Scene, seed: int, point: int, start: int, stop: int,
     scenes = ([bound.scene({key: float(values[j]) for key, values in drawn.items()}) for j in range(n)]
               if study is not None else scene)
     batch = gpu.simulate_many(scenes, seed, point, start, stop, common, grid, signals, scene.event_rows)
-    # (the filter streams afresh: the ground paths the realisations saw)
-    def intensities_of(s: Scene, first: int, last: int) -> dict[str, np.ndarray]:
-        paths = ground_paths(s, seed, point, first, last, common, philox=True) if s.im_period > 0 else None
-        return ground_intensities(s, paths)
-
-    intensities = (intensities_of(scene, start, stop) if study is None else
-                   _joined([intensities_of(s, r, r + 1) for s, r in zip(scenes, range(start, stop))]))
+    intensities = _intensities(scenes, seed, point, start, stop, common, philox=True)
     paths = None if grid is None else batch.history.transpose(2, 1, 0)
     return _table(batch.raw, scenes, batch.samples, point, start, drawn, intensities, batch.events), paths
 
@@ -562,7 +564,7 @@ def prepare_loops(scenes: list[Scene], seed: int, common: bool, grid: tuple[int,
         seen.add(run)
         print(f"step loop: {structure(scene)}: compiling or loading ...", end="", file=sys.stderr, flush=True)
         hits, start = sum(run.stats.cache_hits.values()), time.monotonic()
-        simulate_chunk(scene, seed, point, 0, 0, common, grid, signals, scene.event_rows, scene.im_period > 0)
+        simulate_chunk(scene, seed, point, 0, 0, common, grid, signals, scene.event_rows)
         loaded = sum(run.stats.cache_hits.values()) > hits
         print(f" {'loaded from the cache' if loaded else 'compiled (cached on disk for later runs)'} "
               f"in {time.monotonic() - start:.1f} s", file=sys.stderr, flush=True)

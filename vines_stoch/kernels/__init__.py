@@ -91,7 +91,8 @@ def sample_buffer(scene) -> np.ndarray:
 def filter_tuple(scene, generator: np.random.Generator | np.ndarray | None) -> Filters:
     """The kernels' filter arrays with the initial filter state: zero (from rest) or a draw
     from the stationary law (``p0`` is the root of its covariance) from ``generator`` (the
-    filter stream: a numpy Generator, or a Philox stream as on the GPU, ``loads.stationary_start``);
+    filter stream: a PCG64 or Philox stream, or a numpy Generator, ``loads.stationary_start``;
+    None: from rest);
     then the next state's and the normals' scratch (``loads.advance_filters``)."""
     f = scene.filters
     z = np.zeros(f["phi"].shape[0])
@@ -329,6 +330,16 @@ def start_path(scene, streams: Streams | np.random.Generator | None = None, *,
                 sources=sources)
 
 
+def compile_first(dispatcher, args: tuple, gens: Sequence) -> None:
+    """Before the first run in this process of ``dispatcher`` (a step loop, or a loop around
+    one) with streams of the kinds of ``gens``: compile it for ``args`` (or load it) with the
+    faster front end, one process at a time (``cache.compile_once``)."""
+    started = (dispatcher, *((type(gen), getattr(gen, "dtype", None)) for gen in gens))
+    if started not in _STARTED:
+        compile_once(dispatcher, args)
+        _STARTED.add(started)
+
+
 def advance(path: Path, stop: int) -> Path:
     """Run ``path`` from the step it has reached to step ``stop`` (at most the scene's step
     count), in place; returns it.  Its state, metric vector, history rows, Poincare samples and
@@ -346,10 +357,7 @@ def advance(path: Path, stop: int) -> Path:
     if stop == path.step and stop > 0:  # (a path of no steps still writes its metrics)
         return path
     args = (*path.args[:5], grid._replace(n_steps=stop, first=path.step), *path.args[6:])
-    started = (path.kernel, *((type(gen), getattr(gen, "dtype", None)) for gen in args[7:]))
-    if started not in _STARTED:  # the first run in this process: compiled by one process at a time
-        compile_once(path.kernel, args)
-        _STARTED.add(started)
+    compile_first(path.kernel, args, args[7:])
     _sync(path.sources, back=False)
     path.kernel(*args)
     _sync(path.sources)

@@ -1,7 +1,8 @@
 """A chunk of realisations in one compiled call: the loop over realisations runs inside compiled
 code, with the GIL released, deriving each realisation's streams from (seed, purpose, point,
-realisation) there and writing its metric row, Poincare samples, history rows, event log and
-ground-motion path into arrays made once a chunk.
+realisation) there and writing its metric row, Poincare samples, history rows and event log
+into arrays made once a chunk.  The ground-motion paths the realisations saw are replayed from
+their filter streams apart (``ground_paths``), for the scenes that ask for intensity measures.
 
 A realisation's streams are those of ``streams.streams`` (``pcg.seed_stream``: numpy's
 ``SeedSequence`` and ``PCG64`` in compiled code), its state starts from the scene's initial
@@ -22,7 +23,7 @@ import numpy as np
 from numba import njit, types
 from numba.extending import overload
 
-from ..jit.cache import compile_once, stable_cache
+from ..jit.cache import stable_cache
 from ..jit.flags import INLINE, KERNEL
 from ..outputs import EVENT_COLUMNS, Record, new_metrics
 from ..streams import BRIDGE, FILTER, INCREMENTS, PARAMETERS
@@ -32,6 +33,7 @@ from . import (
     _NO_SIGNALS,
     _UNUSED,
     bundles,
+    compile_first,
     filter_tuple,
     history_columns,
     kernel_for,
@@ -42,10 +44,7 @@ from . import (
 from .bundles import Outputs
 from .loads import load_path, stationary_start
 from .pcg import PCG_DTYPE, POOL_SIZE, new_stream, pcg_normal, pcg_uniform, seed_pool, seed_stream
-from .rng import open_stream, stream_key
-
-#: The purposes of a kernel's three streams, in their order (increments, bridge, filter).
-PURPOSES = np.array([INCREMENTS, BRIDGE, FILTER], np.int64)
+from .rng import STREAM_WORDS, open_stream, stream_key, stream_place
 
 
 def reseed(stream, keys, purpose, point, realization, common, pool, words) -> None:
@@ -64,10 +63,7 @@ def _reseed(stream, keys, purpose, point, realization, common, pool, words):
         return pcg
 
     def philox(stream, keys, purpose, point, realization, common, pool, words):
-        place = np.uint64(realization)
-        if not common:  # (``rng.stream_place``)
-            place |= np.uint64(point) << np.uint64(32)
-        open_stream(stream, keys[purpose], place)
+        open_stream(stream, keys[purpose], stream_place(realization, point, common))
     return philox
 
 
@@ -105,10 +101,10 @@ def ground_loop(ex, fl, dt, n_steps, gen_filter, filtered, keys, point, start, c
 def ground_paths(scene, seed: int, point: int, start: int, stop: int, common: bool = True,
                  philox: bool = False) -> np.ndarray:
     """The ground acceleration paths of realisations ``start .. stop - 1`` (``(n, n_steps +
-    1)``), from their filter streams: PCG64 (the CPU's, as ``simulate_chunk(..., ground=True)``
-    gives them) or Philox (``philox``: the cuda backend's, ``rng.philox_stream``)."""
+    1)``), from their filter streams: PCG64 (the CPU's) or Philox (``philox``: the cuda
+    backend's, ``rng.philox_stream``)."""
     filtered = needed_streams(scene)[2]
-    gen = (np.zeros(3, np.uint64) if philox else new_stream()) if filtered else _UNUSED
+    gen = (np.zeros(STREAM_WORDS, np.uint64) if philox else new_stream()) if filtered else _UNUSED
     ground = np.zeros((stop - start, scene.n_steps + 1))
     keys = philox_keys(seed) if philox else seed_keys(seed)
     force = np.zeros((scene.n_steps + 1, scene.n_floors))
@@ -133,11 +129,11 @@ def chunk_loop(kernel):
         for j in range(raw.shape[0]):
             r = start + j
             if wanted[0]:
-                reseed(gen, keys, PURPOSES[0], point, r, common, pool, words)
+                reseed(gen, keys, INCREMENTS, point, r, common, pool, words)
             if wanted[1]:
-                reseed(gen_bridge, keys, PURPOSES[1], point, r, common, pool, words)
+                reseed(gen_bridge, keys, BRIDGE, point, r, common, pool, words)
             if wanted[2]:
-                reseed(gen_filter, keys, PURPOSES[2], point, r, common, pool, words)
+                reseed(gen_filter, keys, FILTER, point, r, common, pool, words)
             for b in range(nb):
                 bodies.x[b] = x0[b]
                 bodies.v[b] = v0[b]
@@ -153,29 +149,22 @@ def chunk_loop(kernel):
 
 class Chunk(NamedTuple):
     """What a chunk's realisations recorded, one a row: the raw metric vectors (``SLOTS``...),
-    the Poincare samples, the history rows (``(n, points, signals)``), the event logs and the
-    ground acceleration paths (``(n, n_steps + 1)``; no rows where not asked for)."""
+    the Poincare samples, the history rows (``(n, points, signals)``) and the event logs."""
 
     raw: np.ndarray
     samples: np.ndarray
     history: np.ndarray
     events: np.ndarray
-    ground: np.ndarray
-
-
-#: Chunk loops this process has run (``cache.compile_once`` saw them first).
-_STARTED: set = set()
 
 
 def simulate_chunk(scene, seed: int, point: int, start: int, stop: int, common: bool = True,
                    history: tuple[int, int] | None = None, signals: tuple[str, ...] | None = None,
-                   event_rows: int = 0, ground: bool = False) -> Chunk:
+                   event_rows: int = 0) -> Chunk:
     """Realisations ``start .. stop - 1`` of ``scene`` at sweep point ``point`` on the streams of
     ``seed`` (``streams.streams``; ``common``: common random numbers), in one compiled call:
     what ``simulate`` gives for each, bitwise.  ``history = (stride, size)`` keeps ``size``
     history rows of ``signals`` (``signals.declare``) every ``stride`` steps; ``event_rows``
-    rows of event log; ``ground`` each realisation's ground acceleration path (for ``sa`` and
-    ``pga``)."""
+    rows of event log."""
     n = stop - start
     wanted = np.array(needed_streams(scene), np.bool_)
     gens = tuple(new_stream() if w else _UNUSED for w in wanted)
@@ -197,14 +186,9 @@ def simulate_chunk(scene, seed: int, point: int, start: int, stop: int, common: 
     run = chunk_loop(kernel)
     call = (*args, seed_keys(seed), point, start, common, wanted, scene.x0, scene.v0, scene.filters["p0"],
             raw, samples, history_rows, events)
-    started = (run, *(g.dtype for g in gens))
-    if started not in _STARTED:
-        compile_once(run, call)
-        _STARTED.add(started)
+    compile_first(run, call, gens)
     run(*call)
-    ground_rows = (ground_paths(scene, seed, point, start, stop, common) if ground
-                   else np.zeros((0, scene.n_steps + 1)))
-    return Chunk(raw, samples, history_rows, events, ground_rows)
+    return Chunk(raw, samples, history_rows, events)
 
 
 @njit(**KERNEL)

@@ -94,8 +94,7 @@ def mix_words(pool, hash_const, words, n_words: int):
 def seed_pool(seed: int) -> tuple[np.ndarray, int]:
     """The pool of ``SeedSequence(seed, spawn_key=key)`` before the key's words are mixed in
     (every key's pool starts so), and the running constant: ``(pool, hash_const)``."""
-    words = np.random.SeedSequence(seed).entropy
-    run = _words(words)
+    run = _words(int(seed))
     run = run + [0] * (POOL_SIZE - len(run))  # (with a spawn key numpy pads the run entropy)
     pool = np.zeros(POOL_SIZE, np.uint64)
     hash_const = _INIT_A

@@ -129,10 +129,13 @@ def stream_key(seed: int, purpose: int) -> int:
     return int(low) | int(high) << 32
 
 
+@njit(**INLINE)
 def stream_place(realization: int, point: int, common: bool) -> int:
     """The counter's upper 64 bits of a realisation's stream: the realisation, and with common
     random numbers off the sweep point above it (as in ``streams.generator``)."""
-    return realization if common else realization | point << 32
+    if common:
+        return realization
+    return realization | (point << 32)
 
 
 def philox_stream(seed: int, purpose: int, realization: int, point: int = 0,
