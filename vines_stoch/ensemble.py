@@ -704,7 +704,7 @@ def _consolidate(study: Study, the_plan: Plan, states: list[PointState], directo
             if kept_paths is not None:
                 path_rows.append(_path_rows(study, the_plan.scenes[c[0]], grids[c[0]], c,
                                             kept_paths[c][:, :, :n], signals))
-    realizations_df = _in_file_types(pd.concat(kept, ignore_index=True))
+    realizations_df = _in_file_types(kept[0] if len(kept) == 1 else pd.concat(kept, ignore_index=True))
     events_df = None
     if "event_t" in realizations_df.columns:
         realizations_df, events_df = _events(realizations_df, study.sweep_keys)
@@ -740,10 +740,18 @@ def _consolidate(study: Study, the_plan: Plan, states: list[PointState], directo
 
 def _in_file_types(frame: pd.DataFrame) -> pd.DataFrame:
     """``frame`` with the column types it has once written as Parquet and read back (an Arrow
-    table in memory): results in memory and from a folder compare equal."""
+    table in memory): results in memory and from a folder compare equal.  Numpy bool, integer
+    and float columns come back as they are (the same type and bits), so only the others make
+    the round trip."""
     import pyarrow as pa
 
-    return pa.Table.from_pandas(frame, preserve_index=False).to_pandas()
+    other = [c for c, dtype in frame.dtypes.items()
+             if not (isinstance(dtype, np.dtype) and dtype.kind in "biuf")]
+    frame = frame.reset_index(drop=True)
+    if other:
+        back = pa.Table.from_pandas(frame[other], preserve_index=False).to_pandas()
+        frame = frame.assign(**{c: back[c] for c in other})  # (in place of each, order kept)
+    return frame
 
 
 def _path_rows(study: Study, scene: Scene, grid: tuple[int, int], c: tuple[int, int, int],

@@ -119,8 +119,9 @@ def finish_table(raw: np.ndarray, scene: Scene | Sequence[Scene],
             raise ValueError(f"finish_table: {len(scenes)} scenes for {n} rows; give one scene, or one "
                              "a row, all with the same floors and limits")
         scene, window = scenes[0], np.array([s.window for s in scenes])
-    slot = {name: raw[:, i] for name, i in _S.items()}
-    counts = raw[:, [_S["impacts"], _S["impacts_left"], _S["impacts_right"]]]
+    slots = np.ascontiguousarray(raw.T)  # (a slot's values contiguous: the columns are views)
+    slot = {name: slots[i] for name, i in _S.items()}
+    counts = slots[[_S["impacts"], _S["impacts_left"], _S["impacts_right"]]]
     if not (np.abs(counts) < 2.0**63).all():  # (as int() refuses them)
         raise ValueError("finish_table: impact counts must be finite integers")
     input_energy = slot["input_energy"]
@@ -142,34 +143,34 @@ def finish_table(raw: np.ndarray, scene: Scene | Sequence[Scene],
             "e1_max": slot["e1_max"],
             "x1_max": slot["x1_max"],
             "x1_rms": rms(slot["x1_square_integral"]),
-            "impacts": counts[:, 0].astype(np.int64),
+            "impacts": counts[0].astype(np.int64),
             "energy_residual": residual,
             "primary_dissipation": slot["primary_dissipation"],
             "absorber_dissipation": slot["absorber_dissipation"],
             "impact_loss": slot["impact_loss"],
-            "impacts_left": counts[:, 1].astype(np.int64),
-            "impacts_right": counts[:, 2].astype(np.int64),
+            "impacts_left": counts[1].astype(np.int64),
+            "impacts_right": counts[2].astype(np.int64),
             "peak_force": slot["peak_force"],
             "contact_time": slot["contact_time"],
         }
         nf = scene.n_floors
         for k in range(nf):
             floor = len(SLOTS) + k  # the floor's entry of the first per-floor block (FLOOR_SLOTS)
-            columns[f"x_max_{k + 1}"] = raw[:, floor + X_MAX_K * nf]
-            columns[f"x_rms_{k + 1}"] = rms(raw[:, floor + X_SQ_INT_K * nf])
-            columns[f"drift_max_{k + 1}"] = raw[:, floor + DRIFT_MAX_K * nf]
-            columns[f"acc_max_{k + 1}"] = raw[:, floor + ACC_MAX_K * nf]
+            columns[f"x_max_{k + 1}"] = slots[floor + X_MAX_K * nf]
+            columns[f"x_rms_{k + 1}"] = rms(slots[floor + X_SQ_INT_K * nf])
+            columns[f"drift_max_{k + 1}"] = slots[floor + DRIFT_MAX_K * nf]
+            columns[f"acc_max_{k + 1}"] = slots[floor + ACC_MAX_K * nf]
     finite = np.ones(n, dtype=bool)
     for name, values in columns.items():
         if name not in ("edm", "energy_residual") and values.dtype.kind == "f":
             finite &= np.isfinite(values)
     passages = passage_slots(nf)
     for limit, name in enumerate(scene.limit_names):  # (NaN where a limit never passed)
-        columns[f"first_passage_{name}"] = raw[:, passages + limit]
+        columns[f"first_passage_{name}"] = slots[passages + limit]
     declared = declared_slots(nf, len(scene.limit_names))
     dt = scene.dt if scenes is None else np.array([s.dt for s in scenes])
     for r, name in enumerate(scene.metric_names):  # (``signals.declare_metrics``)
-        folded, last = raw[:, declared + REDUCTION_SLOTS * r], raw[:, declared + REDUCTION_SLOTS * r + 1]
+        folded, last = slots[declared + REDUCTION_SLOTS * r], slots[declared + REDUCTION_SLOTS * r + 1]
         op = scene.reductions[r, 2]
         with np.errstate(invalid="ignore", over="ignore", divide="ignore"):
             if op == REDUCE_MEAN:  # (the trapezoid rule: the last step end at half weight, as x1_rms)
@@ -189,7 +190,7 @@ def finish_table(raw: np.ndarray, scene: Scene | Sequence[Scene],
         for i, label in zip(kept, regimes(stacked[kept], 2.0 * np.pi / period)):
             codes[i] = labels.setdefault(label, len(labels))
     columns["regime"] = pd.array(list(labels), dtype="string").take(codes)
-    return pd.DataFrame(columns)
+    return pd.DataFrame(columns, copy=False)  # (the arrays are this table's alone)
 
 
 def _stacked(samples: Sequence[np.ndarray | None] | np.ndarray | None, n: int) -> np.ndarray | None:
@@ -290,6 +291,22 @@ def exceedance(passed: int, n: int) -> tuple[float, float, float]:
     return passed / n, float(ci.low), float(ci.high)
 
 
+def _quantiles(values: np.ndarray) -> list[float]:
+    """``np.quantile(values, [0.05, 0.5, 0.95])`` (NaN where there are none), bit for bit: NaN
+    where a value is NaN, the value where all are the same finite number (a metric the scene
+    does not exercise: impacts of a bare structure), else ``order.quantiles``."""
+    if not values.size:
+        return [np.nan] * 3
+    low, high = values.min(), values.max()
+    if np.isnan(low):
+        return [np.nan] * 3
+    if low == high and np.isfinite(low):
+        return [float(low)] * 3
+    from .order import quantiles  # (compiled: numba is imported on first use)
+
+    return [float(v) for v in quantiles(values, np.array([0.05, 0.5, 0.95]))]
+
+
 def summarise(realizations: pd.DataFrame, parameters: list[str],
               residual_tolerance: float = 1e-3) -> pd.DataFrame:
     """One row per sweep point: parameters, ``n_ok``, ``n_failed``, ``notes`` (why statistics
@@ -312,8 +329,11 @@ def summarise(realizations: pd.DataFrame, parameters: list[str],
         return tuple(map(float, student_t.interval(0.95, n - 1))) if n > 1 else (np.nan, np.nan)
 
     rows = []
-    for point, group in realizations.groupby("point", sort=True):
-        ok = group[group["status"] == "ok"]
+    points = realizations["point"].to_numpy()
+    one = points.size > 0 and points.min() == points.max()  # (one point: its rows as they are)
+    for point, group in [(points[0], realizations)] if one else realizations.groupby("point", sort=True):
+        fine = (group["status"] == "ok").to_numpy()
+        ok = group if fine.all() else group[fine]  # (no copy where every realisation ended ok)
         row: dict[str, float | int] = {"point": int(point)}
         for p in parameters:
             row[p] = group[p].iloc[0]
@@ -325,7 +345,7 @@ def summarise(realizations: pd.DataFrame, parameters: list[str],
             values = ok[m].to_numpy(dtype=float)
             n = values.size
             std = float(np.std(values, ddof=1)) if n > 1 else np.nan
-            q = np.quantile(values, [0.05, 0.5, 0.95]) if n else [np.nan] * 3
+            q = _quantiles(values)
             row[f"{m}_mean"] = float(values.mean()) if n else np.nan
             row[f"{m}_std"] = std
             sem = std / np.sqrt(n) if n > 1 else np.nan

@@ -9,9 +9,9 @@ A realisation's streams are those of ``streams.streams`` (``pcg.seed_stream``: n
 state and its filters from their stationary law (``loads.stationary_start``), as ``simulate``
 starts them: a chunk's rows are bitwise those of ``simulate`` run realisation by realisation
 (``tests/unit/kernels/test_chunk.py``), so the numbers depend on no chunk size or worker count.
-A chunk pays no Python per realisation: its compiled loop costs about 0.2 us a realisation beyond
+A chunk pays no Python per realisation: its compiled loop costs about 0.15 us a realisation beyond
 the steps (streams, state, the loop's entry), where a Python call a realisation cost about 60 us;
-``make bench`` ("Short paths and worker scaling") times whole runs, statistics included.
+``make bench`` ("Short paths and worker scaling") times whole runs, tables and statistics included.
 """
 
 from __future__ import annotations
