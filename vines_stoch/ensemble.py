@@ -183,7 +183,45 @@ def _table(raw: np.ndarray, scenes: Scene | list[Scene], samples: np.ndarray, po
         kept = [log[np.isfinite(log[:, EVENT_T])] for log in logs]
         for c, name in enumerate(EVENT_COLUMNS):
             frame[f"event_{name}"] = [log[:, c] for log in kept]
+    first = scenes if isinstance(scenes, Scene) else scenes[0]
+    if first.poincare and samples.shape[1]:
+        names = poincare_columns(first.n_floors, first.mass.shape[0] - first.n_floors)
+        each = [first] * raw.shape[0] if isinstance(scenes, Scene) else scenes
+        k = np.arange(samples.shape[1], dtype=float)  # (the times of ``record_sample``)
+        frame["poincare_period"] = [round(s.sample_from / s.period) + k for s in each]
+        frame["poincare_t"] = [s.sample_from + k * s.period for s in each]
+        for c, name in enumerate(names):
+            frame[f"poincare_{name}"] = list(samples[:, :, c])
     return frame
+
+
+def poincare_columns(n_floors: int, n_absorbers: int) -> list[str]:
+    """The state columns of poincare.parquet, in the order of a Poincare sample row
+    (``kernels.common.record_sample``): each floor's displacement (``x_k``, the lowest first),
+    each absorber's (``xa_j``), then their velocities (``v_k``, ``va_j``), then the impacts on
+    the left and right walls since the metrics window opened."""
+    floors, absorbers = range(1, n_floors + 1), range(1, n_absorbers + 1)
+    return ([f"x_{k}" for k in floors] + [f"xa_{j}" for j in absorbers] + [f"v_{k}" for k in floors]
+            + [f"va_{j}" for j in absorbers] + ["impacts_left", "impacts_right"])
+
+
+def _poincare(realizations: pd.DataFrame, sweep_keys: list[str]) -> tuple[pd.DataFrame, pd.DataFrame]:
+    """The realisations table without its Poincare list columns (``_table``), and
+    poincare.parquet's rows: point, the swept values, realisation, ``period`` (the forcing
+    period's index: the sample is at ``t = period T``), ``t``, then the state
+    (``poincare_columns``); samples the path did not reach (a window shorter than the samples
+    it keeps) are left out."""
+    listed = [c for c in realizations.columns if c.startswith("poincare_")]
+    counts = realizations["poincare_t"].map(len).to_numpy()
+    ids = ["point", *sweep_keys, "realization"]
+    rows = pd.DataFrame({key: np.repeat(realizations[key].to_numpy(), counts) for key in ids})
+    for c in listed:
+        rows[c.removeprefix("poincare_")] = np.concatenate(
+            [np.asarray(v, dtype=float) for v in realizations[c]] or [[]])
+    rows = rows[np.isfinite(rows["x_1"].to_numpy())].reset_index(drop=True)
+    for c in ("period", "impacts_left", "impacts_right"):
+        rows[c] = rows[c].astype(np.int64)
+    return realizations.drop(columns=listed), rows
 
 
 def _events(realizations: pd.DataFrame, sweep_keys: list[str]) -> tuple[pd.DataFrame, pd.DataFrame]:
@@ -708,6 +746,9 @@ def _consolidate(study: Study, the_plan: Plan, states: list[PointState], directo
     events_df = None
     if "event_t" in realizations_df.columns:
         realizations_df, events_df = _events(realizations_df, study.sweep_keys)
+    poincare_df = None
+    if "poincare_t" in realizations_df.columns:
+        realizations_df, poincare_df = _poincare(realizations_df, study.sweep_keys)
     summary_df = summarise(realizations_df, study.sweep_keys, study.base.simulation.residual_tolerance)
     history_df = None
     if spec:
@@ -724,8 +765,9 @@ def _consolidate(study: Study, the_plan: Plan, states: list[PointState], directo
     if directory is None:
         history_df = None if history_df is None else _in_file_types(history_df)
         events_df = None if events_df is None else _in_file_types(events_df)
+        poincare_df = None if poincare_df is None else _in_file_types(poincare_df)
         return Results(realizations_df, _in_file_types(summary_df), history_df, paths_df, meta, None, study,
-                       events_df)
+                       events_df, poincare_df)
     write_table(realizations_df, directory / "realizations.parquet", meta)
     write_table(summary_df, directory / "summary.parquet", meta)
     if history_df is not None:
@@ -733,6 +775,8 @@ def _consolidate(study: Study, the_plan: Plan, states: list[PointState], directo
                     {**meta, "vines_stoch.history_block": str(hist.BLOCK)})
     if events_df is not None:
         write_table(events_df, directory / "events.parquet", meta)
+    if poincare_df is not None:
+        write_table(poincare_df, directory / "poincare.parquet", meta)
     results = read_results(directory)
     results.paths, results.study = paths_df, study
     return results

@@ -45,6 +45,8 @@ QUANTITIES: dict[str, tuple[str, str]] = {
 }
 #: Per-floor columns (``NAME_k``): name and unit.
 FLOOR_QUANTITIES = {"x": ("displacement of floor {k}", "m"), "drift": ("drift of storey {k}", "m"),
+                    "v": ("velocity of floor {k}", "m/s"), "xa": ("displacement of absorber {k}", "m"),
+                    "va": ("velocity of absorber {k}", "m/s"), "stroke": ("stroke of absorber {k}", "m"),
                     "x_max": ("peak displacement of floor {k}", "m"),
                     "x_rms": ("r.m.s. displacement of floor {k}", "m"),
                     "drift_max": ("peak drift of storey {k}", "m"),

@@ -35,6 +35,7 @@ class Run:
     history: pd.DataFrame | None
     scenario: dict
     seed: int
+    poincare: pd.DataFrame | None = None
 
     @classmethod
     def read(cls, directory: str | Path, label: str | None = None) -> Run:
@@ -43,7 +44,8 @@ class Run:
         meta = results.metadata
         scenario = tomllib.loads(meta["vines_stoch.scenario"])
         return cls(directory, label or scenario.get("name", directory.name), results.realizations,
-                   results.summary, results.history, scenario, int(meta["vines_stoch.seed"]))
+                   results.summary, results.history, scenario, int(meta["vines_stoch.seed"]),
+                   results.poincare)
 
     @property
     def swept(self) -> list[str]:
@@ -243,6 +245,28 @@ def _plots(runs: list[Run], out: Path, point: int | None) -> list[str]:
             ax.set(xlabel=label(key, tables), ylabel=label("e1_max_mean"),
                    title="Maximum primary energy with regimes")
             save(fig, "e1_max_regimes.png")
+
+    sections = [run for run in runs if run.poincare is not None and len(run.poincare)]
+    if sections:  # the roof's Poincare samples: against the swept value, and in its phase plane
+        roof = max(int(c[2:]) for c in sections[0].poincare.columns if c.startswith("x_") and c[2:].isdigit())
+        x, v = f"x_{roof}", f"v_{roof}"
+        swept = [run for run in sections if len(run.swept) == 1 and run.axes]
+        if swept:
+            key = swept[0].axes[0]
+            fig, ax = plt.subplots()
+            for run in swept:
+                ax.plot(run.poincare[key], run.poincare[x], ".", ms=2, label=run.label)
+            ax.set(xlabel=label(key, tables), ylabel=f"{label(x)} at t = n T",
+                   title="Bifurcation diagram: the roof once a forcing period")
+            save(fig, "bifurcation.png")
+        fig, ax = plt.subplots()
+        for run in sections:
+            p = _point(run, point)
+            rows = run.poincare[run.poincare["point"] == p]
+            where = ", ".join(f"{k} = {_value(run.summary[k].iloc[p])}" for k in run.swept) or f"point {p}"
+            ax.plot(rows[x], rows[v], "o", ms=3, label=f"{run.label} ({where})")
+        ax.set(xlabel=label(x), ylabel=label(v), title="Poincare section of the roof (t = n T)")
+        save(fig, "poincare_section.png")
 
     fig, ax = plt.subplots()
     samples = {}

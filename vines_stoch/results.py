@@ -69,9 +69,11 @@ class Results:
     time histories, None unless ``[simulation.history]`` asks for them), ``paths`` (every
     realisation's time histories, None unless ``run(..., paths=True)`` asked for them; never
     stored in a folder), ``metadata`` (the provenance every result file carries),
-    ``directory`` (the folder, None for a run in memory) and ``events`` (the event logs of
-    events.parquet, None unless ``[output] events`` asks for them).  ``scenario`` is the Study run (read
-    from the metadata, on first use, for results read from a folder).
+    ``directory`` (the folder, None for a run in memory), ``events`` (the event logs of
+    events.parquet, None unless ``[output] events`` asks for them) and ``poincare`` (the
+    Poincare samples of poincare.parquet, None unless ``[output] poincare`` asks for them).
+    ``scenario`` is the Study run (read from the metadata, on first use, for results read from
+    a folder).
 
     It unpacks as ``realizations, summary = results``, as the tuple ``run`` used to return."""
 
@@ -83,6 +85,7 @@ class Results:
     directory: Path | None = None
     study: Study | None = field(default=None, repr=False)
     events: pd.DataFrame | None = None
+    poincare: pd.DataFrame | None = None
 
     @property
     def scenario(self) -> Study:
@@ -104,17 +107,18 @@ class Results:
 
 def read_results(directory: str | Path) -> Results:
     """The results of a finished run in ``directory`` (after ``store.check_folder``: never the
-    results of two runs), ``history`` and ``events`` where the run wrote them."""
+    results of two runs), ``history``, ``events`` and ``poincare`` where the run wrote them."""
     from .store import check_folder, read_metadata
 
     directory = Path(directory)
     check_folder(directory)
-    history, events = directory / "history.parquet", directory / "events.parquet"
-    return Results(pd.read_parquet(directory / "realizations.parquet"),
-                   pd.read_parquet(directory / "summary.parquet"),
-                   pd.read_parquet(history) if history.is_file() else None,
+    def table(name: str) -> pd.DataFrame | None:
+        path = directory / f"{name}.parquet"
+        return pd.read_parquet(path) if path.is_file() else None
+
+    return Results(table("realizations"), table("summary"), table("history"),
                    metadata=read_metadata(directory / "summary.parquet"), directory=directory,
-                   events=pd.read_parquet(events) if events.is_file() else None)
+                   events=table("events"), poincare=table("poincare"))
 
 
 @dataclass(eq=False)

@@ -21,7 +21,16 @@ from .bodies import (
 from .distributions import Distribution
 from .errors import FieldError
 from .fields import MAX_ABSORBERS, MAX_LIMITS, MAX_LOADS, MAX_STEPS, _Model
-from .loads import BlastLoad, InitialLoad, Load, WhiteNoiseLoad, WindLoad, draws_filter_noise
+from .loads import (
+    BaseHarmonicLoad,
+    BlastLoad,
+    HarmonicLoad,
+    InitialLoad,
+    Load,
+    WhiteNoiseLoad,
+    WindLoad,
+    draws_filter_noise,
+)
 from .settings import (
     Ensemble,
     IntensityMeasures,
@@ -116,12 +125,27 @@ class Scenario(_Model):
                 raise FieldError(f"limits.{name}.metric", limit.metric,
                                  "must be a peak metric: x1_max, e1_max, or x_max_k, drift_max_k, acc_max_k "
                                  f"with k in [1, {n}]")
+        if self.output.poincare and self.forcing_frequency is None:
+            raise FieldError("output.poincare", True,
+                             "needs a periodically forced scene: one harmonic or base-harmonic load of "
+                             "frequency > 0, and no noise (the rk4 scheme, which samples the state once "
+                             "a forcing period)")
         contents = self.contents
         if sim.scheme != "auto":
             why = schemes.refusal(schemes.SCHEMES[sim.scheme], *contents)
             if why is not None:
                 raise FieldError("simulation.scheme", sim.scheme, why)
         return self
+
+    @property
+    def forcing_frequency(self) -> float | None:
+        """The frequency (rad/s) of the scene's one periodic load where the step loop samples
+        the state once a forcing period (Poincare samples: rk4, one harmonic or base-harmonic
+        load of frequency > 0; ``scene.poincare_samples``), else None."""
+        periodic = [load for load in self.loads if isinstance(load, (HarmonicLoad, BaseHarmonicLoad))]
+        if self.scheme != "rk4" or len(periodic) != 1 or periodic[0].frequency <= 0:
+            return None
+        return periodic[0].frequency
 
     @property
     def contents(self) -> tuple[bool, bool, bool, bool]:

@@ -163,11 +163,14 @@ class Output(_Model):
     ``rms``: ``stroke_1_peak`` is absorber 1's largest stroke.  Each is a column of
     realizations.parquet with its statistics in summary.parquet.  ``events``: the impacts and
     Hertz contact onsets of each realisation in the metrics window, up to this many, into
-    events.parquet (time, absorber, wall, relative velocity, energy lost; 0: none kept)."""
+    events.parquet (time, absorber, wall, relative velocity, energy lost; 0: none kept).
+    ``poincare``: the state of every body once a forcing period (the Poincare samples the
+    regimes are read from) into poincare.parquet."""
 
     directory: str | None = None
     metrics: list[str] = []
     events: Annotated[int, Field(ge=0, le=MAX_EVENT_ROWS)] = 0
+    poincare: bool = False
 
     @model_validator(mode="after")
     def _distinct(self) -> Output:
