@@ -14,6 +14,8 @@ most ``sqrt(2)`` times one mean's standard error).
 Rewrite the record (only after a change meant to move the numbers, saying so in the commit)::
 
     .venv/bin/python -m tests.integration.test_numbers_hold --write
+
+or add a new example scenario's case to it, the others kept as they are (``--add``).
 """
 
 from __future__ import annotations
@@ -142,14 +144,16 @@ def test_numbers_hold(case: str) -> None:
 
 
 def main(argv: list[str]) -> None:
-    """Write the record (``--write``), or compare and print the largest relative change a case."""
-    if argv[:1] == ["--write"]:
-        found = {case: metrics(case) for case in CASES if not (
+    """Write the record (``--write``), add the cases it lacks and keep the others (``--add``: a
+    new example scenario), or compare and print the largest relative change a case."""
+    if argv[:1] in (["--write"], ["--add"]):
+        kept = _record() if argv[0] == "--add" else {}
+        found = {case: kept.get(case) or metrics(case) for case in CASES if case in kept or not (
             CASES[case][0] == "elcentro"
             and not (ROOT / "scenarios" / "records" / "elcentro_1940_ns.txt").exists())}
         RECORD.parent.mkdir(exist_ok=True)
         RECORD.write_text(json.dumps(found, indent=0, sort_keys=True) + "\n")
-        print(f"wrote {RECORD} ({len(found)} cases)")
+        print(f"wrote {RECORD} ({len(found)} cases, {len(set(found) - set(kept))} new)")
         return
     record = _record()
     for case in CASES:
