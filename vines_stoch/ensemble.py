@@ -29,7 +29,7 @@ import numpy as np
 import pandas as pd
 
 from . import history as hist
-from . import schedulers
+from . import psd, schedulers
 from .binding import binding
 from .kernels import DEFAULT_SIGNALS, kernel_for
 from .kernels.chunk import chunk_loop, ground_paths, parameter_draws, seed_keys, simulate_chunk
@@ -37,7 +37,7 @@ from .metrics import METRICS, finish_table, ground_intensities, summarise
 from .outputs import EVENT_COLUMNS, EVENT_T, POINCARE_SAMPLES, Record
 from .progress import Progress
 from .results import Results, Solution, as_study, check_whole, read_results
-from .scenario import History, Study
+from .scenario import History, Spectra, Study
 from .scenario.fields import MAX_REALIZATIONS
 from .scene import Scene, build_scene
 from .signals import signal_names
@@ -265,23 +265,81 @@ def plan(study: Study, chunk: int | None = None, realizations: int | None = None
     wanted = study.base.ensemble.realizations if realizations is None else realizations
     chunk = study.base.ensemble.chunk if chunk is None else chunk
     spec = history or study.base.simulation.history
+    spectra = study.base.output.spectra
     random = bool(study.base.uncertain)
     counts = [wanted if scene.has_noise or random else 1 for scene in scenes]
     chunks = []
     for p, (scene, n) in enumerate(zip(scenes, counts)):
         if backend == "cuda":
             size = chunk or min(n, GPU_CHUNK)
-            row_bytes = 8 * (len(spec.signals) * hist.grid(scene.n_steps, spec.points)[1] if spec else 0)
+            row_bytes = _recorded_bytes(scene, spec, spectra)
             if scene.period > 0:
                 row_bytes += 8 * POINCARE_SAMPLES * (2 * scene.mass.shape[0] + 2)
             size = min(size, max(1, GPU_CHUNK_BYTES // max(row_bytes, 1)))
         else:
             size = chunk or _auto_chunk(scene, n)
-        if spec and backend != "cuda":
-            row_bytes = 8 * len(spec.signals) * hist.grid(scene.n_steps, spec.points)[1]
+        if (spec or spectra) and backend != "cuda":
+            row_bytes = _recorded_bytes(scene, spec, spectra)
             size = min(size, max(1, HISTORY_CHUNK_BYTES // row_bytes))
         chunks += [(p, s, min(s + size, n)) for s in range(0, n, size)]
     return Plan(scenes, chunks)
+
+
+def recording(scene: Scene, history: History | None,
+              spectra: Spectra | None) -> tuple[tuple[str, ...], tuple[int, int] | None]:
+    """The signals a chunk's realisations record and their grid ``(stride, size)`` (None:
+    none): the history's (``history``: statistics or the paths kept) on its grid, and with
+    ``spectra`` theirs too, every step (the history's rows are then every ``stride``-th)."""
+    signals = tuple(history.signals) if history else ()
+    if spectra is None:
+        return signals, hist.grid(scene.n_steps, history.points) if history else None
+    return signals + tuple(s for s in spectra.signals if s not in signals), (1, scene.n_steps + 1)
+
+
+def _recorded_bytes(scene: Scene, history: History | None, spectra: Spectra | None) -> int:
+    """Bytes of one realisation's recorded signals (``recording``)."""
+    signals, grid = recording(scene, history, spectra)
+    return 8 * len(signals) * (grid[1] if grid else 0)
+
+
+@dataclass(frozen=True)
+class _View:
+    """What the driver takes of a chunk's recorded paths (``recording``): the history's signals
+    (``history``: their rows) on its grid (every ``stride``-th row, ``size`` of them), and the
+    spectra's (``spectra``: their rows) from row ``first`` (the metrics window), Welch segments
+    of ``steps`` rows of ``dt``."""
+
+    history: tuple[int, ...] | None
+    stride: int
+    size: int
+    spectra: tuple[int, ...]
+    first: int
+    steps: int
+    dt: float
+
+
+def _view(scene: Scene, history: History | None, spectra: Spectra | None) -> _View | None:
+    """The ``_View`` of a scene's chunks, or None where they are taken as recorded (no spectra)."""
+    if spectra is None:
+        return None
+    signals, _ = recording(scene, history, spectra)
+    stride, size = hist.grid(scene.n_steps, history.points) if history else (1, 0)
+    return _View(tuple(range(len(history.signals))) if history else None, stride, size,
+                 tuple(signals.index(s) for s in spectra.signals), scene.i0,
+                 psd.segment_steps(scene.n_steps - scene.i0 + 1, spectra.segment, scene.dt), scene.dt)
+
+
+def _chunk(runner, view: _View | None, *args) -> tuple[pd.DataFrame, np.ndarray | None, np.ndarray | None]:
+    """``runner(*args)`` (``run_chunk`` or ``run_chunk_cuda``): the chunk's table, its paths of
+    the history's signals on its grid, and with spectra each realisation's Welch estimates
+    ``(signals, omega, n)`` (``psd.periodograms``), computed where the chunk ran."""
+    frame, paths = runner(*args)
+    if view is None:
+        return frame, paths, None
+    window = paths[list(view.spectra), view.first:, :]
+    _, estimates = psd.periodograms(np.moveaxis(window, 2, 1), view.dt, view.steps)
+    kept = None if view.history is None else paths[list(view.history), ::view.stride, :][:, :view.size]
+    return frame, kept, np.moveaxis(estimates, 1, 2)
 
 
 def _auto_chunk(scene: Scene, n: int) -> int:
@@ -324,15 +382,18 @@ class PointState:
     stop: int | None = None                # realisations kept, once target_sem is met
     tree: hist.Tree | None = None
     edm: list[np.ndarray] = field(default_factory=list)  # per folded chunk: EDM, NaN when failed
+    spectrum: psd.Spectrum | None = None   # the spectra's running sums
 
     @property
     def done(self) -> bool:
         return self.stop is not None or self.folded == len(self.chunks)
 
-    def fold(self, frame: pd.DataFrame, paths: np.ndarray | None, target: float | None) -> None:
-        """Take the next chunk (``frame`` and ``paths`` are read only for ``target`` and the
-        history tree); with ``target``, stop at the first multiple of ``TARGET_STEP``
-        realisations whose EDM standard error is at most ``target``."""
+    def fold(self, frame: pd.DataFrame, paths: np.ndarray | None, target: float | None,
+             estimates: np.ndarray | None = None) -> None:
+        """Take the next chunk (``frame``, ``paths`` and the spectral ``estimates`` are read
+        only for ``target``, the history tree and the spectra); with ``target``, stop at the
+        first multiple of ``TARGET_STEP`` realisations whose EDM standard error is at most
+        ``target``.  Failed realisations count in neither the tree nor the spectra."""
         _, start, stop = self.chunks[self.folded]
         keep = stop - start
         if target is not None:
@@ -341,9 +402,11 @@ class PointState:
             n_stop = _stopping_count(np.concatenate(self.edm), start, target)
             if n_stop is not None:
                 self.stop, keep = n_stop, n_stop - start
+        ok = (frame["status"] == "ok").to_numpy()[:keep]
         if self.tree is not None:
-            ok = (frame["status"] == "ok").to_numpy()
-            self.tree.add(paths[:, :, :keep], ok[:keep])
+            self.tree.add(paths[:, :, :keep], ok)
+        if self.spectrum is not None:
+            self.spectrum.add(estimates[:, :, :keep][:, :, ok])
         self.folded += 1
 
     def to_arrays(self) -> dict[str, np.ndarray]:
@@ -352,6 +415,8 @@ class PointState:
                "edm": np.concatenate(self.edm) if self.edm else np.empty(0)}
         if self.tree is not None:
             out.update({f"tree.{name}": a for name, a in self.tree.to_arrays().items()})
+        if self.spectrum is not None:
+            out.update({f"spectrum.{name}": a for name, a in self.spectrum.to_arrays().items()})
         return out
 
     def restore(self, arrays: dict[str, np.ndarray]) -> None:
@@ -365,6 +430,10 @@ class PointState:
         if self.tree is not None:
             self.tree = hist.Tree.from_arrays({name.removeprefix("tree."): a for name, a in arrays.items()
                                                if name.startswith("tree.")})
+        if self.spectrum is not None:
+            self.spectrum = psd.Spectrum.from_arrays({name.removeprefix("spectrum."): a
+                                                      for name, a in arrays.items()
+                                                      if name.startswith("spectrum.")})
 
 
 def _stopping_count(edm: np.ndarray, start: int, target: float) -> int | None:
@@ -543,10 +612,10 @@ def run(scenario: Study | Mapping[str, Any] | str | os.PathLike, out: str | Path
         if not 0 <= shard[0] < shard[1]:
             raise ValueError(f"--shard {shard[0]}/{shard[1]}: give I/N with 0 <= I < N "
                              "(e.g. --shard 0/4)")
-        if study.base.simulation.history:
-            raise ValueError(f"--shard: {study.source} asks for history statistics, which are folded from "
-                             "the paths of every realisation in order and cannot be split into shards; "
-                             "run it in one job")
+        if study.base.simulation.history or study.base.output.spectra:
+            raise ValueError(f"--shard: {study.source} asks for history statistics or spectra, which are "
+                             "folded from the paths of every realisation in order and cannot be split into "
+                             "shards; run it in one job")
     options = _Options(workers, chunk, realizations, paths, resume, scheduler, progress, checkpoint_seconds,
                        shard, backend)
     if out is None:
@@ -611,27 +680,31 @@ def prepare_loops(scenes: list[Scene], seed: int, common: bool, grid: tuple[int,
 def _run(study: Study, directory: Path | None, o: _Options) -> Results | None:
     """``run`` in a directory it owns, or in memory (``directory`` None)."""
     base = study.base
-    spec = base.simulation.history
+    spec, spectra = base.simulation.history, base.output.spectra
+    tracked = bool(spec or spectra)  # (folded from every realisation's paths, in order)
     grid_spec = spec or (History() if o.paths else None)  # (the grid of the paths kept)
     the_plan = plan(study, o.chunk, o.realizations, o.backend, grid_spec)
     seed, target = base.ensemble.seed, base.ensemble.target_sem
     signals = tuple(grid_spec.signals) if grid_spec else DEFAULT_SIGNALS
     grids = [hist.grid(scene.n_steps, grid_spec.points) if grid_spec else None for scene in the_plan.scenes]
+    recorded = [recording(scene, grid_spec, spectra) for scene in the_plan.scenes]
+    views = [_view(scene, grid_spec, spectra) for scene in the_plan.scenes]
     key = run_key(study.text, the_plan.chunks, o.backend)
     keep = "--resume" if o.resume else "--shard" if o.shard is not None else None
     found = set() if directory is None else prepare_folder(directory, key, len(the_plan.chunks), study.source,
                                                            keep)
     checkpoint = None if directory is None else _Checkpoint(directory / "parts" / CHECKPOINT, key,
                                                             o.checkpoint_seconds)
-    states = [PointState([c for c in the_plan.chunks if c[0] == p], tree=hist.Tree() if spec else None)
+    states = [PointState([c for c in the_plan.chunks if c[0] == p], tree=hist.Tree() if spec else None,
+                         spectrum=psd.Spectrum() if spectra else None)
               for p in range(len(the_plan.scenes))]
-    if o.resume and spec:
+    if o.resume and tracked:
         checkpoint.load(states)
     folded_chunks = {c for s in states for c in s.chunks[:s.folded]}
     # a part on disk is reused unless its history paths are still needed
     on_disk = {c for c in the_plan.chunks if directory is not None and part_path(directory, *c) in found}
-    reusable = folded_chunks if spec else on_disk
-    ready: dict[tuple[int, int, int], tuple[pd.DataFrame, np.ndarray | None]] = {}
+    reusable = folded_chunks if tracked else on_disk
+    ready: dict[tuple[int, int, int], tuple[pd.DataFrame, np.ndarray | None, np.ndarray | None]] = {}
     frames: dict[tuple[int, int, int], pd.DataFrame] = {}  # (in memory: the chunks' tables)
     kept_paths: dict[tuple[int, int, int], np.ndarray] = {}
 
@@ -640,12 +713,13 @@ def _run(study: Study, directory: Path | None, o: _Options) -> Results | None:
             while not state.done:
                 c = state.chunks[state.folded]
                 if c in ready:
-                    frame, chunk_paths = ready.pop(c)
-                elif c in reusable and not spec:
-                    frame, chunk_paths = (pd.read_parquet(part_path(directory, *c)) if target else None), None
+                    frame, chunk_paths, estimates = ready.pop(c)
+                elif c in reusable and not tracked:
+                    frame = pd.read_parquet(part_path(directory, *c)) if target else None
+                    chunk_paths = estimates = None
                 else:
                     break
-                state.fold(frame, chunk_paths, target)
+                state.fold(frame, chunk_paths, target, estimates)
 
     mine = the_plan.chunks if o.shard is None else the_plan.chunks[o.shard[0]::o.shard[1]]
     todo = [c for c in mine if c not in reusable]
@@ -654,8 +728,10 @@ def _run(study: Study, directory: Path | None, o: _Options) -> Results | None:
     chunk_runner = run_chunk_cuda if o.backend == "cuda" else run_chunk
 
     def call(c: tuple[int, int, int]) -> tuple:
-        return chunk_runner, (the_plan.scenes[c[0]], seed, *c, grids[c[0]], study if base.uncertain else None,
-                              base.ensemble.common_random_numbers, signals)
+        signals_c, grid_c = recorded[c[0]]
+        return _chunk, (chunk_runner, views[c[0]], the_plan.scenes[c[0]], seed, *c, grid_c,
+                        study if base.uncertain else None, base.ensemble.common_random_numbers,
+                        signals_c or DEFAULT_SIGNALS)
 
     def skip(c: tuple[int, int, int]) -> bool:
         return states[c[0]].done
@@ -663,13 +739,14 @@ def _run(study: Study, directory: Path | None, o: _Options) -> Results | None:
     def kept() -> int:
         """Chunks of this run that a resumed run does not run again."""
         def held(c: tuple[int, int, int]) -> bool:
-            return c in checkpoint.folded if spec else part_path(directory, *c).exists()
+            return c in checkpoint.folded if tracked else part_path(directory, *c).exists()
 
         return sum(held(c) or (states[c[0]].stop is not None and c[1] >= states[c[0]].stop) for c in mine)
 
     try:
         if o.progress and o.backend == "cpu" and not o.scheduler and todo:
-            prepare_loops(the_plan.scenes, seed, base.ensemble.common_random_numbers, grids[0], signals)
+            prepare_loops(the_plan.scenes, seed, base.ensemble.common_random_numbers, recorded[0][1],
+                          recorded[0][0] or DEFAULT_SIGNALS)
         with ExitStack() as stack:
             interrupted = stack.enter_context(_noting_interrupts())
             fold_ready()
@@ -688,7 +765,7 @@ def _run(study: Study, directory: Path | None, o: _Options) -> Results | None:
                 where = f"{where}, cuda" + ("" if o.scheduler else f" ({gpu.device_name()})")
             folding = False
             try:
-                for c, (frame, chunk_paths) in results:
+                for c, (frame, chunk_paths, estimates) in results:
                     _label(frame, study, c[0])
                     if directory is None:
                         frames[c] = frame
@@ -696,19 +773,19 @@ def _run(study: Study, directory: Path | None, o: _Options) -> Results | None:
                         write_table(frame, part_path(directory, *c), {KEY: key})
                     if o.paths:
                         kept_paths[c] = chunk_paths
-                    ready[c] = (frame, chunk_paths)
+                    ready[c] = (frame, chunk_paths, estimates)
                     folding = True
                     fold_ready()
                     folding = False
                     for rc in [rc for rc in ready if states[rc[0]].done]:
                         ready.pop(rc)
-                    if spec and checkpoint is not None:
+                    if tracked and checkpoint is not None:
                         checkpoint.save(states)
                     bar.advance(c[2] - c[1])
                     if interrupted.is_set():
                         raise KeyboardInterrupt
             except BaseException:
-                if spec and checkpoint is not None and not folding:  # keep what was folded, unless
+                if tracked and checkpoint is not None and not folding:  # keep what was folded, unless
                     checkpoint.save(states, force=True)  # interrupted mid-fold
                 raise
             if interrupted.is_set():
@@ -717,7 +794,7 @@ def _run(study: Study, directory: Path | None, o: _Options) -> Results | None:
             return None
         meta = provenance(study.text, study.source, seed, where, o.backend, key)
         return _consolidate(study, the_plan, states, directory, frames, meta, grids, spec,
-                            kept_paths if o.paths else None, signals)
+                            kept_paths if o.paths else None, signals, views)
     except KeyboardInterrupt as exc:
         if directory is None:
             raise
@@ -728,9 +805,10 @@ def _consolidate(study: Study, the_plan: Plan, states: list[PointState], directo
                  frames: dict[tuple[int, int, int], pd.DataFrame], meta: dict[str, str],
                  grids: list[tuple[int, int] | None], spec: History | None,
                  kept_paths: dict[tuple[int, int, int], np.ndarray] | None,
-                 signals: tuple[str, ...]) -> Results:
+                 signals: tuple[str, ...], views: list[_View | None]) -> Results:
     """Gather the chunks kept (up to each point's stopping count: from ``frames`` in memory, else
-    the folder's parts) into the result tables, written into ``directory`` where there is one."""
+    the folder's parts) into the result tables, and the points' history statistics and spectra
+    (``views``: their Welch segments), written into ``directory`` where there is one."""
     kept, path_rows = [], []
     for state in states:
         for c in state.chunks:
@@ -750,24 +828,31 @@ def _consolidate(study: Study, the_plan: Plan, states: list[PointState], directo
     if "poincare_t" in realizations_df.columns:
         realizations_df, poincare_df = _poincare(realizations_df, study.sweep_keys)
     summary_df = summarise(realizations_df, study.sweep_keys, study.base.simulation.residual_tolerance)
-    history_df = None
-    if spec:
-        rows = []
-        for p, (state, scene, grid) in enumerate(zip(states, the_plan.scenes, grids)):
-            t = scene.dt * grid[0] * np.arange(grid[1])
-            rows_p = hist.frame(state.tree.result(), spec, t)
+    def by_point(rows: list[pd.DataFrame]) -> pd.DataFrame:
+        """Each point's rows after its index and swept values, one table."""
+        for p, rows_p in enumerate(rows):
             rows_p.insert(0, "point", p)
             for i, k in enumerate(study.sweep_keys):
                 rows_p.insert(1 + i, k, study.grid[p][k])
-            rows.append(rows_p)
-        history_df = pd.concat(rows, ignore_index=True)
+        return pd.concat(rows, ignore_index=True)
+
+    history_df = spectra_df = None
+    if spec:
+        history_df = by_point([hist.frame(state.tree.result(), spec, scene.dt * grid[0] * np.arange(grid[1]))
+                               for state, scene, grid in zip(states, the_plan.scenes, grids)])
+    spectra = study.base.output.spectra
+    if spectra:
+        spectra_df = by_point([state.spectrum.frame(psd.frequencies(view.steps, view.dt),
+                                                    tuple(spectra.signals))
+                               for state, view in zip(states, views)])
     paths_df = pd.concat(path_rows, ignore_index=True) if kept_paths is not None else None
     if directory is None:
         history_df = None if history_df is None else _in_file_types(history_df)
         events_df = None if events_df is None else _in_file_types(events_df)
         poincare_df = None if poincare_df is None else _in_file_types(poincare_df)
+        spectra_df = None if spectra_df is None else _in_file_types(spectra_df)
         return Results(realizations_df, _in_file_types(summary_df), history_df, paths_df, meta, None, study,
-                       events_df, poincare_df)
+                       events_df, poincare_df, spectra_df)
     write_table(realizations_df, directory / "realizations.parquet", meta)
     write_table(summary_df, directory / "summary.parquet", meta)
     if history_df is not None:
@@ -777,6 +862,8 @@ def _consolidate(study: Study, the_plan: Plan, states: list[PointState], directo
         write_table(events_df, directory / "events.parquet", meta)
     if poincare_df is not None:
         write_table(poincare_df, directory / "poincare.parquet", meta)
+    if spectra_df is not None:
+        write_table(spectra_df, directory / "spectra.parquet", meta)
     results = read_results(directory)
     results.paths, results.study = paths_df, study
     return results

@@ -36,6 +36,7 @@ class Run:
     scenario: dict
     seed: int
     poincare: pd.DataFrame | None = None
+    spectra: pd.DataFrame | None = None
 
     @classmethod
     def read(cls, directory: str | Path, label: str | None = None) -> Run:
@@ -45,7 +46,7 @@ class Run:
         scenario = tomllib.loads(meta["vines_stoch.scenario"])
         return cls(directory, label or scenario.get("name", directory.name), results.realizations,
                    results.summary, results.history, scenario, int(meta["vines_stoch.seed"]),
-                   results.poincare)
+                   results.poincare, results.spectra)
 
     @property
     def swept(self) -> list[str]:
@@ -267,6 +268,21 @@ def _plots(runs: list[Run], out: Path, point: int | None) -> list[str]:
             ax.plot(rows[x], rows[v], "o", ms=3, label=f"{run.label} ({where})")
         ax.set(xlabel=label(x), ylabel=label(v), title="Poincare section of the roof (t = n T)")
         save(fig, "poincare_section.png")
+
+    spectral = [run for run in runs if run.spectra is not None and len(run.spectra)]
+    if spectral:  # each signal's density at one point, with its band
+        fig, ax = plt.subplots()
+        for run in spectral:
+            p = _point(run, point)
+            rows = run.spectra[(run.spectra["point"] == p) & (run.spectra["omega"] > 0)]
+            for signal, one in rows.groupby("signal", sort=False):
+                line, = ax.plot(one["omega"], one["psd"], lw=1, label=f"{run.label}: {label(signal)}")
+                ax.fill_between(one["omega"], one["psd_lo"].clip(lower=1e-300), one["psd_hi"],
+                                color=line.get_color(), alpha=0.25)
+        ax.set(xscale="log", yscale="log", xlabel="angular frequency ω [rad/s]",
+               ylabel="one-sided power spectral density [(signal unit)² s/rad]",
+               title="Power spectral densities (Welch), 95 % bands")
+        save(fig, "spectra.png")
 
     fig, ax = plt.subplots()
     samples = {}

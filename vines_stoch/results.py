@@ -71,7 +71,8 @@ class Results:
     stored in a folder), ``metadata`` (the provenance every result file carries),
     ``directory`` (the folder, None for a run in memory), ``events`` (the event logs of
     events.parquet, None unless ``[output] events`` asks for them) and ``poincare`` (the
-    Poincare samples of poincare.parquet, None unless ``[output] poincare`` asks for them).
+    Poincare samples of poincare.parquet, None unless ``[output] poincare`` asks for them) and
+    ``spectra`` (the power spectral densities of spectra.parquet, with ``[output] spectra``).
     ``scenario`` is the Study run (read from the metadata, on first use, for results read from
     a folder).
 
@@ -86,6 +87,7 @@ class Results:
     study: Study | None = field(default=None, repr=False)
     events: pd.DataFrame | None = None
     poincare: pd.DataFrame | None = None
+    spectra: pd.DataFrame | None = None
 
     @property
     def scenario(self) -> Study:
@@ -107,7 +109,8 @@ class Results:
 
 def read_results(directory: str | Path) -> Results:
     """The results of a finished run in ``directory`` (after ``store.check_folder``: never the
-    results of two runs), ``history``, ``events`` and ``poincare`` where the run wrote them."""
+    results of two runs), ``history``, ``events``, ``poincare`` and ``spectra`` where the run
+    wrote them."""
     from .store import check_folder, read_metadata
 
     directory = Path(directory)
@@ -118,7 +121,7 @@ def read_results(directory: str | Path) -> Results:
 
     return Results(table("realizations"), table("summary"), table("history"),
                    metadata=read_metadata(directory / "summary.parquet"), directory=directory,
-                   events=table("events"), poincare=table("poincare"))
+                   events=table("events"), poincare=table("poincare"), spectra=table("spectra"))
 
 
 @dataclass(eq=False)

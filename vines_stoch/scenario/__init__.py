@@ -60,6 +60,7 @@ from .settings import (
     Optimize,
     Output,
     Simulation,
+    Spectra,
     limit_metrics,
     quantile_name,
 )
@@ -73,7 +74,7 @@ __all__ = [
     "HertzAbsorber", "History", "ImpactAbsorber", "IntensityMeasures", "ImpulseLoad", "InitialLoad",
     "JenningsEnvelope", "Limit", "LinearAbsorber", "Load", "LognormalDistribution", "NormalDistribution",
     "Optimize", "Output", "Primary", "PulseTrainLoad", "Rayleigh", "RecordLoad", "SaragoniHartEnvelope",
-    "Scenario", "ScenarioError", "Simulation", "Study", "TruncatedNormalDistribution", "UniformDistribution",
-    "WhiteNoiseLoad", "WindLoad", "get_path", "limit_metrics", "load_scenario",
+    "Scenario", "ScenarioError", "Simulation", "Spectra", "Study", "TruncatedNormalDistribution",
+    "UniformDistribution", "WhiteNoiseLoad", "WindLoad", "get_path", "limit_metrics", "load_scenario",
     "parse_scenario", "quantile_name", "set_path",
 ]

@@ -99,13 +99,7 @@ class Scenario(_Model):
                             "then each absorber)",
                         )
         if sim.history is not None:
-            allowed = signal_names(n, len(self.absorbers))
-            for signal in sim.history.signals:
-                if signal not in allowed:
-                    raise FieldError("simulation.history.signals", sim.history.signals,
-                                     f"{signal!r} is not a signal: give x1, e1, x_k, v_k or drift_k "
-                                     f"with k in [1, {n}], or xa_j, va_j or stroke_j with j in "
-                                     f"[1, {len(self.absorbers)}] (absorbers in file order)")
+            self._check_signals("simulation.history.signals", sim.history.signals)
         for metric in self.output.metrics:
             try:
                 declare_metrics([metric], n, len(self.absorbers))
@@ -125,6 +119,14 @@ class Scenario(_Model):
                 raise FieldError(f"limits.{name}.metric", limit.metric,
                                  "must be a peak metric: x1_max, e1_max, or x_max_k, drift_max_k, acc_max_k "
                                  f"with k in [1, {n}]")
+        spectra = self.output.spectra
+        if spectra is not None:
+            self._check_signals("output.spectra.signals", spectra.signals)
+            window = sim.duration - sim.metrics_from
+            if spectra.segment is not None and not 8 * sim.dt <= spectra.segment <= window:
+                raise FieldError("output.spectra.segment", spectra.segment,
+                                 f"must be in [{8 * sim.dt:g}, {window:g}] s (8 steps to the metrics "
+                                 "window, simulation.duration - simulation.metrics_from)")
         if self.output.poincare and self.forcing_frequency is None:
             raise FieldError("output.poincare", True,
                              "needs a periodically forced scene: one harmonic or base-harmonic load of "
@@ -136,6 +138,16 @@ class Scenario(_Model):
             if why is not None:
                 raise FieldError("simulation.scheme", sim.scheme, why)
         return self
+
+    def _check_signals(self, key: str, signals: list[str]) -> None:
+        """A ``FieldError`` for ``key`` where a name of ``signals`` is not a signal of the scene."""
+        n, na = self.primary.n_floors, len(self.absorbers)
+        allowed = signal_names(n, na)
+        for signal in signals:
+            if signal not in allowed:
+                raise FieldError(key, signals, f"{signal!r} is not a signal: give x1, e1, x_k, v_k or "
+                                 f"drift_k with k in [1, {n}], or xa_j, va_j or stroke_j with j in "
+                                 f"[1, {na}] (absorbers in file order)")
 
     @property
     def forcing_frequency(self) -> float | None:

@@ -151,6 +151,21 @@ class IntensityMeasures(_Model):
     damping: Annotated[float, Field(ge=0, lt=1, allow_inf_nan=False)] = 0.05
 
 
+class Spectra(_Model):
+    """Ensemble-averaged one-sided power spectral densities of signals over the metrics window
+    (spectra.parquet; ``psd.py``): Welch's method on every step of each realisation, Hann
+    segments of ``segment`` seconds overlapping by half (default: 15 segments in the window)."""
+
+    signals: Annotated[list[str], Field(min_length=1)] = ["x1"]
+    segment: Annotated[float, Field(gt=0, allow_inf_nan=False)] | None = None
+
+    @model_validator(mode="after")
+    def _distinct(self) -> Spectra:
+        if len(set(self.signals)) != len(self.signals):
+            raise FieldError("signals", self.signals, "must not repeat a signal")
+        return self
+
+
 #: Most rows of a realisation's event log (``[output] events``).
 MAX_EVENT_ROWS = 1_000_000
 
@@ -165,12 +180,14 @@ class Output(_Model):
     Hertz contact onsets of each realisation in the metrics window, up to this many, into
     events.parquet (time, absorber, wall, relative velocity, energy lost; 0: none kept).
     ``poincare``: the state of every body once a forcing period (the Poincare samples the
-    regimes are read from) into poincare.parquet."""
+    regimes are read from) into poincare.parquet.  ``spectra``: the ensemble-averaged power
+    spectral densities of signals over the metrics window into spectra.parquet (``Spectra``)."""
 
     directory: str | None = None
     metrics: list[str] = []
     events: Annotated[int, Field(ge=0, le=MAX_EVENT_ROWS)] = 0
     poincare: bool = False
+    spectra: Spectra | None = None
 
     @model_validator(mode="after")
     def _distinct(self) -> Output:
