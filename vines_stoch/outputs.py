@@ -13,7 +13,7 @@ import numpy as np
 from numba import njit
 
 from .jit.flags import INLINE
-from .signals import REDUCTION_SLOTS
+from .signals import REDUCTION_SLOTS, SIGNAL_SHARE
 
 #: Slots of the raw metric vector a kernel fills; ``metrics.finish_table`` turns it into columns.
 SLOTS = (
@@ -80,7 +80,8 @@ EVENT_T, EVENT_ABSORBER, EVENT_SIDE, EVENT_SPEED, EVENT_LOSS = range(len(EVENT_C
 class Record(NamedTuple):
     """What a run records beyond the built-in metrics, the step loop's compile-time flags: the
     first passages of limits (the scene has limits), history rows (of declared signals,
-    ``signals.declare``), the event log, the declared metrics (``signals.declare_metrics``).
+    ``signals.declare``), the event log, the declared metrics (``signals.declare_metrics``) and
+    whether one of them folds the absorbers' energy share (``signals.SHARE_METRICS``).
     The Poincare samples are the scheme's (``driver.Step``).
     A loop compiles the code of a record only when it is asked for."""
 
@@ -88,13 +89,15 @@ class Record(NamedTuple):
     history: bool = False
     events: bool = False
     declared: bool = False
+    share: bool = False
 
     @classmethod
     def of(cls, scene, history_rows: int = 0, event_rows: int = 0) -> Record:
         """What a run of ``scene`` keeping ``history_rows`` history rows and ``event_rows`` rows
         of event log records."""
         return cls(passages=scene.limits.shape[0] > 0, history=history_rows > 0, events=event_rows > 0,
-                   declared=scene.reductions.shape[0] > 0)
+                   declared=scene.reductions.shape[0] > 0,
+                   share=bool((scene.reductions[:, 0] == SIGNAL_SHARE).any()))
 
 
 def new_events(capacity: int) -> np.ndarray:

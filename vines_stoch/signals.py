@@ -24,13 +24,16 @@ SIGNALS = {
     "va": (4, "absorber"),    # an absorber's velocity
     "stroke": (5, "absorber"),  # an absorber's displacement less its host floor's
     "e1": (6, None),          # the structure's energy E1
+    "share": (7, None),       # the absorbers' share of the energy, E_abs / (E1 + E_abs)
 }
-(SIGNAL_X, SIGNAL_V, SIGNAL_DRIFT, SIGNAL_XA, SIGNAL_VA, SIGNAL_STROKE, SIGNAL_E1) = range(len(SIGNALS))
+(SIGNAL_X, SIGNAL_V, SIGNAL_DRIFT, SIGNAL_XA, SIGNAL_VA, SIGNAL_STROKE, SIGNAL_E1,
+ SIGNAL_SHARE) = range(len(SIGNALS))
 
 
 def signal_names(n_floors: int, n_absorbers: int = 0) -> list[str]:
-    """The signals a structure of ``n_floors`` floors and ``n_absorbers`` absorbers can record."""
-    names = ["x1", "e1"]
+    """The signals a structure of ``n_floors`` floors and ``n_absorbers`` absorbers can record
+    (``share`` where it has absorbers)."""
+    names = ["x1", "e1"] + (["share"] if n_absorbers else [])
     for stem, (_, counts) in SIGNALS.items():
         if counts is not None:
             n = n_floors if counts == "floor" else n_absorbers
@@ -48,8 +51,9 @@ def declare(names: Iterable[str], n_floors: int, n_absorbers: int = 0) -> np.nda
         if name not in allowed:
             raise ValueError(f"signals: {name!r} is not a signal of this structure "
                              f"(allowed: {', '.join(allowed)})")
-        if name in ("x1", "e1"):
-            rows.append((SIGNAL_X, n_floors - 1) if name == "x1" else (SIGNAL_E1, 0))
+        whole = {"x1": (SIGNAL_X, n_floors - 1), "e1": (SIGNAL_E1, 0), "share": (SIGNAL_SHARE, 0)}
+        if name in whole:
+            rows.append(whole[name])
             continue
         stem, k = name.rsplit("_", 1)
         code, counts = SIGNALS[stem]
@@ -67,10 +71,14 @@ def declare(names: Iterable[str], n_floors: int, n_absorbers: int = 0) -> np.nda
 #: trapezoid rule over the step ends, as ``x1_rms``).
 REDUCTIONS = {"peak": 0, "max": 1, "min": 2, "mean": 3, "rms": 4}
 REDUCE_PEAK, REDUCE_MAX, REDUCE_MIN, REDUCE_MEAN, REDUCE_RMS = range(len(REDUCTIONS))
+#: The built-in metrics of a scene with absorbers that fold its ``share`` signal over the
+#: metrics window (MODEL.md section 4; Wei et al. eq. 21), after the declared metrics.
+SHARE_METRICS = {"energy_share_mean": REDUCE_MEAN, "energy_share_max": REDUCE_MAX}
 #: Raw metric slots a declared metric takes: what it folds, and the signal at the last step end.
 REDUCTION_SLOTS = 2
 #: The names of declared metrics: ``<signal>_<reduction>``.
-METRIC_NAME = re.compile(rf"(x1|e1|({'|'.join(stem for stem, (_, n) in SIGNALS.items() if n)})_[1-9][0-9]*)"
+METRIC_NAME = re.compile(rf"(x1|e1|share|({'|'.join(stem for stem, (_, n) in SIGNALS.items() if n)})"
+                         rf"_[1-9][0-9]*)"
                          rf"_({'|'.join(REDUCTIONS)})")
 #: The built-in metric columns (``metrics.METRICS``) that read as a declared metric's name: a
 #: declared metric may not take them (``tests/unit/statistics`` checks the list).

@@ -15,7 +15,8 @@ Rewrite the record (only after a change meant to move the numbers, saying so in 
 
     .venv/bin/python -m tests.integration.test_numbers_hold --write
 
-or add a new example scenario's case to it, the others kept as they are (``--add``).
+or add what it lacks, a new example scenario's case or a new metric's column, keeping what it
+holds (``--add``).
 """
 
 from __future__ import annotations
@@ -143,14 +144,25 @@ def test_numbers_hold(case: str) -> None:
                                            err_msg=f"{case} point {point} {column}")
 
 
+def _merged(kept: dict | None, now: dict) -> dict:
+    """A case's record: the one kept, with the metric columns it lacks taken from ``now`` (a
+    metric added since), or ``now`` where none is kept."""
+    if kept is None:
+        return now
+    return {point: {**then, "columns": {**now[point]["columns"], **then["columns"]}}
+            for point, then in kept.items()}
+
+
 def main(argv: list[str]) -> None:
-    """Write the record (``--write``), add the cases it lacks and keep the others (``--add``: a
-    new example scenario), or compare and print the largest relative change a case."""
+    """Write the record (``--write``); add what it lacks, keeping what it holds (``--add``: a new
+    example scenario's case, a new metric's column); or compare and print the largest relative
+    change a case."""
     if argv[:1] in (["--write"], ["--add"]):
         kept = _record() if argv[0] == "--add" else {}
-        found = {case: kept.get(case) or metrics(case) for case in CASES if case in kept or not (
-            CASES[case][0] == "elcentro"
-            and not (ROOT / "scenarios" / "records" / "elcentro_1940_ns.txt").exists())}
+        missing = not (ROOT / "scenarios" / "records" / "elcentro_1940_ns.txt").exists()
+        found = {case: kept[case] if missing and CASES[case][0] == "elcentro" else
+                 _merged(kept.get(case), metrics(case))
+                 for case in CASES if case in kept or not (missing and CASES[case][0] == "elcentro")}
         RECORD.parent.mkdir(exist_ok=True)
         RECORD.write_text(json.dumps(found, indent=0, sort_keys=True) + "\n")
         print(f"wrote {RECORD} ({len(found)} cases, {len(set(found) - set(kept))} new)")

@@ -70,7 +70,7 @@ def spec_of(scene, gpu: bool = False, record: Record = Record()) -> Spec:
                 has_hertz=scene.has_hertz,
                 filtered=scene.has_filters and grid, ground=scene.has_ground and grid,
                 geometric=scene.has_geometric, gpu=gpu, passages=record.passages, history=record.history,
-                events=record.events, declared=record.declared)
+                events=record.events, declared=record.declared, share=record.share)
 
 
 def kernel_for(scene, gpu: bool = False, record: Record = Record()):

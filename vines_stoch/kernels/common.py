@@ -60,6 +60,7 @@ from ..signals import (
     REDUCE_PEAK,
     REDUCTION_SLOTS,
     SIGNAL_DRIFT,
+    SIGNAL_SHARE,
     SIGNAL_STROKE,
     SIGNAL_V,
     SIGNAL_VA,
@@ -165,14 +166,10 @@ def contact_step(x, v, nf: int, mass, host, rows, touching) -> float:
     return h
 
 
-@njit(**KERNEL)
-def stored_energy(x, v, mass, nf: int, storey_k, kind, host, rows) -> float:
-    """Mechanical energy stored in all bodies, storeys, attachment springs and Hertz contacts.
-
-    Out of line: it runs twice a path (the window's opening, the end), and every inlined copy
-    costs compile time.  Callers pass copies of a state kept in registers (an array whose
-    address reaches an out-of-line call is kept in memory across the generator's calls)."""
-    e = primary_energy(mass, storey_k, x, v, nf)
+@njit(**INLINE)
+def absorber_energy(x, v, mass, nf: int, kind, host, rows, e: float = 0.0) -> float:
+    """``E_abs``: the absorbers' kinetic energy and the energy stored in their attachment springs
+    and Hertz contacts, added to ``e``."""
     for b in range(nf, v.shape[0]):
         e += 0.5 * mass[b] * v[b] * v[b]
     for a in range(x.shape[0] - nf):
@@ -181,6 +178,24 @@ def stored_energy(x, v, mass, nf: int, storey_k, kind, host, rows) -> float:
         if kind[a] == HERTZ:
             e += contact_energy(rows, a, u)
     return e
+
+
+@njit(**INLINE)
+def energy_share(e1: float, e_abs: float) -> float:
+    """The absorbers' share of the energy, ``E_abs / (E1 + E_abs)`` (MODEL.md section 4; Wei et
+    al. eq. 21); 0 where there is none."""
+    total = e1 + e_abs
+    return e_abs / total if total > 0.0 else 0.0
+
+
+@njit(**KERNEL)
+def stored_energy(x, v, mass, nf: int, storey_k, kind, host, rows) -> float:
+    """Mechanical energy stored in all bodies, storeys, attachment springs and Hertz contacts.
+
+    Out of line: it runs twice a path (the window's opening, the end), and every inlined copy
+    costs compile time.  Callers pass copies of a state kept in registers (an array whose
+    address reaches an out-of-line call is kept in memory across the generator's calls)."""
+    return absorber_energy(x, v, mass, nf, kind, host, rows, primary_energy(mass, storey_k, x, v, nf))
 
 
 @njit(**INLINE)
@@ -384,10 +399,11 @@ def block_end(i: int, n_steps: int, i0: int, h_next: int) -> int:
 
 
 @njit(**INLINE)
-def signal_value(code: int, index: int, x, v, nf: int, e1: float, host) -> float:
+def signal_value(code: int, index: int, x, v, nf: int, e1: float, e_abs: float, host) -> float:
     """A declared signal's value (``signals.declare``: ``code``, ``index``) in the state
-    ``x, v`` (``E1``: ``e1``; ``host``: the absorbers' host floors).  The state is read at
-    run-time indices by ``pick``, so that it stays in registers (``jit.intrinsics.pick``)."""
+    ``x, v`` (``E1``: ``e1``; the absorbers' energy: ``e_abs``; ``host``: the absorbers' host
+    floors).  The state is read at run-time indices by ``pick``, so that it stays in registers
+    (``jit.intrinsics.pick``)."""
     if code == SIGNAL_X or code == SIGNAL_XA:
         return pick(x, index)
     if code == SIGNAL_V or code == SIGNAL_VA:
@@ -396,52 +412,60 @@ def signal_value(code: int, index: int, x, v, nf: int, e1: float, host) -> float
         return pick(x, index) - pick(x, index - 1) if index > 0 else pick(x, 0)
     if code == SIGNAL_STROKE:
         return pick(x, nf + index) - pick(x, host_of(host, index, nf))
+    if code == SIGNAL_SHARE:
+        return energy_share(e1, e_abs)
     return e1
 
 
 @njit(**INLINE)
-def history_row(history, j: int, signals, x, v, nf: int, e1: float, host) -> None:
+def history_row(history, j: int, signals, x, v, nf: int, e1: float, mass, kind, host, rows) -> None:
     """History row ``j``: the declared ``signals`` (rows ``(code, index)``, ``signals.declare``),
     one column each.  Out of line (``_history_row``: rare work, a row every ``stride`` steps,
     whose inlined copies of ``signal_value`` cost every loop compile time), so callers pass
     copies of a state kept in registers (see ``stored_energy``)."""
-    _history_row(*plain((history, j, signals, x, v, runtime_value(nf), e1, host)))
+    _history_row(*plain((history, j, signals, x, v, runtime_value(nf), e1, mass, kind, host, rows)))
 
 
 @njit(**KERNEL)
-def _history_row(history, j: int, signals, x, v, nf: int, e1: float, host) -> None:
-    """``history_row``'s body, compiled once for every loop."""
+def _history_row(history, j: int, signals, x, v, nf: int, e1: float, mass, kind, host, rows) -> None:
+    """``history_row``'s body, compiled once for every loop (the absorbers' energy computed
+    where a signal is their share)."""
+    e_abs = 0.0
     for c in range(signals.shape[0]):
-        history[j, c] = signal_value(signals[c, 0], signals[c, 1], x, v, nf, e1, host)
+        if signals[c, 0] == SIGNAL_SHARE:
+            e_abs = absorber_energy(x, v, mass, nf, kind, host, rows)
+    for c in range(signals.shape[0]):
+        history[j, c] = signal_value(signals[c, 0], signals[c, 1], x, v, nf, e1, e_abs, host)
 
 
 @njit(**INLINE)
-def start_history(history, stride, signals, x, v, nf, e1, host) -> int:
+def start_history(history, stride, signals, x, v, nf, e1, mass, kind, host, rows) -> int:
     """Write the first history row (``t = 0``) when a history is kept; returns the step after
     which the next row is due (``-1``: never)."""
     if history.shape[0] == 0:
         return -1
-    history_row(history, 0, signals, x, v, nf, e1, host)
+    history_row(history, 0, signals, x, v, nf, e1, mass, kind, host, rows)
     return stride if history.shape[0] > 1 else -1
 
 
 @njit(**INLINE)
-def record_history(history, stride, step, signals, x, v, nf, e1, host) -> int:
+def record_history(history, stride, step, signals, x, v, nf, e1, mass, kind, host, rows) -> int:
     """Write the history row of ``t = step dt`` (``history_row``); returns the next due step."""
     j = step // stride
-    history_row(history, j, signals, x, v, nf, e1, host)
+    history_row(history, j, signals, x, v, nf, e1, mass, kind, host, rows)
     return step + stride if j + 1 < history.shape[0] else -1
 
 
 @njit(**INLINE)
-def fold_declared(reductions, out, at: int, x, v, nf: int, e1: float, host, opening: bool) -> None:
+def fold_declared(reductions, out, at: int, x, v, nf: int, e1: float, e_abs: float, host,
+                  opening: bool) -> None:
     """Fold a step end's state into the declared metrics (rows ``(code, index, reduction)``,
     ``signals.declare_metrics``; slots from ``at``, ``signals.REDUCTION_SLOTS`` each): peaks,
     extremes, sums of the signal or its square; at the metrics window's ``opening``, each
     signal's first value (a sum's at half weight: the trapezoid rule).  The last slot keeps the
     signal, whose half weight ``metrics.finish_table`` takes off the sums at the window's end."""
     for r in range(reductions.shape[0]):
-        q = signal_value(reductions[r, 0], reductions[r, 1], x, v, nf, e1, host)
+        q = signal_value(reductions[r, 0], reductions[r, 1], x, v, nf, e1, e_abs, host)
         op = reductions[r, 2]
         j = at + REDUCTION_SLOTS * r
         if op == REDUCE_PEAK:

@@ -58,6 +58,7 @@ from .carry import (
 )
 from .common import (
     CHECK_EVERY,
+    absorber_energy,
     block_end,
     diverged,
     first_passages,
@@ -84,7 +85,8 @@ class Spec(NamedTuple):
     noise, impact and Hertz absorbers, filtered loads, ground acceleration, geometric
     attachments, the cuda backend's loop (per-absorber flags on the stack), and what the run
     records beyond the built-in metrics (``outputs.Record``: first passages, history rows, the
-    event log, declared metrics), whose code the loop holds only where asked."""
+    event log, declared metrics, the absorbers' energy share among them), whose code the loop
+    holds only where asked."""
 
     n_bodies: int
     n_floors: int
@@ -101,6 +103,7 @@ class Spec(NamedTuple):
     history: bool
     events: bool
     declared: bool
+    share: bool
 
 
 class Step(NamedTuple):
@@ -146,6 +149,7 @@ def step_loop(plug: Step, spec: Spec):
     PASSAGES = spec.passages  # (what the run records: ``outputs.Record``)
     HISTORY = spec.history
     DECLARED = spec.declared
+    SHARE = spec.share  # (a declared metric folds the absorbers' energy share)
 
     @njit(**KERNEL)
     def kernel(bodies_, absorbers_, ex_, fl_, noise_, grid_, outputs_, gen_, gen_bridge_, gen_filter_):
@@ -196,7 +200,7 @@ def step_loop(plug: Step, spec: Spec):
             h_next = -1
             if HISTORY:
                 copy_state(x, v, xc, vc)
-                h_next = start_history(history, stride, signals, xc, vc, nf, e1_prev, host)
+                h_next = start_history(history, stride, signals, xc, vc, nf, e1_prev, mass, kind, host, rows)
             pending = limits.shape[0] if PASSAGES else 0  # limits not passed yet
             next_sample = 0
         sampling = SAMPLES and samples.shape[0] > 0
@@ -219,7 +223,8 @@ def step_loop(plug: Step, spec: Spec):
                 opening(own, x, v, inv_mass, acc, bodies, absorbers)
                 floor_peaks(x, nf, acc, x_max, drift_max, acc_max)
                 if DECLARED:
-                    fold_declared(reductions, out, declared_at, x, v, nf, e1_max, host, True)
+                    e_abs = absorber_energy(x, v, mass, nf, kind, host, rows) if SHARE else 0.0
+                    fold_declared(reductions, out, declared_at, x, v, nf, e1_max, e_abs, host, True)
                 if PASSAGES and pending > 0:
                     pending = first_passages(limits, i * dt, nf, x_max, drift_max, acc_max, inv_mass,
                                              FORCE_PEAKS,
@@ -260,9 +265,10 @@ def step_loop(plug: Step, spec: Spec):
                                                      FORCE_PEAKS, e1_max, out)
                     e1_prev = e1
                 if DECLARED and inside:
+                    e_abs = absorber_energy(x, v, mass, nf, kind, host, rows) if SHARE else 0.0
                     fold_declared(reductions, out, declared_at, x, v, nf,
-                                  primary_energy(mass, storey_k, x, v, nf) if INTEGRATES else e1_prev, host,
-                                  False)
+                                  primary_energy(mass, storey_k, x, v, nf) if INTEGRATES else e1_prev, e_abs,
+                                  host, False)
                 if SAMPLES and sampling:
                     next_sample = record_sample(samples, next_sample, sample_from, period, i * dt, dt, xp,
                                                 vp, x,
@@ -272,7 +278,7 @@ def step_loop(plug: Step, spec: Spec):
                 copy_state(x, v, xc, vc)
                 h_next = record_history(history, stride, h_next, signals, xc, vc, nf,
                                         primary_energy(mass, storey_k, x, v, nf) if INTEGRATES else e1_prev,
-                                        host)
+                                        mass, kind, host, rows)
         if carry.shape[0] > 0:  # the path's state for its next stretch, raw
             save_accounts(carry, work, d_primary, d_absorber, e_sum, e1_max, loss, n_left, n_right,
                           contact_time, peak_force)
