@@ -402,11 +402,12 @@ class PointState:
             n_stop = _stopping_count(np.concatenate(self.edm), start, target)
             if n_stop is not None:
                 self.stop, keep = n_stop, n_stop - start
-        ok = (frame["status"] == "ok").to_numpy()[:keep]
-        if self.tree is not None:
-            self.tree.add(paths[:, :, :keep], ok)
-        if self.spectrum is not None:
-            self.spectrum.add(estimates[:, :, :keep][:, :, ok])
+        if self.tree is not None or self.spectrum is not None:
+            ok = (frame["status"] == "ok").to_numpy()[:keep]
+            if self.tree is not None:
+                self.tree.add(paths[:, :, :keep], ok)
+            if self.spectrum is not None:
+                self.spectrum.add(estimates[:, :, :keep][:, :, ok])
         self.folded += 1
 
     def to_arrays(self) -> dict[str, np.ndarray]:

@@ -73,11 +73,12 @@ def spec_of(scene, gpu: bool = False, record: Record = Record()) -> Spec:
                 events=record.events, declared=record.declared, share=record.share)
 
 
-def kernel_for(scene, gpu: bool = False, record: Record = Record()):
+def kernel_for(scene, gpu: bool = False, record: Record | None = None):
     """The compiled loop for a scene's scheme and structure: the loop driver around the
     scheme's step (``driver.step_loop``; ``gpu``: the loop the cuda backend compiles), recording
-    what ``record`` asks (``outputs.Record``)."""
-    spec = spec_of(scene, gpu, record)
+    what ``record`` asks (``outputs.Record``; default: what a run of the scene without history
+    rows or event log records, ``Record.of(scene)``)."""
+    spec = spec_of(scene, gpu, Record.of(scene) if record is None else record)
     return step_loop(step_of(SCHEMES[scene.scheme].step)(spec), spec)
 
 
