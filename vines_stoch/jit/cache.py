@@ -30,8 +30,9 @@ from filelock import FileLock
 #: The package's folder.
 PACKAGE = Path(__file__).resolve().parent.parent
 #: The sources compiled functions are built from: the formulas, the step loops and what they
-#: inline, and the compiler settings.
-SOURCES = ("physics", "jit", "outputs.py", "kernels")
+#: inline, the compiler settings, and the modules whose constants they read (the signal and
+#: reduction codes of ``signals.py``, the stream purposes of ``streams.py``).
+SOURCES = ("physics", "jit", "outputs.py", "kernels", "signals.py", "streams.py")
 
 
 def files_digest(root: Path, files: list[Path]) -> str:
