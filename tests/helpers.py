@@ -22,7 +22,7 @@ from vines_stoch.validation.scenes import text as toml_text
 ROOT = Path(__file__).resolve().parents[1]
 
 __all__ = ["ROOT", "changed", "cli", "example_data", "raw_metrics", "scene_from",
-           "sdof_fragility_run", "study_from", "toml_text",
+           "run_interrupted", "sdof_fragility_run", "study_from", "toml_text",
            "two_dof_data"]
 
 
@@ -118,3 +118,25 @@ roof = {{ metric = "x1_max", value = 0.25 }}
                     str(samples))
     assert code == 0, err
     return out
+
+
+def run_interrupted(monkeypatch: Any, scenario: Any, folder: Path, after: int, **options: Any) -> None:
+    """Run ``scenario`` into ``folder`` (``vines_stoch.run``, a checkpoint after every fold)
+    until its ``after``-th table write, which raises ``KeyboardInterrupt`` as Ctrl-C would:
+    the folder a resume starts from."""
+    import pytest
+
+    from vines_stoch import ensemble, run
+
+    writes, real_write = [], ensemble.write_table
+
+    def interrupting(frame, path, meta=None):
+        if len(writes) == after:
+            raise KeyboardInterrupt
+        writes.append(path)
+        real_write(frame, path, meta)
+
+    monkeypatch.setattr(ensemble, "write_table", interrupting)
+    with pytest.raises(KeyboardInterrupt):
+        run(scenario, folder, checkpoint_seconds=0.0, **options)
+    monkeypatch.setattr(ensemble, "write_table", real_write)

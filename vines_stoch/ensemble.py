@@ -794,8 +794,9 @@ def _run(study: Study, directory: Path | None, o: _Options) -> Results | None:
         if o.shard is not None:
             return None
         meta = provenance(study.text, study.source, seed, where, o.backend, key)
+        chosen = _chosen_paths(study, the_plan, states, chunk_runner) if base.output.paths else None
         return _consolidate(study, the_plan, states, directory, frames, meta, grids, spec,
-                            kept_paths if o.paths else None, signals, views)
+                            kept_paths if o.paths else None, signals, views, chosen)
     except KeyboardInterrupt as exc:
         if directory is None:
             raise
@@ -806,10 +807,12 @@ def _consolidate(study: Study, the_plan: Plan, states: list[PointState], directo
                  frames: dict[tuple[int, int, int], pd.DataFrame], meta: dict[str, str],
                  grids: list[tuple[int, int] | None], spec: History | None,
                  kept_paths: dict[tuple[int, int, int], np.ndarray] | None,
-                 signals: tuple[str, ...], views: list[_View | None]) -> Results:
+                 signals: tuple[str, ...], views: list[_View | None], chosen: pd.DataFrame | None) -> Results:
     """Gather the chunks kept (up to each point's stopping count: from ``frames`` in memory, else
     the folder's parts) into the result tables, and the points' history statistics and spectra
-    (``views``: their Welch segments), written into ``directory`` where there is one."""
+    (``views``: their Welch segments), written into ``directory`` where there is one, with the
+    paths of the realisations ``[output] paths`` chooses (``chosen``, ``_chosen_paths``; the
+    results' ``paths`` unless ``kept_paths`` holds every realisation's)."""
     kept, path_rows = [], []
     for state in states:
         for c in state.chunks:
@@ -846,7 +849,7 @@ def _consolidate(study: Study, the_plan: Plan, states: list[PointState], directo
         spectra_df = by_point([state.spectrum.frame(psd.frequencies(view.steps, view.dt),
                                                     tuple(spectra.signals))
                                for state, view in zip(states, views)])
-    paths_df = pd.concat(path_rows, ignore_index=True) if kept_paths is not None else None
+    paths_df = pd.concat(path_rows, ignore_index=True) if kept_paths is not None else chosen
     if directory is None:
         history_df = None if history_df is None else _in_file_types(history_df)
         events_df = None if events_df is None else _in_file_types(events_df)
@@ -865,8 +868,12 @@ def _consolidate(study: Study, the_plan: Plan, states: list[PointState], directo
         write_table(poincare_df, directory / "poincare.parquet", meta)
     if spectra_df is not None:
         write_table(spectra_df, directory / "spectra.parquet", meta)
+    if chosen is not None:
+        write_table(chosen, directory / "paths.parquet", meta)
     results = read_results(directory)
-    results.paths, results.study = paths_df, study
+    results.study = study
+    if kept_paths is not None:
+        results.paths = paths_df
     return results
 
 
@@ -884,6 +891,24 @@ def _in_file_types(frame: pd.DataFrame) -> pd.DataFrame:
         back = pa.Table.from_pandas(frame[other], preserve_index=False).to_pandas()
         frame = frame.assign(**{c: back[c] for c in other})  # (in place of each, order kept)
     return frame
+
+
+def _chosen_paths(study: Study, the_plan: Plan, states: list[PointState], runner) -> pd.DataFrame:
+    """paths.parquet's rows (``[output] paths``): the realisations it chooses of every sweep
+    point (those the point kept: ``target_sem`` may stop it earlier) run again by ``runner``
+    (``run_chunk`` or ``run_chunk_cuda``), on the same streams as in the ensemble, so the same
+    paths, with its signals on its grid (``_path_rows``)."""
+    base, chosen = study.base, study.base.output.paths
+    signals = tuple(chosen.signals)
+    rows = []
+    for p, (scene, state) in enumerate(zip(the_plan.scenes, states)):
+        count = state.stop if state.stop is not None else state.chunks[-1][2]
+        grid = hist.grid(scene.n_steps, chosen.points)
+        for r in (r for r in chosen.realizations if r < count):
+            _, paths = runner(scene, base.ensemble.seed, p, r, r + 1, grid, study if base.uncertain else None,
+                              base.ensemble.common_random_numbers, signals)
+            rows.append(_path_rows(study, scene, grid, (p, r, r + 1), paths, signals))
+    return _in_file_types(pd.concat(rows, ignore_index=True))
 
 
 def _path_rows(study: Study, scene: Scene, grid: tuple[int, int], c: tuple[int, int, int],

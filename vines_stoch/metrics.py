@@ -19,14 +19,14 @@ from .outputs import (
     passage_slots,
 )
 from .scene import Scene
-from .signals import METRIC_NAME, REDUCE_MEAN, REDUCE_RMS, REDUCTION_SLOTS, SHARE_METRICS
+from .signals import METRIC_NAME, REDUCE_MEAN, REDUCE_RMS, REDUCTION_SLOTS
 
 #: Metric columns of realizations.parquet, in order (then the per-floor columns of
 #: ``floor_metrics``); each gets summary statistics.
 METRICS = (
     "input_energy", "edm", "energy_integral", "e1_max", "x1_max", "x1_rms", "impacts",
     "energy_residual", "primary_dissipation", "absorber_dissipation", "impact_loss",
-    "impacts_left", "impacts_right", "peak_force", "contact_time", *SHARE_METRICS,
+    "impacts_left", "impacts_right", "peak_force", "contact_time",
 )
 
 #: Longest period (in forcing periods) the regime detection looks for.
@@ -152,8 +152,6 @@ def finish_table(raw: np.ndarray, scene: Scene | Sequence[Scene],
             "impacts_right": counts[2].astype(np.int64),
             "peak_force": slot["peak_force"],
             "contact_time": slot["contact_time"],
-            # (the absorbers' energy share: 0 without absorbers, else folded below)
-            **{name: np.zeros(n) for name in SHARE_METRICS},
         }
         nf = scene.n_floors
         for k in range(nf):
@@ -171,9 +169,7 @@ def finish_table(raw: np.ndarray, scene: Scene | Sequence[Scene],
         columns[f"first_passage_{name}"] = slots[passages + limit]
     declared = declared_slots(nf, len(scene.limit_names))
     dt = scene.dt if scenes is None else np.array([s.dt for s in scenes])
-    shares = scene.reductions.shape[0] - len(scene.metric_names)  # (SHARE_METRICS' rows, with absorbers)
-    folded_names = scene.metric_names + tuple(SHARE_METRICS)[:shares]
-    for r, name in enumerate(folded_names):  # (``signals.declare_metrics``, ``SHARE_METRICS``)
+    for r, name in enumerate(scene.metric_names):  # (``signals.declare_metrics``)
         folded, last = slots[declared + REDUCTION_SLOTS * r], slots[declared + REDUCTION_SLOTS * r + 1]
         op = scene.reductions[r, 2]
         with np.errstate(invalid="ignore", over="ignore", divide="ignore"):

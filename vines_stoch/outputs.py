@@ -81,7 +81,7 @@ class Record(NamedTuple):
     """What a run records beyond the built-in metrics, the step loop's compile-time flags: the
     first passages of limits (the scene has limits), history rows (of declared signals,
     ``signals.declare``), the event log, the declared metrics (``signals.declare_metrics``) and
-    whether one of them folds the absorbers' energy share (``signals.SHARE_METRICS``).
+    whether one of them folds the absorbers' energy share (the signal ``share``).
     The Poincare samples are the scheme's (``driver.Step``).
     A loop compiles the code of a record only when it is asked for."""
 

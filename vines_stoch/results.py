@@ -66,9 +66,10 @@ def check_whole(name: str, value: object, low: int, high: int | None = None,
 class Results:
     """The tables of a finished run, as pandas DataFrames: ``realizations`` (one row per
     realisation), ``summary`` (one row per sweep point), ``history`` (the ensemble statistics of
-    time histories, None unless ``[simulation.history]`` asks for them), ``paths`` (every
-    realisation's time histories, None unless ``run(..., paths=True)`` asked for them; never
-    stored in a folder), ``metadata`` (the provenance every result file carries),
+    time histories, None unless ``[simulation.history]`` asks for them), ``paths`` (time
+    histories: every realisation's where ``run(..., paths=True)`` asked for them, in memory
+    only; else those of the realisations ``[output] paths`` chooses, paths.parquet; else None),
+    ``metadata`` (the provenance every result file carries),
     ``directory`` (the folder, None for a run in memory), ``events`` (the event logs of
     events.parquet, None unless ``[output] events`` asks for them) and ``poincare`` (the
     Poincare samples of poincare.parquet, None unless ``[output] poincare`` asks for them) and
@@ -109,8 +110,8 @@ class Results:
 
 def read_results(directory: str | Path) -> Results:
     """The results of a finished run in ``directory`` (after ``store.check_folder``: never the
-    results of two runs), ``history``, ``events``, ``poincare`` and ``spectra`` where the run
-    wrote them."""
+    results of two runs), ``history``, ``paths``, ``events``, ``poincare`` and ``spectra`` where
+    the run wrote them."""
     from .store import check_folder, read_metadata
 
     directory = Path(directory)
@@ -119,7 +120,7 @@ def read_results(directory: str | Path) -> Results:
         path = directory / f"{name}.parquet"
         return pd.read_parquet(path) if path.is_file() else None
 
-    return Results(table("realizations"), table("summary"), table("history"),
+    return Results(table("realizations"), table("summary"), table("history"), table("paths"),
                    metadata=read_metadata(directory / "summary.parquet"), directory=directory,
                    events=table("events"), poincare=table("poincare"), spectra=table("spectra"))
 

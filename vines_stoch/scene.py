@@ -50,7 +50,7 @@ from .scenario import (
     WhiteNoiseLoad,
     WindLoad,
 )
-from .signals import SHARE_METRICS, SIGNAL_SHARE, declare_metrics
+from .signals import declare_metrics
 
 
 @dataclass(frozen=True)
@@ -86,8 +86,7 @@ class Scene:
     limits: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))  # (n_limits, 3) rows: limit_row
     limit_names: tuple[str, ...] = ()      # the limits' names, in the rows' order
     reductions: np.ndarray = field(default_factory=lambda: np.zeros((0, 3), np.int64))  # declared metrics:
-    # rows (code, index, reduction) of signals.declare_metrics, then with absorbers those of
-    # signals.SHARE_METRICS, after the limits in the metric vector
+    # rows (code, index, reduction) of signals.declare_metrics, after the limits in the metric vector
     metric_names: tuple[str, ...] = ()     # the declared metrics' names, in the rows' order
     event_rows: int = 0       # rows of a realisation's event log ([output] events; 0: none kept)
     poincare: bool = False    # Poincare samples into poincare.parquet ([output] poincare)
@@ -277,9 +276,7 @@ def build_scene(scenario: Scenario) -> Scene:
         limits=np.array([limit_row(limit.metric, limit.value, nf) for limit in scenario.limits.values()],
                         dtype=float).reshape(-1, 3),
         limit_names=tuple(scenario.limits),
-        reductions=np.vstack([declare_metrics(scenario.output.metrics, nf, len(absorbers))]
-                             + [[(SIGNAL_SHARE, 0, op)] for op in SHARE_METRICS.values() if absorbers]
-                             ).astype(np.int64),
+        reductions=declare_metrics(scenario.output.metrics, nf, len(absorbers)),
         metric_names=tuple(scenario.output.metrics),
         event_rows=scenario.output.events,
         poincare=scenario.output.poincare,

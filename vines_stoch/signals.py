@@ -71,15 +71,15 @@ def declare(names: Iterable[str], n_floors: int, n_absorbers: int = 0) -> np.nda
 #: trapezoid rule over the step ends, as ``x1_rms``).
 REDUCTIONS = {"peak": 0, "max": 1, "min": 2, "mean": 3, "rms": 4}
 REDUCE_PEAK, REDUCE_MAX, REDUCE_MIN, REDUCE_MEAN, REDUCE_RMS = range(len(REDUCTIONS))
-#: The built-in metrics of a scene with absorbers that fold its ``share`` signal over the
-#: metrics window (MODEL.md section 4; Wei et al. eq. 21), after the declared metrics.
-SHARE_METRICS = {"energy_share_mean": REDUCE_MEAN, "energy_share_max": REDUCE_MAX}
+#: The names of the absorbers' energy share over the metrics window (MODEL.md section 4; Wei et
+#: al. eq. 21) as a declared metric: the reductions of the signal ``share`` they stand for.
+SHARE_METRICS = {"energy_share_mean": "mean", "energy_share_max": "max"}
 #: Raw metric slots a declared metric takes: what it folds, and the signal at the last step end.
 REDUCTION_SLOTS = 2
 #: The names of declared metrics: ``<signal>_<reduction>``.
 METRIC_NAME = re.compile(rf"(x1|e1|share|({'|'.join(stem for stem, (_, n) in SIGNALS.items() if n)})"
                          rf"_[1-9][0-9]*)"
-                         rf"_({'|'.join(REDUCTIONS)})")
+                         rf"_({'|'.join(REDUCTIONS)})|{'|'.join(SHARE_METRICS)}")
 #: The built-in metric columns (``metrics.METRICS``) that read as a declared metric's name: a
 #: declared metric may not take them (``tests/unit/statistics`` checks the list).
 BUILT_IN = ("x1_max", "x1_rms", "e1_max")
@@ -89,12 +89,14 @@ def declare_metrics(names: Iterable[str], n_floors: int, n_absorbers: int = 0,
                     taken: Iterable[str] = BUILT_IN) -> np.ndarray:
     """The rows ``(code, index, reduction)`` of the declared metrics ``names``, each
     ``<signal>_<reduction>`` (a signal of ``signal_names``, a reduction of ``REDUCTIONS``:
-    ``stroke_1_peak``, ``va_2_rms``, ``e1_mean``), that the loop driver folds in at every step's
-    end.  A name that is none, or one of ``taken`` (the built-in metric columns: ``BUILT_IN``),
-    is a ``ValueError`` saying what is allowed."""
+    ``stroke_1_peak``, ``va_2_rms``, ``e1_mean``; or one of ``SHARE_METRICS``), that the loop
+    driver folds in at every step's end.  A name that is none, or one of ``taken`` (the built-in
+    metric columns: ``BUILT_IN``), is a ``ValueError`` saying what is allowed."""
     rows = []
     for name in names:
         signal, _, reduction = name.rpartition("_")
+        if name in SHARE_METRICS:
+            signal, reduction = "share", SHARE_METRICS[name]
         if name in taken:
             raise ValueError(f"metrics: {name!r} is a built-in metric already")
         if reduction not in REDUCTIONS or not signal:

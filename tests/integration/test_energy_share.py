@@ -1,6 +1,6 @@
 """The absorbers' energy share ``E_abs / (E1 + E_abs)`` (MODEL.md section 4, Wei et al. eq. 21):
-the signal ``share`` and the metrics ``energy_share_mean``, ``energy_share_max`` on a linear
-two-body free vibration against the definition evaluated on its closed-form motion."""
+the signal ``share`` and the declared metrics ``energy_share_mean``, ``energy_share_max`` on a
+linear two-body free vibration against the definition evaluated on its closed-form motion."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from scipy.linalg import expm
 
-from vines_stoch import run
+from vines_stoch import ScenarioError, run
 
 M1, K1, M2, K2 = 1.0, 1.0, 0.1, 0.12   # an undamped primary and a linear absorber, detuned
 DT, T, T0 = 0.005, 40.0, 10.0           # rk4 steps, duration, the metrics window's opening
@@ -17,7 +17,8 @@ DATA = {"name": "share", "primary": {"mass": M1, "stiffness": K1, "damping": 0.0
         "absorbers": [{"type": "linear", "mass": M2, "stiffness": K2, "damping": 0.0}],
         "loads": [{"type": "initial", "displacement": [1.0, 0.0]}],
         "simulation": {"duration": T, "dt": DT, "metrics_from": T0, "scheme": "rk4",
-                       "history": {"points": 801, "signals": ["share", "e1"]}}}
+                       "history": {"points": 801, "signals": ["share", "e1"]}},
+        "output": {"metrics": ["energy_share_mean", "energy_share_max", "share_peak"]}}
 
 
 def closed_form(t: np.ndarray) -> np.ndarray:
@@ -46,13 +47,18 @@ def test_share_signal_and_metrics_against_the_closed_form():
     trapezoid = (exact.sum() - 0.5 * (exact[0] + exact[-1])) * DT / (T - T0)
     assert row["energy_share_mean"] == pytest.approx(trapezoid, abs=1e-8)
     assert row["energy_share_max"] == pytest.approx(exact.max(), abs=1e-8)
+    assert row["share_peak"] == row["energy_share_max"]  # (the share is never negative)
+    assert {"energy_share_mean_mean", "energy_share_max_q95"} <= set(results.summary.columns)
     assert 0.05 < row["energy_share_mean"] < row["energy_share_max"] < 1.0  # (energy goes back and forth)
 
 
-def test_a_bare_structure_shares_nothing_and_pays_nothing():
+def test_the_share_is_computed_where_asked_and_only_with_absorbers():
+    # a scene that does not ask pays nothing: no column, and its loop does not compute it
+    plain = run({**DATA, "output": {}}).realizations
+    assert not any(c.startswith("energy_share") for c in plain.columns)
     bare = {**DATA, "absorbers": [], "loads": [{"type": "initial", "displacement": [1.0]}],
             "simulation": {**DATA["simulation"], "history": {"points": 11}}}
-    row = run(bare).realizations.iloc[0]
-    assert row["energy_share_mean"] == 0.0 and row["energy_share_max"] == 0.0
-    with pytest.raises(Exception, match="'share' is not a signal"):
-        run({**bare, "simulation": {**bare["simulation"], "history": {"signals": ["share"]}}})
+    with pytest.raises(ScenarioError, match=r"output\.metrics.*'share' is not a signal"):
+        run(bare)
+    with pytest.raises(ScenarioError, match="'share' is not a signal"):
+        run({**bare, "output": {}, "simulation": {**bare["simulation"], "history": {"signals": ["share"]}}})

@@ -15,7 +15,7 @@ import pandas as pd
 import pytest
 from scipy.stats import t as student_t
 
-from tests.helpers import cli, study_from, toml_text, two_dof_data
+from tests.helpers import cli, run_interrupted, study_from, toml_text, two_dof_data
 from vines_stoch import ensemble, history, run
 from vines_stoch.kernels import DEFAULT_SIGNALS, simulate
 from vines_stoch.scene import build_scene
@@ -133,19 +133,7 @@ def test_interrupted_run_resumes_history_from_its_checkpoint(tmp_path, monkeypat
     reference = run(study, tmp_path / "ref", workers=2)
     ref_history = pd.read_parquet(tmp_path / "ref" / "history.parquet")
 
-    writes = []
-    real_write = ensemble.write_table
-
-    def interrupt_after_ten(frame, path, meta=None):
-        if len(writes) == 10:
-            raise KeyboardInterrupt
-        writes.append(path)
-        real_write(frame, path, meta)
-
-    monkeypatch.setattr(ensemble, "write_table", interrupt_after_ten)
-    with pytest.raises(KeyboardInterrupt):
-        run(study, tmp_path / "cut", workers=2, checkpoint_seconds=0.0)
-    monkeypatch.setattr(ensemble, "write_table", real_write)
+    run_interrupted(monkeypatch, study, tmp_path / "cut", 10, workers=2)
     assert (tmp_path / "cut" / "parts" / "history.npz").exists()
     assert not (tmp_path / "cut" / "realizations.parquet").exists()
     resumed = run(study, tmp_path / "cut", workers=2, resume=True)

@@ -11,6 +11,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from tests.helpers import run_interrupted
 from vines_stoch import ScenarioError, read_results, run
 from vines_stoch.reports import report
 
@@ -98,25 +99,12 @@ def test_a_signal_that_is_none_and_a_segment_past_the_window_are_refused():
 def test_an_interrupted_run_resumes_its_spectra_from_the_checkpoint(tmp_path, monkeypatch):
     """The spectra's running sums are checkpointed as the history's are: an interruption after
     some chunks and a resume give the spectra of an uninterrupted run, bit for bit."""
-    from vines_stoch import ensemble
-
     data = oscillator(CASES["white"][0], realizations=12)
     data["simulation"] = {**data["simulation"], "duration": 200.0}
     data["output"] = {"spectra": {"signals": ["x1"]}}
     data["ensemble"] = {**data["ensemble"], "chunk": 2}
     reference = run(data, tmp_path / "ref", workers=2)
-    writes, real_write = [], ensemble.write_table
-
-    def interrupt_after_three(frame, path, meta=None):
-        if len(writes) == 3:
-            raise KeyboardInterrupt
-        writes.append(path)
-        real_write(frame, path, meta)
-
-    monkeypatch.setattr(ensemble, "write_table", interrupt_after_three)
-    with pytest.raises(KeyboardInterrupt):
-        run(data, tmp_path / "cut", workers=2, checkpoint_seconds=0.0)
-    monkeypatch.setattr(ensemble, "write_table", real_write)
+    run_interrupted(monkeypatch, data, tmp_path / "cut", 3, workers=2)
     assert not (tmp_path / "cut" / "spectra.parquet").exists()
     resumed = run(data, tmp_path / "cut", workers=2, resume=True)
     pd.testing.assert_frame_equal(resumed.spectra, reference.spectra, check_exact=True)

@@ -119,6 +119,15 @@ class Scenario(_Model):
                 raise FieldError(f"limits.{name}.metric", limit.metric,
                                  "must be a peak metric: x1_max, e1_max, or x_max_k, drift_max_k, acc_max_k "
                                  f"with k in [1, {n}]")
+        paths = self.output.paths
+        if paths is not None:
+            self._check_signals("output.paths.signals", paths.signals)
+            count = self.ensemble.realizations if self.is_random else 1
+            if max(paths.realizations) >= count:
+                raise FieldError("output.paths.realizations", paths.realizations,
+                                 f"each must be in [0, {count - 1}]: the realisations of a sweep point "
+                                 + ("(ensemble.realizations)" if self.is_random else
+                                    "(a scene without noise or uncertain parameters runs one)"))
         spectra = self.output.spectra
         if spectra is not None:
             self._check_signals("output.spectra.signals", spectra.signals)

@@ -167,6 +167,24 @@ class Spectra(_Model):
         return self
 
 
+class Paths(_Model):
+    """Time histories of chosen realisations into paths.parquet: the signals ``signals`` on a
+    grid of at least ``points`` rows over the whole path (every ``stride`` steps, as the
+    history's), for the realisations ``realizations`` (indices from 0) of every sweep point."""
+
+    realizations: Annotated[list[Annotated[int, Field(ge=0)]], Field(min_length=1, max_length=1000)] = [0]
+    signals: Annotated[list[str], Field(min_length=1)] = ["x1", "e1"]
+    points: Annotated[int, Field(ge=2, le=1_000_000)] = 1000
+
+    @model_validator(mode="after")
+    def _distinct(self) -> Paths:
+        for key in ("realizations", "signals"):
+            values = getattr(self, key)
+            if len(set(values)) != len(values):
+                raise FieldError(key, values, "must not repeat a value")
+        return self
+
+
 #: Most rows of a realisation's event log (``[output] events``).
 MAX_EVENT_ROWS = 1_000_000
 
@@ -176,10 +194,12 @@ class Output(_Model):
     built-in ones: ``metrics`` names each ``<signal>_<reduction>``, a signal of the history's
     (``x1``, ``e1``, ``x_k``, ``v_k``, ``drift_k``, ``xa_j``, ``va_j``, ``stroke_j``, ``share``) reduced
     over the metrics window by ``peak`` (largest absolute value), ``max``, ``min``, ``mean`` or
-    ``rms``: ``stroke_1_peak`` is absorber 1's largest stroke.  Each is a column of
+    ``rms``: ``stroke_1_peak`` is absorber 1's largest stroke; ``energy_share_mean`` and
+    ``energy_share_max`` are the absorbers' energy share's mean and peak.  Each is a column of
     realizations.parquet with its statistics in summary.parquet.  ``events``: the impacts and
     Hertz contact onsets of each realisation in the metrics window, up to this many, into
     events.parquet (time, absorber, wall, relative velocity, energy lost; 0: none kept).
+    ``paths``: time histories of chosen realisations into paths.parquet (``Paths``).
     ``poincare``: the state of every body once a forcing period (the Poincare samples the
     regimes are read from) into poincare.parquet.  ``spectra``: the ensemble-averaged power
     spectral densities of signals over the metrics window into spectra.parquet (``Spectra``)."""
@@ -189,6 +209,7 @@ class Output(_Model):
     events: Annotated[int, Field(ge=0, le=MAX_EVENT_ROWS)] = 0
     poincare: bool = False
     spectra: Spectra | None = None
+    paths: Paths | None = None
 
     @model_validator(mode="after")
     def _distinct(self) -> Output:

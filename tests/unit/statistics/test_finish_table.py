@@ -38,11 +38,9 @@ from vines_stoch.outputs import (
     STATUS_DIVERGED,
     X_MAX_K,
     X_SQ_INT_K,
-    declared_slots,
     passage_slots,
 )
 from vines_stoch.scene import build_scene
-from vines_stoch.signals import REDUCTION_SLOTS
 from vines_stoch.streams import streams
 
 _S = {name: i for i, name in enumerate(SLOTS)}
@@ -76,13 +74,6 @@ def reference_row(raw: np.ndarray, scene, samples: np.ndarray | None = None) -> 
         "contact_time": g(_S["contact_time"]),
     }
     nf = scene.n_floors
-    # the absorbers' energy share: its mean by the trapezoid rule and its peak, folded after the
-    # declared metrics (0 for a bare structure)
-    shared = declared_slots(nf, len(scene.limit_names)) + REDUCTION_SLOTS * len(scene.metric_names)
-    absorbers = scene.reductions.shape[0] > len(scene.metric_names)
-    row["energy_share_mean"] = ((g(shared) - 0.5 * g(shared + 1)) * scene.dt / scene.window if absorbers
-                                else 0.0)
-    row["energy_share_max"] = g(shared + REDUCTION_SLOTS) if absorbers else 0.0
     for k in range(nf):
         slot = len(SLOTS) + k
         row[f"x_max_{k + 1}"] = g(slot + X_MAX_K * nf)
@@ -308,7 +299,7 @@ def test_one_scene_a_row_reads_each_window_and_period():
 
 def test_refusals_as_the_per_row_formulas():
     scene = scene_from(NOISY)
-    raw = np.zeros((2, declared_slots(scene.n_floors, 0) + REDUCTION_SLOTS * scene.reductions.shape[0]))
+    raw = np.zeros((2, passage_slots(scene.n_floors)))
     with pytest.raises(ValueError, match="2-D"):
         finish_table(raw[0], scene)
     raw[1, _S["impacts"]] = math.nan
