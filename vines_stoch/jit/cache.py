@@ -20,6 +20,7 @@ import importlib
 import inspect
 import os
 import types
+import warnings
 from functools import cache
 from pathlib import Path
 from typing import Any
@@ -184,12 +185,29 @@ def _stable_cache(gpu: bool) -> type:
     class StableCache(base):
         """numba's cache whose index key (a hash of the function's bytecode and a pickle of its
         closure's contents) reads, in place of the closure's contents, their descriptions
-        ``cells``."""
+        ``cells``; its entries saved one process at a time (``save_overload``)."""
 
         def __init__(self, py_func: Any, cells: list[str]) -> None:
             super().__init__(py_func)
             self._py_func = types.FunctionType(py_func.__code__, {}, py_func.__name__, None,
                                                tuple(types.CellType(c) for c in cells))
+
+        def save_overload(self, sig: Any, data: Any) -> None:
+            """numba's save, under a lock on the function's index file.  Every loop of one
+            function (every structure's step loop, every chunk loop) has its entry in one
+            index, and numba names a new entry's data file after the entries of the index it
+            has just read: two processes that compile two loops at once could read the same
+            index and pick the same name, the later write winning, so that the other loop's
+            entry would load a loop of another structure (seen: parallel NES scenes run
+            without their impacts, bare oscillators without their load)."""
+            index = getattr(getattr(self, "_cache_file", None), "_index_path", None)
+            if index is None:  # (another numba's internals: not saved, rather than saved unlocked)
+                warnings.warn("vines_stoch.jit.cache: this numba's cache keeps no _cache_file._index_path "
+                              "to lock; a step loop compiled now is not saved on disk (saved unlocked, "
+                              "two processes could mix two loops' entries)", RuntimeWarning, stacklevel=2)
+                return
+            with FileLock(f"{index}.lock"):
+                super().save_overload(sig, data)
 
     return StableCache
 

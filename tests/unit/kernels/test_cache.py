@@ -178,3 +178,32 @@ def test_a_step_loop_compiled_by_one_process_is_loaded_by_the_next(tmp_path):
         assert done.returncode == 0, done.stderr[-2000:]
         runs.append(json.loads(done.stdout.splitlines()[-1]))
     assert runs == [{"misses": 1, "hits": 0}, {"misses": 0, "hits": 1}]
+
+
+def test_the_loops_of_one_function_are_saved_one_process_at_a_time():
+    """numba names a new cache entry's data file after the index it has just read: two processes
+    saving two loops of one function at once could pick one name (the later write winning, the
+    other entry loading the wrong loop).  A stable-keyed cache saves under a lock on the index."""
+    from filelock import FileLock, Timeout
+    from numba import njit
+
+    shift = 3.0
+
+    @njit(cache=True)
+    def shifted(x):
+        return x + shift
+
+    stable = cache._stable_cache(False)(shifted.py_func, ["3.0"])
+    index = stable._cache_file._index_path
+    held = []
+
+    def save(sig, data):
+        try:
+            FileLock(f"{index}.lock", timeout=0).acquire()
+            held.append(False)
+        except Timeout:
+            held.append(True)
+
+    stable._save_overload = save
+    stable.save_overload(None, None)
+    assert held == [True]
