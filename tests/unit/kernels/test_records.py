@@ -104,7 +104,7 @@ def _fresh_ir(scene, history: np.ndarray | None) -> str:
     fresh = step_loop.__wrapped__(step_of(SCHEMES[scene.scheme].step)(spec), spec)
     fresh._cache = NullCache()
     compile_once(fresh, path.args)
-    return next(iter(fresh.overloads.values())).library.get_llvm_str()
+    return next(iter(fresh.inspect_llvm().values()))
 
 
 def test_a_loop_holds_only_what_its_run_records():
