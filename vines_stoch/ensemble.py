@@ -211,16 +211,25 @@ def _poincare(realizations: pd.DataFrame, sweep_keys: list[str]) -> tuple[pd.Dat
     period's index: the sample is at ``t = period T``), ``t``, then the state
     (``poincare_columns``); samples the path did not reach (a window shorter than the samples
     it keeps) are left out."""
-    listed = [c for c in realizations.columns if c.startswith("poincare_")]
-    counts = realizations["poincare_t"].map(len).to_numpy()
-    ids = ["point", *sweep_keys, "realization"]
-    rows = pd.DataFrame({key: np.repeat(realizations[key].to_numpy(), counts) for key in ids})
-    for c in listed:
-        rows[c.removeprefix("poincare_")] = np.concatenate(
-            [np.asarray(v, dtype=float) for v in realizations[c]] or [[]])
+    rest, rows = _unlisted(realizations, sweep_keys, "poincare_")
     rows = rows[np.isfinite(rows["x_1"].to_numpy())].reset_index(drop=True)
     for c in ("period", "impacts_left", "impacts_right"):
         rows[c] = rows[c].astype(np.int64)
+    return rest, rows
+
+
+def _unlisted(realizations: pd.DataFrame, sweep_keys: list[str],
+              prefix: str) -> tuple[pd.DataFrame, pd.DataFrame]:
+    """The realisations table without its list columns ``<prefix><name>`` (``_table``: a list a
+    realisation, the columns' lists of one length in a row), and their entries as rows: point,
+    the swept values, realisation, then each list column (floats, named ``<name>``)."""
+    listed = [c for c in realizations.columns if c.startswith(prefix)]
+    counts = realizations[listed[0]].map(len).to_numpy()
+    ids = ["point", *sweep_keys, "realization"]
+    rows = pd.DataFrame({key: np.repeat(realizations[key].to_numpy(), counts) for key in ids})
+    for c in listed:
+        rows[c.removeprefix(prefix)] = np.concatenate([np.asarray(v, dtype=float) for v in realizations[c]]
+                                                      or [[]])
     return realizations.drop(columns=listed), rows
 
 
@@ -229,21 +238,11 @@ def _events(realizations: pd.DataFrame, sweep_keys: list[str]) -> tuple[pd.DataF
     rows: point, the swept values, realisation, then each event's ``t``, ``absorber`` (from 1, in
     file order), ``wall`` (``"left"`` or ``"right"``), ``speed`` (the absorber's velocity relative
     to its host floor just before the event) and ``loss`` (the energy it took out)."""
-    logged = [f"event_{name}" for name in EVENT_COLUMNS]
-    counts = realizations[logged[0]].map(len).to_numpy()
-    ids = ["point", *sweep_keys, "realization"]
-    events = pd.DataFrame({key: np.repeat(realizations[key].to_numpy(), counts) for key in ids})
-
-    def joined(name: str) -> np.ndarray:
-        return np.concatenate([np.asarray(v, dtype=float) for v in realizations[f"event_{name}"]] or [[]])
-
-    events["t"] = joined("t")
-    events["absorber"] = joined("absorber").astype(np.int64) + 1
-    events["wall"] = pd.Series(["left", "right"], dtype="string").array.take(
-        (joined("side") > 0).astype(np.intp))
-    events["speed"] = joined("speed")
-    events["loss"] = joined("loss")
-    return realizations.drop(columns=logged), events
+    rest, events = _unlisted(realizations, sweep_keys, "event_")  # (t, absorber, side, speed, loss)
+    events["absorber"] = events["absorber"].astype(np.int64) + 1
+    events["side"] = pd.Series(["left", "right"], dtype="string").array.take(
+        (events["side"].to_numpy() > 0).astype(np.intp))
+    return rest, events.rename(columns={"side": "wall"})
 
 
 @dataclass
@@ -305,11 +304,11 @@ def _recorded_bytes(scene: Scene, history: History | None, spectra: Spectra | No
 @dataclass(frozen=True)
 class _View:
     """What the driver takes of a chunk's recorded paths (``recording``): the history's signals
-    (``history``: their rows) on its grid (every ``stride``-th row, ``size`` of them), and the
-    spectra's (``spectra``: their rows) from row ``first`` (the metrics window), Welch segments
-    of ``steps`` rows of ``dt``."""
+    (``history``: how many, the first rows; 0: none) on its grid (every ``stride``-th row,
+    ``size`` of them), and the spectra's (``spectra``: their rows) from row ``first`` (the
+    metrics window), Welch segments of ``steps`` rows of ``dt``."""
 
-    history: tuple[int, ...] | None
+    history: int
     stride: int
     size: int
     spectra: tuple[int, ...]
@@ -324,7 +323,7 @@ def _view(scene: Scene, history: History | None, spectra: Spectra | None) -> _Vi
         return None
     signals, _ = recording(scene, history, spectra)
     stride, size = hist.grid(scene.n_steps, history.points) if history else (1, 0)
-    return _View(tuple(range(len(history.signals))) if history else None, stride, size,
+    return _View(len(history.signals) if history else 0, stride, size,
                  tuple(signals.index(s) for s in spectra.signals), scene.i0,
                  psd.segment_steps(scene.n_steps - scene.i0 + 1, spectra.segment, scene.dt), scene.dt)
 
@@ -338,7 +337,7 @@ def _chunk(runner, view: _View | None, *args) -> tuple[pd.DataFrame, np.ndarray 
         return frame, paths, None
     window = paths[list(view.spectra), view.first:, :]
     _, estimates = psd.periodograms(np.moveaxis(window, 2, 1), view.dt, view.steps)
-    kept = None if view.history is None else paths[list(view.history), ::view.stride, :][:, :view.size]
+    kept = paths[:view.history, ::view.stride, :][:, :view.size] if view.history else None
     return frame, kept, np.moveaxis(estimates, 1, 2)
 
 
