@@ -79,6 +79,9 @@ def unavailable() -> str | None:
     if not nvvm.is_available():
         return ("NVVM, the CUDA compiler library, is not found; install the cuda extra "
                 "(pip install 'vines-stoch[cuda]')")
+    if not hasattr(np, "row_stack"):  # numba-cuda 0.30's GPU target names it when it loads
+        return (f"numba-cuda 0.30 needs numpy < 2.5 (numpy {np.__version__} has no row_stack); "
+                "pip install 'numpy<2.5', or the cuda extra, which asks for it")
     return None
 
 
