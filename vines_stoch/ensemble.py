@@ -31,6 +31,7 @@ import pandas as pd
 from . import history as hist
 from . import psd, schedulers
 from .binding import binding
+from .dynamics import refine_regimes
 from .kernels import DEFAULT_SIGNALS, kernel_for
 from .kernels.chunk import chunk_loop, ground_paths, parameter_draws, seed_keys, simulate_chunk
 from .metrics import METRICS, finish_table, ground_intensities, summarise
@@ -172,6 +173,8 @@ def _table(raw: np.ndarray, scenes: Scene | list[Scene], samples: np.ndarray, po
     logs where it keeps them (``logs``: ``(rows, log rows, EVENT_COLUMNS)``), as list columns
     ``event_<column>`` (a chunk's part holds them; ``_events`` makes them events.parquet's rows)."""
     frame = finish_table(raw, scenes, samples if samples.shape[1] else None)
+    first = scenes if isinstance(scenes, Scene) else scenes[0]
+    refine_regimes(frame, scenes, samples, every=first.lyapunov)
     front = {"point": np.full(raw.shape[0], point, dtype=np.int64),
              "realization": np.arange(start, start + raw.shape[0], dtype=np.int64),
              **{key: np.asarray(values, dtype=float) for key, values in drawn.items()}}
@@ -183,7 +186,6 @@ def _table(raw: np.ndarray, scenes: Scene | list[Scene], samples: np.ndarray, po
         kept = [log[np.isfinite(log[:, EVENT_T])] for log in logs]
         for c, name in enumerate(EVENT_COLUMNS):
             frame[f"event_{name}"] = [log[:, c] for log in kept]
-    first = scenes if isinstance(scenes, Scene) else scenes[0]
     if first.poincare and samples.shape[1]:
         names = poincare_columns(first.n_floors, first.mass.shape[0] - first.n_floors)
         each = [first] * raw.shape[0] if isinstance(scenes, Scene) else scenes

@@ -63,8 +63,8 @@ def regime(samples: np.ndarray, omega: float) -> str | None:
     """Regime ``nT,k,m`` of a periodically forced response (MODEL.md section 4) from Poincare
     samples (rows of positions, velocities, cumulative left and right impacts, one per forcing
     period): the smallest ``n <= MAX_PERIOD`` with which the samples repeat, and the left and
-    right impacts over the last ``n`` periods.  ``"aperiodic"`` when none repeats (amplitude
-    modulated or chaotic motion); None without samples."""
+    right impacts over the last ``n`` periods.  ``"aperiodic"`` when none repeats (a run's table
+    names those, ``dynamics.refine_regimes``); None without samples."""
     return regimes(samples[np.newaxis], np.array([omega]))[0]
 
 

@@ -90,6 +90,7 @@ class Scene:
     metric_names: tuple[str, ...] = ()     # the declared metrics' names, in the rows' order
     event_rows: int = 0       # rows of a realisation's event log ([output] events; 0: none kept)
     poincare: bool = False    # Poincare samples into poincare.parquet ([output] poincare)
+    lyapunov: bool = False    # the largest Lyapunov exponent of every realisation ([output] lyapunov)
     im_period: float = 0.0    # period (s) and damping of the sa column ([intensity_measures]; 0: none)
     im_damping: float = 0.05
 
@@ -279,7 +280,7 @@ def build_scene(scenario: Scenario) -> Scene:
         reductions=declare_metrics(scenario.output.metrics, nf, len(absorbers)),
         metric_names=tuple(scenario.output.metrics),
         event_rows=scenario.output.events,
-        poincare=scenario.output.poincare,
+        poincare=scenario.output.poincare, lyapunov=scenario.output.lyapunov,
         **({"im_period": scenario.intensity_measures.period,
             "im_damping": scenario.intensity_measures.damping}
            if scenario.intensity_measures else {}),

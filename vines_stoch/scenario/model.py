@@ -136,11 +136,12 @@ class Scenario(_Model):
                 raise FieldError("output.spectra.segment", spectra.segment,
                                  f"must be in [{8 * sim.dt:g}, {window:g}] s (8 steps to the metrics "
                                  "window, simulation.duration - simulation.metrics_from)")
-        if self.output.poincare and self.forcing_frequency is None:
-            raise FieldError("output.poincare", True,
-                             "needs a periodically forced scene: one harmonic or base-harmonic load of "
-                             "frequency > 0, and no noise (the rk4 scheme, which samples the state once "
-                             "a forcing period)")
+        for key in ("poincare", "lyapunov"):
+            if getattr(self.output, key) and self.forcing_frequency is None:
+                raise FieldError(f"output.{key}", True,
+                                 "needs a periodically forced scene: one harmonic or base-harmonic load of "
+                                 "frequency > 0, and no noise (the rk4 scheme, which samples the state once "
+                                 "a forcing period)")
         contents = self.contents
         if sim.scheme != "auto":
             why = schemes.refusal(schemes.SCHEMES[sim.scheme], *contents)

@@ -201,13 +201,16 @@ class Output(_Model):
     events.parquet (time, absorber, wall, relative velocity, energy lost; 0: none kept).
     ``paths``: time histories of chosen realisations into paths.parquet (``Paths``).
     ``poincare``: the state of every body once a forcing period (the Poincare samples the
-    regimes are read from) into poincare.parquet.  ``spectra``: the ensemble-averaged power
-    spectral densities of signals over the metrics window into spectra.parquet (``Spectra``)."""
+    regimes are read from) into poincare.parquet.  ``lyapunov``: the largest Lyapunov exponent
+    of every realisation of a periodically forced scene (without it, only of those whose samples
+    do not repeat, to name their regime).  ``spectra``: the ensemble-averaged power spectral
+    densities of signals over the metrics window into spectra.parquet (``Spectra``)."""
 
     directory: str | None = None
     metrics: list[str] = []
     events: Annotated[int, Field(ge=0, le=MAX_EVENT_ROWS)] = 0
     poincare: bool = False
+    lyapunov: bool = False
     spectra: Spectra | None = None
     paths: Paths | None = None
 

@@ -19,6 +19,7 @@ import pandas as pd
 import pytest
 
 from tests.helpers import example_data, scene_from, study_from, two_dof_data
+from vines_stoch.dynamics import refine_regimes
 from vines_stoch.ensemble import draw_parameters, run_chunk
 from vines_stoch.kernels import needed_streams, sample_buffer, simulate
 from vines_stoch.metrics import (
@@ -91,8 +92,9 @@ def reference_row(raw: np.ndarray, scene, samples: np.ndarray | None = None) -> 
 
 
 def reference_chunk(scene, seed: int, point: int, start: int, stop: int, study=None) -> pd.DataFrame:
-    """``run_chunk``'s table (no history) from per-realisation rows of ``reference_row``."""
-    rows = []
+    """``run_chunk``'s table (no history) from per-realisation rows of ``reference_row``, the
+    regimes then named (``dynamics.refine_regimes``)."""
+    rows, scenes, kept = [], [], []
     for r in range(start, stop):
         drawn = draw_parameters(study, seed, point, r) if study is not None else {}
         if drawn:
@@ -101,6 +103,8 @@ def reference_chunk(scene, seed: int, point: int, start: int, stop: int, study=N
         increments, bridge, filters = needed_streams(scene)
         gens = streams(seed, point, r, increments=increments, bridge=bridge, filters=filters)
         raw = simulate(scene, gens, samples=samples)
+        scenes.append(scene)
+        kept.append(samples)
         row = {"point": point, "realization": r, **drawn, **reference_row(raw, scene, samples)}
         if scene.im_period > 0:
             row.update(ground_intensity(scene, streams(seed, point, r, increments=False, bridge=False,
@@ -108,6 +112,7 @@ def reference_chunk(scene, seed: int, point: int, start: int, stop: int, study=N
         rows.append(row)
     frame = pd.DataFrame(rows)
     frame["regime"] = frame["regime"].astype("string")
+    refine_regimes(frame, scenes, np.stack(kept), every=scenes[0].lyapunov)
     return frame
 
 
