@@ -41,7 +41,8 @@ QUANTITIES: dict[str, tuple[str, str]] = {
     "impacts": ("number of impacts", "count"), "energy_residual": ("energy balance residual", ""),
     "energy_share": ("energy share of the absorbers", ""), "sa": ("spectral acceleration Sa", "m/s²"),
     "pga": ("peak ground acceleration", "m/s²"), "envelope_frequency": ("envelope frequency", "rad/s"),
-    "lyapunov": ("largest Lyapunov exponent", "1/s"),
+    "lyapunov": ("largest Lyapunov exponent", "1/s"), "settling_time": ("settling time", "s"),
+    "share": ("energy share of the absorbers", ""),
 }
 #: Per-floor columns (``NAME_k``): name and unit.
 FLOOR_QUANTITIES = {"x": ("displacement of floor {k}", "m"), "drift": ("drift of storey {k}", "m"),

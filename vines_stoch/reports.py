@@ -37,6 +37,7 @@ class Run:
     seed: int
     poincare: pd.DataFrame | None = None
     spectra: pd.DataFrame | None = None
+    paths: pd.DataFrame | None = None
 
     @classmethod
     def read(cls, directory: str | Path, label: str | None = None) -> Run:
@@ -46,7 +47,7 @@ class Run:
         scenario = tomllib.loads(meta["vines_stoch.scenario"])
         return cls(directory, label or scenario.get("name", directory.name), results.realizations,
                    results.summary, results.history, scenario, int(meta["vines_stoch.seed"]),
-                   results.poincare, results.spectra)
+                   results.poincare, results.spectra, results.paths)
 
     @property
     def swept(self) -> list[str]:
@@ -187,6 +188,18 @@ def _point(run: Run, point: int | None) -> int:
     return point if point is not None else len(run.summary) // 2
 
 
+#: Colours of the impact zones: no impacts, one wall, both walls.
+ZONE_COLORS = ("#bbbbbb", "#f0a030", "#c03030")
+
+
+def phase_pairs(signals: list[str]) -> list[tuple[str, str]]:
+    """The (displacement, velocity) signal pairs among ``signals``: ``x_k`` with ``v_k``,
+    ``xa_j`` with ``va_j``."""
+    pairs = [(f"x_{name[2:]}", name) for name in signals if name.startswith("v_")]
+    pairs += [(f"xa_{name[3:]}", name) for name in signals if name.startswith("va_")]
+    return [(x, v) for x, v in pairs if x in signals]
+
+
 def _plots(runs: list[Run], out: Path, point: int | None) -> list[str]:
     """Write the plots, PNG and SVG (where matplotlib is installed); returns the PNG files' names."""
     plt = pyplot(f"the plots of {out / 'report.md'}")
@@ -246,6 +259,51 @@ def _plots(runs: list[Run], out: Path, point: int | None) -> list[str]:
             ax.set(xlabel=label(key, tables), ylabel=label("e1_max_mean"),
                    title="Maximum primary energy with regimes")
             save(fig, "e1_max_regimes.png")
+
+    walls = [run for run in keyed if (run.realizations["impacts"] > 0).any()]
+    if walls:  # where the absorbers meet both walls, one or none, against the swept value
+        key = walls[0].axes[0]
+        fig, ax = plt.subplots()
+        zones = ("no impacts", "one wall", "both walls")
+        for row, run in enumerate(walls):
+            ok = run.realizations[run.realizations["status"] == "ok"]
+            hit = ok.groupby("point")[["impacts_left", "impacts_right"]].mean() > 0
+            zone = hit.sum(axis=1)  # (walls met on average over the point's realisations)
+            values = run.summary.set_index("point")[key].loc[zone.index]
+            ax.scatter(values, np.full(len(zone), row), c=[ZONE_COLORS[z] for z in zone], s=40, marker="s")
+        for z, name in enumerate(zones):
+            ax.plot([], [], "s", color=ZONE_COLORS[z], label=name)
+        swept = np.concatenate([run.summary[key].to_numpy(dtype=float) for run in walls])
+        if (swept > 0).all() and swept.max() > 100.0 * swept.min():  # (values over decades)
+            ax.set_xscale("log")
+        ax.set(xlabel=label(key, tables), yticks=range(len(walls)), yticklabels=[run.label for run in walls],
+               ylim=(-0.8, len(walls) - 0.2), title="Impact zones: walls met against the swept value")
+        save(fig, "impact_zones.png")
+
+    traced = [run for run in runs if run.paths is not None and len(run.paths)]
+    if traced:  # one realisation's time histories, and its phase portraits
+        fig, ax = plt.subplots()
+        portraits = []
+        for run in traced:
+            p = _point(run, point)
+            rows = run.paths[run.paths["point"] == p]
+            first = rows[rows["realization"] == rows["realization"].min()]
+            where = ", ".join(f"{k} = {_value(run.summary[k].iloc[p])}" for k in run.swept) or f"point {p}"
+            signals = [c for c in first.columns
+                       if c not in ("point", "realization", "t") and c not in run.swept]
+            for signal in signals:
+                ax.plot(first["t"], first[signal], lw=0.8, label=f"{run.label}: {label(signal)}")
+            portraits += [(run, where, first, x, v) for x, v in phase_pairs(signals)]
+        ax.set(xlabel=label("t"), ylabel="signal (units of each)",
+               title=f"Time histories of realisation {int(first['realization'].iloc[0])}")
+        save(fig, "paths.png")
+        if portraits:
+            fig, ax = plt.subplots()
+            for run, where, first, x, v in portraits:
+                ax.plot(first[x], first[v], lw=0.6, label=f"{run.label} ({where}): {x}")
+            ax.set(xlabel=f"displacement: {', '.join(label(x) for *_, x, _ in portraits)}",
+                   ylabel=f"velocity: {', '.join(label(v) for *_, v in portraits)}", title="Phase portraits")
+            save(fig, "phase_portrait.png")
 
     sections = [run for run in runs if run.poincare is not None and len(run.poincare)]
     if sections:  # the roof's Poincare samples: against the swept value, and in its phase plane

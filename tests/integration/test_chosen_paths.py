@@ -10,6 +10,7 @@ import pytest
 
 from tests.helpers import two_dof_data
 from vines_stoch import ScenarioError, read_results, run, solve
+from vines_stoch.reports import phase_pairs, report
 
 SIGNALS = ["x1", "xa_1", "stroke_1", "share", "e1"]
 DATA = {
@@ -47,3 +48,25 @@ def test_a_realization_past_the_ensemble_is_refused_by_name():
     data = {**DATA, "output": {"paths": {"realizations": [9]}}}
     with pytest.raises(ScenarioError, match=r"output\.paths\.realizations.*must be in \[0, 8\]"):
         run(data)
+
+
+def test_the_report_draws_time_histories_phase_portraits_and_impact_zones(tmp_path):
+    """A vibro-impact NES swept in clearance under harmonic forcing (small clearances: impacts on
+    both walls; a clearance past the stroke: none): the report draws the chosen path's time
+    histories, the phase portraits of the bodies whose displacement and velocity it holds, and
+    the zones of walls met against the clearance."""
+    data = {"name": "vi-zones", "primary": {"mass": 1.0, "stiffness": 1.0, "damping": 0.02},
+            "absorbers": [{"type": "impact", "mass": 0.1, "clearance": 0.05, "restitution": 0.6}],
+            "loads": [{"type": "harmonic", "amplitude": 0.1, "frequency": 1.0}],
+            "simulation": {"duration": 60.0, "dt": 1e-2, "scheme": "euler-maruyama"},
+            "sweep": {"absorbers.0.clearance": [0.05, 100.0]},
+            "output": {"paths": {"realizations": [0], "signals": ["x_1", "v_1", "xa_1", "va_1"]}}}
+    run(data, tmp_path / "out")
+    realizations = read_results(tmp_path / "out").realizations
+    assert (realizations.loc[0, ["impacts_left", "impacts_right"]] > 0).all()
+    assert realizations.loc[1, "impacts"] == 0
+    page = report([tmp_path / "out"], tmp_path / "report")
+    for name in ("paths.png", "phase_portrait.png", "impact_zones.png"):
+        assert (page.parent / name).stat().st_size > 10_000  # (a rendered figure)
+        assert f"]({name})" in page.read_text()
+    assert phase_pairs(["x_1", "v_1", "xa_1", "e1", "v_2"]) == [("x_1", "v_1")]
