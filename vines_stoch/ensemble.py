@@ -41,7 +41,7 @@ from .results import Results, Solution, as_study, check_whole, read_results
 from .scenario import History, Spectra, Study
 from .scenario.fields import MAX_REALIZATIONS
 from .scene import Scene, build_scene
-from .signals import signal_names
+from .signals import declare, signal_names
 from .store import (
     CHECKPOINT,
     KEY,
@@ -667,7 +667,9 @@ def prepare_loops(scenes: list[Scene], seed: int, common: bool, grid: tuple[int,
     loaded.  A chunk of no realisations runs each loop with the argument types of ``run_chunk``."""
     seen = set()
     for point, scene in enumerate(scenes):
-        run = chunk_loop(kernel_for(scene, record=Record.of(scene, grid[1] if grid else 0, scene.event_rows)))
+        columns = declare(signals, scene.n_floors, scene.kind.shape[0]) if grid else None
+        record = Record.of(scene, grid[1] if grid else 0, scene.event_rows, columns)
+        run = chunk_loop(kernel_for(scene, record=record))
         if run in seen or run.overloads:
             continue
         seen.add(run)

@@ -187,7 +187,7 @@ class Inputs:
     @property
     def record(self) -> Record:
         """What the launches record beyond the metrics (``outputs.Record``)."""
-        return Record.of(self.scene, self.size, self.n_events)
+        return Record.of(self.scene, self.size, self.n_events, self.signals)
 
     def outputs(self, m: int, empty) -> tuple:
         """``m`` realisations' output arrays from ``empty(shape)``: metric rows, Poincare

@@ -13,7 +13,7 @@ import numpy as np
 from numba import njit
 
 from .jit.flags import INLINE
-from .signals import REDUCTION_SLOTS, SIGNAL_SHARE
+from .signals import REDUCTION_SLOTS, SIGNAL_CONTACT, SIGNAL_SHARE
 
 #: Slots of the raw metric vector a kernel fills; ``metrics.finish_table`` turns it into columns.
 SLOTS = (
@@ -81,7 +81,9 @@ class Record(NamedTuple):
     """What a run records beyond the built-in metrics, the step loop's compile-time flags: the
     first passages of limits (the scene has limits), history rows (of declared signals,
     ``signals.declare``), the event log, the declared metrics (``signals.declare_metrics``) and
-    whether one of them folds the absorbers' energy share (the signal ``share``).
+    whether one of them folds the absorbers' energy share (the signal ``share``), and whether a
+    history column or a declared metric reads a contact force (``contact_j``: the loop then keeps
+    each step's impact impulses).
     The Poincare samples are the scheme's (``driver.Step``).
     A loop compiles the code of a record only when it is asked for."""
 
@@ -90,14 +92,20 @@ class Record(NamedTuple):
     events: bool = False
     declared: bool = False
     share: bool = False
+    contact: bool = False
 
     @classmethod
-    def of(cls, scene, history_rows: int = 0, event_rows: int = 0) -> Record:
-        """What a run of ``scene`` keeping ``history_rows`` history rows and ``event_rows`` rows
-        of event log records."""
+    def of(cls, scene, history_rows: int = 0, event_rows: int = 0,
+           signals: np.ndarray | None = None) -> Record:
+        """What a run of ``scene`` keeping ``history_rows`` history rows of the ``signals``
+        (``signals.declare``'s rows) and ``event_rows`` rows of event log records."""
+        codes = scene.reductions[:, 0]
+        if history_rows > 0 and signals is not None:
+            codes = np.concatenate([codes, np.asarray(signals).reshape(-1, 2)[:, 0]])
         return cls(passages=scene.limits.shape[0] > 0, history=history_rows > 0, events=event_rows > 0,
                    declared=scene.reductions.shape[0] > 0,
-                   share=bool((scene.reductions[:, 0] == SIGNAL_SHARE).any()))
+                   share=bool((scene.reductions[:, 0] == SIGNAL_SHARE).any()),
+                   contact=bool((codes == SIGNAL_CONTACT).any()))
 
 
 def new_events(capacity: int) -> np.ndarray:

@@ -48,6 +48,7 @@ QUANTITIES: dict[str, tuple[str, str]] = {
 FLOOR_QUANTITIES = {"x": ("displacement of floor {k}", "m"), "drift": ("drift of storey {k}", "m"),
                     "v": ("velocity of floor {k}", "m/s"), "xa": ("displacement of absorber {k}", "m"),
                     "va": ("velocity of absorber {k}", "m/s"), "stroke": ("stroke of absorber {k}", "m"),
+                    "contact": ("contact force of absorber {k} on its host", "N"),
                     "x_max": ("peak displacement of floor {k}", "m"),
                     "x_rms": ("r.m.s. displacement of floor {k}", "m"),
                     "drift_max": ("peak drift of storey {k}", "m"),

@@ -25,9 +25,10 @@ SIGNALS = {
     "stroke": (5, "absorber"),  # an absorber's displacement less its host floor's
     "e1": (6, None),          # the structure's energy E1
     "share": (7, None),       # the absorbers' share of the energy, E_abs / (E1 + E_abs)
+    "contact": (8, "absorber"),  # an absorber's contact or impact force on its host floor
 }
 (SIGNAL_X, SIGNAL_V, SIGNAL_DRIFT, SIGNAL_XA, SIGNAL_VA, SIGNAL_STROKE, SIGNAL_E1,
- SIGNAL_SHARE) = range(len(SIGNALS))
+ SIGNAL_SHARE, SIGNAL_CONTACT) = range(len(SIGNALS))
 
 
 def signal_names(n_floors: int, n_absorbers: int = 0) -> list[str]:
@@ -43,8 +44,9 @@ def signal_names(n_floors: int, n_absorbers: int = 0) -> list[str]:
 
 def declare(names: Iterable[str], n_floors: int, n_absorbers: int = 0) -> np.ndarray:
     """The history columns of the signals ``names``: rows ``(code, index)`` (``index``: the
-    body, or the absorber for a stroke, from 0) that the loop driver evaluates at each history
-    point (``signal_value``).  A name that is not a signal (``signal_names``) is a ``ValueError``."""
+    body, or the absorber for a stroke or a contact force, from 0) that the loop driver
+    evaluates at each history point (``signal_value``).  A name that is not a signal
+    (``signal_names``) is a ``ValueError``."""
     allowed = signal_names(n_floors, n_absorbers)
     rows = []
     for name in names:
@@ -58,7 +60,7 @@ def declare(names: Iterable[str], n_floors: int, n_absorbers: int = 0) -> np.nda
         stem, k = name.rsplit("_", 1)
         code, counts = SIGNALS[stem]
         index = int(k) - 1
-        if counts == "absorber" and code != SIGNAL_STROKE:
+        if counts == "absorber" and code not in (SIGNAL_STROKE, SIGNAL_CONTACT):
             index += n_floors
         rows.append((code, index))
     return np.array(rows, dtype=np.int64).reshape(len(rows), 2)

@@ -70,7 +70,7 @@ def spec_of(scene, gpu: bool = False, record: Record = Record()) -> Spec:
                 has_hertz=scene.has_hertz,
                 filtered=scene.has_filters and grid, ground=scene.has_ground and grid,
                 geometric=scene.has_geometric, gpu=gpu, passages=record.passages, history=record.history,
-                events=record.events, declared=record.declared, share=record.share)
+                events=record.events, declared=record.declared, share=record.share, contact=record.contact)
 
 
 def kernel_for(scene, gpu: bool = False, record: Record | None = None):
@@ -207,7 +207,7 @@ def bundles(scene, x: np.ndarray, v: np.ndarray, fl: Filters, normals: np.ndarra
         Grid(dt=scene.dt, n_steps=scene.n_steps, i0=scene.i0, period=scene.period,
              sample_from=scene.sample_from, stride=stride, first=0),
         Outputs(out=out, samples=samples, history=history, signals=signals, limits=scene.limits, carry=carry,
-                events=events, reductions=scene.reductions),
+                events=events, reductions=scene.reductions, impulses=np.zeros(scene.kind.shape[0])),
         *gens,
     )
 
@@ -255,7 +255,7 @@ class Path:
         bodies, absorbers, loads, fl, noise, grid, outputs, *gens = self.args
         outputs = outputs._replace(out=outputs.out.copy(), samples=outputs.samples.copy(),
                                    history=outputs.history.copy(), carry=outputs.carry.copy(),
-                                   events=outputs.events.copy())
+                                   events=outputs.events.copy(), impulses=outputs.impulses.copy())
         if self.step > 0 and outputs.carry.shape[0] == 0:
             raise ValueError("branch: this path keeps no carry (start_path(..., stretches=False))")
         sources = ()
@@ -327,7 +327,7 @@ def start_path(scene, streams: Streams | np.random.Generator | None = None, *,
                          f"not {events.shape}")
     args = bundles(scene, x, v, fl, normals if replay else _NO_NORMALS, out, samples, history, stride, gens,
                    refine, carry, columns, events)
-    return Path(kernel_for(scene, record=Record.of(scene, history.shape[0], events.shape[0])), args,
+    return Path(kernel_for(scene, record=Record.of(scene, history.shape[0], events.shape[0], columns)), args,
                 sources=sources)
 
 
@@ -385,7 +385,7 @@ def simulate(scene, streams: Streams | np.random.Generator | None = None, *,
     ``samples`` (from ``sample_buffer``) receives the Poincare
     samples of periodic scenes; ``history`` (shape ``(G, len(signals))``) receives the
     ``signals`` (names of ``signals.signal_names``: ``x1``, ``e1``, ``x_k``, ``v_k``,
-    ``drift_k``, ``xa_j``, ``va_j``, ``stroke_j``; without names, ``history_columns``) at
+    ``drift_k``, ``xa_j``, ``va_j``, ``stroke_j``, ``contact_j``; without names, ``history_columns``) at
     ``t = j stride dt``, ``j < G`` (rows after a divergence keep their previous content);
     ``events`` (from ``outputs.new_events``) receives the event log, the impacts and Hertz
     contacts' onsets in the metrics window (``outputs.EVENT_COLUMNS``), as many as it has rows.

@@ -89,8 +89,10 @@ class Outputs(NamedTuple):
     (``signals.declare``: a column each), the limits whose first passages the metric vector
     records (``common.first_passages``), the path's carry to its next stretch
     (``kernels/carry.py``; empty: none kept), the event log (``outputs.EVENT_COLUMNS``;
-    empty: none kept) and the declared metrics the metric vector records after the first
-    passages (``signals.declare_metrics``).  What of these a loop writes is compiled in only
+    empty: none kept), the declared metrics the metric vector records after the first
+    passages (``signals.declare_metrics``) and, one an absorber, the impulses of the impacts on
+    its host in the step that ended (the signal ``contact_j``; written where the loop keeps
+    them, ``outputs.Record``).  What of these a loop writes is compiled in only
     where the run asks for it (``outputs.Record``)."""
 
     out: Any
@@ -101,3 +103,4 @@ class Outputs(NamedTuple):
     carry: Any
     events: Any
     reductions: Any
+    impulses: Any

@@ -140,7 +140,7 @@ def chunk_loop(kernel):
             if fl.z.shape[0] > 0:
                 stationary_start(p0, gen_filter, fl.z, fl.draws)
             out = Outputs(raw[j], samples[j], history[j], outputs.signals, outputs.limits, outputs.carry,
-                          events[j], outputs.reductions)
+                          events[j], outputs.reductions, outputs.impulses)
             kernel(bodies, absorbers, ex, fl, noise, grid, out, gen, gen_bridge, gen_filter)
 
     stable_cache(run)  # (its closure holds the step loop: see ``jit.cache.stable_cache``)
@@ -182,7 +182,7 @@ def simulate_chunk(scene, seed: int, point: int, start: int, stop: int, common: 
     args = bundles(scene, scene.x0.copy(), scene.v0.copy(), filter_tuple(scene, None), np.zeros(0), out0,
                    buffer, template, stride, gens, 1, _NO_CARRY, columns,
                    np.zeros((0, len(EVENT_COLUMNS))))
-    kernel = kernel_for(scene, record=Record.of(scene, size, event_rows))
+    kernel = kernel_for(scene, record=Record.of(scene, size, event_rows, columns))
     run = chunk_loop(kernel)
     call = (*args, seed_keys(seed), point, start, common, wanted, scene.x0, scene.v0, scene.filters["p0"],
             raw, samples, history_rows, events)

@@ -59,6 +59,7 @@ from ..signals import (
     REDUCE_MIN,
     REDUCE_PEAK,
     REDUCTION_SLOTS,
+    SIGNAL_CONTACT,
     SIGNAL_DRIFT,
     SIGNAL_SHARE,
     SIGNAL_STROKE,
@@ -256,14 +257,15 @@ def keep_in_cavities(x, nf: int, kind, host, rows):
 
 @njit(**INLINE)
 def resolve_impact(mass, v, nf: int, a: int, side: int, gain: float, restitution: float, last: bool,
-                   stuck, host) -> float:
+                   stuck, host, impulses) -> float:
     """The Newton impact of absorber ``a`` on the ``side`` wall of its host floor's cavity
     (MODEL.md section 2, Wei et al. eqs. 2-3), the one impact resolver of every scheme.
 
     An impact slower than ``gain`` (the relative velocity the loads add in one step, pressing
     into the wall) or the ``last`` one a step may resolve is plastic and starts sticking.  The
-    host's velocity jumps, so the absorbers stuck on it are re-examined.  Returns the energy
-    lost."""
+    host's velocity jumps, so the absorbers stuck on it are re-examined; the impulse on the host
+    is added to ``impulses[a]`` where the run keeps them (the signal ``contact_j``).  Returns the
+    energy lost."""
     h = host_of(host, a, nf)
     j = nf + a
     vh, vj = v[h], pick(v, j)
@@ -275,6 +277,8 @@ def resolve_impact(mass, v, nf: int, a: int, side: int, gain: float, restitution
     if plastic:
         vj = vh
         stuck[a] = side
+    if impulses.shape[0] > 0:
+        impulses[a] += mass[h] * (vh - v[h])
     v[h] = vh
     put(v, j, vj)
     return loss
@@ -399,10 +403,26 @@ def block_end(i: int, n_steps: int, i0: int, h_next: int) -> int:
 
 
 @njit(**INLINE)
-def signal_value(code: int, index: int, x, v, nf: int, e1: float, e_abs: float, host) -> float:
+def contact_on_host(x, nf: int, a: int, kind, host, rows, impulses, dt: float) -> float:
+    """The contact or impact force of absorber ``a`` on its host floor at a step's end (the
+    signal ``contact_j``): a Hertz absorber's contact force there (the opposite of
+    ``contact_force_law``'s on the absorber); an impact absorber's impulses on its host over the
+    step that ended, over ``dt`` (``impulses``: summed by ``resolve_impact``); 0 for the other
+    laws, and for an absorber stuck to its wall (the constraint's force is not resolved)."""
+    if kind[a] == HERTZ:
+        return -contact_force_law(rows, a, pick(x, nf + a) - pick(x, host_of(host, a, nf)))
+    if kind[a] == IMPACT and impulses.shape[0] > 0:
+        return impulses[a] / dt
+    return 0.0
+
+
+@njit(**INLINE)
+def signal_value(code: int, index: int, x, v, nf: int, e1: float, e_abs: float, host, kind, rows, impulses,
+                 dt: float) -> float:
     """A declared signal's value (``signals.declare``: ``code``, ``index``) in the state
-    ``x, v`` (``E1``: ``e1``; the absorbers' energy: ``e_abs``; ``host``: the absorbers' host
-    floors).  The state is read at run-time indices by ``pick``, so that it stays in registers
+    ``x, v`` (``E1``: ``e1``; the absorbers' energy: ``e_abs``; ``host``, ``kind``, ``rows``: the
+    absorbers' host floors, laws and parameters; ``impulses``, ``dt``: ``contact_on_host``).  The
+    state is read at run-time indices by ``pick``, so that it stays in registers
     (``jit.intrinsics.pick``)."""
     if code == SIGNAL_X or code == SIGNAL_XA:
         return pick(x, index)
@@ -414,20 +434,25 @@ def signal_value(code: int, index: int, x, v, nf: int, e1: float, e_abs: float, 
         return pick(x, nf + index) - pick(x, host_of(host, index, nf))
     if code == SIGNAL_SHARE:
         return energy_share(e1, e_abs)
+    if code == SIGNAL_CONTACT:
+        return contact_on_host(x, nf, index, kind, host, rows, impulses, dt)
     return e1
 
 
 @njit(**INLINE)
-def history_row(history, j: int, signals, x, v, nf: int, e1: float, mass, kind, host, rows) -> None:
+def history_row(history, j: int, signals, x, v, nf: int, e1: float, mass, kind, host, rows, impulses,
+                dt: float) -> None:
     """History row ``j``: the declared ``signals`` (rows ``(code, index)``, ``signals.declare``),
     one column each.  Out of line (``_history_row``: rare work, a row every ``stride`` steps,
     whose inlined copies of ``signal_value`` cost every loop compile time), so callers pass
     copies of a state kept in registers (see ``stored_energy``)."""
-    _history_row(*plain((history, j, signals, x, v, runtime_value(nf), e1, mass, kind, host, rows)))
+    _history_row(*plain((history, j, signals, x, v, runtime_value(nf), e1, mass, kind, host, rows, impulses,
+                         dt)))
 
 
 @njit(**KERNEL)
-def _history_row(history, j: int, signals, x, v, nf: int, e1: float, mass, kind, host, rows) -> None:
+def _history_row(history, j: int, signals, x, v, nf: int, e1: float, mass, kind, host, rows, impulses,
+                 dt: float) -> None:
     """``history_row``'s body, compiled once for every loop (the absorbers' energy computed
     where a signal is their share)."""
     e_abs = 0.0
@@ -435,37 +460,39 @@ def _history_row(history, j: int, signals, x, v, nf: int, e1: float, mass, kind,
         if signals[c, 0] == SIGNAL_SHARE:
             e_abs = absorber_energy(x, v, mass, nf, kind, host, rows)
     for c in range(signals.shape[0]):
-        history[j, c] = signal_value(signals[c, 0], signals[c, 1], x, v, nf, e1, e_abs, host)
+        history[j, c] = signal_value(signals[c, 0], signals[c, 1], x, v, nf, e1, e_abs, host, kind, rows,
+                                     impulses, dt)
 
 
 @njit(**INLINE)
-def start_history(history, stride, signals, x, v, nf, e1, mass, kind, host, rows) -> int:
+def start_history(history, stride, signals, x, v, nf, e1, mass, kind, host, rows, impulses, dt) -> int:
     """Write the first history row (``t = 0``) when a history is kept; returns the step after
     which the next row is due (``-1``: never)."""
     if history.shape[0] == 0:
         return -1
-    history_row(history, 0, signals, x, v, nf, e1, mass, kind, host, rows)
+    history_row(history, 0, signals, x, v, nf, e1, mass, kind, host, rows, impulses, dt)
     return stride if history.shape[0] > 1 else -1
 
 
 @njit(**INLINE)
-def record_history(history, stride, step, signals, x, v, nf, e1, mass, kind, host, rows) -> int:
+def record_history(history, stride, step, signals, x, v, nf, e1, mass, kind, host, rows, impulses, dt) -> int:
     """Write the history row of ``t = step dt`` (``history_row``); returns the next due step."""
     j = step // stride
-    history_row(history, j, signals, x, v, nf, e1, mass, kind, host, rows)
+    history_row(history, j, signals, x, v, nf, e1, mass, kind, host, rows, impulses, dt)
     return step + stride if j + 1 < history.shape[0] else -1
 
 
 @njit(**INLINE)
-def fold_declared(reductions, out, at: int, x, v, nf: int, e1: float, e_abs: float, host,
-                  opening: bool) -> None:
+def fold_declared(reductions, out, at: int, x, v, nf: int, e1: float, e_abs: float, host, kind, rows,
+                  impulses, dt: float, opening: bool) -> None:
     """Fold a step end's state into the declared metrics (rows ``(code, index, reduction)``,
     ``signals.declare_metrics``; slots from ``at``, ``signals.REDUCTION_SLOTS`` each): peaks,
     extremes, sums of the signal or its square; at the metrics window's ``opening``, each
     signal's first value (a sum's at half weight: the trapezoid rule).  The last slot keeps the
     signal, whose half weight ``metrics.finish_table`` takes off the sums at the window's end."""
     for r in range(reductions.shape[0]):
-        q = signal_value(reductions[r, 0], reductions[r, 1], x, v, nf, e1, e_abs, host)
+        q = signal_value(reductions[r, 0], reductions[r, 1], x, v, nf, e1, e_abs, host, kind, rows, impulses,
+                         dt)
         op = reductions[r, 2]
         j = at + REDUCTION_SLOTS * r
         if op == REDUCE_PEAK:

@@ -85,8 +85,8 @@ class Spec(NamedTuple):
     noise, impact and Hertz absorbers, filtered loads, ground acceleration, geometric
     attachments, the cuda backend's loop (per-absorber flags on the stack), and what the run
     records beyond the built-in metrics (``outputs.Record``: first passages, history rows, the
-    event log, declared metrics, the absorbers' energy share among them), whose code the loop
-    holds only where asked."""
+    event log, declared metrics, the absorbers' energy share among them, the impacts' impulses
+    for the signal ``contact_j``), whose code the loop holds only where asked."""
 
     n_bodies: int
     n_floors: int
@@ -104,6 +104,7 @@ class Spec(NamedTuple):
     events: bool
     declared: bool
     share: bool
+    contact: bool
 
 
 class Step(NamedTuple):
@@ -150,6 +151,7 @@ def step_loop(plug: Step, spec: Spec):
     HISTORY = spec.history
     DECLARED = spec.declared
     SHARE = spec.share  # (a declared metric folds the absorbers' energy share)
+    CONTACT = spec.contact and spec.has_impact  # (a signal reads the impacts' impulses over a step)
 
     @njit(**KERNEL)
     def kernel(bodies_, absorbers_, ex_, fl_, noise_, grid_, outputs_, gen_, gen_bridge_, gen_filter_):
@@ -167,7 +169,7 @@ def step_loop(plug: Step, spec: Spec):
                                                                 grid.sample_from, grid.stride, grid.first)
         out, samples, history, signals, limits, carry = (outputs.out, outputs.samples, outputs.history,
                                                          outputs.signals, outputs.limits, outputs.carry)
-        reductions = outputs.reductions
+        reductions, impulses = outputs.reductions, outputs.impulses
         declared_at = declared_slots(NF, limits.shape[0])
         resume = first > 0  # a later stretch of the path: its state from ``carry``
         # the state (copied back at the end) on the stack (see ``jit.intrinsics.scratch``); copies
@@ -200,7 +202,8 @@ def step_loop(plug: Step, spec: Spec):
             h_next = -1
             if HISTORY:
                 copy_state(x, v, xc, vc)
-                h_next = start_history(history, stride, signals, xc, vc, nf, e1_prev, mass, kind, host, rows)
+                h_next = start_history(history, stride, signals, xc, vc, nf, e1_prev, mass, kind, host, rows,
+                                       impulses, dt)
             pending = limits.shape[0] if PASSAGES else 0  # limits not passed yet
             next_sample = 0
         sampling = SAMPLES and samples.shape[0] > 0
@@ -224,7 +227,8 @@ def step_loop(plug: Step, spec: Spec):
                 floor_peaks(x, nf, acc, x_max, drift_max, acc_max)
                 if DECLARED:
                     e_abs = absorber_energy(x, v, mass, nf, kind, host, rows) if SHARE else 0.0
-                    fold_declared(reductions, out, declared_at, x, v, nf, e1_max, e_abs, host, True)
+                    fold_declared(reductions, out, declared_at, x, v, nf, e1_max, e_abs, host, kind, rows,
+                                  impulses, dt, True)
                 if PASSAGES and pending > 0:
                     pending = first_passages(limits, i * dt, nf, x_max, drift_max, acc_max, inv_mass,
                                              FORCE_PEAKS,
@@ -245,6 +249,9 @@ def step_loop(plug: Step, spec: Spec):
                     else:
                         copy_into(xp, x)
                         copy_into(vp, v)
+                if CONTACT:  # (the impulses of this step's impacts, from none)
+                    for a in range(impulses.shape[0]):
+                        impulses[a] = 0.0
                 acct = (work, d_primary, d_absorber, e_sum, e1_max, loss, n_left, n_right, contact_time,
                         peak_force, pending)
                 sc, acct = step(i, x, v, inv_mass, acc, own, sc, acct, inside, peaks, bodies, absorbers, ex,
@@ -268,7 +275,7 @@ def step_loop(plug: Step, spec: Spec):
                     e_abs = absorber_energy(x, v, mass, nf, kind, host, rows) if SHARE else 0.0
                     fold_declared(reductions, out, declared_at, x, v, nf,
                                   primary_energy(mass, storey_k, x, v, nf) if INTEGRATES else e1_prev, e_abs,
-                                  host, False)
+                                  host, kind, rows, impulses, dt, False)
                 if SAMPLES and sampling:
                     next_sample = record_sample(samples, next_sample, sample_from, period, i * dt, dt, xp,
                                                 vp, x,
@@ -278,7 +285,7 @@ def step_loop(plug: Step, spec: Spec):
                 copy_state(x, v, xc, vc)
                 h_next = record_history(history, stride, h_next, signals, xc, vc, nf,
                                         primary_energy(mass, storey_k, x, v, nf) if INTEGRATES else e1_prev,
-                                        mass, kind, host, rows)
+                                        mass, kind, host, rows, impulses, dt)
         if carry.shape[0] > 0:  # the path's state for its next stretch, raw
             save_accounts(carry, work, d_primary, d_absorber, e_sum, e1_max, loss, n_left, n_right,
                           contact_time, peak_force)

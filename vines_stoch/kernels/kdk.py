@@ -569,7 +569,7 @@ def kdk_step(spec) -> Step:
                 last = n_impacts == MAX_EVENTS - 1
                 speed = v[j] - v[h]
                 loss = resolve_impact(mass, v, nf, hit, side, gain, rows[hit, RESTITUTION], last,
-                                      stuck, host)
+                                      stuck, host, outputs.impulses)
                 n_impacts += 1
                 if inside:
                     loss_sum += loss

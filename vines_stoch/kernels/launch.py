@@ -51,6 +51,7 @@ def launcher(kernel, n_bodies: int, simulated: bool):
         r = first + t
         x = cuda.local.array(NB, float64)
         v = cuda.local.array(NB, float64)
+        impulses = cuda.local.array(NB, float64)  # (one an absorber, fewer than the bodies)
         for b in range(NB):
             x[b] = x0[p, b]
             v[b] = v0[p, b]
@@ -91,7 +92,7 @@ def launcher(kernel, n_bodies: int, simulated: bool):
                     first=0),
                Outputs(out=row, samples=own_samples, history=own_history, signals=plain(signals),
                        limits=plain(limits[p]), carry=row[:0], events=own_events,
-                       reductions=plain(reductions)),
+                       reductions=plain(reductions), impulses=impulses),
                inc, bri, fil)
 
     if not simulated:

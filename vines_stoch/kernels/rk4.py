@@ -385,7 +385,7 @@ def rk4_step(spec) -> Step:
                 gain = (pick(acc_wall, j) - acc_wall[hf]) * dt
                 speed = pick(v, j) - v[hf]
                 loss = resolve_impact(mass, v, nf, q, side, gain, rows[q, RESTITUTION],
-                                      n_impacts >= MAX_EVENTS, stuck, host)
+                                      n_impacts >= MAX_EVENTS, stuck, host, outputs.impulses)
                 if inside:
                     loss_sum += loss
                     e1_max = max(e1_max, primary_energy(mass, storey_k, x, v, nf))

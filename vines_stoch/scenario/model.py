@@ -106,9 +106,9 @@ class Scenario(_Model):
             except ValueError as exc:
                 raise FieldError("output.metrics", self.output.metrics,
                                  f"{str(exc).removeprefix('metrics: ')}: give <signal>_<reduction>, the "
-                                 f"signal x1, e1, x_k, v_k or drift_k with k in [1, {n}], or xa_j, va_j or "
-                                 f"stroke_j with j in [1, {len(self.absorbers)}], the reduction peak, max, "
-                                 "min, mean or rms") from None
+                                 f"signal x1, e1, x_k, v_k or drift_k with k in [1, {n}], or xa_j, va_j, "
+                                 f"stroke_j or contact_j with j in [1, {len(self.absorbers)}], the reduction "
+                                 "peak, max, min, mean or rms") from None
         metrics = limit_metrics(n)
         for name, limit in self.limits.items():
             if not LIMIT_NAME.fullmatch(name):
@@ -156,8 +156,8 @@ class Scenario(_Model):
         for signal in signals:
             if signal not in allowed:
                 raise FieldError(key, signals, f"{signal!r} is not a signal: give x1, e1, x_k, v_k or "
-                                 f"drift_k with k in [1, {n}], or xa_j, va_j or stroke_j with j in "
-                                 f"[1, {na}] (absorbers in file order)")
+                                 f"drift_k with k in [1, {n}], or xa_j, va_j, stroke_j or contact_j with j "
+                                 f"in [1, {na}] (absorbers in file order)")
 
     @property
     def forcing_frequency(self) -> float | None:

@@ -16,8 +16,10 @@ class History(_Model):
     the roof's displacement ``x1`` and the structure's energy ``e1``; ``signals`` may name any
     signal of ``signals.signal_names``: a floor's displacement ``x_k``, velocity ``v_k`` or
     inter-storey drift ``drift_k`` (``k = 1..n``), an absorber's displacement ``xa_j``, velocity
-    ``va_j`` or stroke ``stroke_j`` (``j``: the absorbers in file order), and with absorbers
-    their share of the energy ``share`` (``E_abs / (E1 + E_abs)``)."""
+    ``va_j``, stroke ``stroke_j`` or contact force on its host ``contact_j`` (``j``: the
+    absorbers in file order; a Hertz absorber's contact force, an impact absorber's impulses over
+    the step that ended over ``dt``, 0 for the other laws), and with absorbers their share of the
+    energy ``share`` (``E_abs / (E1 + E_abs)``)."""
 
     points: Annotated[int, Field(ge=2, le=100_000)] = 1000
     quantiles: list[Annotated[float, Field(gt=0, lt=1, allow_inf_nan=False)]] = [0.05, 0.5, 0.95]
@@ -192,9 +194,9 @@ MAX_EVENT_ROWS = 1_000_000
 class Output(_Model):
     """Where results go (default ``results/<name>``), and the metrics declared beside the
     built-in ones: ``metrics`` names each ``<signal>_<reduction>``, a signal of the history's
-    (``x1``, ``e1``, ``x_k``, ``v_k``, ``drift_k``, ``xa_j``, ``va_j``, ``stroke_j``, ``share``) reduced
-    over the metrics window by ``peak`` (largest absolute value), ``max``, ``min``, ``mean`` or
-    ``rms``: ``stroke_1_peak`` is absorber 1's largest stroke; ``energy_share_mean`` and
+    (``x1``, ``e1``, ``x_k``, ``v_k``, ``drift_k``, ``xa_j``, ``va_j``, ``stroke_j``, ``contact_j``,
+    ``share``) reduced over the metrics window by ``peak`` (largest absolute value), ``max``,
+    ``min``, ``mean`` or ``rms``: ``stroke_1_peak`` is absorber 1's largest stroke; ``energy_share_mean`` and
     ``energy_share_max`` are the absorbers' energy share's mean and peak.  Each is a column of
     realizations.parquet with its statistics in summary.parquet.  ``events``: the impacts and
     Hertz contact onsets of each realisation in the metrics window, up to this many, into

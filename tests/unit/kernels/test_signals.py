@@ -74,3 +74,42 @@ def test_a_scenario_names_absorber_signals_for_its_history_and_paths():
     one = solve(data, realization=2, signals=["x1", "xa_1", "stroke_1"])
     np.testing.assert_array_equal(one.ys["stroke_1"], one.ys["xa_1"] - one.ys["x1"])
     assert np.abs(one.ys["stroke_1"]).max() > 0.0
+
+
+@pytest.mark.parametrize("scheme", ["rk4", "euler-maruyama"])
+def test_an_impact_signal_is_its_impulse_on_the_host_over_the_step(scheme):
+    """A free absorber (1 kg, 0.7 m/s) meets the wall of a resting host (50 kg, next to no spring)
+    once: the host takes the Newton impulse ``(1 + e) mu w`` (``mu`` the reduced mass), the
+    signal ``contact_1`` is that impulse over ``dt`` at the step that holds the impact and 0 at
+    every other step end; so ``sum(contact_1) dt`` is the impulse, to rounding."""
+    m1, ma, w, e = 50.0, 1.0, 0.7, 0.6
+    data = {"name": "one-impact", "primary": {"mass": m1, "stiffness": 1e-6, "damping": 0.0},
+            "absorbers": [{"type": "impact", "mass": ma, "clearance": 0.1, "restitution": e}],
+            "loads": [{"type": "initial", "displacement": [0.0, 0.0], "velocity": [0.0, w]}],
+            "simulation": {"duration": 0.3, "dt": 1e-3, "scheme": scheme}}
+    scene = scene_from(data)
+    history = np.full((scene.n_steps + 1, 1), np.nan)
+    simulate(scene, history=history, stride=1, signals=["contact_1"])
+    impulse = (1.0 + e) * m1 * ma / (m1 + ma) * w
+    assert np.count_nonzero(history[:, 0]) == 1  # (the step of the one impact, 0.1 m / 0.7 m/s in)
+    assert np.flatnonzero(history[:, 0])[0] == int(np.ceil(0.1 / w / scene.dt))
+    assert history[:, 0].sum() * scene.dt == pytest.approx(impulse, rel=1e-12)
+
+
+def test_a_hertz_signal_is_its_contact_force_on_the_host():
+    """Seed 003's single-sided SSVI NES kicked into its walls: at every step end ``contact_1`` is
+    ``-K_L z_L^1.5 + K_R z_R^1.5`` of the stroke there (``z_L = wall_lo - u``, ``z_R = u - wall_hi``,
+    zero out of contact: the opposite of the force on the absorber), here written out."""
+    from vines_stoch.physics.absorbers import K_LEFT, K_RIGHT, WALL_HI, WALL_LO
+
+    data = example_data("seed003_ss60", "sweep")
+    data["loads"] = [{"type": "initial", "displacement": [0.0, 0.0], "velocity": [0.0, 3.0]}]
+    scene = scene_from(data, changes={"simulation.duration": 3.0, "simulation.metrics_from": 0.0})
+    history = np.full((scene.n_steps + 1, 3), np.nan)
+    simulate(scene, history=history, stride=1, signals=["contact_1", "xa_1", "x_1"])
+    row = scene.rows[0]
+    u = history[:, 1] - history[:, 2]
+    left, right = np.maximum(row[WALL_LO] - u, 0.0), np.maximum(u - row[WALL_HI], 0.0)
+    expected = -row[K_LEFT] * left**1.5 + row[K_RIGHT] * right**1.5
+    assert np.count_nonzero(expected) > 10  # (in contact at some step ends)
+    np.testing.assert_allclose(history[:, 0], expected, rtol=1e-12, atol=1e-12 * np.abs(expected).max())
