@@ -208,14 +208,17 @@ def test_event_logs_come_back():
 
 
 def test_declared_metrics_come_back():
-    """A scene's declared metrics (``[output] metrics``) fill each thread's metric row as the CPU
-    loop's on the same Philox streams (``assert_cpu_loop``)."""
+    """A scene's declared metrics (``[output] metrics``: the contact forces among them, whose
+    impulses each thread keeps on its stack) fill each thread's metric row as the CPU loop's on
+    the same Philox streams (``assert_cpu_loop``)."""
+    metrics = ["stroke_1_peak", "va_2_rms", "contact_1_peak", "contact_2_peak"]
     scene = scene_from(example_data("contact_noise_parallel"),
-                       changes={"simulation.duration": 1.0, "output.metrics": ["stroke_1_peak", "va_2_rms"]})
+                       changes={"simulation.duration": 1.0, "output.metrics": metrics})
     batch = gpu.simulate_many(scene, seed=4, point=0, start=1, stop=3)
     for i, r in enumerate(range(1, 3)):
         assert_cpu_loop(batch.raw[i], scene, lambda s, r=r: simulate(s, philox_streams(4, r)))
-    assert (batch.raw[:, -4] > 0).all()  # (stroke_1_peak's slot)
+    assert (batch.raw[:, -8] > 0).all()  # (stroke_1_peak's slot)
+    assert (batch.raw[:, -2] > 0).all()  # (contact_2_peak's: the impact absorber's impulses)
 
 
 def test_uncertain_parameters_run_a_scene_a_realisation():
