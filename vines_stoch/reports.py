@@ -188,6 +188,8 @@ def _point(run: Run, point: int | None) -> int:
     return point if point is not None else len(run.summary) // 2
 
 
+#: Rows of a path's end that its time-history plot shows (the whole path in phase portraits).
+RECENT_ROWS = 1000
 #: Colours of the impact zones: no impacts, one wall, both walls.
 ZONE_COLORS = ("#bbbbbb", "#f0a030", "#c03030")
 
@@ -281,9 +283,8 @@ def _plots(runs: list[Run], out: Path, point: int | None) -> list[str]:
         save(fig, "impact_zones.png")
 
     traced = [run for run in runs if run.paths is not None and len(run.paths)]
-    if traced:  # one realisation's time histories, and its phase portraits
-        fig, ax = plt.subplots()
-        portraits = []
+    if traced:  # one realisation's time histories, a signal an axis, and its phase portraits
+        chosen, portraits = [], []
         for run in traced:
             p = _point(run, point)
             rows = run.paths[run.paths["point"] == p]
@@ -291,11 +292,23 @@ def _plots(runs: list[Run], out: Path, point: int | None) -> list[str]:
             where = ", ".join(f"{k} = {_value(run.summary[k].iloc[p])}" for k in run.swept) or f"point {p}"
             signals = [c for c in first.columns
                        if c not in ("point", "realization", "t") and c not in run.swept]
-            for signal in signals:
-                ax.plot(first["t"], first[signal], lw=0.8, label=f"{run.label}: {label(signal)}")
+            chosen.append((run, where, first, signals))
             portraits += [(run, where, first, x, v) for x, v in phase_pairs(signals)]
-        ax.set(xlabel=label("t"), ylabel="signal (units of each)",
-               title=f"Time histories of realisation {int(first['realization'].iloc[0])}")
+        names = list(dict.fromkeys(signal for *_, signals in chosen for signal in signals))
+        fig, axes = plt.subplots(len(names), 1, sharex=True, squeeze=False,
+                                 figsize=(6.4, 1.0 + 1.3 * len(names)))
+        for run, where, first, signals in chosen:
+            recent = first.iloc[-RECENT_ROWS:]  # (the path's end: its steady motion, legible)
+            for signal in signals:
+                axes[names.index(signal), 0].plot(recent["t"], recent[signal], lw=0.8,
+                                                  label=f"{run.label} ({where})")
+        for ax, signal in zip(axes[:, 0], names):
+            ax.set_title(label(signal), fontsize=8, loc="left")
+        axes[-1, 0].set_xlabel(label("t"))
+        shown = chosen[0][2]["t"].iloc[-RECENT_ROWS:]
+        axes[0, 0].set_title(f"Time histories of realisation {int(chosen[0][2]['realization'].iloc[0])}, "
+                             f"t = {shown.iloc[0]:g} to {shown.iloc[-1]:g} s\n{label(names[0])}", fontsize=8,
+                             loc="left")
         save(fig, "paths.png")
         if portraits:
             fig, ax = plt.subplots()
