@@ -86,15 +86,16 @@ def _place(path: Path, state: np.ndarray, scale: float) -> None:
 
 
 def largest_lyapunov(scene: Scene, streams: Streams | np.random.Generator | None = None, *,
-                     interval: int | None = None, d0: float = D0) -> float:
+                     interval: int | None = None, d0: float = D0, first: int | None = None) -> float:
     """Largest Lyapunov exponent (1/s) of the realisation of ``scene`` on ``streams`` (as
-    ``kernels.simulate`` takes them; None for a deterministic scene) over its metrics window,
-    by Benettin's two trajectories (module text): renormalised every ``interval`` steps (default:
-    one forcing period, or a two-hundredth of the window without a periodic load).  Negative
+    ``kernels.simulate`` takes them; None for a deterministic scene) from step ``first``
+    (default: the metrics window's start) to the end, by Benettin's two trajectories (module
+    text): renormalised every ``interval`` steps (default: one forcing period, or a
+    two-hundredth of the window without a periodic load).  Negative
     for motion that settles on a periodic orbit or a point, about 0 for quasi-periodic
     (modulated) motion, positive for chaos.  NaN if the companion's distance stops being finite
     or the window holds no step."""
-    first, last = scene.i0, scene.n_steps
+    first, last = (scene.i0 if first is None else first), scene.n_steps
     if last <= first:
         return math.nan
     if interval is None:
@@ -170,9 +171,10 @@ def refine_regimes(frame: pd.DataFrame, scenes: Scene | list[Scene], samples: np
     """Name the ``aperiodic`` regimes of ``frame`` (a table of ``metrics.finish_table``, one row a
     realisation of ``scenes``: one scene, or one a row; ``samples``: their Poincare samples
     ``(rows, samples, columns)``) in the classes of the module text, in place, and add the
-    ``REGIME_COLUMNS``: ``lyapunov`` (1/s) where a row was classified by it (every ended row
-    with ``every``, ``[output] lyapunov``), ``envelope_frequency`` (rad/s) of the ``modulated``
-    rows, ``settling_time`` (s) of the ``transient`` ones.  Nothing where the scene is not
+    ``REGIME_COLUMNS``: ``lyapunov`` (1/s, over the periods the samples span) where a row was
+    classified by it (every ended row with ``every``, ``[output] lyapunov``),
+    ``envelope_frequency`` (rad/s) of the ``modulated`` rows, ``settling_time`` (s) of the
+    ``transient`` ones.  Nothing where the scene is not
     periodically forced."""
     first = scenes if isinstance(scenes, Scene) else scenes[0]
     if first.period <= 0 or samples is None or samples.shape[1] == 0:
@@ -189,17 +191,21 @@ def refine_regimes(frame: pd.DataFrame, scenes: Scene | list[Scene], samples: np
         omega = 2.0 * math.pi / scene.period
         row = samples[i]
         count = int((~np.isnan(row[:, 0])).sum())
-        exponent = largest_lyapunov(scene)
+        # over the periods the samples span (the regime's own stretch of the window)
+        first = min(math.ceil(scene.sample_from / scene.dt - 1e-9), scene.n_steps - 1)
+        exponent = largest_lyapunov(scene, first=first)
         columns["lyapunov"][i] = exponent
+        span = (scene.n_steps - first) * scene.dt
+        periods = math.log(max(span / scene.period, 2.0))
         if regime[i] != "aperiodic":
             continue
         settled = settling(row, omega)
         if settled is not None:
             regime[i] = "transient"
             columns["settling_time"][i] = scene.sample_from + settled * scene.period
-        elif exponent * scene.window > GROWTH_POWER * math.log(max(scene.window / scene.period, 2.0)):
+        elif exponent * span > GROWTH_POWER * periods:
             regime[i] = "chaotic"
-        elif exponent * scene.window < -math.log(max(scene.window / scene.period, 2.0)):
+        elif exponent * span < -periods:
             regime[i] = "transient"  # (still converging on a periodic orbit past the window)
         else:
             # the roof's envelope once a period: |x + i v / omega| (the analytic signal of a

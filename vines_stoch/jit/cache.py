@@ -93,6 +93,14 @@ def key_by_sources(package: str = "numba.core") -> str:
                 root = os.path.join(os.path.dirname(py_file), "__pycache__")
             self._cache_path = os.path.join(root, name)
 
+        def get_source_stamp(self):
+            """The folder's own key, the sources' digest, in place of numba's hash of the one
+            source file read when the cache was opened: processes that read that file at
+            different moments (an edit between two starts) would otherwise each find the other's
+            index stale and rewrite it from its first data file's name on, over entries the other
+            still lists (seen: a scene run on another structure's loop)."""
+            return name
+
         @classmethod
         def from_function(cls, py_func, py_file):
             if not Path(py_file).resolve().is_relative_to(PACKAGE):
@@ -201,6 +209,14 @@ def _stable_cache(gpu: bool) -> type:
             entry would load a loop of another structure (seen: parallel NES scenes run
             without their impacts, bare oscillators without their load)."""
             index = getattr(getattr(self, "_cache_file", None), "_index_path", None)
+            folder = os.path.basename(getattr(self, "_cache_path", ""))
+            if folder.startswith("vines-stoch-") and folder != f"vines-stoch-{digest()}":
+                # the sources changed since this process keyed its folder: what it compiled now
+                # is not what that folder's sources give
+                warnings.warn(f"vines_stoch.jit.cache: the package's sources changed since this process "
+                              f"started; a loop compiled now is not saved in {folder}", RuntimeWarning,
+                              stacklevel=2)
+                return
             if index is None:  # (another numba's internals: not saved, rather than saved unlocked)
                 warnings.warn("vines_stoch.jit.cache: this numba's cache keeps no _cache_file._index_path "
                               "to lock; a step loop compiled now is not saved on disk (saved unlocked, "

@@ -207,3 +207,30 @@ def test_the_loops_of_one_function_are_saved_one_process_at_a_time():
     stable._save_overload = save
     stable.save_overload(None, None)
     assert held == [True]
+
+
+def test_an_index_is_stamped_by_its_folders_sources_and_a_loop_compiled_after_an_edit_is_not_saved(
+        monkeypatch):
+    """numba stamps a cache index with a hash of the function's source file, read when the cache
+    was opened: two processes that opened it on either side of an edit would each find the
+    other's index stale and rewrite it, reusing data file names that the other still lists (a
+    scene then ran on another structure's loop).  The stable-keyed folders stamp their indexes
+    with the folder's own digest, and a loop compiled after the sources changed under a running
+    process is not saved into the folder of the sources it started with."""
+    import warnings
+
+    from vines_stoch.kernels.common import stored_energy
+
+    folder = f"vines-stoch-{cache.digest()}"
+    locator = stored_energy._cache._impl.locator
+    assert locator.get_source_stamp() == folder and stored_energy._cache._cache_path.endswith(folder)
+    stable = cache._stable_cache(False)(stored_energy.py_func, [])
+    saved = []
+    stable._save_overload = lambda sig, data: saved.append(sig)
+    stable.save_overload("sig", None)
+    assert saved == ["sig"]
+    monkeypatch.setattr(cache, "digest", lambda package=cache.PACKAGE: "0" * 16)  # (an edit since)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        stable.save_overload("later", None)
+    assert saved == ["sig"] and "sources changed since this process started" in str(caught[0].message)

@@ -171,7 +171,7 @@ def test_an_irregular_response_that_is_not_chaotic_is_chatter_with_impacts(monke
     """``refine_regimes`` on samples that do not repeat, with an exponent of 0 (stood in): with
     impacts and no envelope to read, chatter; without impacts, modulated."""
     scene = scene_from(forced(1.0, zeta=0.05, duration=100.0))
-    monkeypatch.setattr(dynamics, "largest_lyapunov", lambda s: 0.0)
+    monkeypatch.setattr(dynamics, "largest_lyapunov", lambda s, **options: 0.0)
     jitter = np.random.default_rng(5).normal(1.0, 0.01, (2, 32, 2))  # (x, v) of one body
     counts = np.cumsum(np.ones((32, 2)), axis=0)
     samples = np.stack([np.concatenate([jitter[0], counts], axis=1),
