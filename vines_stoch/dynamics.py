@@ -184,6 +184,7 @@ def refine_regimes(frame: pd.DataFrame, scenes: Scene | list[Scene], samples: np
     regime = frame["regime"].to_numpy(dtype=object, na_value=None)
     ok = (frame["status"] == "ok").to_numpy()
     nf, nb = first.n_floors, first.mass.shape[0]
+    exponents: dict[int, float] = {}  # (by scene: a scene without noise runs one path, whatever its row)
     for i in np.flatnonzero(ok):
         if regime[i] != "aperiodic" and not every:
             continue
@@ -193,8 +194,9 @@ def refine_regimes(frame: pd.DataFrame, scenes: Scene | list[Scene], samples: np
         count = int((~np.isnan(row[:, 0])).sum())
         # over the periods the samples span (the regime's own stretch of the window)
         first = min(math.ceil(scene.sample_from / scene.dt - 1e-9), scene.n_steps - 1)
-        exponent = largest_lyapunov(scene, first=first)
-        columns["lyapunov"][i] = exponent
+        if id(scene) not in exponents:
+            exponents[id(scene)] = largest_lyapunov(scene, first=first)
+        exponent = columns["lyapunov"][i] = exponents[id(scene)]
         span = (scene.n_steps - first) * scene.dt
         periods = math.log(max(span / scene.period, 2.0))
         if regime[i] != "aperiodic":
