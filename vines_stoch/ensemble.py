@@ -19,7 +19,7 @@ import signal
 import sys
 import threading
 import time
-from collections.abc import Iterator, Mapping
+from collections.abc import Callable, Iterator, Mapping
 from contextlib import ExitStack, closing, contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -29,7 +29,7 @@ import numpy as np
 import pandas as pd
 
 from . import history as hist
-from . import psd, schedulers
+from . import psd, rare, schedulers, sensitivity
 from .binding import binding
 from .dynamics import refine_regimes
 from .kernels import DEFAULT_SIGNALS, kernel_for
@@ -798,24 +798,67 @@ def _run(study: Study, directory: Path | None, o: _Options) -> Results | None:
             return None
         meta = provenance(study.text, study.source, seed, where, o.backend, key)
         chosen = _chosen_paths(study, the_plan, states, chunk_runner) if base.output.paths else None
+        studies = {}
+        if base.rare is not None:
+            studies["rare"] = rare.table(study, _scene_of(study), o.progress)
+        if base.sensitivity is not None:
+            studies["sensitivity"] = sensitivity.table(study, _design_output(study), o.progress)
         return _consolidate(study, the_plan, states, directory, frames, meta, grids, spec,
-                            kept_paths if o.paths else None, signals, views, chosen)
+                            kept_paths if o.paths else None, signals, views, chosen, studies)
     except KeyboardInterrupt as exc:
         if directory is None:
             raise
         raise Interrupted(kept(), len(mine)) from exc
 
 
+def _scene_of(study: Study) -> Callable[[int, int], Scene]:
+    """The scene of path ``j`` of sweep point ``point`` for a rare-event estimate: the point's,
+    or with uncertain parameters those realisation ``j`` of the ensemble draws."""
+    base = study.base
+    scenes = [build_scene(scenario) for scenario in study.points]
+    if not base.uncertain:
+        return lambda point, j: scenes[point]
+    bound = [binding(study, p) for p in range(len(study.points))]
+    return lambda point, j: bound[point].scene(draw_parameters(study, base.ensemble.seed, point, j,
+                                                               base.ensemble.common_random_numbers))
+
+
+def _design_output(study: Study) -> Callable[[int, dict[str, float]], float]:
+    """A Sobol design point's output (``sensitivity.table``): the mean of ``[sensitivity]
+    metric`` over realisations ``0 .. R - 1`` of the point's scene with the parameters ``values``
+    (the same noise at every design point), or for ``p_NAME`` the fraction that exceeded limit
+    NAME; realisations that failed are left out."""
+    base = study.base
+    spec = base.sensitivity
+    bound: dict[int, Any] = {}
+
+    def output(point: int, values: dict[str, float]) -> float:
+        if point not in bound:
+            bound[point] = binding(study, point)
+        scene = bound[point].scene(values)
+        frame, _ = run_chunk(scene, base.ensemble.seed, point, 0, spec.realizations,
+                             common=base.ensemble.common_random_numbers)
+        ok = frame[frame["status"] == "ok"]
+        if spec.metric.startswith("p_") and f"first_passage_{spec.metric[2:]}" in ok.columns:
+            return float(ok[f"first_passage_{spec.metric[2:]}"].notna().mean())
+        return float(ok[spec.metric].mean())
+
+    return output
+
+
 def _consolidate(study: Study, the_plan: Plan, states: list[PointState], directory: Path | None,
                  frames: dict[tuple[int, int, int], pd.DataFrame], meta: dict[str, str],
                  grids: list[tuple[int, int] | None], spec: History | None,
                  kept_paths: dict[tuple[int, int, int], np.ndarray] | None,
-                 signals: tuple[str, ...], views: list[_View | None], chosen: pd.DataFrame | None) -> Results:
+                 signals: tuple[str, ...], views: list[_View | None], chosen: pd.DataFrame | None,
+                 studies: dict[str, pd.DataFrame] | None = None) -> Results:
     """Gather the chunks kept (up to each point's stopping count: from ``frames`` in memory, else
     the folder's parts) into the result tables, and the points' history statistics and spectra
     (``views``: their Welch segments), written into ``directory`` where there is one, with the
     paths of the realisations ``[output] paths`` chooses (``chosen``, ``_chosen_paths``; the
-    results' ``paths`` unless ``kept_paths`` holds every realisation's)."""
+    results' ``paths`` unless ``kept_paths`` holds every realisation's) and the tables of the
+    studies beside the ensemble (``studies``: ``rare`` and ``sensitivity``, by name)."""
+    studies = {name: _in_file_types(frame) for name, frame in (studies or {}).items()}
     kept, path_rows = [], []
     for state in states:
         for c in state.chunks:
@@ -859,7 +902,7 @@ def _consolidate(study: Study, the_plan: Plan, states: list[PointState], directo
         poincare_df = None if poincare_df is None else _in_file_types(poincare_df)
         spectra_df = None if spectra_df is None else _in_file_types(spectra_df)
         return Results(realizations_df, _in_file_types(summary_df), history_df, paths_df, meta, None, study,
-                       events_df, poincare_df, spectra_df)
+                       events_df, poincare_df, spectra_df, studies.get("rare"), studies.get("sensitivity"))
     write_table(realizations_df, directory / "realizations.parquet", meta)
     write_table(summary_df, directory / "summary.parquet", meta)
     if history_df is not None:
@@ -873,6 +916,8 @@ def _consolidate(study: Study, the_plan: Plan, states: list[PointState], directo
         write_table(spectra_df, directory / "spectra.parquet", meta)
     if chosen is not None:
         write_table(chosen, directory / "paths.parquet", meta)
+    for name, frame in studies.items():
+        write_table(frame, directory / f"{name}.parquet", meta)
     results = read_results(directory)
     results.study = study
     if kept_paths is not None:

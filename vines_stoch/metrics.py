@@ -48,6 +48,12 @@ def floor_metrics(n_floors: int) -> list[str]:
     return [f"{name}_{k}" for k in range(1, n_floors + 1) for name in FLOOR_METRICS]
 
 
+def sensitivity_metrics(n_floors: int, limits: Sequence[str], declared: Sequence[str]) -> set[str]:
+    """What ``[sensitivity] metric`` may name: a metric column (``METRICS``, the floors', the
+    declared ``[output] metrics``) or ``p_NAME`` for a limit NAME (its exceedance indicator)."""
+    return {*METRICS, *floor_metrics(n_floors), *declared, *(f"p_{name}" for name in limits)}
+
+
 def metric_columns(frame: pd.DataFrame) -> list[str]:
     """The metric columns present in a realisations table: ``METRICS``, the floors', then the
     declared ones (``[output] metrics``: ``signals.METRIC_NAME``)."""

@@ -73,7 +73,9 @@ class Results:
     ``directory`` (the folder, None for a run in memory), ``events`` (the event logs of
     events.parquet, None unless ``[output] events`` asks for them) and ``poincare`` (the
     Poincare samples of poincare.parquet, None unless ``[output] poincare`` asks for them) and
-    ``spectra`` (the power spectral densities of spectra.parquet, with ``[output] spectra``).
+    ``spectra`` (the power spectral densities of spectra.parquet, with ``[output] spectra``),
+    ``rare`` (the rare-event estimates of rare.parquet, with ``[rare]``) and ``sensitivity``
+    (the Sobol indices of sensitivity.parquet, with ``[sensitivity]``).
     ``scenario`` is the Study run (read from the metadata, on first use, for results read from
     a folder).
 
@@ -89,6 +91,8 @@ class Results:
     events: pd.DataFrame | None = None
     poincare: pd.DataFrame | None = None
     spectra: pd.DataFrame | None = None
+    rare: pd.DataFrame | None = None
+    sensitivity: pd.DataFrame | None = None
 
     @property
     def scenario(self) -> Study:
@@ -110,8 +114,8 @@ class Results:
 
 def read_results(directory: str | Path) -> Results:
     """The results of a finished run in ``directory`` (after ``store.check_folder``: never the
-    results of two runs), ``history``, ``paths``, ``events``, ``poincare`` and ``spectra`` where
-    the run wrote them."""
+    results of two runs), ``history``, ``paths``, ``events``, ``poincare``, ``spectra``, ``rare``
+    and ``sensitivity`` where the run wrote them."""
     from .store import check_folder, read_metadata
 
     directory = Path(directory)
@@ -122,7 +126,8 @@ def read_results(directory: str | Path) -> Results:
 
     return Results(table("realizations"), table("summary"), table("history"), table("paths"),
                    metadata=read_metadata(directory / "summary.parquet"), directory=directory,
-                   events=table("events"), poincare=table("poincare"), spectra=table("spectra"))
+                   events=table("events"), poincare=table("poincare"), spectra=table("spectra"),
+                   rare=table("rare"), sensitivity=table("sensitivity"))
 
 
 @dataclass(eq=False)

@@ -55,7 +55,8 @@ def _dependency_versions() -> str:
 KEY = "vines_stoch.run_key"
 #: The result files a run (or ``vines-stoch fragility``) writes into its folder.
 RESULTS = ("summary.parquet", "realizations.parquet", "history.parquet", "events.parquet",
-           "poincare.parquet", "spectra.parquet", "paths.parquet", "fragility.parquet")
+           "poincare.parquet", "spectra.parquet", "paths.parquet", "rare.parquet", "sensitivity.parquet",
+           "fragility.parquet")
 #: The parts' manifest (the run key and the number of chunks) and the history statistics'
 #: checkpoint, in ``DIR/parts``.
 MANIFEST, CHECKPOINT = "manifest.json", "history.npz"

@@ -17,8 +17,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-#: Purposes of the streams (the first element of their spawn key).
-INCREMENTS, PARAMETERS, BRIDGE, FILTER = 0, 1, 2, 3
+#: Purposes of the streams (the first element of their spawn key); ``RARE``: the paths, choices
+#: and inputs of rare-event estimates (``rare.py``, keyed further by point, replica and draw).
+INCREMENTS, PARAMETERS, BRIDGE, FILTER, RARE = 0, 1, 2, 3, 4
 
 
 def generator(seed: int, point: int, realization: int, purpose: int = INCREMENTS,

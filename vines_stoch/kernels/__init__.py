@@ -261,7 +261,9 @@ class Path:
         sources = ()
         if streams is None:
             _sync(self.sources, back=False)
-            gens = list(copy.deepcopy(gens))  # (one copy of a stream given in several places)
+            # (one copy of a stream given in several places; the never-drawn placeholders kept as
+            # they are, so that a copy branches on new streams as its original would)
+            gens = list(copy.deepcopy(gens, {id(_UNUSED): _UNUSED, id(_UNDRAWN): _UNDRAWN}))
         else:
             gens, sources = _streams_for_copy(gens, streams)
             gens = list(gens)

@@ -37,6 +37,8 @@ from .settings import (
     Limit,
     Optimize,
     Output,
+    Rare,
+    Sensitivity,
     Simulation,
     limit_metrics,
 )
@@ -60,6 +62,8 @@ class Scenario(_Model):
     optimize: Optimize | None = None
     limits: Annotated[dict[str, Limit], Field(max_length=MAX_LIMITS)] = {}
     intensity_measures: IntensityMeasures | None = None
+    rare: Rare | None = None
+    sensitivity: Sensitivity | None = None
     output: Output = Output()
 
     @model_validator(mode="after")
@@ -119,6 +123,7 @@ class Scenario(_Model):
                 raise FieldError(f"limits.{name}.metric", limit.metric,
                                  "must be a peak metric: x1_max, e1_max, or x_max_k, drift_max_k, acc_max_k "
                                  f"with k in [1, {n}]")
+        self._check_rare(n)
         paths = self.output.paths
         if paths is not None:
             self._check_signals("output.paths.signals", paths.signals)
@@ -148,6 +153,40 @@ class Scenario(_Model):
             if why is not None:
                 raise FieldError("simulation.scheme", sim.scheme, why)
         return self
+
+    def _check_rare(self, n: int) -> None:
+        """``[rare]``: a limit of ``[limits]``, a scene with noise (and for subset simulation white
+        noise alone); ``[sensitivity]``: uncertain parameters and a metric or limit to read."""
+        rare = self.rare
+        if rare is not None:
+            if rare.limit not in self.limits:
+                raise FieldError("rare.limit", rare.limit, "must be a key of [limits] ("
+                                 + (", ".join(self.limits) or "the scenario has none") + ")")
+            if not self.has_noise:
+                raise FieldError("rare", rare.limit, "needs a scene with noise (a white-noise, filtered or "
+                                 "ground-motion load): splitting branches paths onto fresh noise")
+            if rare.method == "subset":
+                filtered = self.contents[1]
+                white = any(isinstance(load, WhiteNoiseLoad) for load in self.loads)
+                if filtered or self.uncertain or not white:
+                    why = ("filtered loads" if filtered else "uncertain parameters" if self.uncertain
+                           else "no white noise")
+                    raise FieldError("rare.method", rare.method, "subset simulation samples the white-noise "
+                                     f"increments; this scene has {why}: use 'splitting'")
+            if rare.method == "subset" and rare.n % 10:
+                raise FieldError("rare.particles", rare.particles,
+                                 "must be a multiple of 10 with subset simulation (10 states a chain)")
+        sens = self.sensitivity
+        if sens is not None:
+            if not self.uncertain:
+                raise FieldError("sensitivity", sens.metric, "needs [uncertain] parameters to apportion")
+            from ..metrics import sensitivity_metrics
+
+            allowed = sensitivity_metrics(n, self.limits, self.output.metrics)
+            if sens.metric not in allowed:
+                raise FieldError("sensitivity.metric", sens.metric,
+                                 "must be a metric column (edm, x1_max, e1_max, ...) or p_NAME for a limit "
+                                 f"NAME ({', '.join(sorted(allowed)[:12])}, ...)")
 
     def _check_signals(self, key: str, signals: list[str]) -> None:
         """A ``FieldError`` for ``key`` where a name of ``signals`` is not a signal of the scene."""

@@ -144,6 +144,44 @@ class Limit(_Model):
     value: Positive
 
 
+class Rare(_Model):
+    """A rare-event estimate of one limit's exceedance probability at every sweep point
+    (rare.parquet; ``rare.py``): ``limit`` names a key of ``[limits]``; ``method`` is
+    ``"splitting"`` (adaptive multilevel splitting on the running peak over the limit's value:
+    any scene with noise) or ``"subset"`` (subset simulation on the white-noise increments: scenes
+    whose only randomness is white noise); independent replicas of ``particles`` paths each
+    (default 200 for splitting, 1000 for subset) run until the estimate's coefficient of
+    variation is at most ``target_cov`` or ``max_paths`` path-equivalents (steps run over a
+    path's steps) are spent; ``kill``: the least fraction of paths splitting kills a level."""
+
+    limit: str
+    method: Literal["splitting", "subset"] = "splitting"
+    target_cov: Annotated[float, Field(gt=0, lt=1, allow_inf_nan=False)] = 0.1
+    max_paths: Annotated[float, Field(ge=1, le=1e9, allow_inf_nan=False)] = 100_000
+    particles: Annotated[int, Field(ge=10, le=1_000_000)] | None = None
+    kill: Annotated[float, Field(gt=0, le=0.5, allow_inf_nan=False)] = 0.1
+
+    @property
+    def n(self) -> int:
+        """Paths of a splitting replica, samples of a subset level."""
+        return self.particles or (200 if self.method == "splitting" else 1000)
+
+
+class Sensitivity(_Model):
+    """Sobol indices (first order and total, with bootstrap 95 % intervals) of ``metric`` with
+    respect to the ``[uncertain]`` parameters at every sweep point (sensitivity.parquet;
+    ``sensitivity.py``): a Sobol design of ``samples`` base points (Saltelli's scheme:
+    ``samples (d + 2)`` parameter sets for ``d`` parameters), each run on the same
+    ``realizations`` noise paths (common random numbers), its value the mean of ``metric`` over
+    them, or for ``p_NAME`` the fraction exceeding limit NAME: the indices apportion the variance
+    of that conditional mean, the noise's own variance left out."""
+
+    metric: str = "edm"
+    samples: Annotated[int, Field(ge=8, le=1 << 20)] = 1024
+    realizations: Annotated[int, Field(ge=1, le=100_000)] = 8
+    bootstrap: Annotated[int, Field(ge=10, le=100_000)] = 1000
+
+
 class IntensityMeasures(_Model):
     """Intensity measures of the ground acceleration each realisation saw (records and
     generated ground motion, over the whole duration), as columns of realizations.parquet:

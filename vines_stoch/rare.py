@@ -1,0 +1,355 @@
+"""Rare-event estimates of a limit's exceedance probability ``P(peak > value)`` (``[rare]``):
+adaptive multilevel splitting on the running peak, and subset simulation as its cross-check.
+
+**Adaptive multilevel splitting** (Cerou and Guyader, Stoch. Anal. Appl. 25 (2007) 417; the
+generalised algorithm of Brehier, Gazeau, Goudenege, Lelievre and Rousset, Ann. Appl. Probab.
+26 (2016) 3559, unbiased for any score).  ``n`` paths run to the end; a path's score is its
+running peak of the limited metric over the limit's value (exceedance: a score above 1).  At
+each level the ``k`` lowest scores fix the level ``z``; every path whose score is ``<= z`` is
+killed (``K >= k`` of them, ties included) and replaced by a branch of a survivor drawn at
+random: the survivor's path up to the first step its running peak exceeded ``z`` (replayed on
+its own streams from its last snapshot, ``kernels.Path.branch``), fresh streams after it.  The
+estimate is ``prod (1 - K_j / n)`` times the fraction of the final paths above 1.  The paths are
+the engine's own step loop run in stretches (``kernels.start_path``, ``advance``), so impacts,
+Hertz contact, filtered loads and uncertain parameters are those of an ensemble run.
+
+**Subset simulation** (Au and Beck, Probab. Eng. Mech. 16 (2001) 263) with the modified
+Metropolis algorithm on the Gaussian inputs: the white-noise increments a path replays
+(``start_path(..., normals=...)``), a level a fraction ``P0`` of the samples, each seed a Markov
+chain of ``1 / P0`` states.  Where a scene also seeds Brownian trees (impacts or contact under
+white noise), each candidate draws its seed afresh from the prior (an independent proposal,
+accepted as the others only inside the level).
+
+Both run in independent replicas, one after another in a fixed order, until the coefficient of
+variation of their mean, ``sd / (mean sqrt(R))``, reaches the target (from
+``MIN_REPLICAS`` replicas on) or the budget of path-equivalents (steps run over the steps of a
+path, replays included) is spent: the reported ``cov`` is the replicas' own spread, and the 95 %
+interval Student's ``t`` on it.  Every replica's streams are keyed by (seed, purpose, sweep point,
+replica, draw), so an estimate depends on nothing else.
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import numpy as np
+import pandas as pd
+from scipy import stats
+
+from .kernels import Path, advance, needed_streams, start_path
+from .outputs import DRIFT_MAX_K, E1_MAX, LIMIT_E1, SLOTS, X_MAX_K, passage_slots
+from .schemes import SCHEMES
+from .streams import RARE, Streams
+
+#: Methods of ``[rare]``.
+METHODS = ("splitting", "subset")
+#: Replicas before the coefficient of variation may stop an estimate (its spread needs a few).
+MIN_REPLICAS = 5
+#: Snapshots kept along a splitting path (a branch replays at most two stretches between them).
+SNAPSHOTS = 16
+#: Subset simulation: the fraction of samples that seeds the next level, and the proposal's
+#: standard deviation of the modified Metropolis algorithm (per standard normal input).
+P0, PROPOSAL = 0.1, 1.0
+#: Subset simulation's most levels (``P0 ** 64``: far below any probability asked for).
+MAX_LEVELS = 64
+#: Sub-purposes of the rare-event streams (the key's second element).
+PATHS, SELECTION, INPUTS = 0, 1, 2
+
+
+def peak(out: np.ndarray, row: np.ndarray, nf: int) -> float:
+    """The running peak a limit row (``scene.limit_row``: code, floor, value) watches, read from
+    a raw metric vector (as ``kernels.common.first_passages`` reads it in the loop)."""
+    code, k = int(row[0]), int(row[1])
+    if code == LIMIT_E1:
+        return float(out[E1_MAX])
+    if code == DRIFT_MAX_K and k == 0:
+        code = X_MAX_K
+    return float(out[len(SLOTS) + code * nf + k])
+
+
+@dataclass
+class Replica:
+    """One replica's estimate: ``p``, the path-equivalents it spent, its levels (splitting: the
+    level ``z_j`` and the survivors' fraction ``1 - K_j / n`` of each; subset: the thresholds)."""
+
+    p: float
+    paths: float
+    levels: list[tuple[float, float]] = field(default_factory=list)
+
+
+@dataclass
+class Estimate:
+    """A rare-event estimate: the mean ``p`` of the replicas, its coefficient of variation and
+    95 % interval, the path-equivalents spent and the replicas themselves."""
+
+    p: float
+    cov: float
+    p_lo: float
+    p_hi: float
+    paths: float
+    levels: float
+    method: str
+    replicas: list[Replica]
+
+    def row(self) -> dict[str, object]:
+        """rare.parquet's columns."""
+        return {"p": self.p, "cov": self.cov, "p_lo": self.p_lo, "p_hi": self.p_hi, "paths": self.paths,
+                "levels": self.levels, "replicas": len(self.replicas), "method": self.method}
+
+
+def rare_streams(seed: int, point: int, replica: int, draw: int, scene) -> Streams:
+    """The streams of path ``draw`` of a rare-event replica, keyed by (seed, ``RARE``, point,
+    replica, draw, purpose); only those ``scene`` draws from (``kernels.needed_streams``)."""
+    def gen(purpose: int) -> np.random.Generator:
+        key = (RARE, PATHS, point, replica, draw, purpose)
+        return np.random.Generator(np.random.PCG64(np.random.SeedSequence(seed, spawn_key=key)))
+
+    increments, bridge, filters = needed_streams(scene)
+    return Streams(gen(0) if increments else None, gen(1) if bridge else None, gen(2) if filters else None)
+
+
+def _chooser(seed: int, point: int, replica: int, purpose: int) -> np.random.Generator:
+    """A replica's own generator of ``purpose`` (``SELECTION``: which survivors are branched;
+    ``INPUTS``: subset simulation's inputs and proposals)."""
+    return np.random.Generator(np.random.PCG64(np.random.SeedSequence(
+        seed, spawn_key=(RARE, purpose, point, replica))))
+
+
+class _Particle:
+    """A splitting path: the path (run to the end), its snapshots (copies never run themselves,
+    shared with the particles branched from it; ``_Splitting``) and its score, the running peak
+    at the end."""
+
+    __slots__ = ("path", "snaps", "score")
+
+    def __init__(self, path: Path, snaps: list[Path]):
+        self.path, self.snaps, self.score = path, snaps, 0.0
+
+
+class _Splitting:
+    """One replica of adaptive multilevel splitting (see the module).  A particle keeps a snapshot
+    every ``stride`` steps and one at the step it was branched at, so that the first passage of a
+    level is found by replaying one stretch: its first snapshot after the passage comes at most a
+    stride after it."""
+
+    def __init__(self, scenes: Callable[[int], object], limit: int, seed: int, point: int, replica: int):
+        self.scenes, self.limit, self.seed, self.point, self.replica = scenes, limit, seed, point, replica
+        self.first = scenes(0)
+        self.n_steps, self.nf = self.first.n_steps, self.first.n_floors
+        self.stride = max(1, -(-self.n_steps // SNAPSHOTS))
+        self.steps = 0  # (steps run, replays included)
+        self.draws = 0
+
+    def _fresh(self) -> Streams:
+        """The streams of the next path drawn (an initial path, or a branch after its branching
+        step)."""
+        self.draws += 1
+        return rare_streams(self.seed, self.point, self.replica, self.draws - 1, self.first)
+
+    def _peak(self, path: Path) -> float:
+        return peak(path.out, path.args[6].limits[self.limit], self.nf)
+
+    def _run(self, particle: _Particle) -> _Particle:
+        """Run ``particle`` from the step it has reached to the end, a snapshot at each stride."""
+        path = particle.path
+        while path.step < self.n_steps:
+            stop = min(self.n_steps, (path.step // self.stride + 1) * self.stride)
+            self.steps += stop - path.step
+            advance(path, stop)
+            if stop < self.n_steps:
+                particle.snaps.append(path.branch())
+        particle.score = self._peak(path)
+        return particle
+
+    def start(self, j: int) -> _Particle:
+        """Initial path ``j`` on its own streams, run to the end."""
+        path = start_path(self.scenes(j), self._fresh())
+        return self._run(_Particle(path, [path.branch()]))
+
+    def branch(self, survivor: _Particle, level: float) -> _Particle:
+        """A new particle: ``survivor`` up to the first step its running peak exceeded ``level``,
+        fresh streams from there on."""
+        peaks = np.array([self._peak(s) for s in survivor.snaps])
+        b = int(np.searchsorted(peaks > level, True)) - 1  # (the last snapshot at or below the level)
+        snap = survivor.snaps[b]
+        stop = survivor.snaps[b + 1].step if b + 1 < len(survivor.snaps) else self.n_steps
+        # the level's first passage: the stretch replayed with the limit's value set to the level
+        # (its first-passage slot is still NaN at the snapshot: the level lies below the value)
+        probe = snap.branch()
+        outputs = probe.args[6]
+        limits = outputs.limits.copy()
+        limits[self.limit, 2] = level
+        probe.args = (*probe.args[:6], outputs._replace(limits=limits), *probe.args[7:])
+        self.steps += stop - snap.step
+        advance(probe, stop)
+        t = probe.out[passage_slots(self.nf) + self.limit]
+        at = int(round(t / probe.args[5].dt))
+        if not snap.step < at <= stop:
+            raise RuntimeError(f"splitting: the level's first passage ({t}) lies outside the replayed "
+                               f"stretch ({snap.step}, {stop}]")
+        lead = snap.branch()
+        self.steps += at - lead.step
+        advance(lead, at)
+        child = lead.branch(self._fresh())
+        # (the survivor's snapshots up to the branching step are the child's too, then its own)
+        return self._run(_Particle(child, [*survivor.snaps[:b + 1], child.branch()]))
+
+
+def splitting(scenes: Callable[[int], object], limit: int, n: int, kill: int, seed: int, point: int,
+              replica: int) -> Replica:
+    """One replica of adaptive multilevel splitting with ``n`` paths, at least ``kill`` killed a
+    level; ``scenes(j)``: the scene of initial path ``j`` (the sweep point's, or with its own
+    uncertain parameters); ``limit``: the row of the scene's limits.  Scores are running peaks,
+    compared as the loop compares them with a limit's value (``peak > value``)."""
+    run = _Splitting(scenes, limit, seed, point, replica)
+    value = float(run.first.limits[limit, 2])
+    chooser = _chooser(seed, point, replica, SELECTION)
+    particles = [run.start(j) for j in range(n)]
+    weight, levels = 1.0, []
+    while True:
+        scores = np.array([p.score for p in particles])
+        level = float(np.partition(scores, kill - 1)[kill - 1])
+        if level >= value:
+            break
+        killed = np.flatnonzero(scores <= level)
+        if killed.shape[0] == n:  # (every path at the level: none above it)
+            weight = 0.0
+            break
+        survivors = np.flatnonzero(scores > level)
+        weight *= 1.0 - killed.shape[0] / n
+        levels.append((level / value, 1.0 - killed.shape[0] / n))
+        parents = survivors[chooser.integers(0, survivors.shape[0], killed.shape[0])]
+        for i, parent in zip(killed, parents):
+            particles[i] = run.branch(particles[parent], level)
+    above = sum(p.score > value for p in particles)
+    return Replica(weight * above / n, run.steps / run.n_steps, levels)
+
+
+def subset(scene, limit: int, n: int, seed: int, point: int, replica: int) -> Replica:
+    """One replica of subset simulation with ``n`` samples a level (``n P0`` chains of ``1 /
+    P0`` states) on the white-noise increments of ``scene`` (see the module)."""
+    if scene.has_filters or not scene.has_white_noise:
+        raise ValueError("rare.method = 'subset': samples the white-noise increments a path replays; this "
+                         "scene " + ("has filtered loads" if scene.has_filters else "has no white noise")
+                         + " (use method = 'splitting')")
+    dim = scene.n_steps * SCHEMES[scene.scheme].normals * max(scene.noisy_floors, 1)
+    rng = _chooser(seed, point, replica, INPUTS)
+    row = scene.limits[limit]
+    value = float(row[2])
+    seeded = needed_streams(scene)[1]
+    count = 0
+
+    def score(u: np.ndarray) -> float:
+        nonlocal count
+        streams = rare_streams(seed, point, replica, count, scene) if seeded else None
+        count += 1
+        path = start_path(scene, streams, normals=u, stretches=False)
+        advance(path, scene.n_steps)
+        return peak(path.out, row, scene.n_floors)
+
+    chain = round(1 / P0)
+    seeds = max(1, n // chain)
+    u = rng.standard_normal((seeds * chain, dim))
+    y = np.array([score(x) for x in u])
+    p, levels = 1.0, []
+    while len(levels) < MAX_LEVELS:
+        order = np.argsort(y)[::-1]
+        # (the level halfway between the seeds' lowest and the next: every seed lies above it)
+        level = 0.5 * float(y[order[seeds - 1]] + y[order[seeds]])
+        if level >= value:
+            break
+        levels.append((level / value, P0))
+        p *= P0
+        new_u, new_y = np.empty_like(u), np.empty_like(y)
+        for c, s in enumerate(order[:seeds]):
+            cu, cy = u[s].copy(), y[s]
+            for step in range(chain):
+                if step > 0:  # (the modified Metropolis move, component by component, then the level)
+                    xi = cu + PROPOSAL * rng.standard_normal(dim)
+                    moved = rng.random(dim) < np.exp(-0.5 * (xi * xi - cu * cu))
+                    candidate = np.where(moved, xi, cu)
+                    y_candidate = score(candidate)
+                    if y_candidate > level:
+                        cu, cy = candidate, y_candidate
+                new_u[c * chain + step], new_y[c * chain + step] = cu, cy
+        u, y = new_u, new_y
+    return Replica(p * float(np.mean(y > value)), float(count), levels)
+
+
+def combine(replicas: list[Replica], method: str) -> Estimate:
+    """The replicas' mean, with its coefficient of variation and 95 % Student-t interval."""
+    ps = np.array([r.p for r in replicas])
+    mean = float(ps.mean())
+    m = ps.shape[0]
+    sem = float(ps.std(ddof=1) / math.sqrt(m)) if m > 1 else math.inf
+    cov = sem / mean if mean > 0 else math.inf
+    half = float(stats.t.ppf(0.975, m - 1)) * sem if m > 1 else math.inf
+    levels = float(np.mean([len(r.levels) for r in replicas]))
+    spent = float(sum(r.paths for r in replicas))
+    return Estimate(mean, cov, max(0.0, mean - half), mean + half, spent, levels, method, replicas)
+
+
+def estimate(scenes: Callable[[int], object], limit: int, method: str, seed: int, point: int, *,
+             particles: int, target_cov: float, max_paths: float, kill: float = 0.1,
+             replicas: int | None = None, note: Callable[[Estimate], None] | None = None) -> Estimate:
+    """Replicas of ``method`` (``n = particles`` paths or samples each; splitting kills at least a
+    fraction ``kill`` a level) in stages: ``MIN_REPLICAS`` first, then as many more as their
+    spread says the target needs (``R cov^2 / target_cov^2`` in all), until the coefficient of
+    variation reaches ``target_cov`` at the end of a stage or ``max_paths`` path-equivalents are
+    spent (with ``replicas``: exactly that many).  Testing the spread only at the end of a stage
+    keeps the estimate from stopping on a lucky run of replicas, as testing after each would
+    (the replicas' law is skewed: a low spread comes with a low mean).  ``note`` is called with
+    the estimate so far after each replica."""
+    done: list[Replica] = []
+    goal = replicas if replicas is not None else MIN_REPLICAS
+    while True:
+        r = len(done)
+        if method == "splitting":
+            done.append(splitting(scenes, limit, particles, max(1, int(kill * particles)), seed, point, r))
+        else:
+            done.append(subset(scenes(0), limit, particles, seed, point, r))
+        result = combine(done, method)
+        if note is not None:
+            note(result)
+        if replicas is None and result.paths >= max_paths:
+            return result
+        if len(done) < goal:
+            continue
+        if replicas is not None or result.cov <= target_cov:
+            return result
+        if math.isfinite(result.cov):
+            goal = max(goal + 1, math.ceil(len(done) * (result.cov / target_cov) ** 2))
+        else:  # (no replica above the limit yet: double)
+            goal = 2 * len(done)
+
+
+def table(study, scene_of: Callable[[int, int], object], progress: bool = False) -> pd.DataFrame:
+    """rare.parquet: one row per sweep point of ``study`` (its ``[rare]`` table): the point, its
+    swept values, the estimate (``Estimate.row``), and as lists the replicas' estimates and
+    path-equivalents (the estimate's convergence) and the first replica's levels (splitting:
+    ``z_j``; subset: the intermediate thresholds, over the limit's value).  ``scene_of(point,
+    j)``: the scene of path ``j`` of a point (its uncertain parameters drawn as realisation
+    ``j``'s)."""
+    spec, seed = study.base.rare, study.base.ensemble.seed
+    CR = "\r" if sys.stderr.isatty() else ""  # noqa: N806
+    limit = list(study.base.limits).index(spec.limit)
+    rows = []
+    for point in range(len(study.points)):
+        def note(e: Estimate, point: int = point) -> None:
+            if progress:  # (one line, rewritten on a terminal; a line a replica in a log)
+                print(f"{CR}rare: point {point}: p = {e.p:.3g}, cov {e.cov:.2f}, {len(e.replicas)} replicas, "
+                      f"{e.paths:.0f} path-equivalents", end="" if CR else "\n", file=sys.stderr, flush=True)
+
+        result = estimate(lambda j, point=point: scene_of(point, j), limit, spec.method, seed, point,
+                          particles=spec.n, target_cov=spec.target_cov, max_paths=spec.max_paths,
+                          kill=spec.kill, note=note)
+        if progress and CR:
+            print(file=sys.stderr)
+        rows.append({"point": point, **{k: study.grid[point][k] for k in study.sweep_keys}, **result.row(),
+                     "replica_p": [r.p for r in result.replicas],
+                     "replica_paths": [r.paths for r in result.replicas],
+                     "level_values": [z for z, _ in result.replicas[0].levels]})
+    return pd.DataFrame(rows)
