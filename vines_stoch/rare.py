@@ -334,19 +334,19 @@ def table(study, scene_of: Callable[[int, int], object], progress: bool = False)
     j)``: the scene of path ``j`` of a point (its uncertain parameters drawn as realisation
     ``j``'s)."""
     spec, seed = study.base.rare, study.base.ensemble.seed
-    CR = "\r" if sys.stderr.isatty() else ""  # noqa: N806
+    cr = "\r" if sys.stderr.isatty() else ""
     limit = list(study.base.limits).index(spec.limit)
     rows = []
     for point in range(len(study.points)):
         def note(e: Estimate, point: int = point) -> None:
             if progress:  # (one line, rewritten on a terminal; a line a replica in a log)
-                print(f"{CR}rare: point {point}: p = {e.p:.3g}, cov {e.cov:.2f}, {len(e.replicas)} replicas, "
-                      f"{e.paths:.0f} path-equivalents", end="" if CR else "\n", file=sys.stderr, flush=True)
+                print(f"{cr}rare: point {point}: p = {e.p:.3g}, cov {e.cov:.2f}, {len(e.replicas)} replicas, "
+                      f"{e.paths:.0f} path-equivalents", end="" if cr else "\n", file=sys.stderr, flush=True)
 
         result = estimate(lambda j, point=point: scene_of(point, j), limit, spec.method, seed, point,
                           particles=spec.n, target_cov=spec.target_cov, max_paths=spec.max_paths,
                           kill=spec.kill, note=note)
-        if progress and CR:
+        if progress and cr:
             print(file=sys.stderr)
         rows.append({"point": point, **{k: study.grid[point][k] for k in study.sweep_keys}, **result.row(),
                      "replica_p": [r.p for r in result.replicas],
