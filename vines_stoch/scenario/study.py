@@ -92,12 +92,13 @@ def _invalid(data: dict[str, Any], values: dict[str, float], source: str) -> Sce
 
 def _variant(data: dict[str, Any], values: dict[str, Any]) -> dict[str, Any]:
     """A copy of the file's tables with the fields named by ``values`` set: one design, without
-    the uncertain and optimize tables (the values a study varies)."""
+    the uncertain, optimize and sensitivity tables (the values a study varies, and the study over
+    them)."""
     variant = copy.deepcopy(data)
     for key, value in values.items():
         set_path(variant, key, value)
-    variant.pop("uncertain", None)
-    variant.pop("optimize", None)
+    for table in ("uncertain", "optimize", "sensitivity"):
+        variant.pop(table, None)
     return variant
 
 

@@ -1,0 +1,230 @@
+"""Rare-event estimates (``vines_stoch/rare.py``) against the exact first-passage probability of
+a linear oscillator's discrete-time Gaussian process, computed here by an independent method.
+
+The oscillator (omega = 2 pi, zeta = 0.05, white noise scaled to a stationary standard deviation
+of 1, from rest, T = 10 s, dt = 0.01; the peak of |x| over the step ends) is linear in its
+standard normal increments: ``x_k = sum_j h_{k-j} u_j`` with ``h`` the scheme's response to one
+unit increment (read from the engine: the map is the engine's discrete process, whatever its
+scheme).  Its failure set is the union of the 2 n half-spaces ``+-a_k . u > b``, and importance
+sampling using elementary events (Au and Beck, Probab. Eng. Mech. 16 (2001) 193) gives
+``P = (sum_k P(E_k)) E[1 / #events hit]`` with a coefficient of variation of about 1 % from a few
+thousand samples: the reference the estimators are held to.
+
+Tolerances: an estimate and the reference agree within ``Z`` standard errors of their difference
+(the estimator's reported ``cov`` and the reference's own standard error).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from scipy import stats
+
+from tests.helpers import scene_from, study_from
+from vines_stoch import rare, run
+from vines_stoch.kernels import simulate
+from vines_stoch.scenario.errors import ScenarioError
+
+OMEGA, ZETA = 2 * math.pi, 0.05
+#: The white-noise intensity of a stationary standard deviation of 1: ``sigma^2 / (4 zeta omega^3)``.
+SIGMA = math.sqrt(4 * ZETA * OMEGA ** 3)
+#: Standard errors of a difference within which two estimates agree (a two-sided 0.3 % test for each).
+Z = 3.0
+
+
+def oscillator(value: float, duration: float = 10.0) -> dict:
+    """The linear oscillator of the module with a limit ``roof`` on the peak of ``|x|``."""
+    return {"name": "oscillator", "primary": {"mass": 1.0, "stiffness": OMEGA ** 2, "damping": 2 * ZETA * OMEGA},
+            "loads": [{"type": "white-noise", "intensity": SIGMA}],
+            "simulation": {"duration": duration, "dt": 0.01, "scheme": "euler-maruyama"},
+            "ensemble": {"realizations": 10, "seed": 3},
+            "limits": {"roof": {"metric": "x1_max", "value": value}}}
+
+
+def response_matrix(scene) -> np.ndarray:
+    """``A`` with ``x_k = (A u)_{k-1}``, ``k = 1..n``: the engine's response to one unit increment
+    at the first step, shifted (the scheme is time-invariant: checked on a random input)."""
+    n = scene.n_steps
+    unit = np.zeros(n)
+    unit[0] = 1.0
+    h = np.zeros((n + 1, 1))
+    simulate(scene, normals=unit, history=h, signals=("x1",))
+    a = np.zeros((n, n))
+    for k in range(1, n + 1):
+        a[k - 1, :k] = h[k:0:-1, 0]
+    u = np.random.default_rng(0).standard_normal(n)
+    x = np.zeros((n + 1, 1))
+    simulate(scene, normals=u, history=x, signals=("x1",))
+    assert np.allclose(a @ u, x[1:, 0], rtol=0, atol=1e-9 * np.abs(x).max())
+    return a
+
+
+def isee(a: np.ndarray, b: float, samples: int = 4000, seed: int = 1) -> tuple[float, float]:
+    """``P(max_k |(A u)_k| > b)`` for standard normal ``u`` by importance sampling using
+    elementary events (Au and Beck 2001), with its standard error."""
+    n = a.shape[0]
+    norms = np.linalg.norm(a, axis=1)
+    events = stats.norm.sf(b / norms)  # P(a_k u > b) = P(-a_k u > b)
+    total = 2 * events.sum()
+    rng = np.random.default_rng(seed)
+    pick = rng.choice(2 * n, samples, p=np.concatenate([events, events]) / total)
+    k, sign = pick % n, np.where(pick < n, 1.0, -1.0)
+    direction = a[k] / norms[k, None]
+    beyond = stats.norm.isf(rng.random(samples) * events[k])  # the component along a_k, given the event
+    z = rng.standard_normal((samples, n))
+    u = z - direction * np.sum(direction * z, axis=1)[:, None] + (sign * beyond)[:, None] * direction
+    hits = np.sum(np.abs(u @ a.T) > b, axis=1)
+    assert hits.min() >= 1  # (each sample lies in the event it was drawn from)
+    weights = total / hits
+    return float(weights.mean()), float(weights.std(ddof=1) / math.sqrt(samples))
+
+
+@pytest.fixture(scope="module")
+def matrix() -> np.ndarray:
+    return response_matrix(scene_from(oscillator(1.0)))
+
+
+def agree(p: float, cov: float, reference: float, se: float) -> bool:
+    """Whether an estimate with coefficient of variation ``cov`` agrees with the reference."""
+    return abs(p - reference) <= Z * math.hypot(p * cov, se)
+
+
+@pytest.mark.parametrize("value, p_about, particles, target", [(4.2, 1e-3, 100, 0.1), (5.3, 1e-5, 200, 0.2),
+                                                               (5.75, 1e-6, 200, 0.3)])
+def test_splitting_against_the_exact_first_passage(matrix, value, p_about, particles, target):
+    reference, se = isee(matrix, value)
+    assert p_about / 3 < reference < 3 * p_about
+    scene = scene_from(oscillator(value))
+    e = rare.estimate(lambda j: scene, 0, "splitting", 11, 0, particles=particles, target_cov=target,
+                      max_paths=60_000)
+    assert e.cov <= target or e.paths >= 60_000
+    assert agree(e.p, e.cov, reference, se), (e.p, e.cov, reference, se)
+    assert e.p_lo <= e.p <= e.p_hi
+
+
+def test_subset_simulation_against_the_exact_first_passage(matrix):
+    value = 5.3
+    reference, se = isee(matrix, value)
+    scene = scene_from(oscillator(value))
+    e = rare.estimate(lambda j: scene, 0, "subset", 11, 0, particles=500, target_cov=0.2, max_paths=60_000)
+    assert agree(e.p, e.cov, reference, se), (e.p, e.cov, reference, se)
+    assert len(e.replicas[0].levels) >= 4  # (P0 = 0.1: four levels below 1e-5)
+
+
+def test_the_reference_against_crude_monte_carlo(matrix):
+    """At p about 1e-3 the ensemble's own exceedance fraction (its Wilson interval) holds the
+    reference: the reference is that of the engine's process, its limit included."""
+    value = 4.2
+    reference, se = isee(matrix, value)
+    summary = run(oscillator(value) | {"ensemble": {"realizations": 100_000, "seed": 5}}).summary
+    assert summary.p_roof_lo[0] <= reference <= summary.p_roof_hi[0]
+
+
+def impact_oscillator(value: float, realizations: int = 10) -> dict:
+    """The oscillator for 2 s with a vibro-impact absorber (about 17 impacts a path)."""
+    data = oscillator(value, duration=2.0)
+    data["absorbers"] = [{"type": "impact", "mass": 0.05, "clearance": 0.2, "restitution": 0.6}]
+    data["ensemble"] = {"realizations": realizations, "seed": 8}
+    return data
+
+
+def test_splitting_subset_and_crude_monte_carlo_agree_on_a_scene_with_impacts():
+    """p about 2e-4: crude Monte Carlo on 500,000 paths (its Wilson interval's half-width over
+    1.96 as its standard error), splitting and subset simulation, pairwise within ``Z`` standard
+    errors of their difference."""
+    value = 3.35
+    summary = run(impact_oscillator(value, 500_000)).summary
+    crude, crude_se = summary.p_roof[0], (summary.p_roof_hi[0] - summary.p_roof_lo[0]) / (2 * 1.96)
+    scene = scene_from(impact_oscillator(value))
+    assert scene.has_impact
+    split = rare.estimate(lambda j: scene, 0, "splitting", 2, 0, particles=200, target_cov=0.25, max_paths=40_000)
+    sub = rare.estimate(lambda j: scene, 0, "subset", 2, 0, particles=500, target_cov=0.15, max_paths=40_000)
+    assert 1e-4 < crude < 4e-4
+    assert agree(split.p, split.cov, crude, crude_se), (split.p, split.cov, crude, crude_se)
+    assert agree(sub.p, sub.cov, crude, crude_se), (sub.p, sub.cov, crude, crude_se)
+    assert agree(split.p, split.cov, sub.p, sub.p * sub.cov), (split.p, split.cov, sub.p, sub.cov)
+
+
+def test_the_reported_cov_matches_the_spread_of_repeated_estimates(matrix):
+    """20 estimates on 20 seeds: the spread of the estimates against the coefficient of variation
+    each reports.  Under normality ``s / sigma`` of 20 values lies in [0.57, 1.45] with 99 %
+    probability (chi-square, 19 degrees of freedom): the band of the ratio."""
+    scene = scene_from(oscillator(2.6, duration=3.0))
+    estimates = [rare.estimate(lambda j: scene, 0, "splitting", seed, 0, particles=50, target_cov=0.25,
+                               max_paths=20_000) for seed in range(20)]
+    ps = np.array([e.p for e in estimates])
+    spread = ps.std(ddof=1) / ps.mean()
+    reported = np.sqrt(np.mean([e.cov ** 2 for e in estimates]))
+    low, high = (math.sqrt(stats.chi2.ppf(q, 19) / 19) for q in (0.005, 0.995))
+    assert low <= spread / reported <= high, (spread, reported)
+
+
+def test_an_estimate_depends_on_its_seed_and_point_alone():
+    scene = scene_from(oscillator(3.5, duration=3.0))
+    first = rare.estimate(lambda j: scene, 0, "splitting", 4, 2, particles=40, target_cov=0.5, max_paths=1e9,
+                          replicas=3)
+    again = rare.estimate(lambda j: scene, 0, "splitting", 4, 2, particles=40, target_cov=0.5, max_paths=1e9,
+                          replicas=2)
+    other = rare.estimate(lambda j: scene, 0, "splitting", 4, 3, particles=40, target_cov=0.5, max_paths=1e9,
+                          replicas=2)
+    assert [r.p for r in again.replicas] == [r.p for r in first.replicas[:2]]
+    assert [r.p for r in other.replicas] != [r.p for r in again.replicas]
+
+
+def test_a_branch_replays_its_parent_up_to_the_level():
+    """A branch starts from its parent's state at the first step the parent's running peak
+    exceeded the level (bitwise: the parent replayed from its start), and leaves it after."""
+    from vines_stoch.kernels import advance
+
+    scene = scene_from(oscillator(3.0, duration=3.0))
+    split = rare._Splitting(lambda j: scene, 0, 1, 0, 0)
+    parent = split.start(0)
+    level = 0.6 * parent.score
+    child = split.branch(parent, level)
+    shared = next(i for i, (a, b) in enumerate(zip(child.snaps, parent.snaps)) if a is not b)
+    start = child.snaps[shared]  # (the child at its branching step)
+    replay = parent.snaps[0].branch()
+    advance(replay, start.step - 1)
+    assert split._peak(replay) <= level
+    advance(replay, start.step)
+    assert split._peak(replay) > level
+    assert np.array_equal(replay.x, start.x) and np.array_equal(replay.v, start.v)
+    assert child.score > level and child.score != parent.score
+
+
+def rare_data(method: str = "splitting", **rare_keys) -> dict:
+    return oscillator(3.5, duration=3.0) | {"rare": {"limit": "roof", "method": method, "target_cov": 0.3,
+                                                     "max_paths": 3000, "particles": 50, **rare_keys}}
+
+
+def test_rare_parquet_in_memory_and_from_the_folder(tmp_path):
+    from vines_stoch import read_results
+
+    results = run(rare_data(), tmp_path / "out")
+    again = read_results(tmp_path / "out")
+    assert list(results.rare.columns[:8]) == ["point", "p", "cov", "p_lo", "p_hi", "paths", "levels", "replicas"]
+    assert results.rare.equals(again.rare)
+    row = results.rare.iloc[0]
+    assert row.method == "splitting" and 0 < row.p < 1 and row.paths > 0
+    assert len(row.replica_p) == row.replicas and np.isclose(np.mean(row.replica_p), row.p)
+
+
+@pytest.mark.parametrize("changes, key", [
+    ({"rare.limit": "floor"}, "rare.limit"),
+    ({"rare.target_cov": 1.5}, "rare.target_cov"),
+    ({"rare.method": "importance"}, "rare.method"),
+    ({"rare.particles": 55, "rare.method": "subset"}, "rare.particles"),
+    ({"loads": [{"type": "harmonic", "amplitude": 1.0, "frequency": 1.0}]}, "rare"),
+])
+def test_bad_rare_tables_are_refused_by_name(changes, key):
+    with pytest.raises(ScenarioError, match=key.replace(".", r"\.")):
+        study_from(rare_data(), changes)
+
+
+def test_subset_simulation_refuses_filtered_loads():
+    data = rare_data("subset")
+    data["loads"] = [{"type": "filtered-noise", "intensity": 1.0, "frequency": 6.0, "damping": 0.1}]
+    with pytest.raises(ScenarioError, match=r"rare\.method.*filtered loads.*splitting"):
+        study_from(data)
