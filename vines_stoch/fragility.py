@@ -93,13 +93,35 @@ def log_likelihood(u: np.ndarray, n: np.ndarray, z: np.ndarray, a: float, b: flo
     return float((z * log_ndtr(eta) + (n - z) * log_ndtr(-eta)).sum())
 
 
-def stripes(realizations: pd.DataFrame, limit: str, im: str, diverged: str = "exclude") -> pd.DataFrame:
+def rare_counts(rare: pd.DataFrame | None, limit: str, im: str) -> dict[float, tuple[int, float]]:
+    """The rare-event estimates of ``limit`` (rare.parquet's rows) at the values of the swept key
+    ``im``, each as the binomial counts that carry the same information: ``n = (1 - p) / (p
+    cov^2)`` trials (rounded) of which ``p n`` exceed, the crude Monte Carlo sample whose
+    estimate has the same mean and coefficient of variation.  Estimates without an exceedance
+    (``p = 0``, no finite ``cov``) carry none and are left out."""
+    if rare is None or im not in rare or "limit" not in rare:
+        return {}
+    counts: dict[float, tuple[int, float]] = {}
+    for _, row in rare[rare["limit"] == limit].iterrows():
+        if row.p > 0 and np.isfinite(row["cov"]) and row["cov"] > 0:
+            n = max(2, round((1 - row.p) / (row.p * row["cov"] ** 2)))
+            exceeded = row.p * n
+            old = counts.get(float(row[im]), (0, 0.0))
+            counts[float(row[im])] = (old[0] + n, old[1] + exceeded)
+    return counts
+
+
+def stripes(realizations: pd.DataFrame, limit: str, im: str, diverged: str = "exclude",
+            rare: pd.DataFrame | None = None) -> pd.DataFrame:
     """One row per intensity: the realisations whose column ``im`` holds it (a swept key: the
     sweep points at that value, e.g. every record of a suite scaled to one ``Sa``; or a
     realisation's own intensity, such as the ``sa`` column of generated ground motions), ``n``
     counted, ``exceeded``, the ``fraction`` with its 95 % Wilson interval (``fraction_lo``,
     ``fraction_hi``) and ``n_diverged`` (realisations that did not end ok: left out, or counted
-    as exceedances with ``diverged = "exceed"``)."""
+    as exceedances with ``diverged = "exceed"``).  With ``rare`` (rare.parquet of the run), the
+    rare-event estimates of ``limit`` add their counts of equal information (``rare_counts``,
+    ``n_rare`` of ``n``) to the stripes of their intensities: a curve can rest on intensities
+    where the crude sample saw no exceedance."""
     column = f"first_passage_{limit}"
     if column not in realizations:
         known = ", ".join(limit_names(realizations)) or "none: the scenario has no [limits]"
@@ -110,6 +132,7 @@ def stripes(realizations: pd.DataFrame, limit: str, im: str, diverged: str = "ex
     if diverged not in DIVERGED:
         raise ValueError(f"--diverged {diverged}: must be one of {', '.join(DIVERGED)}")
     rows = []
+    extra = rare_counts(rare, limit, im)
     # (NaN: a stripe that fit leaves out)
     for value, group in realizations.groupby(im, sort=True, dropna=False):
         ok = group["status"] == "ok"
@@ -118,11 +141,13 @@ def stripes(realizations: pd.DataFrame, limit: str, im: str, diverged: str = "ex
         n = int(ok.sum())
         if diverged == "exceed":
             exceeded, n = exceeded + failed, n + failed
+        n_rare, z_rare = extra.get(float(value), (0, 0.0))
+        n, exceeded = n + n_rare, exceeded + z_rare
         fraction, lo, hi = exceedance(exceeded, n)
         rows.append({"im": float(value), "n": n, "exceeded": exceeded, "fraction": fraction,
-                     "fraction_lo": lo, "fraction_hi": hi, "n_diverged": failed})
+                     "fraction_lo": lo, "fraction_hi": hi, "n_diverged": failed, "n_rare": n_rare})
     return pd.DataFrame(rows, columns=["im", "n", "exceeded", "fraction", "fraction_lo", "fraction_hi",
-                                       "n_diverged"])
+                                       "n_diverged", "n_rare"])
 
 
 def _replicates(n: np.ndarray, z: np.ndarray, samples: int,
@@ -225,7 +250,7 @@ def fragility(directory: str | Path, limit: str, im: str, diverged: str = "exclu
     if plot and figure.exists() and KEY not in png_text(figure):
         raise ForeignFiles(f"{figure}: not a plot vines-stoch wrote; move it out of the folder to fit "
                            f"{limit}")
-    table = stripes(realizations, limit, im, diverged)
+    table = stripes(realizations, limit, im, diverged, results.rare)
     result = fit(table, samples, seed, keep=True)
     replicates = result.pop("replicates", None)
     policy = "counted as exceedances" if diverged == "exceed" else "excluded"

@@ -284,16 +284,22 @@ def limit_names(frame: pd.DataFrame) -> list[str]:
     return [c[len("first_passage_"):] for c in frame.columns if c.startswith("first_passage_")]
 
 
-def exceedance(passed: int, n: int) -> tuple[float, float, float]:
+def exceedance(passed: float, n: int) -> tuple[float, float, float]:
     """Fraction ``passed / n`` of realisations whose peak exceeded a limit, with its 95 % Wilson
     score interval (``scipy.stats.binomtest``; Wilson, J. Am. Stat. Assoc. 22 (1927) 209,
     DOI 10.1080/01621459.1927.10502953): its coverage stays close to 95 % for small ``n`` and
-    fractions near 0 or 1, where the normal approximation fails.  NaN for ``n = 0``."""
-    from scipy.stats import binomtest  # (scipy.stats takes about 0.5 s to import)
+    fractions near 0 or 1, where the normal approximation fails.  NaN for ``n = 0``.  A count
+    that is not whole (a rare-event estimate's count of equal information,
+    ``fragility.rare_counts``) takes Wilson's closed form."""
+    from scipy.stats import binomtest, norm  # (scipy.stats takes about 0.5 s to import)
 
     if n == 0:
         return math.nan, math.nan, math.nan
-    ci = binomtest(passed, n).proportion_ci(confidence_level=0.95, method="wilson")
+    if passed != int(passed):
+        z, p = float(norm.isf(0.025)), passed / n
+        centre, half = p + z * z / (2 * n), z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n))
+        return p, (centre - half) / (1 + z * z / n), (centre + half) / (1 + z * z / n)
+    ci = binomtest(int(passed), n).proportion_ci(confidence_level=0.95, method="wilson")
     return passed / n, float(ci.low), float(ci.high)
 
 

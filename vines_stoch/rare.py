@@ -349,6 +349,7 @@ def table(study, scene_of: Callable[[int, int], object], progress: bool = False)
         if progress and cr:
             print(file=sys.stderr)
         rows.append({"point": point, **{k: study.grid[point][k] for k in study.sweep_keys}, **result.row(),
+                     "limit": spec.limit,
                      "replica_p": [r.p for r in result.replicas],
                      "replica_paths": [r.paths for r in result.replicas],
                      "level_values": [z for z, _ in result.replicas[0].levels]})

@@ -36,7 +36,8 @@ Z = 3.0
 
 def oscillator(value: float, duration: float = 10.0) -> dict:
     """The linear oscillator of the module with a limit ``roof`` on the peak of ``|x|``."""
-    return {"name": "oscillator", "primary": {"mass": 1.0, "stiffness": OMEGA ** 2, "damping": 2 * ZETA * OMEGA},
+    return {"name": "oscillator",
+            "primary": {"mass": 1.0, "stiffness": OMEGA ** 2, "damping": 2 * ZETA * OMEGA},
             "loads": [{"type": "white-noise", "intensity": SIGMA}],
             "simulation": {"duration": duration, "dt": 0.01, "scheme": "euler-maruyama"},
             "ensemble": {"realizations": 10, "seed": 3},
@@ -139,7 +140,8 @@ def test_splitting_subset_and_crude_monte_carlo_agree_on_a_scene_with_impacts():
     crude, crude_se = summary.p_roof[0], (summary.p_roof_hi[0] - summary.p_roof_lo[0]) / (2 * 1.96)
     scene = scene_from(impact_oscillator(value))
     assert scene.has_impact
-    split = rare.estimate(lambda j: scene, 0, "splitting", 2, 0, particles=200, target_cov=0.25, max_paths=40_000)
+    split = rare.estimate(lambda j: scene, 0, "splitting", 2, 0, particles=200, target_cov=0.25,
+                          max_paths=40_000)
     sub = rare.estimate(lambda j: scene, 0, "subset", 2, 0, particles=500, target_cov=0.15, max_paths=40_000)
     assert 1e-4 < crude < 4e-4
     assert agree(split.p, split.cov, crude, crude_se), (split.p, split.cov, crude, crude_se)
@@ -204,7 +206,8 @@ def test_rare_parquet_in_memory_and_from_the_folder(tmp_path):
 
     results = run(rare_data(), tmp_path / "out")
     again = read_results(tmp_path / "out")
-    assert list(results.rare.columns[:8]) == ["point", "p", "cov", "p_lo", "p_hi", "paths", "levels", "replicas"]
+    assert list(results.rare.columns[:8]) == ["point", "p", "cov", "p_lo", "p_hi", "paths", "levels",
+                                              "replicas"]
     assert results.rare.equals(again.rare)
     row = results.rare.iloc[0]
     assert row.method == "splitting" and 0 < row.p < 1 and row.paths > 0
@@ -228,3 +231,24 @@ def test_subset_simulation_refuses_filtered_loads():
     data["loads"] = [{"type": "filtered-noise", "intensity": 1.0, "frequency": 6.0, "damping": 0.1}]
     with pytest.raises(ScenarioError, match=r"rare\.method.*filtered loads.*splitting"):
         study_from(data)
+
+
+def test_fragility_takes_the_rare_estimates_as_stripes(tmp_path):
+    """A sweep over the noise's intensity whose weakest point crude Monte Carlo (200 paths) sees
+    no exceedance at: the rare estimates join the stripes as counts of equal information, and
+    the stripe's fraction is then the estimate's."""
+    from vines_stoch.fragility import fragility
+
+    data = oscillator(3.0, duration=3.0) | {
+        "ensemble": {"realizations": 200, "seed": 1},
+        "sweep": {"loads.0.intensity": [0.6 * SIGMA, 0.8 * SIGMA, SIGMA]},
+        "rare": {"limit": "roof", "target_cov": 0.3, "max_paths": 20_000, "particles": 50}}
+    results = run(data, tmp_path / "out")
+    weakest = results.realizations[results.realizations.point == 0]
+    assert weakest.first_passage_roof.notna().sum() == 0
+    rows = fragility(tmp_path / "out", "roof", "loads.0.intensity", samples=200, plot=False)
+    assert (rows.n_rare > 0).all()
+    estimate = results.rare.set_index("point")
+    first = rows.iloc[0]
+    assert first.fraction == pytest.approx(estimate.p[0], rel=1e-3)  # (200 crude paths beside some 1e7)
+    assert np.isfinite(first["median"]) and first["beta"] > 0

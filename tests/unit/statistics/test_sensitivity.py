@@ -41,7 +41,7 @@ def test_the_estimator_against_the_ishigami_closed_forms():
     for name, exact in (("s1", s1), ("st", st)):
         half = (frame[f"{name}_hi"] - frame[f"{name}_lo"]).to_numpy() / 2
         assert np.all(half < 0.05)
-        assert np.all(np.abs(frame[name].to_numpy() - exact) <= 2 * half), (name, frame[name].to_numpy(), exact)
+        assert np.all(np.abs(frame[name].to_numpy() - exact) <= 2 * half), (name, frame[name], exact)
 
 
 def test_the_unit_cube_maps_onto_the_laws():
@@ -67,7 +67,8 @@ def scene_data(metric: str = "x1_max") -> dict:
             "simulation": {"duration": 3.0, "dt": 0.01},
             "ensemble": {"realizations": 4, "seed": 2},
             "limits": {"roof": {"metric": "x1_max", "value": 0.25}},
-            "uncertain": {"primary.stiffness": {"distribution": "uniform", "low": 0.8 * OMEGA2, "high": 1.2 * OMEGA2},
+            "uncertain": {"primary.stiffness": {"distribution": "uniform", "low": 0.8 * OMEGA2,
+                                                "high": 1.2 * OMEGA2},
                           "absorbers.0.mass": {"distribution": "lognormal", "median": 0.05, "cov": 0.2}},
             "sensitivity": {"metric": metric, "samples": 64, "realizations": 8, "bootstrap": 200}}
 
