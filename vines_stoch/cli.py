@@ -137,6 +137,14 @@ def run(
 
     with pd.option_context("display.width", 200, "display.max_columns", 24, "display.precision", 4):
         typer.echo(summary[headline(study, summary)].to_string(index=False))
+        if result.rare is not None:
+            typer.echo(f"\n{directory}/rare.parquet: P({study.base.rare.limit} exceeded), "
+                       f"{study.base.rare.method}")
+            typer.echo(result.rare[[*study.sweep_keys, "p", "cov", "p_lo", "p_hi", "paths", "replicas"]]
+                       .to_string(index=False))
+        if result.sensitivity is not None:
+            typer.echo(f"\n{directory}/sensitivity.parquet: Sobol indices of {study.base.sensitivity.metric}")
+            typer.echo(result.sensitivity.to_string(index=False))
 
 
 def headline(study: Study, summary: pd.DataFrame) -> list[str]:

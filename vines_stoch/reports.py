@@ -38,6 +38,8 @@ class Run:
     poincare: pd.DataFrame | None = None
     spectra: pd.DataFrame | None = None
     paths: pd.DataFrame | None = None
+    rare: pd.DataFrame | None = None
+    sensitivity: pd.DataFrame | None = None
 
     @classmethod
     def read(cls, directory: str | Path, label: str | None = None) -> Run:
@@ -47,7 +49,7 @@ class Run:
         scenario = tomllib.loads(meta["vines_stoch.scenario"])
         return cls(directory, label or scenario.get("name", directory.name), results.realizations,
                    results.summary, results.history, scenario, int(meta["vines_stoch.seed"]),
-                   results.poincare, results.spectra, results.paths)
+                   results.poincare, results.spectra, results.paths, results.rare, results.sensitivity)
 
     @property
     def swept(self) -> list[str]:
@@ -354,6 +356,46 @@ def _plots(runs: list[Run], out: Path, point: int | None) -> list[str]:
                ylabel="one-sided power spectral density [(signal unit)² s/rad]",
                title="Power spectral densities (Welch), 95 % bands")
         save(fig, "spectra.png")
+
+    estimated = [run for run in runs if run.rare is not None and len(run.rare)]
+    if estimated:  # each point's replicas: the running estimate against the paths spent; the levels
+        fig, (conv, lev) = plt.subplots(1, 2, figsize=(11, 4.2))
+        for run in estimated:
+            for _, row in run.rare.iterrows():
+                where = ", ".join(f"{k} = {_value(row[k])}" for k in run.swept) or f"point {row['point']}"
+                ps = np.asarray(row["replica_p"], float)
+                spent = np.cumsum(np.asarray(row["replica_paths"], float))
+                m = np.arange(1, ps.size + 1)
+                mean = np.cumsum(ps) / m
+                sd = np.array([ps[:k].std(ddof=1) if k > 1 else np.nan for k in m])
+                line, = conv.plot(spent, mean, "o-", ms=3, label=f"{run.label} ({where}): {row['method']}")
+                conv.fill_between(spent, np.clip(mean - 1.96 * sd / np.sqrt(m), mean / 100, None),
+                                  mean + 1.96 * sd / np.sqrt(m), color=line.get_color(), alpha=0.2)
+                levels = np.asarray(row["level_values"], float)
+                lev.plot(np.arange(1, levels.size + 1), levels, ".-", ms=3, color=line.get_color(),
+                         label=f"{run.label} ({where})")
+        conv.set(xscale="log", yscale="log", xlabel="path-equivalents spent",
+                 ylabel="exceedance probability (mean of the replicas, 95 %)",
+                 title="Rare-event estimates as replicas accrue")
+        lev.set(xlabel="level", ylabel="level / the limit's value",
+                title="Levels of a replica (splitting: z_j; subset: thresholds)")
+        save(fig, "rare_events.png")
+
+    indexed = [run for run in runs if run.sensitivity is not None and len(run.sensitivity)]
+    if indexed:  # first-order and total indices at one point, with their intervals
+        fig, ax = plt.subplots()
+        for i, run in enumerate(indexed):
+            rows = run.sensitivity[run.sensitivity["point"] == _point(run, point)]
+            x = np.arange(len(rows)) + 0.4 * i / len(indexed)
+            for offset, name, title in ((0.0, "s1", "first order"), (0.2, "st", "total")):
+                err = np.vstack([rows[name] - rows[f"{name}_lo"], rows[f"{name}_hi"] - rows[name]]).clip(0)
+                ax.bar(x + offset / len(indexed), rows[name], width=0.2 / len(indexed), yerr=err, capsize=3,
+                       label=f"{run.label}: {title}")
+            ax.set_xticks(np.arange(len(rows)) + 0.1, rows["parameter"], rotation=15)
+        metric = indexed[0].scenario.get("sensitivity", {}).get("metric", "edm")
+        ax.set(ylabel="Sobol index (bootstrap 95 %)",
+               title=f"Sensitivity of {metric} to the uncertain parameters")
+        save(fig, "sensitivity.png")
 
     fig, ax = plt.subplots()
     samples = {}
