@@ -46,7 +46,7 @@ from ..physics.hertz import hertz_constant
 from ..records import G, write_at2
 from ..scene import build_scene
 from ..streams import streams
-from . import precision, scenes, stability
+from . import bench_rare, precision, scenes, stability
 from .bench_gpu import replace_section, section_of
 from .reference import hertz_reference
 
@@ -511,6 +511,7 @@ def main(out: Path = Path("reports/benchmarks.md"), n_paths: int = 200) -> str:
     out.parent.mkdir(parents=True, exist_ok=True)
     work_precision = precision.section(out.parent)
     stability_suite = stability.section()
+    rare_events = bench_rare.section()
     cores = os.cpu_count()
     scipy_row = (f"| scipy DOP853 + events, rtol {ssvi['scipy_rtol']:.0e} | {ssvi['scipy_s'] * 1e3:.1f} | "
                  f"{ssvi['scipy_error']:.1e} | {ssvi['scipy_s'] / ssvi['ours_s']:.0f}x slower |"
@@ -638,6 +639,7 @@ contact onsets and ends located as events.
 
 {work_precision}
 {stability_suite}
+{rare_events}
 ## Compile time and start-up
 
 `vines-stoch run FILE --quiet` in a fresh process: first on an empty numba cache (every kernel

@@ -1,14 +1,11 @@
 """Rare-event estimates (``vines_stoch/rare.py``) against the exact first-passage probability of
-a linear oscillator's discrete-time Gaussian process, computed here by an independent method.
+a linear oscillator's discrete-time Gaussian process, computed by an independent method
+(``validation/first_passage.py``: importance sampling using elementary events, Au and Beck,
+Probab. Eng. Mech. 16 (2001) 193, on the response's linear map; about 1 % coefficient of
+variation), crude Monte Carlo and each other.
 
-The oscillator (omega = 2 pi, zeta = 0.05, white noise scaled to a stationary standard deviation
-of 1, from rest, T = 10 s, dt = 0.01; the peak of |x| over the step ends) is linear in its
-standard normal increments: ``x_k = sum_j h_{k-j} u_j`` with ``h`` the scheme's response to one
-unit increment (read from the engine: the map is the engine's discrete process, whatever its
-scheme).  Its failure set is the union of the 2 n half-spaces ``+-a_k . u > b``, and importance
-sampling using elementary events (Au and Beck, Probab. Eng. Mech. 16 (2001) 193) gives
-``P = (sum_k P(E_k)) E[1 / #events hit]`` with a coefficient of variation of about 1 % from a few
-thousand samples: the reference the estimators are held to.
+The oscillator: omega = 2 pi, zeta = 0.05, white noise scaled to a stationary standard deviation
+of 1, from rest, T = 10 s, dt = 0.01; the peak of |x| over the step ends.
 
 Tolerances: an estimate and the reference agree within ``Z`` standard errors of their difference
 (the estimator's reported ``cov`` and the reference's own standard error).
@@ -24,8 +21,8 @@ from scipy import stats
 
 from tests.helpers import scene_from, study_from
 from vines_stoch import rare, run
-from vines_stoch.kernels import simulate
 from vines_stoch.scenario.errors import ScenarioError
+from vines_stoch.validation.first_passage import isee, response_matrix
 
 OMEGA, ZETA = 2 * math.pi, 0.05
 #: The white-noise intensity of a stationary standard deviation of 1: ``sigma^2 / (4 zeta omega^3)``.
@@ -42,44 +39,6 @@ def oscillator(value: float, duration: float = 10.0) -> dict:
             "simulation": {"duration": duration, "dt": 0.01, "scheme": "euler-maruyama"},
             "ensemble": {"realizations": 10, "seed": 3},
             "limits": {"roof": {"metric": "x1_max", "value": value}}}
-
-
-def response_matrix(scene) -> np.ndarray:
-    """``A`` with ``x_k = (A u)_{k-1}``, ``k = 1..n``: the engine's response to one unit increment
-    at the first step, shifted (the scheme is time-invariant: checked on a random input)."""
-    n = scene.n_steps
-    unit = np.zeros(n)
-    unit[0] = 1.0
-    h = np.zeros((n + 1, 1))
-    simulate(scene, normals=unit, history=h, signals=("x1",))
-    a = np.zeros((n, n))
-    for k in range(1, n + 1):
-        a[k - 1, :k] = h[k:0:-1, 0]
-    u = np.random.default_rng(0).standard_normal(n)
-    x = np.zeros((n + 1, 1))
-    simulate(scene, normals=u, history=x, signals=("x1",))
-    assert np.allclose(a @ u, x[1:, 0], rtol=0, atol=1e-9 * np.abs(x).max())
-    return a
-
-
-def isee(a: np.ndarray, b: float, samples: int = 4000, seed: int = 1) -> tuple[float, float]:
-    """``P(max_k |(A u)_k| > b)`` for standard normal ``u`` by importance sampling using
-    elementary events (Au and Beck 2001), with its standard error."""
-    n = a.shape[0]
-    norms = np.linalg.norm(a, axis=1)
-    events = stats.norm.sf(b / norms)  # P(a_k u > b) = P(-a_k u > b)
-    total = 2 * events.sum()
-    rng = np.random.default_rng(seed)
-    pick = rng.choice(2 * n, samples, p=np.concatenate([events, events]) / total)
-    k, sign = pick % n, np.where(pick < n, 1.0, -1.0)
-    direction = a[k] / norms[k, None]
-    beyond = stats.norm.isf(rng.random(samples) * events[k])  # the component along a_k, given the event
-    z = rng.standard_normal((samples, n))
-    u = z - direction * np.sum(direction * z, axis=1)[:, None] + (sign * beyond)[:, None] * direction
-    hits = np.sum(np.abs(u @ a.T) > b, axis=1)
-    assert hits.min() >= 1  # (each sample lies in the event it was drawn from)
-    weights = total / hits
-    return float(weights.mean()), float(weights.std(ddof=1) / math.sqrt(samples))
 
 
 @pytest.fixture(scope="module")
