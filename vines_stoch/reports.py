@@ -493,6 +493,19 @@ def report(directories: list[str | Path], out: str | Path = "reports", labels: l
                       "stripes, 95 % bootstrap bounds (`vines-stoch fragility`).", "",
                       markdown(fits[["limit", "im_key", "median", "median_lo", "median_hi", "beta", "beta_lo",
                                      "beta_hi", "bootstrap_fitted", "diverged", "notes"]]), ""]
+        if run.rare is not None:
+            limit = run.rare["limit"].iloc[0]
+            shown = ["point", *run.swept, "p", "cov", "p_lo", "p_hi", "paths", "replicas"]
+            parts += [f"## Rare events: {run.label}", "",
+                      f"P({limit} exceeded) by {run.rare['method'].iloc[0]} (`[rare]`), the coefficient of "
+                      "variation from the replicas' spread, a 95 % interval, the path-equivalents spent.", "",
+                      markdown(run.rare[shown]), ""]
+        if run.sensitivity is not None:
+            metric = run.scenario.get("sensitivity", {}).get("metric", "edm")
+            parts += [f"## Sobol indices: {run.label}", "",
+                      f"First-order and total indices of {metric} over the uncertain parameters "
+                      "(`[sensitivity]`), bootstrap 95 % intervals.", "",
+                      markdown(run.sensitivity.drop(columns=["point"])), ""]
     if len(runs) > 1:
         try:
             table = markdown(compare(runs))
