@@ -37,7 +37,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import pandas as pd
-from scipy import stats
 
 from .kernels import Path, advance, needed_streams, start_path
 from .outputs import DRIFT_MAX_K, E1_MAX, LIMIT_E1, SLOTS, X_MAX_K, passage_slots
@@ -281,6 +280,8 @@ def subset(scene, limit: int, n: int, seed: int, point: int, replica: int) -> Re
 
 def combine(replicas: list[Replica], method: str) -> Estimate:
     """The replicas' mean, with its coefficient of variation and 95 % Student-t interval."""
+    from scipy import stats  # (scipy.stats takes about 0.5 s to import: only where used)
+
     ps = np.array([r.p for r in replicas])
     mean = float(ps.mean())
     m = ps.shape[0]

@@ -28,7 +28,6 @@ from collections.abc import Callable
 
 import numpy as np
 import pandas as pd
-from scipy import stats
 
 
 def sobol_indices(model: Callable[[np.ndarray], np.ndarray], d: int, samples: int, seed: int,
@@ -59,6 +58,8 @@ def parameter_values(dists: dict, unit: np.ndarray) -> dict[str, np.ndarray]:
     """The uncertain parameters' values at points of the unit cube (one column a parameter, in
     file order): each law's value of its draw (``u``, or ``Phi^-1(u)`` for the laws drawn from
     a standard normal)."""
+    from scipy import stats  # (scipy.stats takes about 0.5 s to import: only where used)
+
     u = np.clip(unit, 1e-12, 1.0 - 1e-12)
     return {key: np.asarray(dist.value(stats.norm.ppf(u[:, k]) if dist.normal else u[:, k]), dtype=float)
             for k, (key, dist) in enumerate(dists.items())}
