@@ -19,14 +19,13 @@ from .outputs import (
     passage_slots,
 )
 from .scene import Scene
-from .signals import METRIC_NAME, REDUCE_MEAN, REDUCE_RMS, REDUCTION_SLOTS
-
-#: Metric columns of realizations.parquet, in order (then the per-floor columns of
-#: ``floor_metrics``); each gets summary statistics.
-METRICS = (
-    "input_energy", "edm", "energy_integral", "e1_max", "x1_max", "x1_rms", "impacts",
-    "energy_residual", "primary_dissipation", "absorber_dissipation", "impact_loss",
-    "impacts_left", "impacts_right", "peak_force", "contact_time",
+from .signals import (  # (the metric columns' names: beside the declared metrics')
+    METRIC_NAME,
+    METRICS,
+    REDUCE_MEAN,
+    REDUCE_RMS,
+    REDUCTION_SLOTS,
+    floor_metrics,
 )
 
 #: Longest period (in forcing periods) the regime detection looks for.
@@ -38,21 +37,6 @@ PERIODIC_TOLERANCE = 1e-3
 STATISTICS = ("mean", "std", "sem", "ci95_lo", "ci95_hi", "q05", "q50", "q95")
 
 _S = {name: i for i, name in enumerate(SLOTS)}
-
-#: Per-floor metric columns, ``<name>_<k>`` for floor ``k = 1..n`` (MODEL.md section 4).
-FLOOR_METRICS = ("x_max", "x_rms", "drift_max", "acc_max")
-
-
-def floor_metrics(n_floors: int) -> list[str]:
-    """The per-floor metric columns of a primary with ``n_floors`` floors, floor by floor."""
-    return [f"{name}_{k}" for k in range(1, n_floors + 1) for name in FLOOR_METRICS]
-
-
-def sensitivity_metrics(n_floors: int, limits: Sequence[str], declared: Sequence[str]) -> set[str]:
-    """What ``[sensitivity] metric`` may name: a metric column (``METRICS``, the floors', the
-    declared ``[output] metrics``) or ``p_NAME`` for a limit NAME (its exceedance indicator)."""
-    return {*METRICS, *floor_metrics(n_floors), *declared, *(f"p_{name}" for name in limits)}
-
 
 def metric_columns(frame: pd.DataFrame) -> list[str]:
     """The metric columns present in a realisations table: ``METRICS``, the floors', then the

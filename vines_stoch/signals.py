@@ -2,13 +2,14 @@
 ``declare`` turns names into the columns the loop driver evaluates at each history point
 (``kernels.common.signal_value``), so a history holds just the signals asked for; and the
 metrics a scene declares as a signal's reduction over the metrics window (``[output] metrics``,
-``<signal>_<reduction>``: ``declare_metrics``), which the driver folds in at every step's end.
-Plain Python (no numba): the scenario checks read ``signal_names``."""
+``<signal>_<reduction>``: ``declare_metrics``), which the driver folds in at every step's end;
+and the names of the built-in metric columns (``METRICS``, ``floor_metrics``).  Plain Python (no
+numba): the scenario checks read ``signal_names`` and ``sensitivity_metrics``."""
 
 from __future__ import annotations
 
 import re
-from collections.abc import Iterable
+from collections.abc import Iterable, Sequence
 
 import numpy as np
 
@@ -82,7 +83,7 @@ REDUCTION_SLOTS = 2
 METRIC_NAME = re.compile(rf"(x1|e1|share|({'|'.join(stem for stem, (_, n) in SIGNALS.items() if n)})"
                          rf"_[1-9][0-9]*)"
                          rf"_({'|'.join(REDUCTIONS)})|{'|'.join(SHARE_METRICS)}")
-#: The built-in metric columns (``metrics.METRICS``) that read as a declared metric's name: a
+#: The built-in metric columns (``METRICS``) that read as a declared metric's name: a
 #: declared metric may not take them (``tests/unit/statistics`` checks the list).
 BUILT_IN = ("x1_max", "x1_rms", "e1_max")
 
@@ -107,3 +108,26 @@ def declare_metrics(names: Iterable[str], n_floors: int, n_absorbers: int = 0,
         (code, index), = declare([signal], n_floors, n_absorbers)
         rows.append((code, index, REDUCTIONS[reduction]))
     return np.array(rows, dtype=np.int64).reshape(len(rows), 3)
+
+
+#: Metric columns of realizations.parquet, in order (then the per-floor columns of
+#: ``floor_metrics``); each gets summary statistics.
+METRICS = (
+    "input_energy", "edm", "energy_integral", "e1_max", "x1_max", "x1_rms", "impacts",
+    "energy_residual", "primary_dissipation", "absorber_dissipation", "impact_loss",
+    "impacts_left", "impacts_right", "peak_force", "contact_time",
+)
+
+#: Per-floor metric columns, ``<name>_<k>`` for floor ``k = 1..n`` (MODEL.md section 4).
+FLOOR_METRICS = ("x_max", "x_rms", "drift_max", "acc_max")
+
+
+def floor_metrics(n_floors: int) -> list[str]:
+    """The per-floor metric columns of a primary with ``n_floors`` floors, floor by floor."""
+    return [f"{name}_{k}" for k in range(1, n_floors + 1) for name in FLOOR_METRICS]
+
+
+def sensitivity_metrics(n_floors: int, limits: Sequence[str], declared: Sequence[str]) -> set[str]:
+    """What ``[sensitivity] metric`` may name: a metric column (``METRICS``, the floors', the
+    declared ``[output] metrics``) or ``p_NAME`` for a limit NAME (its exceedance indicator)."""
+    return {*METRICS, *floor_metrics(n_floors), *declared, *(f"p_{name}" for name in limits)}

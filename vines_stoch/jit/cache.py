@@ -109,7 +109,54 @@ def key_by_sources(package: str = "numba.core") -> str:
             return mixin.from_function.__func__(cls, py_func, py_file)
 
     locators.insert(0, SourceKeyedLocator)
+    _lock_saves(caching)
     return name
+
+
+def _lock_saves(caching: Any) -> None:
+    """Make numba's ``Cache.save_overload`` (of ``caching``, numba's or numba-cuda's module) save
+    the entries of this package's functions (a cache folder ``key_by_sources`` names) under a
+    lock on the function's index file, and not at all where the sources changed since this
+    process keyed its folder; other functions' saves are numba's own.  Every signature of a
+    function has its entry in one index, and numba names a new entry's data file after the
+    entries of the index it has just read: two processes that compile two signatures of one
+    function at once could read the same index and pick the same name, the later write
+    winning, so that the other's entry would load the wrong machine code (seen: step loops of
+    other structures; uncertain parameters run on another compile's draws, every realisation
+    alike).  Where numba's cache has no ``save_overload``, its own saves stand and a warning says
+    so."""
+    base = getattr(caching, "Cache", None)
+    original = getattr(base, "save_overload", None)
+    if original is None:
+        warnings.warn(f"vines_stoch.jit.cache: {caching.__name__}.Cache has no save_overload to lock; two "
+                      "processes compiling one function at once could mix its entries", RuntimeWarning,
+                      stacklevel=2)
+        return
+    if getattr(original, "locks_vines_stoch", False):
+        return
+
+    def save_overload(self: Any, sig: Any, data: Any) -> None:
+        folder = os.path.basename(getattr(self, "_cache_path", ""))
+        if not folder.startswith("vines-stoch-"):
+            return original(self, sig, data)
+        if folder != f"vines-stoch-{digest()}":
+            # the sources changed since this process keyed its folder: what it compiled now is
+            # not what that folder's sources give
+            warnings.warn(f"vines_stoch.jit.cache: the package's sources changed since this process "
+                          f"started; a function compiled now is not saved in {folder}", RuntimeWarning,
+                          stacklevel=2)
+            return None
+        index = getattr(getattr(self, "_cache_file", None), "_index_path", None)
+        if index is None:  # (another numba's internals: not saved, rather than saved unlocked)
+            warnings.warn("vines_stoch.jit.cache: this numba's cache keeps no _cache_file._index_path to "
+                          "lock; a function compiled now is not saved on disk (saved unlocked, two "
+                          "processes could mix two signatures' entries)", RuntimeWarning, stacklevel=2)
+            return None
+        with FileLock(f"{index}.lock"):
+            return original(self, sig, data)
+
+    save_overload.locks_vines_stoch = True
+    base.save_overload = save_overload
 
 
 def _in_sources(func: Any) -> bool:
@@ -193,37 +240,12 @@ def _stable_cache(gpu: bool) -> type:
     class StableCache(base):
         """numba's cache whose index key (a hash of the function's bytecode and a pickle of its
         closure's contents) reads, in place of the closure's contents, their descriptions
-        ``cells``; its entries saved one process at a time (``save_overload``)."""
+        ``cells``; its entries saved one process at a time (``_lock_saves``)."""
 
         def __init__(self, py_func: Any, cells: list[str]) -> None:
             super().__init__(py_func)
             self._py_func = types.FunctionType(py_func.__code__, {}, py_func.__name__, None,
                                                tuple(types.CellType(c) for c in cells))
-
-        def save_overload(self, sig: Any, data: Any) -> None:
-            """numba's save, under a lock on the function's index file.  Every loop of one
-            function (every structure's step loop, every chunk loop) has its entry in one
-            index, and numba names a new entry's data file after the entries of the index it
-            has just read: two processes that compile two loops at once could read the same
-            index and pick the same name, the later write winning, so that the other loop's
-            entry would load a loop of another structure (seen: parallel NES scenes run
-            without their impacts, bare oscillators without their load)."""
-            index = getattr(getattr(self, "_cache_file", None), "_index_path", None)
-            folder = os.path.basename(getattr(self, "_cache_path", ""))
-            if folder.startswith("vines-stoch-") and folder != f"vines-stoch-{digest()}":
-                # the sources changed since this process keyed its folder: what it compiled now
-                # is not what that folder's sources give
-                warnings.warn(f"vines_stoch.jit.cache: the package's sources changed since this process "
-                              f"started; a loop compiled now is not saved in {folder}", RuntimeWarning,
-                              stacklevel=2)
-                return
-            if index is None:  # (another numba's internals: not saved, rather than saved unlocked)
-                warnings.warn("vines_stoch.jit.cache: this numba's cache keeps no _cache_file._index_path "
-                              "to lock; a step loop compiled now is not saved on disk (saved unlocked, "
-                              "two processes could mix two loops' entries)", RuntimeWarning, stacklevel=2)
-                return
-            with FileLock(f"{index}.lock"):
-                super().save_overload(sig, data)
 
     return StableCache
 

@@ -9,7 +9,7 @@ import numpy as np
 from pydantic import Field, model_validator
 
 from .. import schemes
-from ..signals import declare_metrics, signal_names
+from ..signals import declare_metrics, sensitivity_metrics, signal_names
 from .bodies import (
     Absorber,
     HertzAbsorber,
@@ -180,8 +180,6 @@ class Scenario(_Model):
         if sens is not None:
             if not self.uncertain:
                 raise FieldError("sensitivity", sens.metric, "needs [uncertain] parameters to apportion")
-            from ..metrics import sensitivity_metrics
-
             allowed = sensitivity_metrics(n, self.limits, self.output.metrics)
             if sens.metric not in allowed:
                 raise FieldError("sensitivity.metric", sens.metric,

@@ -180,12 +180,17 @@ def test_a_step_loop_compiled_by_one_process_is_loaded_by_the_next(tmp_path):
     assert runs == [{"misses": 1, "hits": 0}, {"misses": 0, "hits": 1}]
 
 
-def test_the_loops_of_one_function_are_saved_one_process_at_a_time():
+def test_the_signatures_of_one_function_are_saved_one_process_at_a_time():
     """numba names a new cache entry's data file after the index it has just read: two processes
-    saving two loops of one function at once could pick one name (the later write winning, the
-    other entry loading the wrong loop).  A stable-keyed cache saves under a lock on the index."""
+    saving two signatures of one function at once could pick one name (the later write winning,
+    the other entry loading the wrong machine code).  Every cache of this package's functions
+    saves under a lock on the index: the stable-keyed caches of the step loops and numba's
+    plain cache of the others (``cache._lock_saves``); a function outside the package keeps
+    numba's own save."""
     from filelock import FileLock, Timeout
     from numba import njit
+
+    from vines_stoch.kernels.chunk import parameter_draws
 
     shift = 3.0
 
@@ -193,20 +198,26 @@ def test_the_loops_of_one_function_are_saved_one_process_at_a_time():
     def shifted(x):
         return x + shift
 
-    stable = cache._stable_cache(False)(shifted.py_func, ["3.0"])
-    index = stable._cache_file._index_path
-    held = []
+    def held_while_saving(store) -> bool:
+        index = store._cache_file._index_path
+        held = []
 
-    def save(sig, data):
-        try:
-            FileLock(f"{index}.lock", timeout=0).acquire()
-            held.append(False)
-        except Timeout:
-            held.append(True)
+        def save(sig, data):
+            try:
+                FileLock(f"{index}.lock", timeout=0).acquire()
+                held.append(False)
+            except Timeout:
+                held.append(True)
 
-    stable._save_overload = save
-    stable.save_overload(None, None)
-    assert held == [True]
+        store._save_overload = save
+        store.save_overload(None, None)
+        return held == [True]
+
+    from vines_stoch.kernels.common import stored_energy
+
+    assert held_while_saving(cache._stable_cache(False)(stored_energy.py_func, []))
+    assert held_while_saving(parameter_draws._cache)  # (a plain cache of the package)
+    assert not held_while_saving(shifted._cache)
 
 
 def test_an_index_is_stamped_by_its_folders_sources_and_a_loop_compiled_after_an_edit_is_not_saved(
