@@ -39,6 +39,7 @@ import numpy as np
 import pandas as pd
 
 from .kernels import Path, advance, needed_streams, start_path
+from .kernels.pcg import state_of
 from .outputs import DRIFT_MAX_K, E1_MAX, LIMIT_E1, SLOTS, X_MAX_K, passage_slots
 from .schemes import SCHEMES
 from .streams import RARE, Streams
@@ -101,10 +102,12 @@ class Estimate:
 
 def rare_streams(seed: int, point: int, replica: int, draw: int, scene) -> Streams:
     """The streams of path ``draw`` of a rare-event replica, keyed by (seed, ``RARE``, point,
-    replica, draw, purpose); only those ``scene`` draws from (``kernels.needed_streams``)."""
-    def gen(purpose: int) -> np.random.Generator:
+    replica, draw, purpose); only those ``scene`` draws from (``kernels.needed_streams``), each as
+    the loop's PCG64 stream (``pcg.state_of``), which a path run in stretches carries from one to
+    the next without a numpy generator to keep in step."""
+    def gen(purpose: int) -> np.ndarray:  # (the loop's own PCG64 stream: nothing to sync back)
         key = (RARE, PATHS, point, replica, draw, purpose)
-        return np.random.Generator(np.random.PCG64(np.random.SeedSequence(seed, spawn_key=key)))
+        return state_of(np.random.Generator(np.random.PCG64(np.random.SeedSequence(seed, spawn_key=key))))
 
     increments, bridge, filters = needed_streams(scene)
     return Streams(gen(0) if increments else None, gen(1) if bridge else None, gen(2) if filters else None)

@@ -263,7 +263,9 @@ class Path:
             _sync(self.sources, back=False)
             # (one copy of a stream given in several places; the never-drawn placeholders kept as
             # they are, so that a copy branches on new streams as its original would)
-            gens = list(copy.deepcopy(gens, {id(_UNUSED): _UNUSED, id(_UNDRAWN): _UNDRAWN}))
+            copies = {id(_UNUSED): _UNUSED, id(_UNDRAWN): _UNDRAWN}
+            gens = [copies.setdefault(id(g), g.copy()) if isinstance(g, np.ndarray)
+                    else copy.deepcopy(g, copies) for g in gens]
         else:
             gens, sources = _streams_for_copy(gens, streams)
             gens = list(gens)
