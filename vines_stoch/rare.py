@@ -49,7 +49,7 @@ METHODS = ("splitting", "subset")
 #: Replicas before the coefficient of variation may stop an estimate (its spread needs a few).
 MIN_REPLICAS = 5
 #: Snapshots kept along a splitting path (a branch replays at most two stretches between them).
-SNAPSHOTS = 16
+SNAPSHOTS = 32
 #: Subset simulation: the fraction of samples that seeds the next level, and the proposal's
 #: standard deviation of the modified Metropolis algorithm (per standard normal input).
 P0, PROPOSAL = 0.1, 1.0

@@ -23,7 +23,7 @@ OSCILLATOR = {"name": "rare-bench", "primary": {"mass": 1.0, "stiffness": (2 * m
 THRESHOLDS = {"1e-4": 4.76, "1e-6": 5.65, "1e-8": 6.41}
 #: Each method's replica size and the target and budget of every estimate.
 METHODS = {"splitting": 200, "subset": 1000}
-TARGET, BUDGET = 0.2, 150_000
+TARGET, BUDGET = 0.2, 100_000
 HEADER = ("| p about | method | exact p | estimate | z | cov | replicas | path-equivalents | s | "
           "crude paths for that cov | crude / method | path-equivalents for cov 0.15 (scaled) |\n"
           "| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |")
