@@ -122,13 +122,13 @@ def _chooser(seed: int, point: int, replica: int, purpose: int) -> np.random.Gen
 
 class _Particle:
     """A splitting path: the path (run to the end), its snapshots (copies never run themselves,
-    shared with the particles branched from it; ``_Splitting``) and its score, the running peak
-    at the end."""
+    shared with the particles branched from it; ``_Splitting``) with the running peak at each,
+    and its score, the running peak at the end."""
 
-    __slots__ = ("path", "snaps", "score")
+    __slots__ = ("path", "snaps", "peaks", "score")
 
-    def __init__(self, path: Path, snaps: list[Path]):
-        self.path, self.snaps, self.score = path, snaps, 0.0
+    def __init__(self, path: Path, snaps: list[Path], peaks: list[float]):
+        self.path, self.snaps, self.peaks, self.score = path, snaps, peaks, 0.0
 
 
 class _Splitting:
@@ -163,19 +163,19 @@ class _Splitting:
             advance(path, stop)
             if stop < self.n_steps:
                 particle.snaps.append(path.branch())
+                particle.peaks.append(self._peak(path))
         particle.score = self._peak(path)
         return particle
 
     def start(self, j: int) -> _Particle:
         """Initial path ``j`` on its own streams, run to the end."""
         path = start_path(self.scenes(j), self._fresh())
-        return self._run(_Particle(path, [path.branch()]))
+        return self._run(_Particle(path, [path.branch()], [self._peak(path)]))
 
     def branch(self, survivor: _Particle, level: float) -> _Particle:
         """A new particle: ``survivor`` up to the first step its running peak exceeded ``level``,
         fresh streams from there on."""
-        peaks = np.array([self._peak(s) for s in survivor.snaps])
-        b = int(np.searchsorted(peaks > level, True)) - 1  # (the last snapshot at or below the level)
+        b = int(np.searchsorted(np.array(survivor.peaks) > level, True)) - 1  # (the last at or below it)
         snap = survivor.snaps[b]
         stop = survivor.snaps[b + 1].step if b + 1 < len(survivor.snaps) else self.n_steps
         # the level's first passage: the stretch replayed with the limit's value set to the level
@@ -197,7 +197,8 @@ class _Splitting:
         advance(lead, at)
         child = lead.branch(self._fresh())
         # (the survivor's snapshots up to the branching step are the child's too, then its own)
-        return self._run(_Particle(child, [*survivor.snaps[:b + 1], child.branch()]))
+        return self._run(_Particle(child, [*survivor.snaps[:b + 1], child.branch()],
+                                   [*survivor.peaks[:b + 1], self._peak(child)]))
 
 
 def splitting(scenes: Callable[[int], object], limit: int, n: int, kill: int, seed: int, point: int,
