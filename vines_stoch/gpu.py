@@ -44,7 +44,7 @@ SIMULATED_BATCH = 64
 #: launcher takes them; the others are one for the whole ensemble.
 PER_PATH = ("mass", "storey_k", "storey_c", "floor_c", "x0", "v0", "rows", "forces", "sigma", "limits",
             "phi", "chol", "envelope", "c_force", "c_ground", "p0")
-SHARED = ("kind", "host", "series_t", "series_v", "series_ptr", "series_target", "reductions")
+SHARED = ("kind", "host", "wall", "series_t", "series_v", "series_ptr", "series_target", "reductions")
 _FILTER_KEYS = ("phi", "chol", "envelope", "c_force", "c_ground", "p0")
 
 

@@ -67,6 +67,8 @@ class Scene:
     kind: np.ndarray          # (n_absorbers,) law of each absorber (physics.absorbers.LAWS)
     host: np.ndarray          # (n_absorbers,) host floor (body index) of each absorber
     rows: np.ndarray          # (n_absorbers, physics.ROW) parameter rows
+    wall: np.ndarray          # (n_absorbers,) body holding each absorber's walls: its host floor, or the
+                              # absorber whose cavity holds it (physics.structure.wall_of)
     forces: np.ndarray        # (n_forces, loads.FORCE_ROW) closed-form force rows (kernels/loads.py)
     series_t: np.ndarray      # records, concatenated: times
     series_v: np.ndarray      # values (force or ground acceleration, scaled)
@@ -136,6 +138,12 @@ class Scene:
     @property
     def has_hertz(self) -> bool:
         return bool((self.kind == HERTZ).any())
+
+    @property
+    def has_partners(self) -> bool:
+        """True when an impact absorber meets the walls of another absorber's cavity rather
+        than its host floor's (``impacts_with``: a compile-time flag of the step loops)."""
+        return bool((self.wall != self.host).any())
 
     @cached_property
     def has_geometric(self) -> bool:
@@ -264,6 +272,8 @@ def build_scene(scenario: Scenario) -> Scene:
         storey_c=np.array(storey_c, dtype=float), floor_c=np.array(floor_c, dtype=float),
         kind=np.array([LAWS[a.type] for a in absorbers], dtype=np.int64),
         host=np.array([floor_of(a) for a in absorbers], dtype=np.int64),
+        wall=np.array([floor_of(a) if getattr(a, "impacts_with", None) is None else nf + a.impacts_with - 1
+                       for a in absorbers], dtype=np.int64),
         rows=np.array([absorber_row(a) for a in absorbers], dtype=float).reshape(-1, ROW),
         forces=np.array(forces, dtype=float).reshape(-1, FORCE_ROW),
         series_t=np.concatenate([t for t, _, _ in series] or [np.zeros(0)]),

@@ -67,7 +67,7 @@ def spec_of(scene, gpu: bool = False, record: Record = Record()) -> Spec:
                 n_rows=scene.forces.shape[0] if grid else 0,
                 n_states=scene.filters["phi"].shape[0] if grid else 0,
                 has_noise=scene.has_white_noise and grid, has_impact=scene.has_impact,
-                has_hertz=scene.has_hertz,
+                has_hertz=scene.has_hertz, partners=scene.has_partners,
                 filtered=scene.has_filters and grid, ground=scene.has_ground and grid,
                 geometric=scene.has_geometric, gpu=gpu, passages=record.passages, history=record.history,
                 events=record.events, declared=record.declared, share=record.share, contact=record.contact)
@@ -200,7 +200,7 @@ def bundles(scene, x: np.ndarray, v: np.ndarray, fl: Filters, normals: np.ndarra
     return (
         Bodies(mass=scene.mass, storey_k=scene.storey_k, storey_c=scene.storey_c, floor_c=scene.floor_c,
                x=x, v=v),
-        Absorbers(kind=scene.kind, host=scene.host, rows=scene.rows),
+        Absorbers(kind=scene.kind, host=scene.host, rows=scene.rows, wall=scene.wall),
         loads_of(scene),
         fl,
         Noise(sigma=scene.sigma, normals=normals, refine=refine),

@@ -27,11 +27,13 @@ class Bodies(NamedTuple):
 
 
 class Absorbers(NamedTuple):
-    """Each absorber's law code, host floor and parameter row (``physics.absorbers``)."""
+    """Each absorber's law code, host floor, parameter row (``physics.absorbers``) and the body
+    that holds its walls (``physics.structure.wall_of``)."""
 
     kind: Any
     host: Any
     rows: Any
+    wall: Any
 
 
 class Loads(NamedTuple):

@@ -52,7 +52,7 @@ from ..physics.absorbers import (
 )
 from ..physics.hertz import CONTACT_STEPS, contact_energy, contact_force_law, contact_substep, hertz_force
 from ..physics.impact import restitution_impact, sticks
-from ..physics.structure import host_of, primary_energy, structure_forces
+from ..physics.structure import host_of, primary_energy, structure_forces, wall_of
 from ..signals import (
     REDUCE_MAX,
     REDUCE_MEAN,
@@ -200,79 +200,87 @@ def stored_energy(x, v, mass, nf: int, storey_k, kind, host, rows) -> float:
 
 
 @njit(**INLINE)
-def stick_together(mass, values, nf: int, stuck, host, group_mass, group_sum, release, active=True):
-    """Floors and the absorbers stuck to their cavity walls move as one body (MODEL.md section 2).
+def stick_together(mass, values, nf: int, stuck, wall, group_mass, group_sum, release, active=True):
+    """Bodies and the absorbers stuck to their walls move as one body (MODEL.md section 2).
 
-    ``values`` holds velocities (after a kick) or accelerations; each floor and the absorbers
-    stuck on it get their mass-weighted common value.  With ``release``, an absorber the wall
-    would have to pull (constraint of the wrong sign) is released first.  ``group_mass`` and
-    ``group_sum`` are scratch (one entry per floor).  Nothing happens unless ``active`` (a flag
+    ``values`` holds velocities (after a kick) or accelerations; each body that holds walls
+    (``wall``: ``physics.structure.wall_of``) and the absorbers stuck on it get their
+    mass-weighted common value.  With ``release``, an absorber the wall would have to pull
+    (constraint of the wrong sign) is released first.  ``group_mass`` and ``group_sum`` are
+    scratch, one entry per body that may hold walls (the floors, or every body where absorbers
+    impact absorbers): their length is that count.  Nothing happens unless ``active`` (a flag
     rather than a branch around the call: see ``jit.flags.INLINE``).
     """
+    nw = group_mass.shape[0]
     passes = (2 if release else 1) if active else 0
     for attempt in range(passes):
-        # mass-weighted mean over each floor and its stuck absorbers
-        for k in range(nf):
+        # mass-weighted mean over each body and its stuck absorbers
+        for k in range(nw):
             group_mass[k] = mass[k]
             group_sum[k] = mass[k] * values[k]
         for a in range(values.shape[0] - nf):
             if stuck[a] != 0:
-                h = host_of(host, a, nf)
+                h = wall_of(wall, a, nw)
                 j = nf + a
                 group_mass[h] += mass[j]
                 group_sum[h] += mass[j] * values[j]
-        for k in range(nf):
+        for k in range(nw):
             group_sum[k] = group_sum[k] / group_mass[k]
         if attempt + 1 < passes:
             for a in range(values.shape[0] - nf):
                 # wall force on the absorber ~ mass * (common - free value); a wall only pushes
-                if stuck[a] * (group_sum[host_of(host, a, nf)] - values[nf + a]) > 0.0:
+                if stuck[a] * (group_sum[wall_of(wall, a, nw)] - values[nf + a]) > 0.0:
                     stuck[a] = 0
     if passes > 0:
         for k in range(nf):
             values[k] = group_sum[k]
         for a in range(values.shape[0] - nf):
             if stuck[a] != 0:
-                values[nf + a] = group_sum[host_of(host, a, nf)]
+                h = wall_of(wall, a, nw)
+                values[nf + a] = group_sum[h]
+                if h >= nf:  # an absorber holding the walls: only where one is stuck on it
+                    values[h] = group_sum[h]
 
 
 @njit(**INLINE)
-def pin_to_walls(x, nf: int, stuck, host, rows):
-    """Place stuck absorbers exactly at their wall (removes round-off drift)."""
+def pin_to_walls(x, nf: int, nw: int, stuck, wall, rows):
+    """Place stuck absorbers exactly at their wall (removes round-off drift); ``nw``: the
+    bodies that may hold walls (``physics.structure.wall_of``)."""
     for a in range(x.shape[0] - nf):
         if stuck[a] != 0:
-            x[nf + a] = x[host_of(host, a, nf)] + stuck[a] * rows[a, CLEARANCE]
+            x[nf + a] = x[wall_of(wall, a, nw)] + stuck[a] * rows[a, CLEARANCE]
 
 
 @njit(**INLINE)
-def keep_in_cavities(x, nf: int, kind, host, rows):
+def keep_in_cavities(x, nf: int, nw: int, kind, wall, rows):
     """Clip impact absorbers into their cavities ``|u| <= clearance`` (round-off of a located
     impact, or the rest of a step taken at once after the event cap)."""
     for a in range(x.shape[0] - nf):
         if kind[a] == IMPACT:
-            h = host_of(host, a, nf)
+            h = wall_of(wall, a, nw)
             c = rows[a, CLEARANCE]
             x[nf + a] = x[h] + min(max(x[nf + a] - x[h], -c), c)
 
 
 @njit(**INLINE)
-def resolve_impact(mass, v, nf: int, a: int, side: int, gain: float, restitution: float, last: bool,
-                   stuck, host, impulses) -> float:
-    """The Newton impact of absorber ``a`` on the ``side`` wall of its host floor's cavity
-    (MODEL.md section 2, Wei et al. eqs. 2-3), the one impact resolver of every scheme.
+def resolve_impact(mass, v, nf: int, nw: int, a: int, side: int, gain: float, restitution: float, last: bool,
+                   stuck, wall, impulses) -> float:
+    """The Newton impact of absorber ``a`` on the ``side`` wall of its cavity, in its host floor
+    or in the absorber that holds it (``physics.structure.wall_of``; MODEL.md section 2, Wei et
+    al. eqs. 2-3), the one impact resolver of every scheme.
 
     An impact slower than ``gain`` (the relative velocity the loads add in one step, pressing
     into the wall) or the ``last`` one a step may resolve is plastic and starts sticking.  The
-    host's velocity jumps, so the absorbers stuck on it are re-examined; the impulse on the host
-    is added to ``impulses[a]`` where the run keeps them (the signal ``contact_j``).  Returns the
-    energy lost."""
-    h = host_of(host, a, nf)
+    wall body's velocity jumps, so the absorbers stuck on it are re-examined; the impulse on
+    the wall body is added to ``impulses[a]`` where the run keeps them (the signal
+    ``contact_j``).  Returns the energy lost."""
+    h = wall_of(wall, a, nw)
     j = nf + a
     vh, vj = v[h], pick(v, j)
     plastic = sticks(side, vj - vh, gain) or last
     vh, vj, loss = restitution_impact(mass[h], mass[j], vh, vj, 0.0 if plastic else restitution)
     for q in range(stuck.shape[0]):
-        if host_of(host, q, nf) == h:
+        if wall_of(wall, q, nw) == h:
             stuck[q] = 0
     if plastic:
         vj = vh

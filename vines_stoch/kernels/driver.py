@@ -82,8 +82,9 @@ ACCOUNTS = ("work", "d_primary", "d_absorber", "e_sum", "e1_max", "loss", "n_lef
 class Spec(NamedTuple):
     """What a loop is specialised to (compile-time constants): the numbers of bodies, floors,
     closed-form load rows and filter states (the sizes of its arrays on the stack), white
-    noise, impact and Hertz absorbers, filtered loads, ground acceleration, geometric
-    attachments, the cuda backend's loop (per-absorber flags on the stack), and what the run
+    noise, impact and Hertz absorbers, impacts between absorbers (an impact absorber in
+    another's cavity: ``physics.structure.wall_of``), filtered loads, ground acceleration,
+    geometric attachments, the cuda backend's loop (per-absorber flags on the stack), and what the run
     records beyond the built-in metrics (``outputs.Record``: first passages, history rows, the
     event log, declared metrics, the absorbers' energy share among them, the impacts' impulses
     for the signal ``contact_j``), whose code the loop holds only where asked."""
@@ -95,6 +96,7 @@ class Spec(NamedTuple):
     has_noise: bool
     has_impact: bool
     has_hertz: bool
+    partners: bool
     filtered: bool
     ground: bool
     geometric: bool

@@ -52,7 +52,7 @@ from ..jit.intrinsics import any_set, int_scratch, plain, scratch
 from ..outputs import CAPPED
 from ..physics.absorbers import CLEARANCE, HERTZ, RESTITUTION, WALL_HI, WALL_LO
 from ..physics.hertz import contact_energy, contact_force_law
-from ..physics.structure import host_of
+from ..physics.structure import host_of, wall_of
 from .brownian import MEMO, path_value
 from .carry import REPLAYED, SEED_HIGH, SEED_LOW, restore_absorbers, save_absorbers
 from .common import (
@@ -130,18 +130,20 @@ def increments(path, dw, off, s, left, w_at, sigma, normals, slot, memo, out):
 
 @njit(**INLINE)
 def crossing(x, v, length, left, path, dw, off, w_at, sigma, normals, slot, memo, load, ag, force, mass,
-             inv_mass, stuck, host, a, side, wall, vt, dws, group_mass, group_sum, ground, sticking, tree):
+             inv_mass, stuck, walls, a, side, wall, vt, dws, group_mass, group_sum, ground, sticking, tree):
     """Sub-step length in ``(0, length]`` after which absorber ``a`` is exactly at ``wall``
-    (side ``side``: the gap ``side (x_a - x_host) - wall`` crosses zero upwards) of its host
-    floor, by the Illinois method on the bracket ``[0, length]``; the trial kicks take the
-    Wiener increments of the step's Brownian tree (``increments``), and ``vt`` and ``dws`` are left
-    with the trial kick to the root (the velocities and the half increments); ``sticking``: the scene has
-    impact absorbers that may stick, ``tree``: the sub-steps' increments come from the Brownian
-    tree (white noise; without it they are the step's, zero: compile-time flags, so that a loop
-    without noise prunes the tree's code before typing it).  (The floor count is ``load``'s length: a
-    call of 30 arguments or more is compiled through a tuple, which numba does not inline.)"""
+    (side ``side``: the gap ``side (x_a - x_w) - wall`` crosses zero upwards) of the body ``w``
+    that holds its walls (``walls``: ``physics.structure.wall_of``; the bodies that may hold
+    walls are as many as the sticking groups, ``group_mass``), by the Illinois method on the
+    bracket ``[0, length]``; the trial kicks take the Wiener increments of the step's Brownian
+    tree (``increments``), and ``vt`` and ``dws`` are left with the trial kick to the root (the
+    velocities and the half increments); ``sticking``: the scene has impact absorbers that may
+    stick, ``tree``: the sub-steps' increments come from the Brownian tree (white noise; without
+    it they are the step's, zero: compile-time flags, so that a loop without noise prunes the
+    tree's code before typing it).  (The floor count is ``load``'s length: a call of 30
+    arguments or more is compiled through a tuple, which numba does not inline.)"""
     nf = load.shape[0]
-    h = host_of(host, a, nf)
+    h = wall_of(walls, a, group_mass.shape[0])
     j = nf + a
     lo, hi = 0.0, length
     g_lo = min(side * (x[j] - x[h]) - wall, 0.0)  # on the wall counts as inside
@@ -166,7 +168,7 @@ def crossing(x, v, length, left, path, dw, off, w_at, sigma, normals, slot, memo
         for k in range(nf):
             dws[k] *= 0.5
         kick(v, 0.5 * s, dws, load, ag, force, inv_mass, vt, ground)
-        stick_together(mass, vt, nf, stuck, host, group_mass, group_sum, False, sticking)
+        stick_together(mass, vt, nf, stuck, walls, group_mass, group_sum, False, sticking)
         if done:
             break
         g = side * (x[j] - x[h] + s * (vt[j] - vt[h])) - wall
@@ -341,6 +343,7 @@ def kdk_step(spec) -> Step:
     MEMO_SIZE = spec.n_floors * MEMO if TREE else 0
     NB = spec.n_bodies
     NF = spec.n_floors
+    NW = NB if spec.partners else NF  # the bodies that may hold an impact absorber's walls
     NA = spec.n_bodies - spec.n_floors
     NR = spec.n_rows
     NZ = spec.n_states
@@ -379,8 +382,8 @@ def kdk_step(spec) -> Step:
             restore_absorbers(carry, nf, stuck, touching, owed)
         ag_next = start_loads(gl, ex, fl, grid.dt, carry, resume, nf, na, filtered, ground)
         own = KdkState(scratch(NB), scratch(NB), scratch(NB), scratch(NB), gl, scratch(NF), scratch(NF),
-                       scratch(NF), scratch(NF), noise_scale, slot, scratch(NF), scratch(NF), scratch(NF),
-                       scratch(NF), scratch(MEMO_SIZE), stuck, touching, held, owed, noisy, seed, high, low,
+                       scratch(NF), scratch(NF), noise_scale, slot, scratch(NF), scratch(NF), scratch(NW),
+                       scratch(NW), scratch(MEMO_SIZE), stuck, touching, held, owed, noisy, seed, high, low,
                        has_breaks(ex))
         return own, (ag_next, replayed)
 
@@ -410,7 +413,7 @@ def kdk_step(spec) -> Step:
         nf = NF
         na = NA
         mass, storey_k, storey_c, floor_c = bodies.mass, bodies.storey_k, bodies.storey_c, bodies.floor_c
-        kind, host, rows = absorbers.kind, absorbers.host, absorbers.rows
+        kind, host, rows, walls = absorbers.kind, absorbers.host, absorbers.rows, absorbers.wall
         sigma, normals, refine = noise.sigma, noise.normals, noise.refine
         dt = grid.dt
         out = outputs.out
@@ -465,12 +468,12 @@ def kdk_step(spec) -> Step:
                 dwh[k] = 0.5 * dws[k]
             kick(v, 0.5 * s, dwh, load, ag, force, inv_mass, vn, ground)
             if has_impact:
-                stick_together(mass, vn, nf, stuck, host, group_mass, group_sum, True)
+                stick_together(mass, vn, nf, stuck, walls, group_mass, group_sum, True)
             # the first impact, contact onset or contact end in the sub-step
             hit, side, s_hit, hit_event, hit_wall = -1, 0, s, NONE, 0.0
             if search and ((has_impact and n_impacts < MAX_EVENTS) or has_hertz):
                 for a in range(na):
-                    h = host_of(host, a, nf)
+                    h = wall_of(walls, a, NW)
                     j = nf + a
                     u_end = x[j] - x[h] + s * (vn[j] - vn[h])
                     event, sa, wall = event_ahead(kind[a], stuck[a], touching[a], rows[a, CLEARANCE],
@@ -479,7 +482,7 @@ def kdk_step(spec) -> Step:
                     if event != NONE:
                         sq = gap_sign(event, sa)
                         sc_ = crossing(x, v, s, left, path, dw, off, w_at, sigma, normals, slot, memo,
-                                       load, ag, force, mass, inv_mass, stuck, host, a, sq, sq * wall,
+                                       load, ag, force, mass, inv_mass, stuck, walls, a, sq, sq * wall,
                                        vt, dwc, group_mass, group_sum, ground, has_impact, TREE)
                         if hit < 0 or sc_ < s_hit:
                             hit, side, s_hit, hit_event, hit_wall = a, sa, sc_, event, wall
@@ -523,7 +526,7 @@ def kdk_step(spec) -> Step:
             if has_hertz:
                 contact_closing(x, v, vn, s, nf, inv_mass, host, rows, touching, held, owed)
             if has_impact:
-                stick_together(mass, vn, nf, stuck, host, group_mass, group_sum, False)
+                stick_together(mass, vn, nf, stuck, walls, group_mass, group_sum, False)
             if has_hertz:
                 contact_owed(v, vn, nf, host, touching, held, owed)
             if inside:
@@ -548,7 +551,7 @@ def kdk_step(spec) -> Step:
                 w_at[k] += dws[k]
                 load[k] = load_end[k]
             if hit >= 0 and hit_event != EXIT:
-                h = host_of(host, hit, nf)
+                h = wall_of(walls, hit, NW)
                 j = nf + hit
                 if inside:
                     if side < 0:
@@ -564,12 +567,12 @@ def kdk_step(spec) -> Step:
                 touching[hit] = 0 if hit_event == EXIT else side
             elif has_impact and hit >= 0:  # the impact, at t + s
                 x[j] = x[h] + hit_wall
-                gain = (force[j] / mass[j] - (force[h] + load_end[h]) / mass[h]) * dt
+                gain = (force[j] / mass[j] - (force[h] + (load_end[h] if h < nf else 0.0)) / mass[h]) * dt
                 # the last impact a step may resolve ends a chatter sequence: inelastic collapse
                 last = n_impacts == MAX_EVENTS - 1
                 speed = v[j] - v[h]
-                loss = resolve_impact(mass, v, nf, hit, side, gain, rows[hit, RESTITUTION], last,
-                                      stuck, host, outputs.impulses)
+                loss = resolve_impact(mass, v, nf, NW, hit, side, gain, rows[hit, RESTITUTION], last,
+                                      stuck, walls, outputs.impulses)
                 n_impacts += 1
                 if inside:
                     loss_sum += loss
@@ -581,8 +584,8 @@ def kdk_step(spec) -> Step:
         if has_hertz and capped:  # the last pass took no events: the contacts as they are
             contact_sides(x, nf, kind, host, rows, touching)
         if has_impact:
-            keep_in_cavities(x, nf, kind, host, rows)
-            pin_to_walls(x, nf, stuck, host, rows)
+            keep_in_cavities(x, nf, NW, kind, walls, rows)
+            pin_to_walls(x, nf, NW, stuck, walls, rows)
         for k in range(nf):  # the forces on the floor at the step's end, for the peaks
             acc[k] = force[k] + load_end[k]
         return (ag_next, replayed), (work, d_primary, d_absorber, e_sum, e1_max, loss_sum, n_left, n_right,

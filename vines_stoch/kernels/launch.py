@@ -41,9 +41,9 @@ def launcher(kernel, n_bodies: int, simulated: bool):
 
     @cuda.jit
     def launch(first, n, per_path, place, keys, mass, storey_k, storey_c, floor_c, x0, v0, rows, forces,
-               sigma, limits, phi, chol, envelope, c_force, c_ground, p0, kind, host, series_t, series_v,
-               series_ptr, series_target, reductions, normals, dt, n_steps, i0, period, sample_from, stride,
-               template, signals, out, samples, history, events, work):
+               sigma, limits, phi, chol, envelope, c_force, c_ground, p0, kind, host, wall, series_t,
+               series_v, series_ptr, series_target, reductions, normals, dt, n_steps, i0, period, sample_from,
+               stride, template, signals, out, samples, history, events, work):
         t = cuda.grid(1)
         if t >= n:
             return
@@ -82,7 +82,7 @@ def launcher(kernel, n_bodies: int, simulated: bool):
         stationary_start(f0, fil, z, draws)
         kernel(Bodies(mass=plain(mass[p]), storey_k=plain(storey_k[p]), storey_c=plain(storey_c[p]),
                       floor_c=plain(floor_c[p]), x=x, v=v),
-               Absorbers(kind=plain(kind), host=plain(host), rows=plain(rows[p])),
+               Absorbers(kind=plain(kind), host=plain(host), rows=plain(rows[p]), wall=plain(wall)),
                Loads(forces=plain(forces[p]), series_t=plain(series_t), series_v=plain(series_v),
                      series_ptr=plain(series_ptr), series_target=plain(series_target)),
                Filters(phi=plain(phi[p]), chol=plain(chol[p]), envelope=plain(envelope[p]),

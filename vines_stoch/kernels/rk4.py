@@ -27,7 +27,7 @@ from ..jit.flags import INLINE, KERNEL
 from ..jit.intrinsics import any_set, int_scratch, pick, plain, put, runtime_value, scratch
 from ..outputs import CAPPED
 from ..physics.absorbers import CLEARANCE, DAMPING, RESTITUTION, WALL_HI, WALL_LO
-from ..physics.structure import host_of, primary_energy, structure_power
+from ..physics.structure import host_of, primary_energy, structure_power, wall_of
 from .carry import restore_absorbers, save_absorbers
 from .common import (
     MAX_EVENTS,
@@ -53,24 +53,26 @@ from .loads import applied, has_breaks, next_break
 NEWTON_ITERATIONS = 12
 #: Bits of the ``contact`` argument of ``accelerations``: Hertz contact forces (at run time:
 #: absorbers in contact), geometric attachments (a compile-time constant of the loop:
-#: ``common.geometric_forces``).  One argument for both: ``rk4_step`` has numba's 30.
-HERTZ_FORCES, GEOMETRIC_FORCES = 1, 2
+#: ``common.geometric_forces``), the contact constraint of stuck impact absorbers (at run
+#: time: absorbers stuck).  One argument for all: ``rk4_update`` has numba's 30.
+HERTZ_FORCES, GEOMETRIC_FORCES, STICKING = 1, 2, 4
 
 
 @njit(**INLINE)
-def accelerations(x, v, t, tm, nf, mass, inv_mass, storey_k, storey_c, floor_c, kind, host, rows, forces,
-                  series_t, series_v, series_ptr, series_target, stuck, release, acc, load, group_mass,
-                  group_sum, sticking, contact):
+def accelerations(x, v, t, tm, nf, mass, inv_mass, storey_k, storey_c, floor_c, kind, host, wall, rows,
+                  forces, series_t, series_v, series_ptr, series_target, stuck, release, acc, load,
+                  group_mass, group_sum, contact):
     """Accelerations of all bodies into ``acc`` (``load``: scratch for the floors' loads);
     returns the rates of the energy integrals (load power, structure damping power, absorber
     damping power, ``E1``) and the ground acceleration.
 
     The scene's arrays come one by one (``forces .. series_target``: the loads of
     kernels/loads.py, piecewise loads on the piece of ``tm``): unpacking a tuple of arrays
-    costs reference counting at every call.  ``sticking`` applies the contact constraint of
-    stuck impact absorbers; ``contact`` (bits ``HERTZ_FORCES``, ``GEOMETRIC_FORCES``) adds the
-    Hertz contact forces and the geometric attachments' (flags, not branches around the calls:
-    see ``jit.flags.INLINE``).
+    costs reference counting at every call.  ``contact`` (bits ``HERTZ_FORCES``,
+    ``GEOMETRIC_FORCES``, ``STICKING``) adds the Hertz contact forces and the geometric
+    attachments' and applies the contact constraint of stuck impact absorbers on the bodies
+    that hold their walls (``wall``: ``physics.structure.wall_of``) (flags, not branches around
+    the calls: see ``jit.flags.INLINE``).
     """
     attachment_forces(x, v, nf, storey_k, storey_c, floor_c, host, rows, acc)
     contact_forces(x, nf, kind, host, rows, acc, (contact & HERTZ_FORCES) != 0)
@@ -83,7 +85,7 @@ def accelerations(x, v, t, tm, nf, mass, inv_mass, storey_k, storey_c, floor_c, 
     if ag != 0.0:
         for b in range(v.shape[0]):
             power -= ag * mass[b] * v[b]
-    stick_together(mass, acc, nf, stuck, host, group_mass, group_sum, release, sticking)
+    stick_together(mass, acc, nf, stuck, wall, group_mass, group_sum, release, (contact & STICKING) != 0)
     absorber_power = 0.0
     for a in range(x.shape[0] - nf):
         w = v[nf + a] - v[host_of(host, a, nf)]
@@ -93,35 +95,34 @@ def accelerations(x, v, t, tm, nf, mass, inv_mass, storey_k, storey_c, floor_c, 
 
 
 @njit(**INLINE)
-def wall_accelerations(x, v, t, nf, mass, inv_mass, storey_k, storey_c, floor_c, kind, host, rows, forces,
-                       series_t, series_v, series_ptr, series_target, stuck, release, acc, load, group_mass,
-                       group_sum, sticking, contact):
+def wall_accelerations(x, v, t, nf, mass, inv_mass, storey_k, storey_c, floor_c, kind, host, wall, rows,
+                       forces, series_t, series_v, series_ptr, series_target, stuck, release, acc, load,
+                       group_mass, group_sum, contact):
     """``accelerations`` at an instant (an impact, the end of a step with stuck absorbers),
     out of line: rare work that need not grow the step loop.  The floor count and the flags
     reach it as run-time values (``jit.intrinsics.runtime_value``) and the arrays as numba's
     (``jit.intrinsics.plain``), so that it compiles once, not once for each floor count and set
     of flags of the loops that call it."""
     _wall_accelerations(*plain((x, v, t, runtime_value(nf), mass, inv_mass, storey_k, storey_c, floor_c, kind,
-                                host, rows, forces, series_t, series_v, series_ptr, series_target, stuck,
-                                runtime_value(release), acc, load, group_mass, group_sum,
-                                runtime_value(sticking), runtime_value(contact))))
+                                host, wall, rows, forces, series_t, series_v, series_ptr, series_target,
+                                stuck, runtime_value(release), acc, load, group_mass, group_sum,
+                                runtime_value(contact))))
 
 
 @njit(**KERNEL)
-def _wall_accelerations(x, v, t, nf, mass, inv_mass, storey_k, storey_c, floor_c, kind, host, rows, forces,
-                        series_t, series_v, series_ptr, series_target, stuck, release, acc, load, group_mass,
-                        group_sum, sticking, contact):
+def _wall_accelerations(x, v, t, nf, mass, inv_mass, storey_k, storey_c, floor_c, kind, host, wall, rows,
+                        forces, series_t, series_v, series_ptr, series_target, stuck, release, acc, load,
+                        group_mass, group_sum, contact):
     """``accelerations`` at ``t`` (the out-of-line body of ``wall_accelerations``)."""
-    accelerations(x, v, t, t, nf, mass, inv_mass, storey_k, storey_c, floor_c, kind, host, rows, forces,
+    accelerations(x, v, t, t, nf, mass, inv_mass, storey_k, storey_c, floor_c, kind, host, wall, rows, forces,
                   series_t, series_v, series_ptr, series_target, stuck, release, acc, load, group_mass,
-                  group_sum, sticking, contact)
+                  group_sum, contact)
 
 
 @njit(**INLINE)
 def rk4_update(x, v, t, h, xo, vo, acc, xs, vs, x2, a0, mass, inv_mass, storey_k, storey_c, floor_c, kind,
-               host,
-             rows, forces, series_t, series_v, series_ptr, series_target, stuck, load, group_mass, group_sum,
-             sticking, contact):
+               host, wall, rows, forces, series_t, series_v, series_ptr, series_target, stuck, load,
+               group_mass, group_sum, contact):
     """One RK4 step of size ``h`` from ``(x, v)`` into ``(xo, vo)``; returns the increments
     of the four energy integrals and writes those of ``x_k^2`` into ``x2`` and the floors'
     absolute accelerations at the start into ``a0``.  ``acc``, ``xs``, ``vs`` are scratch
@@ -139,9 +140,9 @@ def rk4_update(x, v, t, h, xo, vo, acc, xs, vs, x2, a0, mass, inv_mass, storey_k
                 xs[b] = x[b]
                 vs[b] = v[b]
         ts = t if stage == 0 else (t + h if stage == 3 else tm)
-        r = accelerations(xs, vs, ts, tm, nf, mass, inv_mass, storey_k, storey_c, floor_c, kind, host, rows,
-                          forces, series_t, series_v, series_ptr, series_target, stuck, False, acc, load,
-                          group_mass, group_sum, sticking, contact)
+        r = accelerations(xs, vs, ts, tm, nf, mass, inv_mass, storey_k, storey_c, floor_c, kind, host, wall,
+                          rows, forces, series_t, series_v, series_ptr, series_target, stuck, False, acc,
+                          load, group_mass, group_sum, contact)
         weight = 1.0 if stage == 0 or stage == 3 else 2.0
         c = 0.5 * h if stage < 2 else h
         for k in range(nf):
@@ -175,15 +176,15 @@ def rk4_update(x, v, t, h, xo, vo, acc, xs, vs, x2, a0, mass, inv_mass, storey_k
 
 
 @njit(**KERNEL)
-def next_event(x, xn, h, nf, kind, host, rows, stuck, touching):
+def next_event(x, xn, h, nf, nw, kind, walls, rows, stuck, touching):
     """The first event of a step ``x -> xn`` of length ``h`` (``events.event_ahead``: an impact
-    absorber crossing its wall, a Hertz contact starting or ending), by linear interpolation of
-    the gap.  Returns ``(kind, absorber, side, tau, wall)``; ``kind == NONE`` when nothing
-    happens."""
+    absorber crossing its wall, a Hertz contact starting or ending; ``walls``, ``nw``: the bodies
+    that hold the walls, ``physics.structure.wall_of``), by linear interpolation of the gap.
+    Returns ``(kind, absorber, side, tau, wall)``; ``kind == NONE`` when nothing happens."""
     event_kind, hit, hit_side, first, hit_wall = NONE, -1, 0, h, 0.0
     for a in range(kind.shape[0]):
         j = nf + a
-        hf = host_of(host, a, nf)
+        hf = wall_of(walls, a, nw)
         u0 = x[j] - x[hf]
         u1 = xn[j] - xn[hf]
         event, side, wall = event_ahead(kind[a], stuck[a], touching[a], rows[a, CLEARANCE], rows[a, WALL_LO],
@@ -239,6 +240,7 @@ def rk4_step(spec) -> Step:
     NB = spec.n_bodies
     NF = spec.n_floors
     NA = spec.n_bodies - spec.n_floors
+    NW = NB if spec.partners else NF  # the bodies that may hold an impact absorber's walls
     GPU = spec.gpu
     GEO = GEOMETRIC_FORCES if spec.geometric else 0
     has_impact, has_hertz = spec.has_impact, spec.has_hertz
@@ -256,8 +258,8 @@ def rk4_step(spec) -> Step:
         if resume:
             restore_absorbers(carry, NF, stuck, touching, owed)
         own = Rk4State(scratch(NB), scratch(NB), scratch(NB), scratch(NB), scratch(NB), scratch(NB),
-                       scratch(NB), scratch(NF), scratch(NF), scratch(NF), scratch(NF), scratch(NF),
-                       scratch(NF), scratch(NF), scratch(NF), stuck, touching, owed, has_breaks(ex))
+                       scratch(NB), scratch(NF), scratch(NW), scratch(NW), scratch(NF), scratch(NF),
+                       scratch(NF), scratch(NW), scratch(NW), stuck, touching, owed, has_breaks(ex))
         return own, 0
 
     @njit(**INLINE)
@@ -284,7 +286,7 @@ def rk4_step(spec) -> Step:
         nf = NF
         na = NA
         mass, storey_k, storey_c, floor_c = bodies.mass, bodies.storey_k, bodies.storey_c, bodies.floor_c
-        kind, host, rows = absorbers.kind, absorbers.host, absorbers.rows
+        kind, host, rows, walls = absorbers.kind, absorbers.host, absorbers.rows, absorbers.wall
         forces, series_t, series_v, series_ptr, series_target = (ex.forces, ex.series_t, ex.series_v,
                                                                  ex.series_ptr, ex.series_target)
         dt = grid.dt
@@ -323,18 +325,18 @@ def rk4_step(spec) -> Step:
                     out[CAPPED] += 1
                 tau = h
             inc = rk4_update(x, v, t, tau, xn, vn, acc, xs, vs, x2, a0, mass, inv_mass, storey_k, storey_c,
-                             floor_c, kind, host, rows, forces, series_t, series_v, series_ptr, series_target,
-                             stuck, load, group_mass, group_sum, sticking,
-                             (HERTZ_FORCES if contact else 0) | GEO)
+                             floor_c, kind, host, walls, rows, forces, series_t, series_v, series_ptr,
+                             series_target, stuck, load, group_mass, group_sum,
+                             (STICKING if sticking else 0) | (HERTZ_FORCES if contact else 0) | GEO)
             if phase == 0:
                 event_kind, q, side, j, hf, sign, wall = NONE, -1, 0, 0, 0, 0, 0.0
                 if (has_impact or has_hertz) and not capped:
                     for b in range(nb):
                         x_event[b] = xn[b]
-                    event_kind, q, side, tau, wall = next_event(*plain((x, x_event, h, nf, kind, host, rows,
-                                                                        stuck, touching)))
+                    event_kind, q, side, tau, wall = next_event(*plain((x, x_event, h, nf, NW, kind, walls,
+                                                                        rows, stuck, touching)))
                 if event_kind != NONE:
-                    j, hf, sign = nf + q, host_of(host, q, nf), gap_sign(event_kind, side)
+                    j, hf, sign = nf + q, wall_of(walls, q, NW), gap_sign(event_kind, side)
                     phase = 1
                     continue
             elif (has_impact or has_hertz) and phase > 0:
@@ -372,20 +374,20 @@ def rk4_step(spec) -> Step:
             left -= h
             if done:
                 if capped:
-                    keep_in_cavities(x, nf, kind, host, rows)
+                    keep_in_cavities(x, nf, NW, kind, walls, rows)
                 break
             if has_impact and event_kind == IMPACT_EVENT:
                 n_impacts += 1
                 put(x, j, x[hf] + wall)
-                wall_accelerations(x, v, t, nf, mass, inv_mass, storey_k, storey_c, floor_c, kind, host, rows,
-                                   forces, series_t, series_v, series_ptr, series_target, stuck, False,
-                                   acc_wall, load_wall, gm_wall, gs_wall, True,
-                                   (HERTZ_FORCES if contact else 0) | GEO)
+                wall_accelerations(x, v, t, nf, mass, inv_mass, storey_k, storey_c, floor_c, kind, host,
+                                   walls, rows, forces, series_t, series_v, series_ptr, series_target, stuck,
+                                   False, acc_wall, load_wall, gm_wall, gs_wall,
+                                   STICKING | (HERTZ_FORCES if contact else 0) | GEO)
                 # the last impact a step may resolve ends a chatter sequence: inelastic collapse
                 gain = (pick(acc_wall, j) - acc_wall[hf]) * dt
                 speed = pick(v, j) - v[hf]
-                loss = resolve_impact(mass, v, nf, q, side, gain, rows[q, RESTITUTION],
-                                      n_impacts >= MAX_EVENTS, stuck, host, outputs.impulses)
+                loss = resolve_impact(mass, v, nf, NW, q, side, gain, rows[q, RESTITUTION],
+                                      n_impacts >= MAX_EVENTS, stuck, walls, outputs.impulses)
                 if inside:
                     loss_sum += loss
                     e1_max = max(e1_max, primary_energy(mass, storey_k, x, v, nf))
@@ -404,11 +406,11 @@ def rk4_step(spec) -> Step:
                     n_right += 1.0
             sub += 1
         if has_impact and any_set(stuck):
-            pin_to_walls(x, nf, stuck, host, rows)
+            pin_to_walls(x, nf, NW, stuck, walls, rows)
             # release contacts the wall would have to pull (checked at step ends)
-            wall_accelerations(x, v, t, nf, mass, inv_mass, storey_k, storey_c, floor_c, kind, host, rows,
-                               forces, series_t, series_v, series_ptr, series_target, stuck, True, acc_wall,
-                               load_wall, gm_wall, gs_wall, True, GEO)
+            wall_accelerations(x, v, t, nf, mass, inv_mass, storey_k, storey_c, floor_c, kind, host, walls,
+                               rows, forces, series_t, series_v, series_ptr, series_target, stuck, True,
+                               acc_wall, load_wall, gm_wall, gs_wall, STICKING | GEO)
         return sc, (work, d_primary, d_absorber, e_integral, e1_max, loss_sum, n_left, n_right, contact_time,
                     peak_force, pending)
 

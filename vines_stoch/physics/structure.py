@@ -1,5 +1,5 @@
-"""The primary structure (MODEL.md sections 1, 1a): storey forces, damping power and ``E1``, and
-which floor hosts an absorber."""
+"""The primary structure (MODEL.md sections 1, 1a): storey forces, damping power and ``E1``,
+which floor hosts an absorber and which body holds an impact absorber's walls."""
 
 from __future__ import annotations
 
@@ -13,6 +13,16 @@ def host_of(host, a: int, nf: int) -> int:
     """Host floor of absorber ``a`` (the constant 0 on a one-storey primary, so the compiler
     keeps every index into the state constant there)."""
     return host[a] if nf > 1 else 0
+
+
+@njit(**INLINE)
+def wall_of(wall, a: int, nw: int) -> int:
+    """The body whose walls absorber ``a`` meets (``wall``: body indices, ``scene.Scene.wall``):
+    its host floor, or for an impact absorber in another absorber's cavity that absorber.
+    ``nw``: the bodies that may hold walls (the floors, or every body in a scene with impacts
+    between absorbers; a compile-time constant), so that on a one-storey primary without them
+    the index is the constant 0 (as ``host_of``)."""
+    return wall[a] if nw > 1 else 0
 
 
 @njit(**INLINE)

@@ -9,7 +9,7 @@ import numpy as np
 from pydantic import Field, model_validator
 
 from .errors import FieldError
-from .fields import LARGEST, MAX_FLOORS, Floor, Mass, NonNegative, Positive, Real, _Model
+from .fields import LARGEST, MAX_ABSORBERS, MAX_FLOORS, Floor, Mass, NonNegative, Positive, Real, _Model
 
 #: A negative finite number (the bistable law's linear stiffness).
 Negative = Annotated[float, Field(lt=0, ge=-LARGEST, allow_inf_nan=False)]
@@ -237,7 +237,15 @@ class GeometricAbsorber(_Absorber):
 
 
 class ImpactAbsorber(_Absorber):
-    """Vibro-impact NES in a symmetric cavity with Newton restitution (MODEL.md section 2)."""
+    """Vibro-impact NES in a symmetric cavity with Newton restitution (MODEL.md section 2).
+
+    The cavity is in its host floor, or with ``impacts_with = j`` in absorber ``j`` (1-based,
+    file order): the walls move with that absorber and the impacts exchange momentum with it,
+    while the spring and dashpot still join the host floor.  This is the vibro-impact dual-mass
+    damper (VIDM) of Wang J. et al., "Seismic response mitigation of building structures with a
+    novel vibro-impact dual-mass damper", Eng. Struct. 215 (2020) 110673 (seed 001, Table 5):
+    two absorbers on the roof that also strike each other.
+    """
 
     type: Literal["impact"]
     floor: Floor | None = None
@@ -246,6 +254,7 @@ class ImpactAbsorber(_Absorber):
     restitution: Annotated[float, Field(ge=0, le=1)]
     stiffness: NonNegative = 0.0
     damping: NonNegative = 0.0
+    impacts_with: Annotated[int, Field(ge=1, le=MAX_ABSORBERS)] | None = None
 
     columns: ClassVar[dict[str, str]] = {"stiffness": "k_lin", "damping": "damping", "clearance": "clearance",
                                          "restitution": "restitution"}

@@ -87,6 +87,7 @@ class Scenario(_Model):
             if floor is not None and not 1 <= floor <= n:
                 raise FieldError(f"{i}.floor", floor,
                                  f"must be in [1, {n}] (the primary has {n} floor{'s' * (n > 1)})")
+        self._check_partners()
         for i, load in enumerate(self.loads):
             if isinstance(load, WindLoad) and (bad := load.floors_error(n)) is not None:
                 raise FieldError(f"loads.{i}.{bad[0]}", bad[1], bad[2])
@@ -185,6 +186,23 @@ class Scenario(_Model):
                 raise FieldError("sensitivity.metric", sens.metric,
                                  "must be a metric column (edm, x1_max, e1_max, ...) or p_NAME for a limit "
                                  f"NAME ({', '.join(sorted(allowed)[:12])}, ...)")
+
+    def _check_partners(self) -> None:
+        """A ``FieldError`` where an impact absorber's ``impacts_with`` names no other absorber, or
+        one that is itself an impact absorber (whose walls a stuck absorber would have to follow
+        while stuck itself)."""
+        na = len(self.absorbers)
+        for i, a in enumerate(self.absorbers):
+            j = getattr(a, "impacts_with", None)
+            if j is None:
+                continue
+            key = f"absorbers.{i}.impacts_with"
+            if j > na or j == i + 1:
+                raise FieldError(key, j, f"must name another absorber: j in [1, {na}] (file order), not "
+                                 f"{i + 1}, this one")
+            if isinstance(self.absorbers[j - 1], ImpactAbsorber):
+                raise FieldError(key, j, f"absorber {j} is an impact absorber: the cavity must be in an "
+                                 "absorber of another type (linear, cubic, bistable, geometric, hertz)")
 
     def _check_signals(self, key: str, signals: list[str]) -> None:
         """A ``FieldError`` for ``key`` where a name of ``signals`` is not a signal of the scene."""

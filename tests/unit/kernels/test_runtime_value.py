@@ -8,7 +8,7 @@ from numba import njit
 
 from tests.helpers import scene_from
 from vines_stoch.jit.intrinsics import runtime_value
-from vines_stoch.kernels.rk4 import HERTZ_FORCES, _wall_accelerations, wall_accelerations
+from vines_stoch.kernels.rk4 import HERTZ_FORCES, STICKING, _wall_accelerations, wall_accelerations
 from vines_stoch.physics.absorbers import WALL_LO
 
 
@@ -49,12 +49,12 @@ def _at_the_wall(x, v, mass, inv_mass, storey_k, storey_c, floor_c, kind, host, 
     """Both calls of the RK4 loop, each with its literal floor count and flags."""
     forces, series_t, series_v, series_ptr, series_target = ex
     load, gm, gs = np.zeros(2), np.zeros(2), np.zeros(2)
-    wall_accelerations(x, v, 0.3, 2, mass, inv_mass, storey_k, storey_c, floor_c, kind, host, rows, forces,
-                       series_t, series_v, series_ptr, series_target, stuck, False, out[0], load, gm, gs,
-                       True, HERTZ_FORCES)
-    wall_accelerations(x, v, 0.3, 2, mass, inv_mass, storey_k, storey_c, floor_c, kind, host, rows, forces,
-                       series_t, series_v, series_ptr, series_target, stuck, True, out[1], load, gm, gs,
-                       True, 0)
+    wall_accelerations(x, v, 0.3, 2, mass, inv_mass, storey_k, storey_c, floor_c, kind, host, host, rows,
+                       forces, series_t, series_v, series_ptr, series_target, stuck, False, out[0], load, gm,
+                       gs, STICKING | HERTZ_FORCES)
+    wall_accelerations(x, v, 0.3, 2, mass, inv_mass, storey_k, storey_c, floor_c, kind, host, host, rows,
+                       forces, series_t, series_v, series_ptr, series_target, stuck, True, out[1], load, gm,
+                       gs, STICKING)
 
 
 def test_the_wall_accelerations_compile_once():
