@@ -3,13 +3,19 @@ adaptive multilevel splitting on the running peak, and subset simulation as its 
 
 **Adaptive multilevel splitting** (Cerou and Guyader, Stoch. Anal. Appl. 25 (2007) 417; the
 generalised algorithm of Brehier, Gazeau, Goudenege, Lelievre and Rousset, Ann. Appl. Probab.
-26 (2016) 3559, unbiased for any score).  ``n`` paths run to the end; a path's score is its
-running peak of the limited metric over the limit's value (exceedance: a score above 1).  At
-each level the ``k`` lowest scores fix the level ``z``; every path whose score is ``<= z`` is
-killed (``K >= k`` of them, ties included) and replaced by a branch of a survivor drawn at
-random: the survivor's path up to the first step its running peak exceeded ``z`` (replayed on
-its own streams from its last snapshot, ``kernels.Path.branch``), fresh streams after it.  The
-estimate is ``prod (1 - K_j / n)`` times the fraction of the final paths above 1.  The paths are
+26 (2016) 3559, unbiased for any score).  ``n`` paths run to the end; a path's score is a
+running peak (``Score``): for a limit on a floor's displacement or a storey's drift, the running
+peak of the primary's energy ``E1``, which bounds that displacement at every instant
+(``energy_bound``) and, unlike the displacement's own peak, grows with the motion's amplitude
+whatever its phase (for one storey it is the envelope ``x^2 + v^2 / w^2``); for the other
+limits, the limited metric's own running peak.  At each level the ``k`` lowest scores fix the
+level ``z``; every path whose score is ``<= z`` is killed (``K >= k`` of them, ties included) and
+replaced by a branch of a survivor drawn at random: the survivor's path up to the first step its
+score exceeded ``z`` (replayed on its own streams from its last snapshot,
+``kernels.Path.branch``), fresh streams after it.  The levels rise until they pass the score
+every exceeding path must reach; the estimate is ``prod (1 - K_j / n)`` times the fraction of
+the final paths whose limited metric exceeds the limit (for an indicator that vanishes below
+that score this is the generalised algorithm's unbiased estimator).  The paths are
 the engine's own step loop run in stretches (``kernels.start_path``, ``advance``), so impacts,
 Hertz contact, filtered loads and uncertain parameters are those of an ensemble run.
 
@@ -57,6 +63,52 @@ P0, PROPOSAL = 0.1, 1.0
 MAX_LEVELS = 64
 #: Sub-purposes of the rare-event streams (the key's second element).
 PATHS, SELECTION, INPUTS = 0, 1, 2
+
+
+def energy_bound(scene, limit: int) -> float | None:
+    """``K`` with ``peak^2 <= 2 E1 / K`` at every instant for limit row ``limit`` of ``scene``
+    (``scene.limit_row``), where one holds: a floor's displacement ``x_k = d_1 + ... + d_k`` is
+    bounded by the strain energy of the storeys below it (Cauchy-Schwarz: ``x_k^2 <= (sum 1 /
+    k_i) sum k_i d_i^2``, so ``K`` is the storeys' series stiffness), a storey's drift by its own
+    (``K = k_k``); ``E1`` holds both strain energies (MODEL.md section 4).  None for the other
+    limits, or where a storey on the way has no spring."""
+    code, k = int(scene.limits[limit, 0]), int(scene.limits[limit, 1])
+    springs = scene.storey_k
+    if code == X_MAX_K or (code == DRIFT_MAX_K and k == 0):
+        springs = springs[:k + 1]
+    elif code == DRIFT_MAX_K:
+        springs = springs[k:k + 1]
+    else:
+        return None
+    return float(1.0 / np.sum(1.0 / springs)) if (springs > 0.0).all() else None
+
+
+@dataclass(frozen=True)
+class Score:
+    """What a splitting path's score is: the running peak of limit row ``row`` (``code``,
+    floor: ``scene.limit_row``'s), read as ``peak`` reads it, and ``top``, the score every path
+    whose limited metric exceeds the limit's value has exceeded (the levels' end).  With
+    ``energy`` the row is the primary's energy (``LIMIT_E1``) and ``top`` the energy
+    ``K value^2 / 2`` of ``energy_bound`` (less a relative 1e-9 against rounding); ``scale``
+    turns a score into the limited quantity's units over the limit (the levels reported)."""
+
+    code: float
+    floor: float
+    top: float
+    energy: bool
+
+    @classmethod
+    def of(cls, scene, limit: int, bounds: set) -> Score:
+        """The score of a splitting replica whose paths' scenes give the ``energy_bound``s
+        ``bounds`` (the energy only where every path has the same bound)."""
+        code, floor, value = (float(x) for x in scene.limits[limit])
+        bound = next(iter(bounds)) if len(bounds) == 1 else None
+        if bound is None:
+            return cls(code, floor, value, False)
+        return cls(float(LIMIT_E1), 0.0, 0.5 * bound * value * value * (1.0 - 1e-9), True)
+
+    def scale(self, level: float) -> float:
+        return math.sqrt(level / self.top) if self.energy else level / self.top
 
 
 def peak(out: np.ndarray, row: np.ndarray, nf: int) -> float:
@@ -122,13 +174,13 @@ def _chooser(seed: int, point: int, replica: int, purpose: int) -> np.random.Gen
 
 class _Particle:
     """A splitting path: the path (run to the end), its snapshots (copies never run themselves,
-    shared with the particles branched from it; ``_Splitting``) with the running peak at each,
-    and its score, the running peak at the end."""
+    shared with the particles branched from it; ``_Splitting``) with the score at each, its
+    score at the end and whether its limited metric exceeds the limit's value."""
 
-    __slots__ = ("path", "snaps", "peaks", "score")
+    __slots__ = ("path", "snaps", "peaks", "score", "exceeds")
 
     def __init__(self, path: Path, snaps: list[Path], peaks: list[float]):
-        self.path, self.snaps, self.peaks, self.score = path, snaps, peaks, 0.0
+        self.path, self.snaps, self.peaks, self.score, self.exceeds = path, snaps, peaks, 0.0, False
 
 
 class _Splitting:
@@ -137,9 +189,13 @@ class _Splitting:
     level is found by replaying one stretch: its first snapshot after the passage comes at most a
     stride after it."""
 
-    def __init__(self, scenes: Callable[[int], object], limit: int, seed: int, point: int, replica: int):
+    def __init__(self, scenes: Callable[[int], object], limit: int, seed: int, point: int, replica: int,
+                 n: int):
         self.scenes, self.limit, self.seed, self.point, self.replica = scenes, limit, seed, point, replica
         self.first = scenes(0)
+        self.score = Score.of(self.first, limit, {energy_bound(scenes(j), limit) for j in range(n)})
+        self.row = np.array([self.score.code, self.score.floor, 0.0])
+        self.value = float(self.first.limits[limit, 2])
         self.n_steps, self.nf = self.first.n_steps, self.first.n_floors
         self.stride = max(1, -(-self.n_steps // SNAPSHOTS))
         self.steps = 0  # (steps run, replays included)
@@ -152,7 +208,8 @@ class _Splitting:
         return rare_streams(self.seed, self.point, self.replica, self.draws - 1, self.first)
 
     def _peak(self, path: Path) -> float:
-        return peak(path.out, path.args[6].limits[self.limit], self.nf)
+        """The path's score so far (``Score``)."""
+        return peak(path.out, self.row, self.nf)
 
     def _run(self, particle: _Particle) -> _Particle:
         """Run ``particle`` from the step it has reached to the end, a snapshot at each stride."""
@@ -165,6 +222,7 @@ class _Splitting:
                 particle.snaps.append(path.branch())
                 particle.peaks.append(self._peak(path))
         particle.score = self._peak(path)
+        particle.exceeds = peak(path.out, path.args[6].limits[self.limit], self.nf) > self.value
         return particle
 
     def start(self, j: int) -> _Particle:
@@ -173,17 +231,18 @@ class _Splitting:
         return self._run(_Particle(path, [path.branch()], [self._peak(path)]))
 
     def branch(self, survivor: _Particle, level: float) -> _Particle:
-        """A new particle: ``survivor`` up to the first step its running peak exceeded ``level``,
-        fresh streams from there on."""
+        """A new particle: ``survivor`` up to the first step its score exceeded ``level``, fresh
+        streams from there on."""
         b = int(np.searchsorted(np.array(survivor.peaks) > level, True)) - 1  # (the last at or below it)
         snap = survivor.snaps[b]
         stop = survivor.snaps[b + 1].step if b + 1 < len(survivor.snaps) else self.n_steps
-        # the level's first passage: the stretch replayed with the limit's value set to the level
-        # (its first-passage slot is still NaN at the snapshot: the level lies below the value)
+        # the level's first passage: the stretch replayed with the limit's row watching the score,
+        # its value set to the level (its first-passage slot is still NaN at the snapshot: the
+        # level lies below the top, which an exceeding path passes first)
         probe = snap.branch()
         outputs = probe.args[6]
         limits = outputs.limits.copy()
-        limits[self.limit, 2] = level
+        limits[self.limit] = (self.score.code, self.score.floor, level)
         probe.args = (*probe.args[:6], outputs._replace(limits=limits), *probe.args[7:])
         self.steps += stop - snap.step
         advance(probe, stop)
@@ -207,15 +266,15 @@ def splitting(scenes: Callable[[int], object], limit: int, n: int, kill: int, se
     level; ``scenes(j)``: the scene of initial path ``j`` (the sweep point's, or with its own
     uncertain parameters); ``limit``: the row of the scene's limits.  Scores are running peaks,
     compared as the loop compares them with a limit's value (``peak > value``)."""
-    run = _Splitting(scenes, limit, seed, point, replica)
-    value = float(run.first.limits[limit, 2])
+    run = _Splitting(scenes, limit, seed, point, replica, n)
+    top = run.score.top
     chooser = _chooser(seed, point, replica, SELECTION)
     particles = [run.start(j) for j in range(n)]
     weight, levels = 1.0, []
     while True:
         scores = np.array([p.score for p in particles])
         level = float(np.partition(scores, kill - 1)[kill - 1])
-        if level >= value:
+        if level >= top:
             break
         killed = np.flatnonzero(scores <= level)
         if killed.shape[0] == n:  # (every path at the level: none above it)
@@ -223,11 +282,11 @@ def splitting(scenes: Callable[[int], object], limit: int, n: int, kill: int, se
             break
         survivors = np.flatnonzero(scores > level)
         weight *= 1.0 - killed.shape[0] / n
-        levels.append((level / value, 1.0 - killed.shape[0] / n))
+        levels.append((run.score.scale(level), 1.0 - killed.shape[0] / n))
         parents = survivors[chooser.integers(0, survivors.shape[0], killed.shape[0])]
         for i, parent in zip(killed, parents):
             particles[i] = run.branch(particles[parent], level)
-    above = sum(p.score > value for p in particles)
+    above = sum(p.exceeds for p in particles)
     return Replica(weight * above / n, run.steps / run.n_steps, levels)
 
 

@@ -548,8 +548,9 @@ def seed001(scenarios: Path, figures: Path) -> list[str]:
     against the closed-form steady state, and the NES's effect."""
     lines = ["## Seed 001: the three-storey frames of Tables 3-5, each device alone", "",
              "Lizunov, Pogorelova, Postnikova, section 4.3 (`scenarios/seed001_frame_devices.toml`, "
-             "`seed001_frame_vitmd.toml`): Table 3's frames,", "each device of Tables 4-5 alone on the "
-             "top floor. The paper prints the devices' parameters only, no response: the paper",
+             "`seed001_frame_vitmd.toml`, `seed001_frame_vidm.toml`): Table 3's frames,", "each device of "
+             "Tables 4-5 alone on the top floor. The paper prints the devices' parameters only, no response: "
+             "the paper",
              "column says so. The load is reconstructed (Clough-Penzien ground motion, PGA near 0.1 g; "
              "Rayleigh 2 %), the same", "realisations with and without the device; cut = 1 - mean(with) / "
              "mean(bare) of the roof's rms and peak displacement,", "+- its standard error "
