@@ -580,7 +580,9 @@ def seed001(scenarios: Path, figures: Path) -> list[str]:
                          f"{100 * dm_rms_se:.1f} %, peak {100 * dm_peak:+.1f} +- {100 * dm_peak_se:.1f} %; "
                          f"the impacts take {100 * share:.1f} % of the input energy (EDM "
                          f"{r['rows']['edm'].mean():.3f} against {r['dm']['edm'].mean():.3f}).")
-    lines += ["", *notes, ""]
+    lines.append("")
+    for note in notes:  # (a paragraph each)
+        lines += [note, ""]
     lines += seed001_rig(scenarios)
     return lines
 

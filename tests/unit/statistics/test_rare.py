@@ -52,14 +52,18 @@ def agree(p: float, cov: float, reference: float, se: float) -> bool:
 
 
 @pytest.mark.parametrize("value, p_about, particles, target", [(4.2, 1e-3, 100, 0.1), (5.3, 1e-5, 200, 0.2),
-                                                               (5.75, 1e-6, 200, 0.3)])
+                                                               (5.75, 1e-6, 200, 0.15)])
 def test_splitting_against_the_exact_first_passage(matrix, value, p_about, particles, target):
+    """Each estimate reaches its target within 30,000 path-equivalents (at 1e-6 the target is
+    0.15: the energy score's replica of 200 paths spends about 1,100 path-equivalents at a
+    coefficient of variation of about 0.34, so about 6,000 in all) and agrees with the exact
+    probability."""
     reference, se = isee(matrix, value)
     assert p_about / 3 < reference < 3 * p_about
     scene = scene_from(oscillator(value))
     e = rare.estimate(lambda j: scene, 0, "splitting", 11, 0, particles=particles, target_cov=target,
-                      max_paths=60_000)
-    assert e.cov <= target or e.paths >= 60_000
+                      max_paths=30_000)
+    assert e.cov <= target and e.paths <= 30_000, (e.cov, e.paths)
     assert agree(e.p, e.cov, reference, se), (e.p, e.cov, reference, se)
     assert e.p_lo <= e.p <= e.p_hi
 
