@@ -800,7 +800,8 @@ def _run(study: Study, directory: Path | None, o: _Options) -> Results | None:
         chosen = _chosen_paths(study, the_plan, states, chunk_runner) if base.output.paths else None
         studies = {}
         if base.rare is not None:
-            studies["rare"] = rare.table(study, _scene_of(study), o.progress)
+            studies["rare"] = rare.table(study, _scene_of(study), o.progress,
+                                         lambda point, values: binding(study, point).scene(values))
         if base.sensitivity is not None:
             studies["sensitivity"] = sensitivity.table(study, _design_output(study), o.progress)
         return _consolidate(study, the_plan, states, directory, frames, meta, grids, spec,

@@ -21,8 +21,10 @@ Hertz contact, filtered loads and uncertain parameters are those of an ensemble 
 
 **Subset simulation** (Au and Beck, Probab. Eng. Mech. 16 (2001) 263) with the modified
 Metropolis algorithm on the Gaussian inputs: the white-noise increments a path replays
-(``start_path(..., normals=...)``), a level a fraction ``P0`` of the samples, each seed a Markov
-chain of ``1 / P0`` states.  Where a scene also seeds Brownian trees (impacts or contact under
+(``start_path(..., normals=...)``) and, with uncertain parameters, one standard normal a
+parameter (its law's value of that normal, or of its probability for a law drawn from a uniform:
+``Parameters``), a level a fraction ``P0`` of the samples, each seed a Markov chain of ``1 / P0``
+states.  Where a scene also seeds Brownian trees (impacts or contact under
 white noise), each candidate draws its seed afresh from the prior (an independent proposal,
 accepted as the others only inside the level).
 
@@ -150,6 +152,25 @@ class Estimate:
         """rare.parquet's columns."""
         return {"p": self.p, "cov": self.cov, "p_lo": self.p_lo, "p_hi": self.p_hi, "paths": self.paths,
                 "levels": self.levels, "replicas": len(self.replicas), "method": self.method}
+
+
+@dataclass(frozen=True)
+class Parameters:
+    """Subset simulation's uncertain parameters: their laws (``[uncertain]``, file order) and
+    ``scene(values)``, the sweep point's scene with those values (``binding.Binding.scene``)."""
+
+    laws: dict
+    scene: Callable[[dict[str, float]], object]
+
+    def at(self, z: np.ndarray) -> object:
+        """The scene at standard normal inputs ``z`` (one a parameter): each law's value of its
+        normal, or of ``Phi(z)`` for a law drawn from a uniform (``distributions``)."""
+        from scipy.special import ndtr
+
+        values = {key: float(law.value(np.array([z[k] if law.normal else min(max(ndtr(z[k]), 1e-16),
+                                                                                   1.0 - 1e-16)]))[0])
+                  for k, (key, law) in enumerate(self.laws.items())}
+        return self.scene(values)
 
 
 def rare_streams(seed: int, point: int, replica: int, draw: int, scene) -> Streams:
@@ -290,14 +311,17 @@ def splitting(scenes: Callable[[int], object], limit: int, n: int, kill: int, se
     return Replica(weight * above / n, run.steps / run.n_steps, levels)
 
 
-def subset(scene, limit: int, n: int, seed: int, point: int, replica: int) -> Replica:
+def subset(scene, limit: int, n: int, seed: int, point: int, replica: int,
+           parameters: Parameters | None = None) -> Replica:
     """One replica of subset simulation with ``n`` samples a level (``n P0`` chains of ``1 /
-    P0`` states) on the white-noise increments of ``scene`` (see the module)."""
+    P0`` states) on the white-noise increments of ``scene`` and the uncertain ``parameters``
+    (see the module)."""
     if scene.has_filters or not scene.has_white_noise:
         raise ValueError("rare.method = 'subset': samples the white-noise increments a path replays; this "
                          "scene " + ("has filtered loads" if scene.has_filters else "has no white noise")
                          + " (use method = 'splitting')")
-    dim = scene.n_steps * SCHEMES[scene.scheme].normals * max(scene.noisy_floors, 1)
+    noise = scene.n_steps * SCHEMES[scene.scheme].normals * max(scene.noisy_floors, 1)
+    dim = noise + (len(parameters.laws) if parameters is not None else 0)
     rng = _chooser(seed, point, replica, INPUTS)
     row = scene.limits[limit]
     value = float(row[2])
@@ -308,7 +332,8 @@ def subset(scene, limit: int, n: int, seed: int, point: int, replica: int) -> Re
         nonlocal count
         streams = rare_streams(seed, point, replica, count, scene) if seeded else None
         count += 1
-        path = start_path(scene, streams, normals=u, stretches=False)
+        own = scene if parameters is None else parameters.at(u[noise:])
+        path = start_path(own, streams, normals=u[:noise], stretches=False)
         advance(path, scene.n_steps)
         return peak(path.out, row, scene.n_floors)
 
@@ -358,9 +383,11 @@ def combine(replicas: list[Replica], method: str) -> Estimate:
 
 def estimate(scenes: Callable[[int], object], limit: int, method: str, seed: int, point: int, *,
              particles: int, target_cov: float, max_paths: float, kill: float = 0.1,
-             replicas: int | None = None, note: Callable[[Estimate], None] | None = None) -> Estimate:
+             replicas: int | None = None, note: Callable[[Estimate], None] | None = None,
+             parameters: Parameters | None = None) -> Estimate:
     """Replicas of ``method`` (``n = particles`` paths or samples each; splitting kills at least a
-    fraction ``kill`` a level) in stages: ``MIN_REPLICAS`` first, then as many more as their
+    fraction ``kill`` a level; subset simulation samples the uncertain ``parameters`` with the
+    noise, where a scene has them) in stages: ``MIN_REPLICAS`` first, then as many more as their
     spread says the target needs (``R cov^2 / target_cov^2`` in all), until the coefficient of
     variation reaches ``target_cov`` at the end of a stage or ``max_paths`` path-equivalents are
     spent (with ``replicas``: exactly that many).  Testing the spread only at the end of a stage
@@ -374,7 +401,7 @@ def estimate(scenes: Callable[[int], object], limit: int, method: str, seed: int
         if method == "splitting":
             done.append(splitting(scenes, limit, particles, max(1, int(kill * particles)), seed, point, r))
         else:
-            done.append(subset(scenes(0), limit, particles, seed, point, r))
+            done.append(subset(scenes(0), limit, particles, seed, point, r, parameters))
         result = combine(done, method)
         if note is not None:
             note(result)
@@ -390,13 +417,15 @@ def estimate(scenes: Callable[[int], object], limit: int, method: str, seed: int
             goal = 2 * len(done)
 
 
-def table(study, scene_of: Callable[[int, int], object], progress: bool = False) -> pd.DataFrame:
+def table(study, scene_of: Callable[[int, int], object], progress: bool = False,
+          scene_at: Callable[[int, dict[str, float]], object] | None = None) -> pd.DataFrame:
     """rare.parquet: one row per sweep point of ``study`` (its ``[rare]`` table): the point, its
     swept values, the estimate (``Estimate.row``), and as lists the replicas' estimates and
     path-equivalents (the estimate's convergence) and the first replica's levels (splitting:
     ``z_j``; subset: the intermediate thresholds, over the limit's value).  ``scene_of(point,
     j)``: the scene of path ``j`` of a point (its uncertain parameters drawn as realisation
-    ``j``'s)."""
+    ``j``'s); ``scene_at(point, values)``: the point's scene with the uncertain parameters
+    ``values`` (subset simulation's, where the study has them)."""
     spec, seed = study.base.rare, study.base.ensemble.seed
     cr = "\r" if sys.stderr.isatty() else ""
     limit = list(study.base.limits).index(spec.limit)
@@ -407,9 +436,12 @@ def table(study, scene_of: Callable[[int, int], object], progress: bool = False)
                 print(f"{cr}rare: point {point}: p = {e.p:.3g}, cov {e.cov:.2f}, {len(e.replicas)} replicas, "
                       f"{e.paths:.0f} path-equivalents", end="" if cr else "\n", file=sys.stderr, flush=True)
 
+        parameters = None
+        if spec.method == "subset" and study.base.uncertain and scene_at is not None:
+            parameters = Parameters(study.base.uncertain, lambda values, point=point: scene_at(point, values))
         result = estimate(lambda j, point=point: scene_of(point, j), limit, spec.method, seed, point,
                           particles=spec.n, target_cov=spec.target_cov, max_paths=spec.max_paths,
-                          kill=spec.kill, note=note)
+                          kill=spec.kill, note=note, parameters=parameters)
         if progress and cr:
             print(file=sys.stderr)
         rows.append({"point": point, **{k: study.grid[point][k] for k in study.sweep_keys}, **result.row(),

@@ -157,7 +157,8 @@ class Scenario(_Model):
 
     def _check_rare(self, n: int) -> None:
         """``[rare]``: a limit of ``[limits]``, a scene with noise (and for subset simulation white
-        noise alone); ``[sensitivity]``: uncertain parameters and a metric or limit to read."""
+        noise and no filtered load); ``[sensitivity]``: uncertain parameters and a metric or limit
+        to read."""
         rare = self.rare
         if rare is not None:
             if rare.limit not in self.limits:
@@ -169,11 +170,11 @@ class Scenario(_Model):
             if rare.method == "subset":
                 filtered = self.contents[1]
                 white = any(isinstance(load, WhiteNoiseLoad) for load in self.loads)
-                if filtered or self.uncertain or not white:
-                    why = ("filtered loads" if filtered else "uncertain parameters" if self.uncertain
-                           else "no white noise")
+                if filtered or not white:
+                    why = "filtered loads" if filtered else "no white noise"
                     raise FieldError("rare.method", rare.method, "subset simulation samples the white-noise "
-                                     f"increments; this scene has {why}: use 'splitting'")
+                                     "increments (and the uncertain parameters); this scene has "
+                                     f"{why}: use 'splitting'")
             if rare.method == "subset" and rare.n % 10:
                 raise FieldError("rare.particles", rare.particles,
                                  "must be a multiple of 10 with subset simulation (10 states a chain)")

@@ -29,6 +29,8 @@ OMEGA, ZETA = 2 * math.pi, 0.05
 SIGMA = math.sqrt(4 * ZETA * OMEGA ** 3)
 #: Standard errors of a difference within which two estimates agree (a two-sided 0.3 % test for each).
 Z = 3.0
+#: The limit of p about 7e-4 of the 3 s oscillator with a lognormal stiffness (cov 0.3).
+VALUE_UNCERTAIN = 4.0
 
 
 def oscillator(value: float, duration: float = 10.0) -> dict:
@@ -240,6 +242,25 @@ def test_rare_parquet_in_memory_and_from_the_folder(tmp_path):
 def test_bad_rare_tables_are_refused_by_name(changes, key):
     with pytest.raises(ScenarioError, match=key.replace(".", r"\.")):
         study_from(rare_data(), changes)
+
+
+def test_subset_simulation_samples_the_uncertain_parameters():
+    """The oscillator for 3 s with a lognormal stiffness (cov 0.3) at p about 7e-4: subset
+    simulation on the noise and the parameter's normal (through a run's ``[rare]`` table) and
+    crude Monte Carlo on 100,000 paths (each its own stiffness) agree within ``Z`` standard errors
+    of their difference.  The stiffness matters: at its median the probability is about a
+    tenth of that (measured 6.5e-5 on 200,000 paths), far outside the tolerance."""
+    stiffness = {"distribution": "lognormal", "median": OMEGA ** 2, "cov": 0.3}
+    data = oscillator(VALUE_UNCERTAIN, duration=3.0) | {"uncertain": {"primary.stiffness": stiffness}}
+    summary = run(data | {"ensemble": {"realizations": 100_000, "seed": 5}}).summary
+    crude, crude_se = summary.p_roof[0], (summary.p_roof_hi[0] - summary.p_roof_lo[0]) / (2 * 1.96)
+    assert 3e-4 < crude < 3e-3
+    results = run(data | {"rare": {"limit": "roof", "method": "subset", "particles": 500, "target_cov": 0.15,
+                                   "max_paths": 40_000}})
+    row = results.rare.iloc[0]
+    p, cov = row["p"], row["cov"]
+    assert row["method"] == "subset" and cov <= 0.15
+    assert agree(p, cov, crude, crude_se), (p, cov, crude, crude_se)
 
 
 def test_subset_simulation_refuses_filtered_loads():
