@@ -26,7 +26,7 @@ SIGNALS = {
     "stroke": (5, "absorber"),  # an absorber's displacement less its host floor's
     "e1": (6, None),          # the structure's energy E1
     "share": (7, None),       # the absorbers' share of the energy, E_abs / (E1 + E_abs)
-    "contact": (8, "absorber"),  # an absorber's contact or impact force on its host floor
+    "contact": (8, "absorber"),  # an absorber's contact or impact force on its host (or walls' body)
 }
 (SIGNAL_X, SIGNAL_V, SIGNAL_DRIFT, SIGNAL_XA, SIGNAL_VA, SIGNAL_STROKE, SIGNAL_E1,
  SIGNAL_SHARE, SIGNAL_CONTACT) = range(len(SIGNALS))

@@ -414,9 +414,10 @@ def block_end(i: int, n_steps: int, i0: int, h_next: int) -> int:
 def contact_on_host(x, nf: int, a: int, kind, host, rows, impulses, dt: float) -> float:
     """The contact or impact force of absorber ``a`` on its host floor at a step's end (the
     signal ``contact_j``): a Hertz absorber's contact force there (the opposite of
-    ``contact_force_law``'s on the absorber); an impact absorber's impulses on its host over the
-    step that ended, over ``dt`` (``impulses``: summed by ``resolve_impact``); 0 for the other
-    laws, and for an absorber stuck to its wall (the constraint's force is not resolved)."""
+    ``contact_force_law``'s on the absorber); an impact absorber's impulses on the body that holds
+    its walls (its host, or the absorber of ``impacts_with``) over the step that ended, over
+    ``dt`` (``impulses``: summed by ``resolve_impact``); 0 for the other laws, and for an
+    absorber stuck to its wall (the constraint's force is not resolved)."""
     if kind[a] == HERTZ:
         return -contact_force_law(rows, a, pick(x, nf + a) - pick(x, host_of(host, a, nf)))
     if kind[a] == IMPACT and impulses.shape[0] > 0:
