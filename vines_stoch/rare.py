@@ -87,15 +87,14 @@ def energy_bound(scene, limit: int) -> float | None:
 
 @dataclass(frozen=True)
 class Score:
-    """What a splitting path's score is: the running peak of limit row ``row`` (``code``,
-    floor: ``scene.limit_row``'s), read as ``peak`` reads it, and ``top``, the score every path
-    whose limited metric exceeds the limit's value has exceeded (the levels' end).  With
-    ``energy`` the row is the primary's energy (``LIMIT_E1``) and ``top`` the energy
+    """What a splitting path's score is: the running peak a limit row ``row`` watches (its code
+    and floor, ``scene.limit_row``'s; its value 0), read as ``peak`` reads it, and ``top``, the
+    score every path whose limited metric exceeds the limit's value has exceeded (the levels'
+    end).  With ``energy`` the row is the primary's energy (``LIMIT_E1``) and ``top`` the energy
     ``K value^2 / 2`` of ``energy_bound`` (less a relative 1e-9 against rounding); ``scale``
     turns a score into the limited quantity's units over the limit (the levels reported)."""
 
-    code: float
-    floor: float
+    row: np.ndarray
     top: float
     energy: bool
 
@@ -106,8 +105,8 @@ class Score:
         code, floor, value = (float(x) for x in scene.limits[limit])
         bound = next(iter(bounds)) if len(bounds) == 1 else None
         if bound is None:
-            return cls(code, floor, value, False)
-        return cls(float(LIMIT_E1), 0.0, 0.5 * bound * value * value * (1.0 - 1e-9), True)
+            return cls(np.array([code, floor, 0.0]), value, False)
+        return cls(np.array([float(LIMIT_E1), 0.0, 0.0]), 0.5 * bound * value * value * (1.0 - 1e-9), True)
 
     def scale(self, level: float) -> float:
         return math.sqrt(level / self.top) if self.energy else level / self.top
@@ -212,10 +211,10 @@ class _Splitting:
 
     def __init__(self, scenes: Callable[[int], object], limit: int, seed: int, point: int, replica: int,
                  n: int):
-        self.scenes, self.limit, self.seed, self.point, self.replica = scenes, limit, seed, point, replica
-        self.first = scenes(0)
-        self.score = Score.of(self.first, limit, {energy_bound(scenes(j), limit) for j in range(n)})
-        self.row = np.array([self.score.code, self.score.floor, 0.0])
+        self.limit, self.seed, self.point, self.replica = limit, seed, point, replica
+        self.scenes = [scenes(j) for j in range(n)]  # (the initial paths' scenes)
+        self.first = self.scenes[0]
+        self.score = Score.of(self.first, limit, {energy_bound(scene, limit) for scene in self.scenes})
         self.value = float(self.first.limits[limit, 2])
         self.n_steps, self.nf = self.first.n_steps, self.first.n_floors
         self.stride = max(1, -(-self.n_steps // SNAPSHOTS))
@@ -230,7 +229,7 @@ class _Splitting:
 
     def _peak(self, path: Path) -> float:
         """The path's score so far (``Score``)."""
-        return peak(path.out, self.row, self.nf)
+        return peak(path.out, self.score.row, self.nf)
 
     def _run(self, particle: _Particle) -> _Particle:
         """Run ``particle`` from the step it has reached to the end, a snapshot at each stride."""
@@ -248,7 +247,7 @@ class _Splitting:
 
     def start(self, j: int) -> _Particle:
         """Initial path ``j`` on its own streams, run to the end."""
-        path = start_path(self.scenes(j), self._fresh())
+        path = start_path(self.scenes[j], self._fresh())
         return self._run(_Particle(path, [path.branch()], [self._peak(path)]))
 
     def branch(self, survivor: _Particle, level: float) -> _Particle:
@@ -263,7 +262,7 @@ class _Splitting:
         probe = snap.branch()
         outputs = probe.args[6]
         limits = outputs.limits.copy()
-        limits[self.limit] = (self.score.code, self.score.floor, level)
+        limits[self.limit] = (*self.score.row[:2], level)
         probe.args = (*probe.args[:6], outputs._replace(limits=limits), *probe.args[7:])
         self.steps += stop - snap.step
         advance(probe, stop)
