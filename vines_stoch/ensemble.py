@@ -45,7 +45,9 @@ from .signals import declare, signal_names
 from .store import (
     CHECKPOINT,
     KEY,
+    STUDIES,
     ForeignFiles,
+    Saved,
     lock_folder,
     part_path,
     prepare_folder,
@@ -799,11 +801,12 @@ def _run(study: Study, directory: Path | None, o: _Options) -> Results | None:
         meta = provenance(study.text, study.source, seed, where, o.backend, key)
         chosen = _chosen_paths(study, the_plan, states, chunk_runner) if base.output.paths else None
         studies = {}
+        saved = Saved(None if directory is None else directory / "parts" / STUDIES, key, o.resume)
         if base.rare is not None:
             studies["rare"] = rare.table(study, _scene_of(study), o.progress,
-                                         lambda point, values: binding(study, point).scene(values))
+                                         lambda point, values: binding(study, point).scene(values), saved)
         if base.sensitivity is not None:
-            studies["sensitivity"] = sensitivity.table(study, _design_output(study), o.progress)
+            studies["sensitivity"] = sensitivity.table(study, _design_output(study), o.progress, saved)
         return _consolidate(study, the_plan, states, directory, frames, meta, grids, spec,
                             kept_paths if o.paths else None, signals, views, chosen, studies)
     except KeyboardInterrupt as exc:

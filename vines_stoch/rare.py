@@ -21,12 +21,13 @@ Hertz contact, filtered loads and uncertain parameters are those of an ensemble 
 
 **Subset simulation** (Au and Beck, Probab. Eng. Mech. 16 (2001) 263) with the modified
 Metropolis algorithm on the Gaussian inputs: the white-noise increments a path replays
-(``start_path(..., normals=...)``) and, with uncertain parameters, one standard normal a
-parameter (its law's value of that normal, or of its probability for a law drawn from a uniform:
-``Parameters``), a level a fraction ``P0`` of the samples, each seed a Markov chain of ``1 / P0``
-states.  Where a scene also seeds Brownian trees (impacts or contact under
-white noise), each candidate draws its seed afresh from the prior (an independent proposal,
-accepted as the others only inside the level).
+(``start_path(..., normals=...)``), the standard normals of its filtered loads (replayed from a
+tape as the filter stream, ``rng.tape``: ``kernels.filter_draws`` of them) and, with uncertain
+parameters, one standard normal a parameter (its law's value of that normal, or of its
+probability for a law drawn from a uniform: ``Parameters``), a level a fraction ``P0`` of the
+samples, each seed a Markov chain of ``1 / P0`` states.  Where a scene also seeds Brownian trees
+(impacts or contact under white noise), each candidate draws its seed afresh from the prior (an
+independent proposal, accepted as the others only inside the level).
 
 Both run in independent replicas, one after another in a fixed order, until the coefficient of
 variation of their mean, ``sd / (mean sqrt(R))``, reaches the target (from
@@ -46,8 +47,9 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
-from .kernels import Path, advance, needed_streams, start_path
+from .kernels import Path, advance, filter_draws, needed_streams, start_path
 from .kernels.pcg import state_of
+from .kernels.rng import tape
 from .outputs import DRIFT_MAX_K, E1_MAX, LIMIT_E1, SLOTS, X_MAX_K, passage_slots
 from .schemes import SCHEMES
 from .streams import RARE, Streams
@@ -313,14 +315,16 @@ def splitting(scenes: Callable[[int], object], limit: int, n: int, kill: int, se
 def subset(scene, limit: int, n: int, seed: int, point: int, replica: int,
            parameters: Parameters | None = None) -> Replica:
     """One replica of subset simulation with ``n`` samples a level (``n P0`` chains of ``1 /
-    P0`` states) on the white-noise increments of ``scene`` and the uncertain ``parameters``
-    (see the module)."""
-    if scene.has_filters or not scene.has_white_noise:
-        raise ValueError("rare.method = 'subset': samples the white-noise increments a path replays; this "
-                         "scene " + ("has filtered loads" if scene.has_filters else "has no white noise")
-                         + " (use method = 'splitting')")
-    noise = scene.n_steps * SCHEMES[scene.scheme].normals * max(scene.noisy_floors, 1)
-    dim = noise + (len(parameters.laws) if parameters is not None else 0)
+    P0`` states) on the standard normal inputs of ``scene``'s noise (the white-noise increments
+    and the filters' normals, replayed from a tape: ``rng.tape``) and the uncertain
+    ``parameters`` (see the module)."""
+    noise = (scene.n_steps * SCHEMES[scene.scheme].normals * max(scene.noisy_floors, 1)
+             if scene.has_white_noise else 0)
+    filtered = filter_draws(scene)
+    if noise + filtered == 0:
+        raise ValueError("rare.method = 'subset': samples the standard normal inputs of a scene's noise; "
+                         "this scene has none")
+    dim = noise + filtered + (len(parameters.laws) if parameters is not None else 0)
     rng = _chooser(seed, point, replica, INPUTS)
     row = scene.limits[limit]
     value = float(row[2])
@@ -329,10 +333,11 @@ def subset(scene, limit: int, n: int, seed: int, point: int, replica: int,
 
     def score(u: np.ndarray) -> float:
         nonlocal count
-        streams = rare_streams(seed, point, replica, count, scene) if seeded else None
+        bridge = rare_streams(seed, point, replica, count, scene).bridge if seeded else None
         count += 1
-        own = scene if parameters is None else parameters.at(u[noise:])
-        path = start_path(own, streams, normals=u[:noise], stretches=False)
+        own = scene if parameters is None else parameters.at(u[noise + filtered:])
+        streams = Streams(None, bridge, tape(u[noise:noise + filtered]) if filtered else None)
+        path = start_path(own, streams, normals=u[:noise] if noise else None, stretches=False)
         advance(path, scene.n_steps)
         return peak(path.out, row, scene.n_floors)
 
@@ -383,7 +388,7 @@ def combine(replicas: list[Replica], method: str) -> Estimate:
 def estimate(scenes: Callable[[int], object], limit: int, method: str, seed: int, point: int, *,
              particles: int, target_cov: float, max_paths: float, kill: float = 0.1,
              replicas: int | None = None, note: Callable[[Estimate], None] | None = None,
-             parameters: Parameters | None = None) -> Estimate:
+             parameters: Parameters | None = None, done: list[Replica] | None = None) -> Estimate:
     """Replicas of ``method`` (``n = particles`` paths or samples each; splitting kills at least a
     fraction ``kill`` a level; subset simulation samples the uncertain ``parameters`` with the
     noise, where a scene has them) in stages: ``MIN_REPLICAS`` first, then as many more as their
@@ -392,32 +397,58 @@ def estimate(scenes: Callable[[int], object], limit: int, method: str, seed: int
     spent (with ``replicas``: exactly that many).  Testing the spread only at the end of a stage
     keeps the estimate from stopping on a lucky run of replicas, as testing after each would
     (the replicas' law is skewed: a low spread comes with a low mean).  ``note`` is called with
-    the estimate so far after each replica."""
-    done: list[Replica] = []
+    the estimate so far after each replica run; ``done``: the first replicas, already run (a
+    resumed estimate: its stages are taken again over them, so it stops where the estimate run
+    in one go stops)."""
+    kept: list[Replica] = []
     goal = replicas if replicas is not None else MIN_REPLICAS
     while True:
-        r = len(done)
-        if method == "splitting":
-            done.append(splitting(scenes, limit, particles, max(1, int(kill * particles)), seed, point, r))
+        r = len(kept)
+        if done is not None and r < len(done):
+            kept.append(done[r])
         else:
-            done.append(subset(scenes(0), limit, particles, seed, point, r, parameters))
-        result = combine(done, method)
-        if note is not None:
-            note(result)
+            if method == "splitting":
+                kill_at_least = max(1, int(kill * particles))
+                kept.append(splitting(scenes, limit, particles, kill_at_least, seed, point, r))
+            else:
+                kept.append(subset(scenes(0), limit, particles, seed, point, r, parameters))
+            if note is not None:
+                note(combine(kept, method))
+        result = combine(kept, method)
         if replicas is None and result.paths >= max_paths:
             return result
-        if len(done) < goal:
+        if len(kept) < goal:
             continue
         if replicas is not None or result.cov <= target_cov:
             return result
         if math.isfinite(result.cov):
-            goal = max(goal + 1, math.ceil(len(done) * (result.cov / target_cov) ** 2))
+            goal = max(goal + 1, math.ceil(len(kept) * (result.cov / target_cov) ** 2))
         else:  # (no replica above the limit yet: double)
-            goal = 2 * len(done)
+            goal = 2 * len(kept)
+
+
+def _saved_replicas(saved, point: int) -> list[Replica]:
+    """The replicas of sweep point ``point`` a ``store.Saved`` holds (``_save_replicas``)."""
+    ps, paths, counts = (saved.get(f"rare.{point}.{name}") for name in ("p", "paths", "counts"))
+    if ps is None:
+        return []
+    levels = saved.get(f"rare.{point}.levels").reshape(-1, 2)
+    ends = np.cumsum(counts)
+    return [Replica(float(p), float(spent), [(float(z), float(f)) for z, f in levels[end - count:end]])
+            for p, spent, count, end in zip(ps, paths, counts, ends)]
+
+
+def _save_replicas(saved, point: int, replicas: list[Replica]) -> None:
+    """Keep a sweep point's replicas in ``saved`` (a ``store.Saved``)."""
+    levels = [level for r in replicas for level in r.levels]
+    saved.put({f"rare.{point}.p": np.array([r.p for r in replicas]),
+               f"rare.{point}.paths": np.array([r.paths for r in replicas]),
+               f"rare.{point}.counts": np.array([len(r.levels) for r in replicas], np.int64),
+               f"rare.{point}.levels": np.array(levels, dtype=float).reshape(-1, 2)})
 
 
 def table(study, scene_of: Callable[[int, int], object], progress: bool = False,
-          scene_at: Callable[[int, dict[str, float]], object] | None = None) -> pd.DataFrame:
+          scene_at: Callable[[int, dict[str, float]], object] | None = None, saved=None) -> pd.DataFrame:
     """rare.parquet: one row per sweep point of ``study`` (its ``[rare]`` table): the point, its
     swept values, the estimate (``Estimate.row``), and as lists the replicas' estimates and
     path-equivalents (the estimate's convergence) and the first replica's levels (splitting:
@@ -431,6 +462,8 @@ def table(study, scene_of: Callable[[int, int], object], progress: bool = False,
     rows = []
     for point in range(len(study.points)):
         def note(e: Estimate, point: int = point) -> None:
+            if saved is not None:
+                _save_replicas(saved, point, e.replicas)
             if progress:  # (one line, rewritten on a terminal; a line a replica in a log)
                 print(f"{cr}rare: point {point}: p = {e.p:.3g}, cov {e.cov:.2f}, {len(e.replicas)} replicas, "
                       f"{e.paths:.0f} path-equivalents", end="" if cr else "\n", file=sys.stderr, flush=True)
@@ -440,7 +473,8 @@ def table(study, scene_of: Callable[[int, int], object], progress: bool = False,
             parameters = Parameters(study.base.uncertain, lambda values, point=point: scene_at(point, values))
         result = estimate(lambda j, point=point: scene_of(point, j), limit, spec.method, seed, point,
                           particles=spec.n, target_cov=spec.target_cov, max_paths=spec.max_paths,
-                          kill=spec.kill, note=note, parameters=parameters)
+                          kill=spec.kill, note=note, parameters=parameters,
+                          done=_saved_replicas(saved, point) if saved is not None else None)
         if progress and cr:
             print(file=sys.stderr)
         rows.append({"point": point, **{k: study.grid[point][k] for k in study.sweep_keys}, **result.row(),

@@ -29,6 +29,9 @@ from collections.abc import Callable
 import numpy as np
 import pandas as pd
 
+#: Design points between two saves of their outputs (and two progress lines).
+SAVE_EVERY = 64
+
 
 def sobol_indices(model: Callable[[np.ndarray], np.ndarray], d: int, samples: int, seed: int,
                   bootstrap: int = 1000, names: list[str] | None = None) -> pd.DataFrame:
@@ -43,6 +46,7 @@ def sobol_indices(model: Callable[[np.ndarray], np.ndarray], d: int, samples: in
     problem = {"num_vars": d, "names": names, "bounds": [[0.0, 1.0]] * d}
     design = sample.sample(problem, samples, calc_second_order=False, scramble=True, seed=seed)
     y = np.asarray(model(design), dtype=float)
+
     if np.ptp(y) == 0.0:  # (no variance to apportion: every index is 0)
         zeros = np.zeros(d)
         return pd.DataFrame({"parameter": names, "s1": zeros, "s1_lo": zeros, "s1_hi": zeros,
@@ -65,20 +69,31 @@ def parameter_values(dists: dict, unit: np.ndarray) -> dict[str, np.ndarray]:
             for k, (key, dist) in enumerate(dists.items())}
 
 
-def table(study, outputs: Callable[[int, dict[str, float]], float], progress: bool = False) -> pd.DataFrame:
+def table(study, outputs: Callable[[int, dict[str, float]], float], progress: bool = False,
+          saved=None) -> pd.DataFrame:
     """sensitivity.parquet: one row per sweep point and uncertain parameter (the point, its
     swept values, ``sobol_indices``' columns); ``outputs(point, values)``: the design point's
-    output (the mean of the metric over the common noise realisations)."""
+    output (the mean of the metric over the common noise realisations); ``saved``: a
+    ``store.Saved`` that keeps the outputs run so far (every ``SAVE_EVERY`` design points), and
+    gives back those of an interrupted run, which are not run again."""
     spec, seed = study.base.sensitivity, study.base.ensemble.seed
     dists = study.base.uncertain
     frames = []
     for point in range(len(study.points)):
         def model(unit: np.ndarray, point: int = point) -> np.ndarray:
             values = parameter_values(dists, unit)
-            out = np.empty(unit.shape[0])
-            for i in range(unit.shape[0]):
+            name = f"sensitivity.{point}.y"
+            before = saved.get(name) if saved is not None else None
+            out = np.full(unit.shape[0], np.nan)
+            start = 0 if before is None else min(before.shape[0], unit.shape[0])
+            if start:
+                out[:start] = before[:start]
+            for i in range(start, unit.shape[0]):
                 out[i] = outputs(point, {key: float(v[i]) for key, v in values.items()})
-                if progress and (i % 64 == 0 or i == unit.shape[0] - 1):
+                last = i == unit.shape[0] - 1
+                if saved is not None and ((i + 1) % SAVE_EVERY == 0 or last):
+                    saved.put({name: out[:i + 1]})
+                if progress and (i % SAVE_EVERY == 0 or last):
                     print(f"\rsensitivity: point {point}: {i + 1} of {unit.shape[0]} parameter sets", end="",
                           file=sys.stderr, flush=True)
             if progress:

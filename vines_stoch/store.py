@@ -57,13 +57,14 @@ KEY = "vines_stoch.run_key"
 RESULTS = ("summary.parquet", "realizations.parquet", "history.parquet", "events.parquet",
            "poincare.parquet", "spectra.parquet", "paths.parquet", "rare.parquet", "sensitivity.parquet",
            "fragility.parquet")
-#: The parts' manifest (the run key and the number of chunks) and the history statistics'
-#: checkpoint, in ``DIR/parts``.
-MANIFEST, CHECKPOINT = "manifest.json", "history.npz"
+#: The parts' manifest (the run key and the number of chunks), the history statistics'
+#: checkpoint and the studies' (``Saved``), in ``DIR/parts``.
+MANIFEST, CHECKPOINT, STUDIES = "manifest.json", "history.npz", "studies.npz"
 #: Names of the files in ``DIR/parts`` that only a run writes: parts, and temporary files of an
 #: atomic write that a killed run can leave (``write_table``, ``write_arrays``, the manifest).
 _PART = re.compile(r"point\d{5}_r\d{8}-\d{8}\.parquet")
-_LEFT_BEHIND = re.compile(r"(point\d{5}_r\d{8}-\d{8}\.parquet|history\.npz)\.tmp|manifest\.json\.\d+")
+_LEFT_BEHIND = re.compile(r"(point\d{5}_r\d{8}-\d{8}\.parquet|history\.npz|studies\.npz)\.tmp"
+                          r"|manifest\.json\.\d+")
 #: Marker of a checkpoint file (its format, should it ever change).
 _ARRAYS_FORMAT = "vines-stoch arrays 1"
 
@@ -311,6 +312,32 @@ def read_arrays(path: Path) -> tuple[str, dict[str, np.ndarray]]:
     return str(header.get("key")), arrays
 
 
+class Saved:
+    """What the studies after an ensemble have done so far (the rare-event replicas, the Sobol
+    design's outputs: ``rare.table``, ``sensitivity.table``), as named numeric arrays saved
+    atomically in ``DIR/parts/studies.npz`` (``write_arrays``) each time ``put`` is called: a
+    resumed run takes them up where the interrupted one stopped, to the same numbers.  Without a
+    folder it keeps nothing."""
+
+    def __init__(self, path: Path | None, key: str, resume: bool):
+        self.path, self.key, self.arrays = path, key, {}
+        if path is not None and resume and path.exists():
+            found, self.arrays = read_arrays(path)
+            if found != key:
+                raise ForeignFiles(f"{path}: the studies of another run; remove it (its rare-event "
+                                   "estimates and Sobol indices then run again), or use another --out folder")
+
+    def get(self, name: str) -> np.ndarray | None:
+        """The array saved as ``name``, or None."""
+        return self.arrays.get(name)
+
+    def put(self, arrays: Mapping[str, np.ndarray]) -> None:
+        """Keep ``arrays`` (by name, replacing those of the same names) and save them all."""
+        self.arrays.update({name: np.asarray(a) for name, a in arrays.items()})
+        if self.path is not None:
+            write_arrays(self.path, self.arrays, self.key)
+
+
 def _manifest(directory: Path) -> dict | None:
     """The parts' manifest of a folder (``{"key", "chunks", "source"}``), None where there is none or
     it is not one a run wrote."""
@@ -341,7 +368,7 @@ def _written_in_parts(path: Path) -> bool:
         return True
     if path.name == MANIFEST:
         return _manifest(path.parent.parent) is not None
-    if path.name == CHECKPOINT:
+    if path.name in (CHECKPOINT, STUDIES):
         try:
             read_arrays(path)
         except ForeignFiles:

@@ -256,14 +256,24 @@ def stable_cache(dispatcher: Any) -> bool:
     them: the loop driver closes over its scheme's step functions (``kernels.driver``), whose
     dispatchers pickle with an identity drawn afresh in each process (numba's
     ``_MemoMixin._uuid``), so that no process would find another's entries (each would compile
-    the loop again and add one).  Returns whether it is so keyed: not where a closure's content
-    has no such description (numba's own key then stands)."""
+    the loop again and add one).  The function also takes a name of its own, its qualified name
+    and a hash of those descriptions: numba names a compiled function's symbol by its qualified
+    name, its types and a counter of the compiling process, so that two loops of one closure
+    (a loop recording first passages and one that does not), compiled by two processes with the
+    same count, would share a symbol, and a process loading both (a chunk loop linking its step
+    loop) would run the first one loaded in place of the other (seen: first passages missing
+    from a sensitivity design that ran after another scene's ensemble).  Returns whether it is
+    so keyed: not where a closure's content has no such description (numba's own key then
+    stands, whose entries no other process finds)."""
     from numba.core.caching import FunctionCache
 
     func = dispatcher.py_func
     cells = [described(c.cell_contents) for c in func.__closure__ or ()]
     if None in cells or not isinstance(getattr(dispatcher, "_cache", None), FunctionCache):
         return False
+    if not getattr(func, "named_by_closure", False):
+        func.__qualname__ = f"{func.__qualname__}_{hashlib.sha256(repr(cells).encode()).hexdigest()[:16]}"
+        func.named_by_closure = True
     dispatcher._cache = _stable_cache(False)(func, cells)
     return True
 

@@ -112,6 +112,16 @@ def needed_streams(scene, replay: bool = False) -> tuple[bool, bool, bool]:
     return white and not replay, white and (scene.has_impact or scene.has_hertz), scene.has_filters
 
 
+def filter_draws(scene) -> int:
+    """The standard normals a path of ``scene`` draws from its filter stream: one a filter state
+    for a stationary start (``loads.stationary_start``), then one a state and step
+    (``loads.advance_filters``); 0 where its scheme reads no filtered load."""
+    if not spec_of(scene).filtered:
+        return 0
+    states = scene.filters["phi"].shape[0]
+    return states * (scene.n_steps + int(bool(np.any(scene.filters["p0"] != 0.0))))
+
+
 def _streams_for(scene, replay: bool, streams: Streams | np.random.Generator | None) -> tuple[tuple, tuple]:
     """The kernel's generators (increments, bridge, filter), and the numpy generators they stand
     for (``_as_streams``).  A generator is passed only where the kernel draws from it, an empty
@@ -316,8 +326,6 @@ def start_path(scene, streams: Streams | np.random.Generator | None = None, *,
                          "replayed normals and the euler-maruyama scheme")
     if replay and normals.shape[0] < needed:
         raise ValueError(f"normals: need {needed} values, got {normals.shape[0]}")
-    if replay and scene.has_filters:
-        raise ValueError("normals: a replayed Brownian path drives white noise only, not filtered loads")
     gens, sources = _streams_for(scene, replay, streams)
     fl = filter_tuple(scene, gens[2])
     _sync(sources)
@@ -381,7 +389,8 @@ def simulate(scene, streams: Streams | np.random.Generator | None = None, *,
     one numpy Generator for every purpose) is required where the scene draws random numbers
     (a ``ValueError`` says so); ``normals`` replays a given Brownian path (one standard normal
     per noisy floor and step, two with the ``sra`` scheme: see ``grid.step_normals``) instead of
-    drawing the increments; with ``refine`` (kick-drift-kick only) it holds ``refine`` fine
+    drawing the increments (and a tape as the filter stream, ``rng.tape``, replays the filters'
+    noise: ``filter_draws`` normals); with ``refine`` (kick-drift-kick only) it holds ``refine`` fine
     normals a step and noisy floor, fine step by fine step, and the run sees the path of the
     fine steps, inside a step too (``brownian``): a coarse run and the run of the fine steps
     (``refine = 1``, ``dt / refine``) on the same normals and streams integrate the same path;
@@ -426,5 +435,5 @@ def load_history(
     return scene.dt * np.arange(n + 1), force, ground
 
 
-__all__ = ["SLOTS", "Path", "advance", "bundles", "kernel_for", "load_history", "sample_buffer", "simulate",
-           "start_path"]
+__all__ = ["SLOTS", "Path", "advance", "bundles", "filter_draws", "kernel_for", "load_history",
+           "sample_buffer", "simulate", "start_path"]

@@ -1,7 +1,8 @@
 """Random draws of the kernels from each kind of stream: a PCG64 stream (the CPU ensembles,
 ``streams.py``; ``pcg.py``: numpy's generator in compiled code, a ``pcg.PCG_DTYPE`` record
-array), a counter-based Philox stream (the GPU ensembles, ``gpu.py``) or a numpy ``Generator``
-(of a bit generator other than ``PCG64``, passed by a user).
+array), a counter-based Philox stream (the GPU ensembles, ``gpu.py``), a tape of given normals
+(``tape``: a ``float64`` array, replayed in order; subset simulation's filter noise, ``rare.py``)
+or a numpy ``Generator`` (of a bit generator other than ``PCG64``, passed by a user).
 
 A Philox stream is a ``uint64`` array of ``STREAM_WORDS``: the key (two 32-bit words, from the
 seed and the purpose), the stream's place (the realisation, and the sweep point without common
@@ -90,16 +91,35 @@ def open_stream(stream, key, place) -> None:
     stream[DRAWN] = 0
 
 
+def tape(values: np.ndarray) -> np.ndarray:
+    """A stream that replays ``values`` as its normals, in order: the count drawn so far, then
+    the values (a ``float64`` array).  Draws past its end are NaN (a path that diverges, not
+    numbers from elsewhere); it gives no uniforms."""
+    return np.concatenate([[0.0], np.asarray(values, dtype=np.float64)])
+
+
+@njit(**INLINE)
+def tape_normal(stream) -> float:
+    """The tape's next value (NaN past its end), counting it drawn."""
+    i = int(stream[0]) + 1
+    stream[0] += 1.0
+    return stream[i] if i < stream.shape[0] else math.nan
+
+
 def normal(gen) -> float:
-    """One standard normal from ``gen`` (a PCG64 or Philox stream, or a numpy Generator)."""
+    """One standard normal from ``gen`` (a PCG64 or Philox stream, a tape, or a numpy Generator)."""
     if isinstance(gen, np.ndarray):
-        return pcg_normal(gen) if gen.dtype == PCG_DTYPE else philox_normal(gen)
+        if gen.dtype == PCG_DTYPE:
+            return pcg_normal(gen)
+        return tape_normal(gen) if gen.dtype == np.float64 else philox_normal(gen)
     return gen.standard_normal()
 
 
 def uniform(gen) -> float:
     """One uniform in ``[0, 1)`` from ``gen`` (a PCG64 or Philox stream, or a numpy Generator)."""
     if isinstance(gen, np.ndarray):
+        if gen.dtype == np.float64:
+            raise TypeError("uniform: a tape replays normals only")
         return pcg_uniform(gen) if gen.dtype == PCG_DTYPE else philox_uniform(gen)
     return gen.random()
 
@@ -109,6 +129,8 @@ def _normal(gen):
     if isinstance(gen, types.Array):
         if isinstance(gen.dtype, types.Record):
             return lambda gen: pcg_normal(gen)
+        if isinstance(gen.dtype, types.Float):
+            return lambda gen: tape_normal(gen)
         return lambda gen: philox_normal(gen)
     return lambda gen: gen.standard_normal()
 
@@ -118,6 +140,8 @@ def _uniform(gen):
     if isinstance(gen, types.Array):
         if isinstance(gen.dtype, types.Record):
             return lambda gen: pcg_uniform(gen)
+        if isinstance(gen.dtype, types.Float):
+            return None  # (a tape replays normals only)
         return lambda gen: philox_uniform(gen)
     return lambda gen: gen.random()
 

@@ -156,9 +156,8 @@ class Scenario(_Model):
         return self
 
     def _check_rare(self, n: int) -> None:
-        """``[rare]``: a limit of ``[limits]``, a scene with noise (and for subset simulation white
-        noise and no filtered load); ``[sensitivity]``: uncertain parameters and a metric or limit
-        to read."""
+        """``[rare]``: a limit of ``[limits]``, a scene with noise; ``[sensitivity]``: uncertain
+        parameters and a metric or limit to read."""
         rare = self.rare
         if rare is not None:
             if rare.limit not in self.limits:
@@ -167,14 +166,6 @@ class Scenario(_Model):
             if not self.has_noise:
                 raise FieldError("rare", rare.limit, "needs a scene with noise (a white-noise, filtered or "
                                  "ground-motion load): splitting branches paths onto fresh noise")
-            if rare.method == "subset":
-                filtered = self.contents[1]
-                white = any(isinstance(load, WhiteNoiseLoad) for load in self.loads)
-                if filtered or not white:
-                    why = "filtered loads" if filtered else "no white noise"
-                    raise FieldError("rare.method", rare.method, "subset simulation samples the white-noise "
-                                     "increments (and the uncertain parameters); this scene has "
-                                     f"{why}: use 'splitting'")
             if rare.method == "subset" and rare.n % 10:
                 raise FieldError("rare.particles", rare.particles,
                                  "must be a multiple of 10 with subset simulation (10 states a chain)")

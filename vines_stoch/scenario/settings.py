@@ -148,8 +148,8 @@ class Rare(_Model):
     """A rare-event estimate of one limit's exceedance probability at every sweep point
     (rare.parquet; ``rare.py``): ``limit`` names a key of ``[limits]``; ``method`` is
     ``"splitting"`` (adaptive multilevel splitting on a running peak, ``rare.Score``: any
-    scene with noise) or ``"subset"`` (subset simulation on the white-noise increments and the
-    uncertain parameters: scenes with white noise and no filtered load); independent replicas
+    scene with noise) or ``"subset"`` (subset simulation on the noise's standard normal inputs, white
+    and filtered, and the uncertain parameters); independent replicas
     of ``particles`` paths each (default 200 for splitting, 1000 for subset) run until the
     estimate's coefficient of variation is at most ``target_cov`` or ``max_paths``
     path-equivalents (steps run over a path's steps) are spent; ``kill``: the least fraction of

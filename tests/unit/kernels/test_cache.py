@@ -180,6 +180,50 @@ def test_a_step_loop_compiled_by_one_process_is_loaded_by_the_next(tmp_path):
     assert runs == [{"misses": 1, "hits": 0}, {"misses": 0, "hits": 1}]
 
 
+#: A process that runs the chunk of a noisy oscillator for each argument, without history
+#: rows (``plain``) or with them (``history``: a loop of the same closure and argument types
+#: that records them), and prints the history rows.
+RUN_CHUNKS = r'''
+import json, sys
+from tests.helpers import scene_from
+from vines_stoch.kernels.chunk import simulate_chunk
+data = {"name": "symbols", "primary": {"mass": 1.0, "stiffness": 39.5, "damping": 0.6},
+        "loads": [{"type": "white-noise", "intensity": 2.0}], "simulation": {"duration": 3.0, "dt": 0.01}}
+scene = scene_from(data)
+out = {}
+for which in sys.argv[1:]:
+    grid = (10, 30) if which == "history" else None
+    chunk = simulate_chunk(scene, 2, 0, 0, 6, history=grid, signals=("x1",) if grid else None)
+    out[which] = chunk.history[:, :, 0].tolist() if grid else None
+print(json.dumps(out))
+'''
+
+
+def test_two_loops_of_one_closure_compiled_by_two_processes_run_apart_in_a_third(tmp_path):
+    """One process compiles the chunk loop without history rows, another the one with them,
+    both against the same cached helpers (so with the same count of functions compiled before
+    the loops: numba names a symbol by the qualified name, the types and that count), and a
+    third that loads both runs each its own (``cache.stable_cache`` names each loop by its
+    closure too): its history rows are those the second process found, not NaN (the rows of
+    the loop without history, run in place of the other, as before that naming)."""
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "numba")}
+
+    def run(*which: str) -> dict:
+        done = subprocess.run([sys.executable, "-c", RUN_CHUNKS, *which], cwd=ROOT, env=env,
+                              capture_output=True, text=True, timeout=600)
+        assert done.returncode == 0, done.stderr[-2000:]
+        return json.loads(done.stdout.splitlines()[-1])
+
+    run("plain")  # (the helpers cached; then the loops' entries removed, so both compile them)
+    for path in (tmp_path / "numba").rglob("*"):
+        if path.name.startswith(("chunk.chunk_loop", "driver.step_loop")):
+            path.unlink()
+    run("plain")
+    alone = np.array(run("history")["history"])
+    assert not np.isnan(alone).any()
+    np.testing.assert_array_equal(np.array(run("plain", "history")["history"]), alone)
+
+
 def test_the_signatures_of_one_function_are_saved_one_process_at_a_time():
     """numba names a new cache entry's data file after the index it has just read: two processes
     saving two signatures of one function at once could pick one name (the later write winning,

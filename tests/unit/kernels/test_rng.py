@@ -108,3 +108,32 @@ def test_philox_normal_takes_one_block_a_draw():
     philox_normal(s)
     philox_normal(s)
     assert s[DRAWN] == 2
+
+
+def test_a_tape_replays_the_filter_noise_a_stream_draws():
+    """A scene under a filtered load (from its stationary law) and white noise: its path on a
+    tape of the normals a PCG64 filter stream draws is that stream's path, bitwise, and the
+    tape is read to its end (``kernels.filter_draws``, the stationary start included); past its
+    end a tape gives NaN, and no uniforms."""
+    from tests.helpers import scene_from
+    from vines_stoch.kernels import filter_draws, simulate
+    from vines_stoch.kernels.rng import tape
+    from vines_stoch.streams import Streams
+
+    filtered = {"type": "filtered-noise", "intensity": 3.0, "frequency": 6.0, "damping": 0.3,
+                "start": "stationary"}
+    scene = scene_from({"name": "tape", "primary": {"mass": 1.0, "stiffness": 40.0, "damping": 0.3},
+                        "loads": [filtered, {"type": "white-noise", "intensity": 0.5}],
+                        "simulation": {"duration": 1.0, "dt": 0.01}})
+    drawn = filter_draws(scene)
+    assert drawn == 2 * (scene.n_steps + 1)
+    streams = Streams(np.random.default_rng(1), None, np.random.default_rng(2))
+    out = simulate(scene, streams)
+    replayed = tape(np.random.default_rng(2).standard_normal(drawn))
+    again = simulate(scene, Streams(np.random.default_rng(1), None, replayed))
+    assert np.array_equal(out, again, equal_nan=True)
+    assert replayed[0] == drawn
+    short = tape([0.5])
+    assert normal(short) == 0.5 and math.isnan(normal(short))
+    with pytest.raises(TypeError, match="normals only"):
+        uniform(short)

@@ -93,3 +93,32 @@ def test_bad_sensitivity_tables_are_refused_by_name(changes, key):
         changes = None
     with pytest.raises(ScenarioError, match=key.replace(".", r"\.")):
         study_from(data, changes)
+
+
+def test_an_interrupted_design_resumes_from_its_saved_outputs(tmp_path, monkeypatch):
+    """Ctrl-C at the 100th of the 256 design points: the 64 saved are not run again, and the
+    indices are those of a run in one go."""
+    from vines_stoch import ensemble, sensitivity
+
+    data = scene_data()
+    whole = run(data).sensitivity
+    calls, real = [], ensemble._design_output
+
+    def counting(study):
+        output = real(study)
+
+        def counted(point, values):
+            calls.append(point)
+            if interrupt and len(calls) == 100:
+                raise KeyboardInterrupt
+            return output(point, values)
+        return counted
+
+    monkeypatch.setattr(ensemble, "_design_output", counting)
+    interrupt = True
+    with pytest.raises(ensemble.Interrupted):
+        run(data, tmp_path / "out")
+    interrupt, calls[:] = False, []
+    resumed = run(data, tmp_path / "out", resume=True).sensitivity
+    assert len(calls) == 4 * 64 - sensitivity.SAVE_EVERY
+    assert resumed.equals(whole)
