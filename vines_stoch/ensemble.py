@@ -804,9 +804,11 @@ def _run(study: Study, directory: Path | None, o: _Options) -> Results | None:
         saved = Saved(None if directory is None else directory / "parts" / STUDIES, key, o.resume)
         if base.rare is not None:
             studies["rare"] = rare.table(study, _scene_of(study), o.progress,
-                                         lambda point, values: binding(study, point).scene(values), saved)
+                                         lambda point, values: binding(study, point).scene(values), saved,
+                                         o.backend)
         if base.sensitivity is not None:
-            studies["sensitivity"] = sensitivity.table(study, _design_output(study), o.progress, saved)
+            studies["sensitivity"] = sensitivity.table(study, _design_output(study, chunk_runner), o.progress,
+                                                       saved)
         return _consolidate(study, the_plan, states, directory, frames, meta, grids, spec,
                             kept_paths if o.paths else None, signals, views, chosen, studies)
     except KeyboardInterrupt as exc:
@@ -827,11 +829,12 @@ def _scene_of(study: Study) -> Callable[[int, int], Scene]:
                                                                base.ensemble.common_random_numbers))
 
 
-def _design_output(study: Study) -> Callable[[int, dict[str, float]], float]:
+def _design_output(study: Study, runner: Callable = run_chunk) -> Callable[[int, dict[str, float]], float]:
     """A Sobol design point's output (``sensitivity.table``): the mean of ``[sensitivity]
     metric`` over realisations ``0 .. R - 1`` of the point's scene with the parameters ``values``
     (the same noise at every design point), or for ``p_NAME`` the fraction that exceeded limit
-    NAME; realisations that failed are left out."""
+    NAME; realisations that failed are left out.  ``runner``: the chunk runner of the run's
+    backend (``run_chunk``, or ``run_chunk_cuda``: the realisations on the GPU)."""
     base = study.base
     spec = base.sensitivity
     bound: dict[int, Any] = {}
@@ -840,8 +843,8 @@ def _design_output(study: Study) -> Callable[[int, dict[str, float]], float]:
         if point not in bound:
             bound[point] = binding(study, point)
         scene = bound[point].scene(values)
-        frame, _ = run_chunk(scene, base.ensemble.seed, point, 0, spec.realizations,
-                             common=base.ensemble.common_random_numbers)
+        frame, _ = runner(scene, base.ensemble.seed, point, 0, spec.realizations,
+                          common=base.ensemble.common_random_numbers)
         ok = frame[frame["status"] == "ok"]
         if spec.metric.startswith("p_") and f"first_passage_{spec.metric[2:]}" in ok.columns:
             return float(ok[f"first_passage_{spec.metric[2:]}"].notna().mean())

@@ -282,5 +282,114 @@ def simulate_many(scenes: Scene | list[Scene], seed: int, point: int, start: int
     return Batch(raw, samples, history, logs)
 
 
-__all__ = ["Batch", "GPUUnavailable", "Inputs", "device_name", "launch_types", "require", "simulate_many",
-           "unavailable"]
+#: The bundle fields of a path in the stretch launcher's order (``kernels.launch.stretcher``), by
+#: bundle (``kernels.Path.args``: bodies, absorbers, loads, filters, noise; outputs after the grid).
+_STRETCH_FIELDS = ((0, ("mass", "storey_k", "storey_c", "floor_c", "x", "v")),
+                   (1, ("kind", "host", "rows", "wall")),
+                   (2, ("forces", "series_t", "series_v", "series_ptr", "series_target")),
+                   (3, ("phi", "chol", "envelope", "c_force", "c_ground", "z", "zn", "draws")),
+                   (4, ("sigma", "normals")))
+_STRETCH_OUTPUTS = ("out", "samples", "history", "signals", "limits", "carry", "events", "reductions",
+                    "impulses")
+#: What a stretch changes of a path (its state, outputs and streams), copied back after it.
+_CHANGED = frozenset({"x", "v", "z", "zn", "draws", "out", "samples", "history", "carry", "events",
+                      "impulses", "inc", "bri", "fil"})
+
+
+def _stacked(arrays: list[np.ndarray], name: str) -> np.ndarray:
+    try:
+        return np.ascontiguousarray(np.stack(arrays))
+    except ValueError:
+        raise ValueError(f"gpu.advance_many: the paths' {name} differ in shape; a batch runs paths of one "
+                         "structure") from None
+
+
+def advance_many(paths: list, stops: list[int]) -> None:
+    """Run each of ``paths`` (``kernels.Path``s of one structure, their streams counter-based:
+    Philox streams or tapes, ``kernels/rng.py``) from the step it has reached to its stop on the
+    GPU, one path a thread, in place: what ``kernels.advance`` does for each, bitwise under the
+    simulator (which runs the CPU loop), up to rounding on a GPU (see ``simulate_many``).  The
+    rare-event estimates' paths on the cuda backend (``rare.py``)."""
+    from .kernels import compile_first, stretch_to
+    from .kernels.pcg import PCG_DTYPE
+
+    todo = []
+    for path, stop in zip(paths, stops):
+        if not stretch_to(path, stop):
+            continue
+        if any(not isinstance(g, np.ndarray) or g.dtype == PCG_DTYPE for g in path.args[7:]):
+            raise ValueError("gpu.advance_many: a path on a PCG64 stream or a numpy generator; the GPU draws "
+                             "from counter-based streams (rng.philox_stream, rng.tape)")
+        if path.args[5]._replace(n_steps=0, first=0) != paths[0].args[5]._replace(n_steps=0, first=0):
+            raise ValueError("gpu.advance_many: the paths' time grids differ; a batch shares its grid")
+        todo.append((path, stop))
+    if not todo:
+        return
+    require()
+    from numba import cuda
+
+    from .kernels.launch import stretcher
+
+    first = todo[0][0]
+    grid = first.args[5]
+    if simulating():  # (the threads run the path's own loop, compiled here: see ``_compile_here``)
+        compile_first(first.kernel, (*first.args[:5], grid, *first.args[6:]), first.args[7:])
+        launch = stretcher(first.kernel, True)
+    else:
+        launch = stretcher(kernel_for(first.scene, gpu=True, record=first.record), False)
+    done = 0
+    while done < len(todo):
+        own = [_path_arrays(p) for p, _ in todo[done:]]
+        m = _batch_size(sum(a.nbytes for a in own[0].values()) + 64, len(own))
+        batch, own = todo[done:done + m], own[:m]
+        device = {name: cuda.to_device(_stacked([a[name] for a in own], name)) for name in own[0]}
+        firsts = cuda.to_device(np.array([p.step for p, _ in batch], np.int64))
+        ends = cuda.to_device(np.array([stop for _, stop in batch], np.int64))
+        args = _stretch_arguments(first, m, device, firsts, ends)
+        if not simulating():
+            from .jit.cache import compile_once
+
+            compile_once(launch, args, "numba.cuda.core")
+        threads = min(m, THREADS)  # (a level's few branches: no idle threads to start)
+        launch[math.ceil(m / threads), threads](*args)
+        for name in _CHANGED:
+            back = device[name].copy_to_host()
+            for i, arrays in enumerate(own):
+                if arrays[name].size:
+                    arrays[name][...] = back[i]
+        for p, stop in batch:
+            p.step = stop
+        done += m
+
+
+def _stretch_arguments(first, m: int, arrays: dict, firsts, stops) -> tuple:
+    """The stretch launcher's arguments, in its order (``kernels.launch.stretcher``): ``m``
+    paths' ``arrays`` (by ``_path_arrays``' names, a leading axis), the grid of ``first``,
+    their first steps and stops."""
+    grid = first.args[5]
+    return (m, *(arrays[name] for _, names in _STRETCH_FIELDS for name in names), first.args[4].refine,
+            grid.dt, grid.i0, grid.period, grid.sample_from, grid.stride, firsts, stops,
+            *(arrays[name] for name in _STRETCH_OUTPUTS), arrays["inc"], arrays["bri"], arrays["fil"])
+
+
+def stretch_types(path) -> tuple:
+    """numba types of the stretch launcher's arguments for paths like ``path`` (for
+    ``numba.cuda.compile_ptx``, which needs no GPU)."""
+    import numba
+
+    arrays = {name: a[None] for name, a in _path_arrays(path).items()}
+    steps = np.zeros(1, np.int64)
+    return tuple(numba.typeof(a) for a in _stretch_arguments(path, 1, arrays, steps, steps))
+
+
+def _path_arrays(path) -> dict[str, np.ndarray]:
+    """A path's arrays by the stretch launcher's names (``_STRETCH_FIELDS``, the outputs and the
+    three streams ``inc``, ``bri``, ``fil``)."""
+    arrays = {name: getattr(path.args[b], name) for b, names in _STRETCH_FIELDS for name in names}
+    arrays.update({name: getattr(path.args[6], name) for name in _STRETCH_OUTPUTS})
+    arrays.update(zip(("inc", "bri", "fil"), path.args[7:10]))
+    return arrays
+
+
+__all__ = ["Batch", "GPUUnavailable", "Inputs", "advance_many", "device_name", "launch_types", "require",
+           "simulate_many", "stretch_types", "unavailable"]

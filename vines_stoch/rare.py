@@ -17,7 +17,10 @@ every exceeding path must reach; the estimate is ``prod (1 - K_j / n)`` times th
 the final paths whose limited metric exceeds the limit (for an indicator that vanishes below
 that score this is the generalised algorithm's unbiased estimator).  The paths are
 the engine's own step loop run in stretches (``kernels.start_path``, ``advance``), so impacts,
-Hertz contact, filtered loads and uncertain parameters are those of an ensemble run.
+Hertz contact, filtered loads and uncertain parameters are those of an ensemble run.  The
+paths of a stage (the initial paths, a level's probes, leads and branches) run together
+(``run_paths``): on the cuda backend as one batch of GPU threads (``gpu.advance_many``), on
+Philox streams.
 
 **Subset simulation** (Au and Beck, Probab. Eng. Mech. 16 (2001) 263) with the modified
 Metropolis algorithm on the Gaussian inputs: the white-noise increments a path replays
@@ -49,7 +52,7 @@ import pandas as pd
 
 from .kernels import Path, advance, filter_draws, needed_streams, start_path
 from .kernels.pcg import state_of
-from .kernels.rng import tape
+from .kernels.rng import stream_key, tape
 from .outputs import DRIFT_MAX_K, E1_MAX, LIMIT_E1, SLOTS, X_MAX_K, passage_slots
 from .schemes import SCHEMES
 from .streams import RARE, Streams
@@ -174,17 +177,32 @@ class Parameters:
         return self.scene(values)
 
 
-def rare_streams(seed: int, point: int, replica: int, draw: int, scene) -> Streams:
+def rare_streams(seed: int, point: int, replica: int, draw: int, scene, philox: bool = False) -> Streams:
     """The streams of path ``draw`` of a rare-event replica, keyed by (seed, ``RARE``, point,
     replica, draw, purpose); only those ``scene`` draws from (``kernels.needed_streams``), each as
     the loop's PCG64 stream (``pcg.state_of``), which a path run in stretches carries from one to
-    the next without a numpy generator to keep in step."""
-    def gen(purpose: int) -> np.ndarray:  # (the loop's own PCG64 stream: nothing to sync back)
+    the next without a numpy generator to keep in step; with ``philox`` (the cuda backend) as
+    Philox streams keyed by (seed, ``RARE``, point, replica, purpose), the draw their place."""
+    def gen(purpose: int) -> np.ndarray:  # (the loop's own stream: nothing to sync back)
+        if philox:
+            return np.array([stream_key(seed, RARE, PATHS, point, replica, purpose), draw, 0], np.uint64)
         key = (RARE, PATHS, point, replica, draw, purpose)
         return state_of(np.random.Generator(np.random.PCG64(np.random.SeedSequence(seed, spawn_key=key))))
 
     increments, bridge, filters = needed_streams(scene)
     return Streams(gen(0) if increments else None, gen(1) if bridge else None, gen(2) if filters else None)
+
+
+def run_paths(paths: list[Path], stops: list[int], backend: str = "cpu") -> None:
+    """Run each of ``paths`` to its stop: one after the other on the CPU (``kernels.advance``),
+    or together on the GPU (``backend = "cuda"``: ``gpu.advance_many``, one path a thread)."""
+    if backend == "cuda":
+        from . import gpu
+
+        gpu.advance_many(paths, stops)
+    else:
+        for path, stop in zip(paths, stops):
+            advance(path, stop)
 
 
 def _chooser(seed: int, point: int, replica: int, purpose: int) -> np.random.Generator:
@@ -209,11 +227,12 @@ class _Splitting:
     """One replica of adaptive multilevel splitting (see the module).  A particle keeps a snapshot
     every ``stride`` steps and one at the step it was branched at, so that the first passage of a
     level is found by replaying one stretch: its first snapshot after the passage comes at most a
-    stride after it."""
+    stride after it.  The paths of a stage (the initial paths, a level's probes, leads and
+    branches) run together (``run_paths``: on the GPU one a thread)."""
 
     def __init__(self, scenes: Callable[[int], object], limit: int, seed: int, point: int, replica: int,
-                 n: int):
-        self.limit, self.seed, self.point, self.replica = limit, seed, point, replica
+                 n: int, backend: str = "cpu"):
+        self.limit, self.seed, self.point, self.replica, self.backend = limit, seed, point, replica, backend
         self.scenes = [scenes(j) for j in range(n)]  # (the initial paths' scenes)
         self.first = self.scenes[0]
         self.score = Score.of(self.first, limit, {energy_bound(scene, limit) for scene in self.scenes})
@@ -227,71 +246,88 @@ class _Splitting:
         """The streams of the next path drawn (an initial path, or a branch after its branching
         step)."""
         self.draws += 1
-        return rare_streams(self.seed, self.point, self.replica, self.draws - 1, self.first)
+        return rare_streams(self.seed, self.point, self.replica, self.draws - 1, self.first,
+                            self.backend == "cuda")
 
     def _peak(self, path: Path) -> float:
         """The path's score so far (``Score``)."""
         return peak(path.out, self.score.row, self.nf)
 
-    def _run(self, particle: _Particle) -> _Particle:
-        """Run ``particle`` from the step it has reached to the end, a snapshot at each stride."""
-        path = particle.path
-        while path.step < self.n_steps:
-            stop = min(self.n_steps, (path.step // self.stride + 1) * self.stride)
-            self.steps += stop - path.step
-            advance(path, stop)
-            if stop < self.n_steps:
-                particle.snaps.append(path.branch())
-                particle.peaks.append(self._peak(path))
-        particle.score = self._peak(path)
-        particle.exceeds = peak(path.out, path.args[6].limits[self.limit], self.nf) > self.value
-        return particle
+    def _advance(self, paths: list[Path], stops: list[int]) -> None:
+        self.steps += sum(stop - path.step for path, stop in zip(paths, stops))
+        run_paths(paths, stops, self.backend)
 
-    def start(self, j: int) -> _Particle:
-        """Initial path ``j`` on its own streams, run to the end."""
-        path = start_path(self.scenes[j], self._fresh())
-        return self._run(_Particle(path, [path.branch()], [self._peak(path)]))
+    def _run(self, particles: list[_Particle]) -> list[_Particle]:
+        """Run ``particles`` from the steps they have reached to the end, a snapshot at each
+        stride."""
+        going = [p for p in particles if p.path.step < self.n_steps]
+        while going:
+            stops = [min(self.n_steps, (p.path.step // self.stride + 1) * self.stride) for p in going]
+            self._advance([p.path for p in going], stops)
+            for particle, stop in zip(going, stops):
+                if stop < self.n_steps:
+                    particle.snaps.append(particle.path.branch())
+                    particle.peaks.append(self._peak(particle.path))
+            going = [p for p in going if p.path.step < self.n_steps]
+        for particle in particles:
+            path = particle.path
+            particle.score = self._peak(path)
+            particle.exceeds = peak(path.out, path.args[6].limits[self.limit], self.nf) > self.value
+        return particles
 
-    def branch(self, survivor: _Particle, level: float) -> _Particle:
-        """A new particle: ``survivor`` up to the first step its score exceeded ``level``, fresh
-        streams from there on."""
-        b = int(np.searchsorted(np.array(survivor.peaks) > level, True)) - 1  # (the last at or below it)
-        snap = survivor.snaps[b]
-        stop = survivor.snaps[b + 1].step if b + 1 < len(survivor.snaps) else self.n_steps
-        # the level's first passage: the stretch replayed with the limit's row watching the score,
-        # its value set to the level (its first-passage slot is still NaN at the snapshot: the
-        # level lies below the top, which an exceeding path passes first)
-        probe = snap.branch()
-        outputs = probe.args[6]
-        limits = outputs.limits.copy()
-        limits[self.limit] = (*self.score.row[:2], level)
-        probe.args = (*probe.args[:6], outputs._replace(limits=limits), *probe.args[7:])
-        self.steps += stop - snap.step
-        advance(probe, stop)
-        t = probe.out[passage_slots(self.nf) + self.limit]
-        at = int(round(t / probe.args[5].dt))
-        if not snap.step < at <= stop:
-            raise RuntimeError(f"splitting: the level's first passage ({t}) lies outside the replayed "
-                               f"stretch ({snap.step}, {stop}]")
-        lead = snap.branch()
-        self.steps += at - lead.step
-        advance(lead, at)
-        child = lead.branch(self._fresh())
-        # (the survivor's snapshots up to the branching step are the child's too, then its own)
-        return self._run(_Particle(child, [*survivor.snaps[:b + 1], child.branch()],
-                                   [*survivor.peaks[:b + 1], self._peak(child)]))
+    def start(self) -> list[_Particle]:
+        """The initial paths, each on its own streams, run to the end."""
+        paths = [start_path(scene, self._fresh()) for scene in self.scenes]
+        return self._run([_Particle(path, [path.branch()], [self._peak(path)]) for path in paths])
+
+    def branch(self, survivors: list[_Particle], level: float) -> list[_Particle]:
+        """New particles, one a survivor: the survivor up to the first step its score exceeded
+        ``level``, fresh streams from there on."""
+        plans = []
+        for survivor in survivors:
+            b = int(np.searchsorted(np.array(survivor.peaks) > level, True)) - 1  # (the last at or below it)
+            snap = survivor.snaps[b]
+            stop = survivor.snaps[b + 1].step if b + 1 < len(survivor.snaps) else self.n_steps
+            # the level's first passage: the stretch replayed with the limit's row watching the
+            # score, its value set to the level (its first-passage slot is still NaN at the
+            # snapshot: the level lies below the top, which an exceeding path passes first)
+            probe = snap.branch()
+            outputs = probe.args[6]
+            limits = outputs.limits.copy()
+            limits[self.limit] = (*self.score.row[:2], level)
+            probe.args = (*probe.args[:6], outputs._replace(limits=limits), *probe.args[7:])
+            plans.append((survivor, b, snap, stop, probe))
+        self._advance([plan[4] for plan in plans], [plan[3] for plan in plans])
+        leads, ats = [], []
+        for _, _, snap, stop, probe in plans:
+            t = probe.out[passage_slots(self.nf) + self.limit]
+            at = int(round(t / probe.args[5].dt))
+            if not snap.step < at <= stop:
+                raise RuntimeError(f"splitting: the level's first passage ({t}) lies outside the replayed "
+                                   f"stretch ({snap.step}, {stop}]")
+            leads.append(snap.branch())
+            ats.append(at)
+        self._advance(leads, ats)
+        children = []
+        for (survivor, b, *_), lead in zip(plans, leads):
+            child = lead.branch(self._fresh())
+            # (the survivor's snapshots up to the branching step are the child's too, then its own)
+            children.append(_Particle(child, [*survivor.snaps[:b + 1], child.branch()],
+                                      [*survivor.peaks[:b + 1], self._peak(child)]))
+        return self._run(children)
 
 
 def splitting(scenes: Callable[[int], object], limit: int, n: int, kill: int, seed: int, point: int,
-              replica: int) -> Replica:
+              replica: int, backend: str = "cpu") -> Replica:
     """One replica of adaptive multilevel splitting with ``n`` paths, at least ``kill`` killed a
     level; ``scenes(j)``: the scene of initial path ``j`` (the sweep point's, or with its own
-    uncertain parameters); ``limit``: the row of the scene's limits.  Scores are running peaks,
-    compared as the loop compares them with a limit's value (``peak > value``)."""
-    run = _Splitting(scenes, limit, seed, point, replica, n)
+    uncertain parameters); ``limit``: the row of the scene's limits; ``backend``: where the
+    paths run (``run_paths``).  Scores are running peaks, compared as the loop compares them
+    with a limit's value (``peak > value``)."""
+    run = _Splitting(scenes, limit, seed, point, replica, n, backend)
     top = run.score.top
     chooser = _chooser(seed, point, replica, SELECTION)
-    particles = [run.start(j) for j in range(n)]
+    particles = run.start()
     weight, levels = 1.0, []
     while True:
         scores = np.array([p.score for p in particles])
@@ -306,18 +342,19 @@ def splitting(scenes: Callable[[int], object], limit: int, n: int, kill: int, se
         weight *= 1.0 - killed.shape[0] / n
         levels.append((run.score.scale(level), 1.0 - killed.shape[0] / n))
         parents = survivors[chooser.integers(0, survivors.shape[0], killed.shape[0])]
-        for i, parent in zip(killed, parents):
-            particles[i] = run.branch(particles[parent], level)
+        for i, child in zip(killed, run.branch([particles[parent] for parent in parents], level)):
+            particles[i] = child
     above = sum(p.exceeds for p in particles)
     return Replica(weight * above / n, run.steps / run.n_steps, levels)
 
 
 def subset(scene, limit: int, n: int, seed: int, point: int, replica: int,
-           parameters: Parameters | None = None) -> Replica:
+           parameters: Parameters | None = None, backend: str = "cpu") -> Replica:
     """One replica of subset simulation with ``n`` samples a level (``n P0`` chains of ``1 /
     P0`` states) on the standard normal inputs of ``scene``'s noise (the white-noise increments
     and the filters' normals, replayed from a tape: ``rng.tape``) and the uncertain
-    ``parameters`` (see the module)."""
+    ``parameters`` (see the module).  The chains move together, a state at a time, their
+    candidates run as one batch (``run_paths``: on the GPU with ``backend = "cuda"``)."""
     noise = (scene.n_steps * SCHEMES[scene.scheme].normals * max(scene.noisy_floors, 1)
              if scene.has_white_noise else 0)
     filtered = filter_draws(scene)
@@ -329,22 +366,27 @@ def subset(scene, limit: int, n: int, seed: int, point: int, replica: int,
     row = scene.limits[limit]
     value = float(row[2])
     seeded = needed_streams(scene)[1]
-    count = 0
+    cuda = backend == "cuda"
+    # (on the GPU every place holds a counter-based stream: the increments' an empty Philox one)
+    unused = np.zeros(3, np.uint64) if cuda and noise else None
 
-    def score(u: np.ndarray) -> float:
-        nonlocal count
-        bridge = rare_streams(seed, point, replica, count, scene).bridge if seeded else None
-        count += 1
-        own = scene if parameters is None else parameters.at(u[noise + filtered:])
-        streams = Streams(None, bridge, tape(u[noise:noise + filtered]) if filtered else None)
-        path = start_path(own, streams, normals=u[:noise] if noise else None, stretches=False)
-        advance(path, scene.n_steps)
-        return peak(path.out, row, scene.n_floors)
+    def scores(inputs: np.ndarray, draws: np.ndarray) -> np.ndarray:
+        """The scores of the samples ``inputs`` (a row each), sample ``k`` drawing its Brownian
+        trees' seed as draw ``draws[k]``."""
+        paths = []
+        for u, draw in zip(inputs, draws):
+            own = scene if parameters is None else parameters.at(u[noise + filtered:])
+            bridge = rare_streams(seed, point, replica, int(draw), scene, cuda).bridge if seeded else None
+            streams = Streams(unused, bridge, tape(u[noise:noise + filtered]) if filtered else None)
+            paths.append(start_path(own, streams, normals=u[:noise] if noise else None, stretches=False))
+        run_paths(paths, [scene.n_steps] * len(paths), backend)
+        return np.array([peak(path.out, row, scene.n_floors) for path in paths])
 
     chain = round(1 / P0)
     seeds = max(1, n // chain)
     u = rng.standard_normal((seeds * chain, dim))
-    y = np.array([score(x) for x in u])
+    y = scores(u, np.arange(u.shape[0]))
+    count = u.shape[0]
     p, levels = 1.0, []
     while len(levels) < MAX_LEVELS:
         order = np.argsort(y)[::-1]
@@ -354,18 +396,27 @@ def subset(scene, limit: int, n: int, seed: int, point: int, replica: int,
             break
         levels.append((level / value, P0))
         p *= P0
+        # the proposals and the acceptance draws of the modified Metropolis moves, chain by
+        # chain (the order of a chain run to its end before the next)
+        steps = [[(PROPOSAL * rng.standard_normal(dim), rng.random(dim)) for _ in range(chain - 1)]
+                 for _ in range(seeds)]
+        cu, cy = u[order[:seeds]].copy(), y[order[:seeds]].copy()
         new_u, new_y = np.empty_like(u), np.empty_like(y)
-        for c, s in enumerate(order[:seeds]):
-            cu, cy = u[s].copy(), y[s]
-            for step in range(chain):
-                if step > 0:  # (the modified Metropolis move, component by component, then the level)
-                    xi = cu + PROPOSAL * rng.standard_normal(dim)
-                    moved = rng.random(dim) < np.exp(-0.5 * (xi * xi - cu * cu))
-                    candidate = np.where(moved, xi, cu)
-                    y_candidate = score(candidate)
-                    if y_candidate > level:
-                        cu, cy = candidate, y_candidate
-                new_u[c * chain + step], new_y[c * chain + step] = cu, cy
+        new_u[::chain], new_y[::chain] = cu, cy
+        for step in range(1, chain):  # (component by component, then the level)
+            candidates = np.empty_like(cu)
+            for c in range(seeds):
+                xi, draw = steps[c][step - 1]
+                xi = cu[c] + xi
+                candidates[c] = np.where(draw < np.exp(-0.5 * (xi * xi - cu[c] * cu[c])), xi, cu[c])
+            # (a candidate draws its Brownian trees' seed as it did when each chain ran to its end
+            # before the next: candidate ``c`` of this step as the level's ``c (chain - 1) + step
+            # - 1``-th)
+            y_candidates = scores(candidates, count + np.arange(seeds) * (chain - 1) + step - 1)
+            above = y_candidates > level
+            cu[above], cy[above] = candidates[above], y_candidates[above]
+            new_u[step::chain], new_y[step::chain] = cu, cy
+        count += seeds * (chain - 1)
         u, y = new_u, new_y
     return Replica(p * float(np.mean(y > value)), float(count), levels)
 
@@ -388,7 +439,8 @@ def combine(replicas: list[Replica], method: str) -> Estimate:
 def estimate(scenes: Callable[[int], object], limit: int, method: str, seed: int, point: int, *,
              particles: int, target_cov: float, max_paths: float, kill: float = 0.1,
              replicas: int | None = None, note: Callable[[Estimate], None] | None = None,
-             parameters: Parameters | None = None, done: list[Replica] | None = None) -> Estimate:
+             parameters: Parameters | None = None, done: list[Replica] | None = None,
+             backend: str = "cpu") -> Estimate:
     """Replicas of ``method`` (``n = particles`` paths or samples each; splitting kills at least a
     fraction ``kill`` a level; subset simulation samples the uncertain ``parameters`` with the
     noise, where a scene has them) in stages: ``MIN_REPLICAS`` first, then as many more as their
@@ -399,7 +451,7 @@ def estimate(scenes: Callable[[int], object], limit: int, method: str, seed: int
     (the replicas' law is skewed: a low spread comes with a low mean).  ``note`` is called with
     the estimate so far after each replica run; ``done``: the first replicas, already run (a
     resumed estimate: its stages are taken again over them, so it stops where the estimate run
-    in one go stops)."""
+    in one go stops); ``backend``: where the paths run (``run_paths``)."""
     kept: list[Replica] = []
     goal = replicas if replicas is not None else MIN_REPLICAS
     while True:
@@ -409,9 +461,9 @@ def estimate(scenes: Callable[[int], object], limit: int, method: str, seed: int
         else:
             if method == "splitting":
                 kill_at_least = max(1, int(kill * particles))
-                kept.append(splitting(scenes, limit, particles, kill_at_least, seed, point, r))
+                kept.append(splitting(scenes, limit, particles, kill_at_least, seed, point, r, backend))
             else:
-                kept.append(subset(scenes(0), limit, particles, seed, point, r, parameters))
+                kept.append(subset(scenes(0), limit, particles, seed, point, r, parameters, backend))
             if note is not None:
                 note(combine(kept, method))
         result = combine(kept, method)
@@ -448,14 +500,18 @@ def _save_replicas(saved, point: int, replicas: list[Replica]) -> None:
 
 
 def table(study, scene_of: Callable[[int, int], object], progress: bool = False,
-          scene_at: Callable[[int, dict[str, float]], object] | None = None, saved=None) -> pd.DataFrame:
+          scene_at: Callable[[int, dict[str, float]], object] | None = None, saved=None,
+          backend: str = "cpu") -> pd.DataFrame:
     """rare.parquet: one row per sweep point of ``study`` (its ``[rare]`` table): the point, its
     swept values, the estimate (``Estimate.row``), and as lists the replicas' estimates and
     path-equivalents (the estimate's convergence) and the first replica's levels (splitting:
     ``z_j``; subset: the intermediate thresholds, over the limit's value).  ``scene_of(point,
     j)``: the scene of path ``j`` of a point (its uncertain parameters drawn as realisation
     ``j``'s); ``scene_at(point, values)``: the point's scene with the uncertain parameters
-    ``values`` (subset simulation's, where the study has them)."""
+    ``values`` (subset simulation's, where the study has them); ``saved``: a ``store.Saved`` that
+    keeps each point's replicas as they end and gives back those of an interrupted run (the
+    estimate goes on from them, to the same numbers); ``backend``: where the paths run
+    (``run_paths``)."""
     spec, seed = study.base.rare, study.base.ensemble.seed
     cr = "\r" if sys.stderr.isatty() else ""
     limit = list(study.base.limits).index(spec.limit)
@@ -474,7 +530,8 @@ def table(study, scene_of: Callable[[int, int], object], progress: bool = False,
         result = estimate(lambda j, point=point: scene_of(point, j), limit, spec.method, seed, point,
                           particles=spec.n, target_cov=spec.target_cov, max_paths=spec.max_paths,
                           kill=spec.kill, note=note, parameters=parameters,
-                          done=_saved_replicas(saved, point) if saved is not None else None)
+                          done=_saved_replicas(saved, point) if saved is not None else None,
+                          backend=backend)
         if progress and cr:
             print(file=sys.stderr)
         rows.append({"point": point, **{k: study.grid[point][k] for k in study.sweep_keys}, **result.row(),

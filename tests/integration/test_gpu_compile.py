@@ -28,7 +28,8 @@ pytestmark = pytest.mark.slow
 
 #: Compiles the launcher of the scenario named by its argument (``contact_noise_parallel``:
 #: kick-drift-kick with Hertz contact, impacts and white noise on the Brownian tree;
-#: ``seed003_ds20``: RK4 with Hertz contact; every launcher holds the filters' stationary start);
+#: ``seed003_ds20``: RK4 with Hertz contact; every launcher holds the filters' stationary start;
+#: ``stretcher``: the stretch launcher of a rare-event path with impacts, ``gpu.advance_many``);
 #: prints one JSON line.  numba-cuda asks the current
 #: device's compute capability when it compiles callees; with no device, sm_90 stands in.
 SCRIPT = r"""
@@ -48,13 +49,27 @@ from vines_stoch.jit.frontend import compiling
 from vines_stoch.kernels import kernel_for
 from vines_stoch.kernels.launch import launcher
 name = sys.argv[1]
-grid = {"contact_noise_parallel": (10, 5), "seed003_ds20": None}[name]
-data = example_data(name)
-data.pop("sweep", None)
-scene = scene_from(data, changes={"simulation.duration": 1.0, "simulation.metrics_from": 0.0})
-launch = launcher(kernel_for(scene, gpu=True), scene.mass.shape[0], False)
+if name == "stretcher":  # (a rare-event path: impacts under white noise, on Philox streams)
+    from vines_stoch.gpu import stretch_types
+    from vines_stoch.kernels import start_path
+    from vines_stoch.kernels.launch import stretcher
+    from vines_stoch.kernels.rng import philox_stream
+    from vines_stoch.streams import Streams
+    scene = scene_from({"name": "stretch", "primary": {"mass": 1.0, "stiffness": 39.5, "damping": 0.6},
+                        "absorbers": [{"type": "impact", "mass": 0.05, "clearance": 0.2, "restitution": 0.6}],
+                        "loads": [{"type": "white-noise", "intensity": 5.0}],
+                        "simulation": {"duration": 1.0, "dt": 0.01}})
+    path = start_path(scene, Streams(*(philox_stream(1, p, 0) for p in range(3))))
+    launch, types = stretcher(kernel_for(scene, gpu=True, record=path.record), False), stretch_types(path)
+else:
+    grid = {"contact_noise_parallel": (10, 5), "seed003_ds20": None}[name]
+    data = example_data(name)
+    data.pop("sweep", None)
+    scene = scene_from(data, changes={"simulation.duration": 1.0, "simulation.metrics_from": 0.0})
+    launch = launcher(kernel_for(scene, gpu=True), scene.mass.shape[0], False)
+    types = launch_types(scene, grid)
 with compiling("numba.cuda.core"):  # (the front end the backend compiles its launchers with)
-    ptx, _ = compile_ptx(launch.py_func, launch_types(scene, grid), cc=(9, 0))
+    ptx, _ = compile_ptx(launch.py_func, types, cc=(9, 0))
 with open(sys.argv[2], "w") as f:
     f.write(ptx)
 print(json.dumps({"scene": name}))
@@ -76,7 +91,7 @@ def inputs_hash(scene: str) -> str:
     return h.hexdigest()[:20]
 
 
-@pytest.mark.parametrize("scene", ["contact_noise_parallel", "seed003_ds20"])
+@pytest.mark.parametrize("scene", ["contact_noise_parallel", "seed003_ds20", "stretcher"])
 def test_the_launchers_compile_to_ptx_for_sm_90(scene, request):
     """One scene a test (a process each), so that the two compiles can run side by side."""
     kept = request.config.cache.mkdir("ptx") / f"{scene}-{inputs_hash(scene)}.ptx"

@@ -233,6 +233,10 @@ class Path:
     step: int = 0
     #: The numpy generators the path's streams stand for, with the streams (``_as_streams``).
     sources: tuple = ()
+    #: The scene and what the loop records (``outputs.Record``): what another backend compiles
+    #: the path's loop from (``gpu.advance_many``).
+    scene: Any = None
+    record: Record | None = None
 
     @property
     def x(self) -> np.ndarray:
@@ -286,7 +290,7 @@ class Path:
         fl = fl._replace(z=fl.z.copy(), zn=fl.zn.copy(), draws=fl.draws.copy())
         args = (bodies._replace(x=bodies.x.copy(), v=bodies.v.copy()), absorbers, loads, fl, noise, grid,
                 outputs, *gens)
-        return Path(self.kernel, args, self.step, sources)
+        return Path(self.kernel, args, self.step, sources, self.scene, self.record)
 
 
 #: The signals of a history given without names: the roof's displacement and ``E1``, then with
@@ -339,8 +343,8 @@ def start_path(scene, streams: Streams | np.random.Generator | None = None, *,
                          f"not {events.shape}")
     args = bundles(scene, x, v, fl, normals if replay else _NO_NORMALS, out, samples, history, stride, gens,
                    refine, carry, columns, events)
-    return Path(kernel_for(scene, record=Record.of(scene, history.shape[0], events.shape[0], columns)), args,
-                sources=sources)
+    record = Record.of(scene, history.shape[0], events.shape[0], columns)
+    return Path(kernel_for(scene, record=record), args, sources=sources, scene=scene, record=record)
 
 
 def compile_first(dispatcher, args: tuple, gens: Sequence) -> None:
@@ -353,6 +357,19 @@ def compile_first(dispatcher, args: tuple, gens: Sequence) -> None:
         _STARTED.add(started)
 
 
+def stretch_to(path: Path, stop: int) -> bool:
+    """Whether ``path`` has steps to run to ``stop`` (a path of no steps still writes its metrics
+    at step 0); a ``ValueError`` where ``stop`` lies outside its reach."""
+    n_steps = path.args[5].n_steps
+    if not path.step <= stop <= n_steps:
+        raise ValueError(f"advance: stop {stop} must lie between the step reached ({path.step}) and the "
+                         f"scene's step count ({n_steps})")
+    if path.step > 0 and path.args[6].carry.shape[0] == 0:
+        raise ValueError("advance: this path keeps no carry (start_path(..., stretches=False)); it runs in "
+                         "one stretch only")
+    return not (stop == path.step and stop > 0)
+
+
 def advance(path: Path, stop: int) -> Path:
     """Run ``path`` from the step it has reached to step ``stop`` (at most the scene's step
     count), in place; returns it.  Its state, metric vector, history rows, Poincare samples and
@@ -360,15 +377,9 @@ def advance(path: Path, stop: int) -> Path:
     state and with the metrics of the path run in one go, bitwise (``tests/unit/kernels/
     test_stretches.py``); the metric vector after a stretch holds the metrics of the steps so
     far, as if the path ended there."""
-    grid = path.args[5]
-    if not path.step <= stop <= grid.n_steps:
-        raise ValueError(f"advance: stop {stop} must lie between the step reached ({path.step}) and the "
-                         f"scene's step count ({grid.n_steps})")
-    if path.step > 0 and path.args[6].carry.shape[0] == 0:
-        raise ValueError("advance: this path keeps no carry (start_path(..., stretches=False)); it runs in "
-                         "one stretch only")
-    if stop == path.step and stop > 0:  # (a path of no steps still writes its metrics)
+    if not stretch_to(path, stop):
         return path
+    grid = path.args[5]
     args = (*path.args[:5], grid._replace(n_steps=stop, first=path.step), *path.args[6:])
     compile_first(path.kernel, args, args[7:])
     _sync(path.sources, back=False)

@@ -1,4 +1,5 @@
-"""The CUDA kernel around a step loop: one realisation a thread (``gpu.py``).
+"""The CUDA kernels around a step loop: one realisation a thread from its start (``launcher``),
+or one stretch of a path run in stretches a thread (``stretcher``; ``gpu.py``).
 
 Imported only by the cuda backend: it needs numba-cuda (``numba.cuda``), an optional extra.
 A launcher compiles through ``jit.cache.compile_once`` (numba-cuda's copy of the faster front
@@ -98,3 +99,42 @@ def launcher(kernel, n_bodies: int, simulated: bool):
     if not simulated:
         cache_on_disk(launch)
     return launch
+
+
+@cache
+def stretcher(kernel, simulated: bool):
+    """The CUDA kernel that runs one stretch of ``kernel`` (a step loop of ``kernels/``) for each
+    of a batch of paths (``kernels.Path``, ``gpu.advance_many``), one a thread: path ``t`` from
+    step ``firsts[t]`` to ``stops[t]``, every array of its bundles its own (a leading axis, one
+    row a path: its state, metrics, carry and streams continue where its last stretch stopped),
+    the grid's other fields shared.  Memoised by loop; cached on disk as ``launcher`` is."""
+    plain = _plain if simulated else njit(inline="always")(lambda a: a)
+
+    @cuda.jit
+    def stretch(n, mass, storey_k, storey_c, floor_c, x, v, kind, host, rows, wall, forces, series_t,
+                series_v, series_ptr, series_target, phi, chol, envelope, c_force, c_ground, z, zn, draws,
+                sigma, normals, refine, dt, i0, period, sample_from, stride, firsts, stops, out, samples,
+                history, signals, limits, carry, events, reductions, impulses, inc, bri, fil):
+        t = cuda.grid(1)
+        if t >= n:
+            return
+        kernel(Bodies(mass=plain(mass[t]), storey_k=plain(storey_k[t]), storey_c=plain(storey_c[t]),
+                      floor_c=plain(floor_c[t]), x=plain(x[t]), v=plain(v[t])),
+               Absorbers(kind=plain(kind[t]), host=plain(host[t]), rows=plain(rows[t]), wall=plain(wall[t])),
+               Loads(forces=plain(forces[t]), series_t=plain(series_t[t]), series_v=plain(series_v[t]),
+                     series_ptr=plain(series_ptr[t]), series_target=plain(series_target[t])),
+               Filters(phi=plain(phi[t]), chol=plain(chol[t]), envelope=plain(envelope[t]),
+                       c_force=plain(c_force[t]), c_ground=plain(c_ground[t]), z=plain(z[t]), zn=plain(zn[t]),
+                       draws=plain(draws[t])),
+               Noise(sigma=plain(sigma[t]), normals=plain(normals[t]), refine=refine),
+               Grid(dt=dt, n_steps=stops[t], i0=i0, period=period, sample_from=sample_from, stride=stride,
+                    first=firsts[t]),
+               Outputs(out=plain(out[t]), samples=plain(samples[t]), history=plain(history[t]),
+                       signals=plain(signals[t]), limits=plain(limits[t]), carry=plain(carry[t]),
+                       events=plain(events[t]), reductions=plain(reductions[t]), impulses=plain(impulses[t])),
+               plain(inc[t]), plain(bri[t]), plain(fil[t]))
+
+    if not simulated:
+        cache_on_disk(stretch)
+    return stretch
+

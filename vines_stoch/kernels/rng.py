@@ -146,10 +146,11 @@ def _uniform(gen):
     return lambda gen: gen.random()
 
 
-def stream_key(seed: int, purpose: int) -> int:
+def stream_key(seed: int, *purpose: int) -> int:
     """The Philox key of a purpose's streams: two 32-bit words hashed from (seed, purpose) by
-    numpy's ``SeedSequence`` (as the CPU streams' keys are)."""
-    low, high = np.random.SeedSequence(seed, spawn_key=(purpose,)).generate_state(2, np.uint32)
+    numpy's ``SeedSequence`` (as the CPU streams' keys are; ``purpose``: one number, or a key of
+    several, the rare-event estimates' ``rare.rare_streams``)."""
+    low, high = np.random.SeedSequence(seed, spawn_key=purpose).generate_state(2, np.uint32)
     return int(low) | int(high) << 32
 
 

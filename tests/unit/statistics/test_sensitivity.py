@@ -104,8 +104,8 @@ def test_an_interrupted_design_resumes_from_its_saved_outputs(tmp_path, monkeypa
     whole = run(data).sensitivity
     calls, real = [], ensemble._design_output
 
-    def counting(study):
-        output = real(study)
+    def counting(*args):
+        output = real(*args)
 
         def counted(point, values):
             calls.append(point)
