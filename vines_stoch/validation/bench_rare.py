@@ -92,8 +92,8 @@ Splitting's score is the running peak of the primary's energy (here the envelope
 deviation of {spread:.2f} in this run (cov times the square root of the replicas), against
 {math.sqrt(math.log(1e6) / METHODS['splitting']):.2f} for the ideal score (`sqrt(ln(1 / p) / n)`,
 which would also see how much of the path is left). Subset simulation's inputs
-are the white-noise increments, so it applies where white noise is the only randomness; splitting
-runs every scene.
+are the standard normals of the noise (white-noise increments and filters' normals) and the
+uncertain parameters; splitting runs every scene.
 """
 
 
