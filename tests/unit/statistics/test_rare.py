@@ -149,9 +149,9 @@ def test_a_branch_replays_its_parent_up_to_the_level():
     scene = scene_from(oscillator(3.0, duration=3.0))
     split = rare._Splitting(lambda j: scene, 0, 1, 0, 0, 1)
     assert split.score.energy
-    parent = split.start(0)
+    (parent,) = split.start()
     level = 0.6 * parent.score
-    child = split.branch(parent, level)
+    (child,) = split.branch([parent], level)
     shared = next(i for i, (a, b) in enumerate(zip(child.snaps, parent.snaps)) if a is not b)
     start = child.snaps[shared]  # (the child at its branching step)
     replay = parent.snaps[0].branch()
@@ -333,7 +333,7 @@ def test_an_interrupted_estimate_resumes_from_its_saved_replicas(tmp_path, monke
     calls, real = [], rare.splitting
 
     def counting(*args, **kwargs):
-        calls.append(args[-1])
+        calls.append(args[6])  # (the replica)
         if interrupt and len(calls) == 3:
             raise KeyboardInterrupt
         return real(*args, **kwargs)
