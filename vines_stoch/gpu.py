@@ -339,9 +339,9 @@ def advance_many(paths: list, stops: list[int]) -> None:
         launch = stretcher(kernel_for(first.scene, gpu=True, record=first.record), False)
     done = 0
     while done < len(todo):
-        own = [_path_arrays(p) for p, _ in todo[done:]]
-        m = _batch_size(sum(a.nbytes for a in own[0].values()) + 64, len(own))
-        batch, own = todo[done:done + m], own[:m]
+        m = _batch_size(sum(a.nbytes for a in _path_arrays(first).values()) + 64, len(todo) - done)
+        batch = todo[done:done + m]
+        own = [_path_arrays(p) for p, _ in batch]
         device = {name: cuda.to_device(_stacked([a[name] for a in own], name)) for name in own[0]}
         firsts = cuda.to_device(np.array([p.step for p, _ in batch], np.int64))
         ends = cuda.to_device(np.array([stop for _, stop in batch], np.int64))

@@ -464,9 +464,9 @@ def estimate(scenes: Callable[[int], object], limit: int, method: str, seed: int
                 kept.append(splitting(scenes, limit, particles, kill_at_least, seed, point, r, backend))
             else:
                 kept.append(subset(scenes(0), limit, particles, seed, point, r, parameters, backend))
-            if note is not None:
-                note(combine(kept, method))
         result = combine(kept, method)
+        if note is not None and len(kept) > len(done or ()):  # (after each replica run here)
+            note(result)
         if replicas is None and result.paths >= max_paths:
             return result
         if len(kept) < goal:
