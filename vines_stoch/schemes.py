@@ -19,7 +19,8 @@ class Scheme:
     undamped linear oscillator; ``noise``, ``impacts``, ``hertz``, ``filters``: what a scene
     may contain; ``normals``: standard normals a step draws per noisy floor; ``step``: its
     step, ``<step>_step`` of ``kernels/<step>.py``, which the one loop driver runs
-    (``kernels/driver.py``); ``source``: where it comes from.
+    (``kernels/driver.py``); ``lanes``: its step also runs paths in SIMD lanes
+    (``kernels/lanes.py``, for the scenes ``in_lanes`` admits); ``source``: where it comes from.
     """
 
     name: str
@@ -34,12 +35,13 @@ class Scheme:
     normals: int
     step: str
     source: str
+    lanes: bool = False
 
 
 SCHEMES: dict[str, Scheme] = {
     s.name: s for s in (
         Scheme("euler-maruyama", order=2, strong_order=1.0, weak_order=1.0, stability=2.0,
-               noise=True, impacts=True, hertz=True, filters=True, normals=1, step="kdk",
+               noise=True, impacts=True, hertz=True, filters=True, normals=1, step="kdk", lanes=True,
                source="Euler-Maruyama for additive noise (Kloeden and Platen, Numerical Solution of "
                       "Stochastic Differential Equations, Springer 1992, section 10.2) in kick-drift-kick "
                       "form (velocity Verlet: Swope, Andersen, Berens and Wilson, J. Chem. Phys. 76 (1982) "
@@ -72,6 +74,15 @@ def refusal(scheme: Scheme, noise: bool, filters: bool, impacts: bool, hertz: bo
     if hertz and not scheme.hertz:
         return "has no Hertz contact; use 'auto', 'euler-maruyama' or 'rk4'"
     return None
+
+
+def in_lanes(scheme: str, impacts: bool, hertz: bool, filters: bool) -> bool:
+    """Whether a scene of ``scheme`` runs its ensembles in SIMD lanes (``kernels/lanes.py``):
+    a scheme with a lane step, a scene without impact or Hertz absorbers and without filtered
+    loads.  Such a scene's CPU ensembles draw from counter-based Philox streams (those of the
+    cuda backend, ``kernels/rng.py``), in lanes or, for what the lanes do not record (history
+    rows, event logs, declared metrics), in the scalar loop on the same streams."""
+    return SCHEMES[scheme].lanes and not (impacts or hertz or filters)
 
 
 def choose(noise: bool, filters: bool, impacts: bool, hertz: bool) -> str:

@@ -142,6 +142,48 @@ def int_scratch(typingctx, size):
 
 
 @intrinsic
+def float_bits(typingctx, value):
+    """The bits of a ``float64`` as a ``uint64`` (a bit cast, no conversion: the exponent and
+    mantissa of ``rng.log_positive``'s argument)."""
+    if value != types.float64:
+        return None
+
+    def codegen(context, builder, signature, args):
+        return builder.bitcast(args[0], ir.IntType(64))
+
+    return types.uint64(types.float64), codegen
+
+
+@intrinsic
+def bits_float(typingctx, value):
+    """The ``float64`` whose bits are a ``uint64`` (``float_bits``'s inverse)."""
+    if value != types.uint64:
+        return None
+
+    def codegen(context, builder, signature, args):
+        return builder.bitcast(args[0], ir.DoubleType())
+
+    return types.float64(types.uint64), codegen
+
+
+@intrinsic
+def fused(typingctx, a, b, c):
+    """``a b + c`` rounded once (``llvm.fma``), for ``float64`` operands: where a product's
+    factor is the same for every SIMD lane (a load on the time grid), the compiler computes that
+    product once outside the lane loop and rounds it, where the scalar loop fuses it into the
+    sum; written fused, the two compute the same bits (``kernels/lanes.py``)."""
+    if not all(t == types.float64 for t in (a, b, c)):
+        return None
+
+    def codegen(context, builder, signature, args):
+        double = ir.DoubleType()
+        fma = builder.module.declare_intrinsic("llvm.fma", [double], ir.FunctionType(double, [double] * 3))
+        return builder.call(fma, args)
+
+    return types.float64(types.float64, types.float64, types.float64), codegen
+
+
+@intrinsic
 def runtime_value(typingctx, value):
     """``value`` typed as a run-time value: a constant (a kernel factory's floor count, a flag
     written in the call) loses its literal type.  An out-of-line function called with literal

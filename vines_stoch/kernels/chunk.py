@@ -26,6 +26,7 @@ from numba.extending import overload
 from ..jit.cache import stable_cache
 from ..jit.flags import INLINE, KERNEL
 from ..outputs import EVENT_COLUMNS, Record, new_metrics
+from ..schemes import in_lanes
 from ..streams import BRIDGE, FILTER, INCREMENTS, PARAMETERS
 from . import (
     _NO_CARRY,
@@ -40,8 +41,10 @@ from . import (
     loads_of,
     needed_streams,
     sample_buffer,
+    spec_of,
 )
 from .bundles import Outputs
+from .lanes import lane_loop
 from .loads import load_path, stationary_start
 from .pcg import PCG_DTYPE, POOL_SIZE, new_stream, pcg_normal, pcg_uniform, seed_pool, seed_stream
 from .rng import STREAM_WORDS, open_stream, stream_key, stream_place
@@ -167,7 +170,9 @@ def simulate_chunk(scene, seed: int, point: int, start: int, stop: int, common: 
     rows of event log."""
     n = stop - start
     wanted = np.array(needed_streams(scene), np.bool_)
-    gens = tuple(new_stream() if w else _UNUSED for w in wanted)
+    philox = lane_scene(scene)
+    gens = tuple((np.zeros(STREAM_WORDS, np.uint64) if philox else new_stream()) if w else _UNUSED
+                 for w in wanted)
     stride, size = history or (1, 0)
     template = _NO_HISTORY if size == 0 else np.zeros((1, len(signals)))
     columns = _NO_SIGNALS if size == 0 else history_columns(scene, template, signals)
@@ -177,18 +182,48 @@ def simulate_chunk(scene, seed: int, point: int, start: int, stop: int, common: 
     samples = np.full((n, *buffer.shape), np.nan)
     history_rows = np.full((n, size, columns.shape[0]), np.nan)
     events = np.full((n, event_rows, len(EVENT_COLUMNS)), np.nan)
+    record = Record.of(scene, size, event_rows, columns)
+    if philox and not (record.history or record.events or record.declared):
+        simulate_lanes(scene, seed, point, start, common, raw)
+        return Chunk(raw, samples, history_rows, events)
     # (the bundles of one path: the state and filter buffers the loop reuses; the outputs'
     # buffers stand for their types, each realisation writing into its rows of the arrays above)
     args = bundles(scene, scene.x0.copy(), scene.v0.copy(), filter_tuple(scene, None), np.zeros(0), out0,
                    buffer, template, stride, gens, 1, _NO_CARRY, columns,
                    np.zeros((0, len(EVENT_COLUMNS))))
-    kernel = kernel_for(scene, record=Record.of(scene, size, event_rows, columns))
+    kernel = kernel_for(scene, record=record)
     run = chunk_loop(kernel)
-    call = (*args, seed_keys(seed), point, start, common, wanted, scene.x0, scene.v0, scene.filters["p0"],
+    keys = philox_keys(seed) if philox else seed_keys(seed)
+    call = (*args, keys, point, start, common, wanted, scene.x0, scene.v0, scene.filters["p0"],
             raw, samples, history_rows, events)
     compile_first(run, call, gens)
     run(*call)
     return Chunk(raw, samples, history_rows, events)
+
+
+def lane_scene(scene) -> bool:
+    """Whether ``scene``'s CPU ensembles run in SIMD lanes (``schemes.in_lanes``), and so draw
+    from the Philox streams of ``philox_keys``."""
+    return in_lanes(scene.scheme, scene.has_impact, scene.has_hertz, scene.has_filters)
+
+
+def lane_call(scene, seed: int, point: int, start: int, common: bool, raw: np.ndarray) -> tuple:
+    """The arguments of ``scene``'s lane loop (``lanes.lane_loop``) for realisations ``start ..
+    start + len(raw) - 1`` on the Philox streams of ``seed``, their metric vectors into ``raw``."""
+    places = stream_place(np.arange(start, start + raw.shape[0], dtype=np.uint64), np.uint64(point), common)
+    args = bundles(scene, scene.x0.copy(), scene.v0.copy(), filter_tuple(scene, None), np.zeros(0), raw[:0],
+                   sample_buffer(scene), _NO_HISTORY, 1, (_UNUSED,) * 3)
+    return (*args[:6], scene.limits, np.uint64(philox_keys(seed)[INCREMENTS]), places, raw)
+
+
+def simulate_lanes(scene, seed: int, point: int, start: int, common: bool, raw: np.ndarray) -> None:
+    """Realisations ``start .. start + len(raw) - 1`` in SIMD lanes (``lanes.lane_loop``), their
+    metric vectors into ``raw`` (preset to the vector's start): what the scalar loop gives on
+    their Philox streams."""
+    run = lane_loop(spec_of(scene, record=Record.of(scene)))
+    call = lane_call(scene, seed, point, start, common, raw)
+    compile_first(run, call, ())
+    run(*call)
 
 
 @njit(**KERNEL)

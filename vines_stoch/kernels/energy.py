@@ -20,6 +20,7 @@ from __future__ import annotations
 from numba import njit
 
 from ..jit.flags import INLINE
+from ..jit.intrinsics import fused
 from ..outputs import (
     ABSORBER_DISS,
     E1_MAX,
@@ -79,7 +80,7 @@ def impulse_work(load, s, dws, v, vn) -> float:
     """Work of the floors' load impulses ``load s + dws`` at the mean of ``v`` and ``vn``."""
     w = 0.0
     for k in range(load.shape[0]):
-        term = (load[k] * s + dws[k]) * (0.5 * (v[k] + vn[k]))
+        term = fused(load[k], s, dws[k]) * (0.5 * (v[k] + vn[k]))
         w = term if k == 0 else w + term  # (see ``structure_dissipation``)
     return w
 

@@ -48,7 +48,7 @@ import numpy as np
 from numba import njit
 
 from ..jit.flags import INLINE
-from ..jit.intrinsics import any_set, int_scratch, plain, scratch
+from ..jit.intrinsics import any_set, fused, int_scratch, plain, scratch
 from ..outputs import CAPPED
 from ..physics.absorbers import CLEARANCE, HERTZ, RESTITUTION, WALL_HI, WALL_LO
 from ..physics.hertz import contact_energy, contact_force_law
@@ -98,12 +98,14 @@ def kick(v, s, dws, load, ag, force, inv_mass, vn, ground):
     Wiener increments ``dws`` on the floors (one entry each), ground acceleration ``ag`` on
     every body if ``ground`` (a compile-time flag: ``0 * s`` cannot be folded away under IEEE
     rules) (the caller makes stuck absorbers move with their floor).  ``inv_mass``: the
-    reciprocal masses.  The state-dependent force term comes last, one fused multiply-add after
-    the forces (the step's critical path)."""
+    reciprocal masses.  The load's impulse and the increment are one fused multiply-add
+    (``intrinsics.fused``: the same bits in a loop over SIMD lanes, ``lanes.py``).  The
+    state-dependent force term comes last, one fused multiply-add after the forces (the step's
+    critical path)."""
     base = ag * s if ground else 0.0
     nf = load.shape[0]
     for k in range(nf):
-        vn[k] = (v[k] + ((load[k] * s + dws[k]) * inv_mass[k] - base)) + force[k] * (s * inv_mass[k])
+        vn[k] = (v[k] + (fused(load[k], s, dws[k]) * inv_mass[k] - base)) + force[k] * (s * inv_mass[k])
     for b in range(nf, vn.shape[0]):
         vn[b] = (v[b] - base) + force[b] * (s * inv_mass[b])
 

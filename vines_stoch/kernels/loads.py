@@ -36,6 +36,7 @@ import numpy as np
 from numba import njit
 
 from ..jit import INLINE, KERNEL, copy_into
+from ..jit.intrinsics import fused
 from ..physics.loads import (
     BLAST,
     ENVELOPE_FIRST,
@@ -100,11 +101,13 @@ def rotations(forces, span: float, rc, rs):
 @njit(**INLINE)
 def turn(pc, ps, rc, rs, oc, os):
     """Phasors ``(pc, ps)`` turned by ``(rc, rs)`` into ``(oc, os)`` (complex multiplication;
-    the output may be the input)."""
+    the output may be the input).  Each part is one fused multiply-add, its first product fused
+    (``intrinsics.fused``): left to the compiler, which product it fuses depends on the code
+    around the call, and the scalar loop and the lane loop (``lanes.py``) would round apart."""
     for r in range(pc.shape[0]):
         c, s = pc[r], ps[r]
-        oc[r] = c * rc[r] - s * rs[r]
-        os[r] = s * rc[r] + c * rs[r]
+        oc[r] = fused(c, rc[r], -(s * rs[r]))
+        os[r] = fused(s, rc[r], c * rs[r])
 
 
 @njit(**INLINE)

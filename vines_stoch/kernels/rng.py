@@ -6,13 +6,19 @@ or a numpy ``Generator`` (of a bit generator other than ``PCG64``, passed by a u
 
 A Philox stream is a ``uint64`` array of ``STREAM_WORDS``: the key (two 32-bit words, from the
 seed and the purpose), the stream's place (the realisation, and the sweep point without common
-random numbers: the counter's upper 64 bits) and the number of blocks drawn so far (its lower
-64 bits).  Each draw is one block of Philox4x32-10 (Salmon, Moraes, Dror and Shaw, "Parallel
-random numbers: as easy as 1, 2, 3", SC '11, doi:10.1145/2063384.2063405; the Random123
-reference), so realisation ``r``'s numbers are a function of (seed, purpose, point, r) and
-the draw's index alone: the same whatever the launch configuration or batch.  A normal is the
-Box-Muller cosine of one block's two 53-bit uniforms (Box and Muller, Ann. Math. Statist. 29
-(1958) 610, doi:10.1214/aoms/1177706645).
+random numbers: the counter's upper 64 bits) and the number of draws so far.  Draw ``n`` is
+half ``n mod 2`` of block ``n // 2`` of Philox4x32-10 (the block number: the counter's lower
+64 bits; Salmon, Moraes, Dror and Shaw, "Parallel random numbers: as easy as 1, 2, 3", SC '11,
+doi:10.1145/2063384.2063405; the Random123 reference), so realisation ``r``'s numbers are a
+function of (seed, purpose, point, r) and the draw's index alone: the same whatever the launch
+configuration, batch or SIMD lane (``kernels/lanes.py`` draws a block's two normals at once).
+A block's four words are two 53-bit uniforms: uniform ``n`` is the first or the second; normals
+``2m`` and ``2m + 1`` are the Box-Muller pair of block ``m`` (Box and Muller, Ann. Math.
+Statist. 29 (1958) 610, doi:10.1214/aoms/1177706645), its cosine and its sine.  The logarithm
+and the sine and cosine are branch-free polynomials (``log_positive``, ``sincos_turn``: fdlibm's,
+within an ulp or two of the correctly rounded values), so that a loop over SIMD lanes
+vectorises them and every lane and every scalar draw computes the same bits.  A stream gives
+one kind of draw (a purpose draws normals or uniforms, not both).
 
 The kernels call ``normal`` and ``uniform``; numba picks the implementation by the stream's
 type when it compiles a kernel, and plain Python (the CUDA simulator) by ``isinstance`` and
@@ -28,6 +34,7 @@ from numba import njit, types
 from numba.extending import overload
 
 from ..jit.flags import INLINE
+from ..jit.intrinsics import bits_float, float_bits
 from .pcg import PCG_DTYPE, pcg_normal, pcg_uniform
 
 #: Words of a Philox stream: key, place, blocks drawn.
@@ -39,8 +46,22 @@ _W0, _W1 = np.uint64(0x9E3779B9), np.uint64(0xBB67AE85)  # key schedule (Weyl) i
 _LOW = np.uint64(0xFFFFFFFF)
 _S32, _S11, _S21 = np.uint64(32), np.uint64(11), np.uint64(21)
 _ONE = np.uint64(1)
-_TWO_PI = 2.0 * np.pi
 _ULP53 = 2.0**-53
+# fdlibm's (and musl's) log: ln 2 in two parts and the minimax coefficients of
+# log((1 + s) / (1 - s)) = 2 s + Lg1 s^3 + ... on the reduced range (e_log.c)
+_LN2_HI, _LN2_LO = 6.93147180369123816490e-01, 1.90821492927058770002e-10
+_LG1, _LG2, _LG3, _LG4 = 6.666666666666735130e-01, 3.999999999940941908e-01, 2.857142874366239149e-01, \
+    2.222219843214978396e-01
+_LG5, _LG6, _LG7 = 1.818357216161805012e-01, 1.531383769920937332e-01, 1.479819860511658591e-01
+_HIGH_OFFSET = np.uint64(0x3FF00000 - 0x3FE6A09E)  # moves sqrt(2)/2 .. sqrt(2) onto one exponent
+_SQRT_HALF_HIGH, _HIGH_MANTISSA = np.uint64(0x3FE6A09E), np.uint64(0x000FFFFF)
+_S20 = np.uint64(20)
+# fdlibm's sine and cosine kernels on [-pi/4, pi/4] (k_sin.c, k_cos.c)
+_S1, _S2, _S3 = -1.66666666666666324348e-01, 8.33333333332248946124e-03, -1.98412698298579493134e-04
+_S4, _S5, _S6 = 2.75573137070700676789e-06, -2.50507602534068634195e-08, 1.58969099521155010221e-10
+_C1, _C2, _C3 = 4.16666666666666019037e-02, -1.38888888888741095749e-03, 2.48015872894767294178e-05
+_C4, _C5, _C6 = -2.75573143513906633035e-07, 2.08757232129817482790e-09, -1.13596475577881948265e-11
+_HALF_PI = 0.5 * np.pi
 
 
 @njit(**INLINE)
@@ -57,30 +78,101 @@ def philox4x32(c0, c1, c2, c3, k0, k1):
 
 
 @njit(**INLINE)
-def next_block(stream):
-    """The stream's next block (its four 32-bit words), counting it drawn."""
+def block_of(stream):
+    """The four 32-bit words of the block of the stream's next draw (``draw // 2``), and the
+    half of it the draw takes (``draw mod 2``), counting the draw made."""
     n = stream[DRAWN]
-    place = stream[PLACE]
-    key = stream[KEY]
     stream[DRAWN] = n + _ONE
-    return philox4x32(n & _LOW, n >> _S32, place & _LOW, place >> _S32, key & _LOW, key >> _S32)
+    return philox_block(stream[KEY], stream[PLACE], n >> _ONE), n & _ONE
+
+
+@njit(**INLINE)
+def philox_block(key, place, block):
+    """Block ``block`` of the Philox stream ``(key, place)``: its four 32-bit words."""
+    return philox4x32(block & _LOW, block >> _S32, place & _LOW, place >> _S32, key & _LOW, key >> _S32)
+
+
+@njit(**INLINE)
+def unit_53(high, low) -> float:
+    """The 53-bit integer of two 32-bit words' upper bits, as a float (exact)."""
+    return float(np.int64((high << _S21) | (low >> _S11)))
 
 
 @njit(**INLINE)
 def philox_uniform(stream) -> float:
-    """A uniform in ``[0, 1)`` on the 53-bit grid, from the first two words of a block."""
-    w0, w1, _, _ = next_block(stream)
-    return float((w0 << _S21) | (w1 >> _S11)) * _ULP53
+    """A uniform in ``[0, 1)`` on the 53-bit grid: the first or the second half of a block."""
+    (w0, w1, w2, w3), half = block_of(stream)
+    return (unit_53(w2, w3) if half else unit_53(w0, w1)) * _ULP53
+
+
+@njit(**INLINE)
+def log_positive(x: float) -> float:
+    """``log(x)`` for a positive normal ``x``, branch-free (musl's ``log``, after fdlibm's
+    ``e_log.c``: ``x = 2^k f`` with ``f`` in ``[sqrt(2)/2, sqrt(2))``, then a minimax polynomial
+    in ``s = (f - 1) / (f + 1)``; error below 1 ulp)."""
+    bits = float_bits(x)
+    high = (bits >> _S32) + _HIGH_OFFSET
+    k = float(np.int64(high >> _S20) - 0x3FF)
+    high = (high & _HIGH_MANTISSA) + _SQRT_HALF_HIGH
+    f = bits_float((high << _S32) | (bits & _LOW)) - 1.0
+    hfsq = 0.5 * f * f
+    s = f / (2.0 + f)
+    z = s * s
+    w = z * z
+    t1 = w * (_LG2 + w * (_LG4 + w * _LG6))
+    t2 = z * (_LG1 + w * (_LG3 + w * (_LG5 + w * _LG7)))
+    return s * (hfsq + (t2 + t1)) + k * _LN2_LO - hfsq + f + k * _LN2_HI
+
+
+@njit(**INLINE)
+def sincos_turn(u: float):
+    """``(cos 2 pi u, sin 2 pi u)`` for ``u`` in ``[0, 1)`` on the 53-bit grid, branch-free: the
+    quadrant ``q`` nearest ``4 u`` and ``r = 4 u - q`` in ``[-1/2, 1/2]`` are exact, and fdlibm's
+    kernels (``k_sin.c``, ``k_cos.c``) take ``x = r pi / 2`` in ``[-pi/4, pi/4]``."""
+    y = 4.0 * u
+    q = math.floor(y + 0.5)
+    x = (y - q) * _HALF_PI
+    z = x * x
+    w = z * z
+    sr = _S2 + z * (_S3 + z * _S4) + z * w * (_S5 + z * _S6)
+    sin_x = x + z * x * (_S1 + z * sr)
+    cr = z * (_C1 + z * (_C2 + z * _C3)) + w * w * (_C4 + z * (_C5 + z * _C6))
+    hz = 0.5 * z
+    one_less = 1.0 - hz
+    cos_x = one_less + (((1.0 - one_less) - hz) + z * cr)
+    quadrant = np.int64(q) & 3
+    swap = (quadrant & 1) == 1
+    # the signs as factors of +-1 (exact), not branches: the cosine's negative in quadrants 1
+    # and 2, the sine's in 2 and 3
+    c = (sin_x if swap else cos_x) * (1.0 - float((quadrant + 1) & 2))
+    s = (cos_x if swap else sin_x) * (1.0 - float(quadrant & 2))
+    return c, s
+
+
+@njit(**INLINE)
+def box_muller(w0, w1, w2, w3):
+    """The Box-Muller pair ``(r cos t, r sin t)`` of a block's words: ``r = sqrt(-2 log u1)``,
+    ``u1`` in ``(0, 1]`` from the first two words (its logarithm finite), ``t = 2 pi u2``."""
+    u1 = (unit_53(w0, w1) + 1.0) * _ULP53
+    r = math.sqrt(-2.0 * log_positive(u1))
+    c, s = sincos_turn(unit_53(w2, w3) * _ULP53)
+    return r * c, r * s
+
+
+@njit(**INLINE)
+def philox_pair(key, place, block):
+    """The two normals of block ``block`` of the Philox stream ``(key, place)``: draws
+    ``2 block`` and ``2 block + 1`` of its normals."""
+    w0, w1, w2, w3 = philox_block(key, place, block)
+    return box_muller(w0, w1, w2, w3)
 
 
 @njit(**INLINE)
 def philox_normal(stream) -> float:
-    """A standard normal: the Box-Muller cosine of a block's two uniforms (the first in
-    ``(0, 1]``, so its logarithm is finite)."""
-    w0, w1, w2, w3 = next_block(stream)
-    u1 = (float((w0 << _S21) | (w1 >> _S11)) + 1.0) * _ULP53
-    u2 = float((w2 << _S21) | (w3 >> _S11)) * _ULP53
-    return math.sqrt(-2.0 * math.log(u1)) * math.cos(_TWO_PI * u2)
+    """A standard normal: the cosine or the sine of the Box-Muller pair of its block."""
+    (w0, w1, w2, w3), half = block_of(stream)
+    c, s = box_muller(w0, w1, w2, w3)
+    return s if half else c
 
 
 @njit(**INLINE)

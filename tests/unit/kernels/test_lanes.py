@@ -1,0 +1,167 @@
+"""Paths in SIMD lanes (kernels/lanes.py): each realisation's metric vector is, bitwise, the one the
+scalar loop gives on the same Philox streams, whatever its lane, batch or chunk; the scheme
+registry says which scenes run there; and the update loop is vector code on the host."""
+
+from __future__ import annotations
+
+import dataclasses
+import re
+
+import llvmlite.binding as llvm
+import numpy as np
+import pytest
+from numba import njit
+from numba.core.caching import NullCache
+
+from tests.helpers import scene_from
+from vines_stoch.jit.flags import KERNEL
+from vines_stoch.kernels import simulate, spec_of
+from vines_stoch.kernels.chunk import lane_call, lane_scene, simulate_chunk
+from vines_stoch.kernels.lanes import LANES, lane_loop, lane_normals
+from vines_stoch.kernels.rng import philox_stream
+from vines_stoch.outputs import STATUS, STATUS_DIVERGED, Record, new_metrics
+from vines_stoch.schemes import in_lanes
+from vines_stoch.streams import BRIDGE, FILTER, INCREMENTS, Streams
+
+SEED = 20261127
+
+SMOOTH = {
+    "name": "lanes-smooth",
+    "primary": {"mass": 1.0, "stiffness": 1.0, "damping": 0.02},
+    "absorbers": [{"type": "cubic", "mass": 0.05, "stiffness": 1.0, "damping": 0.01}],
+    "loads": [{"type": "harmonic", "amplitude": 0.1, "frequency": 1.0},
+              {"type": "white-noise", "intensity": 0.05}],
+    # 2,500 steps: across two of the divergence checks' phasor resets (every 1,024 steps)
+    "simulation": {"duration": 2.5, "dt": 1e-3, "scheme": "euler-maruyama"},
+    "limits": {"roof": {"metric": "x1_max", "value": 0.02}, "never": {"metric": "e1_max", "value": 1e9}},
+}
+FRAME = {
+    "name": "lanes-frame",
+    "primary": {"masses": [1.0, 1.0, 0.8], "stiffnesses": [40.0, 30.0, 20.0], "dampings": [0.2, 0.1, 0.1]},
+    "absorbers": [{"type": "cubic", "mass": 0.05, "stiffness": 100.0, "damping": 0.02},
+                  {"type": "linear", "floor": 2, "mass": 0.1, "stiffness": 2.0, "damping": 0.05},
+                  {"type": "bistable", "floor": 1, "mass": 0.02, "stiffness": 50.0, "linear_stiffness": -0.2,
+                   "damping": 0.01}],
+    "loads": [{"type": "white-noise", "intensity": 0.3, "floor": 1},
+              {"type": "white-noise", "intensity": 0.2},
+              {"type": "harmonic", "amplitude": 0.5, "frequency": 3.0, "floor": 2},
+              {"type": "blast", "amplitude": 2.0, "start": 0.3, "duration": 0.2, "decay": 1.0}],
+    "simulation": {"duration": 2.2, "dt": 2e-3, "scheme": "euler-maruyama", "metrics_from": 0.77},
+    "limits": {"drift": {"metric": "drift_max_2", "value": 0.01},
+               "acc": {"metric": "acc_max_3", "value": 0.5}, "x1": {"metric": "x_max_1", "value": 0.005}},
+}
+GROUND = {
+    "name": "lanes-ground",
+    "primary": {"mass": 1.0, "stiffness": 4.0, "damping": 0.05},
+    "absorbers": [{"type": "geometric", "mass": 0.05, "stiffness": 1.0, "free_length": 0.9, "length": 1.0,
+                   "damping": 0.01}],
+    "loads": [{"type": "base-harmonic", "amplitude": 0.3, "frequency": 2.0},
+              {"type": "white-noise", "intensity": 0.1}],
+    "simulation": {"duration": 2.0, "dt": 1e-3, "scheme": "euler-maruyama"},
+}
+#: A deterministic scene run by the kick-drift-kick scheme: the lanes draw nothing.
+QUIET = {**SMOOTH, "loads": [{"type": "harmonic", "amplitude": 0.1, "frequency": 1.0}]}
+
+
+def philox_streams(r: int, point: int = 0, common: bool = True) -> Streams:
+    """Realisation ``r``'s Philox streams (what a lane draws from)."""
+    return Streams(*(philox_stream(SEED, p, r, point, common) for p in (INCREMENTS, BRIDGE, FILTER)))
+
+
+def same(a: np.ndarray, b: np.ndarray) -> bool:
+    """Bitwise equal, NaN where NaN."""
+    return bool(np.all((a == b) | (np.isnan(a) & np.isnan(b))))
+
+
+@pytest.mark.parametrize("data", [SMOOTH, FRAME, GROUND, QUIET], ids=["smooth", "frame", "ground", "quiet"])
+def test_a_lane_is_the_scalar_loop_on_its_philox_streams(data):
+    scene = scene_from(data)
+    assert lane_scene(scene)
+    rows = simulate_chunk(scene, SEED, 0, 0, 5).raw
+    for r in range(5):
+        scalar = simulate(scene, philox_streams(r))
+        assert same(rows[r], scalar), (r, np.flatnonzero(rows[r] != scalar))
+    if data is not QUIET:  # the realisations differ (the noise is theirs)
+        assert not np.array_equal(rows[0], rows[1])
+
+
+def test_a_realisation_is_the_same_in_any_lane_batch_or_chunk():
+    scene = scene_from({**SMOOTH, "simulation": {**SMOOTH["simulation"], "duration": 0.3}})
+    n = LANES + 9  # two batches, the second a part one
+    whole = simulate_chunk(scene, SEED, 0, 0, n).raw
+    for start, stop in ((0, 1), (5, 12), (LANES - 2, LANES + 3), (n - 4, n)):
+        assert same(simulate_chunk(scene, SEED, 0, start, stop).raw, whole[start:stop])
+    assert same(whole[LANES + 4], simulate(scene, philox_streams(LANES + 4)))
+
+
+def test_without_common_random_numbers_a_point_has_streams_of_its_own():
+    scene = scene_from(SMOOTH)
+    own = simulate_chunk(scene, SEED, 3, 2, 4, common=False).raw
+    for j, r in enumerate((2, 3)):
+        assert same(own[j], simulate(scene, philox_streams(r, point=3, common=False)))
+    assert not np.array_equal(own, simulate_chunk(scene, SEED, 3, 2, 4, common=True).raw)
+
+
+def test_a_path_that_diverges_ends_as_in_the_scalar_loop():
+    """A step past the scheme's stability limit (set on the built scene): the paths blow up, each
+    lane ends at the first divergence check that sees it, with the metrics the scalar loop
+    writes there."""
+    base = scene_from({**SMOOTH, "simulation": {**SMOOTH["simulation"], "duration": 3.0}})
+    scene = dataclasses.replace(base, storey_k=base.storey_k * 4.05e6)  # omega dt = 2.01
+    rows = simulate_chunk(scene, SEED, 0, 0, 3).raw
+    for r in range(3):
+        assert rows[r][STATUS] == STATUS_DIVERGED
+        assert same(rows[r], simulate(scene, philox_streams(r)))
+
+
+def test_the_registry_says_which_scenes_run_in_lanes():
+    assert in_lanes("euler-maruyama", impacts=False, hertz=False, filters=False)
+    for impacts, hertz, filters in ((True, False, False), (False, True, False), (False, False, True)):
+        assert not in_lanes("euler-maruyama", impacts, hertz, filters)
+    assert not in_lanes("sra", False, False, False)
+    assert not in_lanes("rk4", False, False, False)
+    impact = {**SMOOTH, "absorbers": [{"type": "impact", "mass": 0.05, "clearance": 0.2, "restitution": 0.6}]}
+    assert not lane_scene(scene_from(impact))
+
+
+def test_what_lanes_do_not_record_runs_in_the_scalar_loop_on_the_same_streams():
+    """History rows are the scalar loop's: a chunk that keeps them gives the metric rows of the
+    lanes, bitwise, and the history of the realisation's Philox path."""
+    scene = scene_from(SMOOTH)
+    plain = simulate_chunk(scene, SEED, 0, 0, 3).raw
+    kept = simulate_chunk(scene, SEED, 0, 0, 3, history=(50, 40), signals=("x1", "e1"))
+    assert same(kept.raw, plain)
+    history = np.full((40, 2), np.nan)
+    simulate(scene, philox_streams(2), history=history, stride=50, signals=("x1", "e1"))
+    assert same(kept.history[2], history)
+
+
+def _packed(asm: str, width: str) -> int:
+    """Packed double-precision arithmetic on ``width`` registers (``ymm``, ``zmm``) in ``asm``."""
+    return len(re.findall(rf"\bv(?:fn?m(?:add|sub)\d*pd|mulpd|addpd|subpd|sqrtpd)\b[^\n]*%{width}", asm))
+
+
+def test_the_lane_loops_are_vector_code_on_this_host():
+    """The update loop and the normals compile to packed arithmetic on 256- or 512-bit registers
+    (``ymm``: AVX2; ``zmm``: AVX-512, where LLVM's tuning for the host takes them); skipped on a
+    host without AVX2.  (Compiled afresh: numba shows no machine code of a loop it loaded from
+    its cache.)"""
+    if not llvm.get_host_cpu_features().get("avx2"):
+        pytest.skip("no AVX2 on this host")
+    scene = scene_from(SMOOTH)
+    run = lane_loop.__wrapped__(spec_of(scene, record=Record.of(scene)))  # (not the memoised one)
+    run._cache = NullCache()
+    run(*lane_call(scene, SEED, 0, 0, True, new_metrics_rows(scene, 2)))
+    normals = njit(**{**KERNEL, "cache": False})(lane_normals.py_func)
+    normals(np.zeros(8), np.zeros(8), 8, 0, np.uint64(1), np.arange(8, dtype=np.uint64), 0)
+    update = run.inspect_asm(run.signatures[0])
+    drawn = normals.inspect_asm(normals.signatures[0])
+    wide = "zmm" if _packed(update, "zmm") else "ymm"
+    assert _packed(update, wide) >= 20, "the lane update loop is not vectorised"
+    assert _packed(drawn, wide) >= 10 and re.search(rf"vsqrtpd[^\n]*%{wide}", drawn), \
+        "the lanes' normals are not vectorised"
+
+
+def new_metrics_rows(scene, n: int) -> np.ndarray:
+    """``n`` metric vectors at their start."""
+    return np.tile(new_metrics(scene.n_floors, scene.limits.shape[0], scene.reductions.shape[0]), (n, 1))

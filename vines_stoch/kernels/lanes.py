@@ -1,0 +1,351 @@
+"""Paths in SIMD lanes: a batch of realisations advances together, step-outer and lane-inner,
+its state in structure-of-arrays, so that the compiler vectorises the update across paths.
+
+The scalar loop (``driver.step_loop``) runs one path at a time: its step is a chain of
+dependent operations a few bodies wide, which leaves most of a vector unit idle.  Here each
+step runs, once for the batch, what does not depend on the path (the closed-form loads, their
+phasors, the metrics window's opening, the divergence check's schedule), then one loop over the
+lanes whose body is the kick-drift-kick step of ``kdk.py`` written for one path (the same inlined
+force, kick and energy functions, on a path's state loaded from the batch's arrays into
+registers), which LLVM turns into vector code, ``LANES`` paths an instruction group.
+
+The noise comes from counter-based Philox streams (``rng.py``): lane ``l``'s normals of step
+``i`` are draws ``i m .. i m + m - 1`` (``m`` noisy floors) of its realisation's stream, a block
+of Philox4x32-10 and a branch-free Box-Muller pair (``rng.philox_pair``) every two draws, in a
+loop of their own over the lanes.  A realisation's numbers therefore depend on (seed, purpose,
+point, realisation) alone, as the cuda backend's do, and the scalar loop given the same Philox
+streams runs the same arithmetic: the two agree bitwise (``tests/unit/kernels/test_lanes.py``).
+
+Which scenes run here is the scheme registry's (``schemes.in_lanes``): the kick-drift-kick
+scheme without impacts, Hertz contact or filtered loads, recording the built-in metrics and the
+limits' first passages.  The rest (events, filters, history rows, event logs, declared metrics)
+runs in the scalar loop on the same streams (``chunk.simulate_chunk``).
+"""
+
+from __future__ import annotations
+
+from functools import cache
+
+import numpy as np
+from numba import njit
+
+from ..jit.cache import stable_cache
+from ..jit.flags import INLINE, KERNEL
+from ..jit.intrinsics import borrowed, int_scratch, plain, scratch
+from ..outputs import ACC_MAX_K, DRIFT_MAX_K, FINAL_ENERGY, STATUS, STATUS_DIVERGED, X_MAX_K, passage_slots
+from ..physics.structure import primary_energy
+from .common import (
+    CHECK_EVERY,
+    DIVERGED,
+    attachment_forces,
+    floor_peaks,
+    geometric_forces,
+    stored_energy,
+    write_floor_metrics,
+)
+from .driver import Spec
+from .energy import absorber_dissipation, impulse_work, momentum, structure_dissipation, write_accounts
+from .grid import GridLoads, end_loads, noise_scales, opening_forces, reset_phasors, start_loads, step_loads
+from .kdk import kick
+from .loads import has_breaks
+from .rng import philox_pair
+
+#: Paths a batch advances together: its state (about 17 numbers a path for a one-storey primary
+#: with one absorber) stays in the core's first-level cache.
+LANES = 256
+#: Alignment of the batch's arrays, in bytes (a cache line; numba's own is 32 bytes).
+ALIGN = 64
+
+
+def lane_rows(n_bodies: int, n_floors: int) -> dict[str, int]:
+    """The rows of a batch's state array (one column a lane), by name: positions, velocities,
+    the accounts (input work, structure and absorber dissipation, the trapezoid sum of ``E1``,
+    its peak and its last value), the per-floor peaks and ``x_k^2`` sums, the step's normals on
+    each floor, and whether the path has ended (diverged: 1)."""
+    names = [("x", n_bodies), ("v", n_bodies), ("work", 1), ("d_primary", 1), ("d_absorber", 1),
+             ("e_sum", 1), ("e1_max", 1), ("e1_prev", 1), ("x_max", n_floors), ("drift_max", n_floors),
+             ("acc_max", n_floors), ("x2", n_floors), ("done", 1), ("rows", 0)]
+    rows, at = {}, 0
+    for name, size in names:
+        rows[name] = at
+        at += size
+    return rows
+
+
+@njit(**KERNEL)
+def aligned_rows(rows: int):
+    """A zeroed array of ``rows`` rows of ``LANES`` lanes, one after the other, starting on an
+    ``ALIGN``-byte boundary (so that every row does)."""
+    buffer = np.zeros(rows * LANES + ALIGN // 8)
+    skip = (ALIGN - buffer.ctypes.data % ALIGN) % ALIGN // 8
+    return buffer[skip:skip + rows * LANES]
+
+
+@njit(**KERNEL)
+def lane_normals(z, spare, nl: int, draw: int, key, places, first: int) -> None:
+    """Draw ``draw`` of the Philox streams ``(key, places[first + lane])`` into ``z[lane]``, lane by
+    lane: at an even draw the Box-Muller pair of its block (``rng.philox_pair``), its second
+    half kept in ``spare`` for the next draw; at an odd draw that half.  (Out of line, as the
+    lane step: a small function that the compiler vectorises on its own.)"""
+    if draw & 1 == 0:
+        block = np.uint64(draw >> 1)
+        for lane in range(nl):
+            z[lane], spare[lane] = philox_pair(key, places[first + lane], block)
+    else:
+        for lane in range(nl):
+            z[lane] = spare[lane]
+
+
+@cache
+def lane_loop(spec: Spec):
+    """The lane loop of kick-drift-kick scenes specialised to ``spec`` (``driver.Spec``; no
+    impacts, Hertz contact or filtered loads).  It takes the bundles of ``kernels/bundles.py``
+    (the state's start in ``bodies``), the key of the increments' Philox streams and each
+    realisation's stream place (``rng.stream_place``), and writes realisation ``j``'s metric
+    vector into ``raw[j]`` (preset to the vector's start)."""
+    NB = spec.n_bodies
+    NF = spec.n_floors
+    NR = spec.n_rows
+    GROUND = spec.ground
+    GEOMETRIC = spec.geometric
+    NOISE = spec.has_noise
+    PASSAGES = spec.passages
+    W = LANES  # (a row's length, a compile-time constant: the rows' distances are known)
+    R = lane_rows(NB, NF)
+    X, V, WORK, DP, DA, ESUM, E1MAX, E1PREV = (R["x"], R["v"], R["work"], R["d_primary"], R["d_absorber"],
+                                               R["e_sum"], R["e1_max"], R["e1_prev"])
+    XMAX, DRIFT, ACCMAX, X2, DONE, ROWS = (R["x_max"], R["drift_max"], R["acc_max"], R["x2"], R["done"],
+                                           R["rows"])
+
+    @njit(**INLINE)
+    def load_lane(s, lane, x, v):
+        """A lane's state into ``x, v``."""
+        for b in range(NB):
+            x[b] = s[(X + b) * W + lane]
+            v[b] = s[(V + b) * W + lane]
+
+    @njit(**INLINE)
+    def load_peaks(s, lane, x_max, drift_max, acc_max):
+        """A lane's per-floor peaks into ``x_max, drift_max, acc_max``."""
+        for k in range(NF):
+            x_max[k] = s[(XMAX + k) * W + lane]
+            drift_max[k] = s[(DRIFT + k) * W + lane]
+            acc_max[k] = s[(ACCMAX + k) * W + lane]
+
+    @njit(**INLINE)
+    def store_peaks(s, lane, x_max, drift_max, acc_max):
+        """``load_peaks``'s inverse."""
+        for k in range(NF):
+            s[(XMAX + k) * W + lane] = x_max[k]
+            s[(DRIFT + k) * W + lane] = drift_max[k]
+            s[(ACCMAX + k) * W + lane] = acc_max[k]
+
+    @njit(**INLINE)
+    def finish_lane(s, lane, out, inside, i0, n_steps, dt, mass, storey_k, nf, kind, host, rows, inv_mass,
+                    passages, limits):
+        """Lane ``lane``'s metric vector into ``out``, as the scalar loop's end writes it."""
+        x, v = scratch(NB), scratch(NB)
+        load_lane(s, lane, x, v)
+        x_max, drift_max, acc_max, x2 = scratch(NF), scratch(NF), scratch(NF), scratch(NF)
+        diverged = False
+        for b in range(NB):
+            if not (abs(x[b]) < DIVERGED):
+                diverged = True
+        if diverged:
+            out[STATUS] = STATUS_DIVERGED
+        e_integral = 0.0
+        load_peaks(s, lane, x_max, drift_max, acc_max)
+        for k in range(NF):
+            x2[k] = s[(X2 + k) * W + lane]
+        if inside and i0 < n_steps:  # (the window's last state at half weight)
+            e_integral = (s[ESUM * W + lane] - 0.5 * s[E1PREV * W + lane]) * dt
+            for k in range(NF):
+                x2[k] = (x2[k] - 0.5 * x[k] * x[k]) * dt
+                acc_max[k] *= inv_mass[k]
+        write_accounts(out, s[WORK * W + lane], s[DP * W + lane], s[DA * W + lane], e_integral,
+                       s[E1MAX * W + lane], 0.0, 0.0, 0.0)
+        out[FINAL_ENERGY] = stored_energy(*plain((x, v, mass, nf, storey_k, kind, host, rows)))
+        write_floor_metrics(out, NF, x_max, drift_max, acc_max, x2)
+        base = passage_slots(NF)
+        for j in range(limits.shape[0]):
+            out[base + j] = passages[j * W + lane]
+
+    @njit(**INLINE)
+    def open_lanes(s, nl, t, gl, bodies, absorbers, inv_mass, limits, passages):
+        """The metrics window's opening (``driver.step_loop``'s): the stored energy as the input
+        work's start, the accounts' and peaks' first values."""
+        mass, storey_k, kind, host, rows = (bodies.mass, bodies.storey_k, absorbers.kind, absorbers.host,
+                                            absorbers.rows)
+        x, v, force, acc = scratch(NB), scratch(NB), scratch(NB), scratch(NF)
+        x_max, drift_max, acc_max = scratch(NF), scratch(NF), scratch(NF)
+        for lane in range(nl):
+            load_lane(s, lane, x, v)
+            e1 = s[E1PREV * W + lane]
+            s[WORK * W + lane] = stored_energy(*plain((x, v, mass, NF, storey_k, kind, host, rows)))
+            s[E1MAX * W + lane] = e1
+            s[ESUM * W + lane] = 0.5 * e1
+            opening_forces(force, gl, x, v, acc, bodies, absorbers, NF, GEOMETRIC)
+            for k in range(NF):
+                s[(X2 + k) * W + lane] = 0.5 * x[k] * x[k]
+                x_max[k], drift_max[k], acc_max[k] = 0.0, 0.0, 0.0
+            floor_peaks(x, NF, acc, x_max, drift_max, acc_max)
+            store_peaks(s, lane, x_max, drift_max, acc_max)
+        if PASSAGES:
+            pass_lanes(s, nl, t, limits, inv_mass, passages)
+
+    @njit(**INLINE)
+    def pass_lanes(s, nl, t, limits, inv_mass, passages):
+        """``t`` as the first passage of each limit whose peak exceeds its value for the first
+        time (``common.first_passages``, lane by lane: a select, no branch)."""
+        for j in range(limits.shape[0]):
+            code, k, value = limits[j, 0], int(limits[j, 1]), limits[j, 2]
+            row, scale = E1MAX, 1.0
+            if code == X_MAX_K or (code == DRIFT_MAX_K and k == 0):
+                row = XMAX + k
+            elif code == DRIFT_MAX_K:
+                row = DRIFT + k
+            elif code == ACC_MAX_K:
+                row, scale = ACCMAX + k, inv_mass[k]
+            for lane in range(nl):
+                peak = s[row * W + lane] * scale if code == ACC_MAX_K else s[row * W + lane]
+                before = passages[j * W + lane]
+                passages[j * W + lane] = t if (before != before and peak > value) else before
+
+    @njit(**INLINE)
+    def update(s, z, nl, inside, dt, ag, ag_next, load, load_next, noise_scale, mass, inv_mass, storey_k,
+               storey_c, floor_c, host, rows):
+        """One kick-drift-kick step of every lane (``kdk.kdk_step`` without events, then the
+        loop driver's accounts at the step's end)."""
+        x, v, vn, force = scratch(NB), scratch(NB), scratch(NB), scratch(NB)
+        dws, dwh, acc = scratch(NF), scratch(NF), scratch(NF)
+        x_max, drift_max, acc_max = scratch(NF), scratch(NF), scratch(NF)
+        for lane in range(nl):
+            load_lane(s, lane, x, v)
+            for k in range(NF):
+                dws[k] = noise_scale[k] * z[k * W + lane] if NOISE else 0.0
+                dwh[k] = 0.5 * dws[k]
+            attachment_forces(x, v, NF, storey_k, storey_c, floor_c, host, rows, force)
+            geometric_forces(x, NF, host, rows, force, GEOMETRIC)
+            kick(v, 0.5 * dt, dwh, load, ag, force, inv_mass, vn, GROUND)
+            work, d_primary, d_absorber = s[WORK * W + lane], s[DP * W + lane], s[DA * W + lane]
+            if inside:
+                work += 0.5 * impulse_work(load, dt, dws, v, vn) - (
+                    0.5 * ag * dt * momentum(mass, v, vn) if ag != 0.0 else 0.0)
+                d_primary += structure_dissipation(v, vn, NF, storey_c, floor_c, dt)
+                d_absorber += absorber_dissipation(v, vn, NF, host, rows, dt)
+            for b in range(NB):
+                x[b] += dt * vn[b]
+                v[b] = vn[b]
+            attachment_forces(x, v, NF, storey_k, storey_c, floor_c, host, rows, force)
+            geometric_forces(x, NF, host, rows, force, GEOMETRIC)
+            kick(v, 0.5 * dt, dwh, load_next, ag_next, force, inv_mass, vn, GROUND)
+            if inside:
+                work += 0.5 * impulse_work(load_next, dt, dws, v, vn) - (
+                    0.5 * ag_next * dt * momentum(mass, v, vn) if ag_next != 0.0 else 0.0)
+                d_primary += structure_dissipation(v, vn, NF, storey_c, floor_c, dt)
+                d_absorber += absorber_dissipation(v, vn, NF, host, rows, dt)
+            for b in range(NB):
+                v[b] = vn[b]
+                s[(X + b) * W + lane] = x[b]
+                s[(V + b) * W + lane] = v[b]
+            s[WORK * W + lane], s[DP * W + lane], s[DA * W + lane] = work, d_primary, d_absorber
+            e1 = primary_energy(mass, storey_k, x, v, NF)
+            if inside:
+                load_peaks(s, lane, x_max, drift_max, acc_max)
+                for k in range(NF):
+                    acc[k] = force[k] + load_next[k]
+                    s[(X2 + k) * W + lane] += x[k] * x[k]
+                floor_peaks(x, NF, acc, x_max, drift_max, acc_max)
+                store_peaks(s, lane, x_max, drift_max, acc_max)
+                s[ESUM * W + lane] += e1
+                s[E1MAX * W + lane] = max(s[E1MAX * W + lane], e1)
+            s[E1PREV * W + lane] = e1
+
+    @njit(**INLINE)
+    def batch(s_, z_, spare_, nl, bodies_, absorbers_, ex_, fl_, noise_, grid_, limits_, key, places_,
+              passages_, raw_, first):
+        # every array as a borrowed view (``jit.intrinsics.borrowed``): no reference counting in
+        # the lane loops, whose calls would keep the compiler from vectorising them
+        bodies, absorbers, ex, fl, noise, grid = borrowed((bodies_, absorbers_, ex_, fl_, noise_, grid_))
+        s, z, spare, limits, places, passages, raw = borrowed((s_, z_, spare_, limits_, places_, passages_,
+                                                               raw_))
+        mass, storey_k, kind, host, rows = (bodies.mass, bodies.storey_k, absorbers.kind, absorbers.host,
+                                            absorbers.rows)
+        dt, n_steps, i0 = grid.dt, grid.n_steps, grid.i0
+        # what every lane shares, on the stack: the parameters (so that the lane loop's stores
+        # alias none of them), the loads on the grid, the noise scales
+        m, inv_mass, sk, sc, fc = scratch(NB), scratch(NB), scratch(NF), scratch(NF), scratch(NF)
+        for b in range(NB):
+            m[b] = mass[b]
+            inv_mass[b] = 1.0 / mass[b]
+        for k in range(NF):
+            sk[k], sc[k], fc[k] = storey_k[k], bodies.storey_c[k], bodies.floor_c[k]
+        gl = GridLoads(scratch(NF), scratch(NF), scratch(NF), scratch(0), scratch(NR), scratch(NR),
+                       scratch(0), scratch(0), scratch(NR), scratch(NR), scratch(0), scratch(0), scratch(0),
+                       scratch(0), scratch(0), scratch(0), scratch(0), scratch(NF))
+        noise_scale, slot, floor_of = scratch(NF), scratch(NF), int_scratch(NF)
+        noisy = noise_scales(noise.sigma, dt, noise_scale, slot) if NOISE else 0
+        for k in range(NF):
+            if NF == 1 or noise_scale[k] > 0.0:
+                floor_of[int(slot[k])] = k
+        ag_next = start_loads(gl, ex, fl, dt, gl.z, False, NF, 0, False, GROUND)
+        piecewise = has_breaks(ex)
+        x, v = scratch(NB), scratch(NB)
+        for lane in range(nl):
+            for b in range(NB):
+                s[(X + b) * W + lane], s[(V + b) * W + lane] = bodies.x[b], bodies.v[b]
+                x[b], v[b] = bodies.x[b], bodies.v[b]
+            for r in range(WORK, ROWS):
+                s[r * W + lane] = 0.0
+            s[E1PREV * W + lane] = primary_energy(m, sk, x, v, NF)
+            for j in range(limits.shape[0]):
+                passages[j * W + lane] = np.nan
+        inside = i0 == 0
+        for i in range(n_steps):
+            if i == i0:
+                inside = True
+                open_lanes(s, nl, i * dt, gl, bodies, absorbers, inv_mass, limits, passages)
+            if i % CHECK_EVERY == 0:
+                for lane in range(nl):  # a path that diverged ends here, as the scalar loop's
+                    if s[DONE * W + lane] == 0.0:
+                        for b in range(NB):
+                            if not (abs(s[(X + b) * W + lane]) < DIVERGED):
+                                s[DONE * W + lane] = 1.0
+                        if s[DONE * W + lane] != 0.0:
+                            finish_lane(s, lane, raw[first + lane], inside, i0, n_steps, dt, m, sk, NF, kind,
+                                        host, rows, inv_mass, passages, limits)
+                            for b in range(NB):
+                                s[(X + b) * W + lane] = s[(V + b) * W + lane] = 0.0
+                reset_phasors(gl, i, dt, ex)
+            ag = step_loads(i, dt, gl, ex, fl, ag_next, piecewise, False, GROUND, fl.z)
+            ag_next = end_loads(i, dt, gl, ex, fl, False, GROUND)
+            if NOISE:
+                for q in range(noisy):
+                    k = floor_of[q] * W
+                    lane_normals(*plain((z[k:k + W], spare, nl, i * noisy + q, key, places, first)))
+            # (``inside`` a constant in each copy: LLVM vectorises each copy on its own)
+            if inside:
+                update(s, z, nl, True, dt, ag, ag_next, gl.load, gl.load_next, noise_scale, m, inv_mass, sk,
+                       sc, fc, host, rows)
+                if PASSAGES:
+                    pass_lanes(s, nl, i * dt + dt, limits, inv_mass, passages)
+            else:
+                update(s, z, nl, False, dt, ag, ag_next, gl.load, gl.load_next, noise_scale, m, inv_mass, sk,
+                       sc, fc, host, rows)
+        for lane in range(nl):
+            if s[DONE * W + lane] == 0.0:
+                finish_lane(s, lane, raw[first + lane], inside, i0, n_steps, dt, m, sk, NF, kind, host, rows,
+                            inv_mass, passages, limits)
+
+    @njit(**KERNEL)
+    def run(bodies, absorbers, ex, fl, noise, grid, limits, key, places, raw):
+        n = raw.shape[0]
+        s, z, spare = aligned_rows(ROWS), aligned_rows(NF), aligned_rows(1)
+        passages = aligned_rows(limits.shape[0])
+        for first in range(0, n, W):
+            nl = min(W, n - first)
+            batch(s, z, spare, nl, bodies, absorbers, ex, fl, noise, grid, limits, key, places,
+                  passages, raw, first)
+
+    stable_cache(run)  # (its closure holds the lane step's functions: see ``jit.cache.stable_cache``)
+    return run
