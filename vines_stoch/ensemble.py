@@ -33,7 +33,8 @@ from . import psd, rare, schedulers, sensitivity
 from .binding import binding
 from .dynamics import refine_regimes
 from .kernels import DEFAULT_SIGNALS, kernel_for
-from .kernels.chunk import chunk_loop, ground_paths, parameter_draws, seed_keys, simulate_chunk
+from .kernels.chunk import chunk_loop, ground_paths, lane_scene, parameter_draws, seed_keys, simulate_chunk
+from .kernels.lanes import LANES
 from .metrics import METRICS, finish_table, ground_intensities, summarise
 from .outputs import EVENT_COLUMNS, EVENT_T, POINCARE_SAMPLES, Record
 from .progress import Progress
@@ -73,6 +74,9 @@ MIN_CHUNK_STEPS = 1_000_000
 HISTORY_CHUNK_BYTES = 8_000_000
 #: ``target_sem`` is tested at every multiple of this many realisations (and never before).
 TARGET_STEP = 100
+#: How many times cheaper a path-step of a scene in SIMD lanes counts in an automatic chunk's
+#: work (``_auto_chunk``; ``make bench``, "Paths in SIMD lanes": about 5x the scalar loop).
+LANE_SPEEDUP = 4
 #: Realisations of an automatic chunk of the cuda backend (a launch fills a large GPU from
 #: about 1e5 threads on; ``gpu.simulate_many`` splits a chunk into launches that fit its memory).
 GPU_CHUNK = 1 << 20
@@ -347,11 +351,18 @@ def _chunk(runner, view: _View | None, *args) -> tuple[pd.DataFrame, np.ndarray 
 
 def _auto_chunk(scene: Scene, n: int) -> int:
     """Realisations of an automatic CPU chunk: ``CHUNK_STEPS`` of work at most, ``n /
-    CHUNKS_PER_POINT`` where that leaves a chunk ``MIN_CHUNK_STEPS`` of work."""
+    CHUNKS_PER_POINT`` where that leaves a chunk ``MIN_CHUNK_STEPS`` of work.  A scene that runs
+    in SIMD lanes (``kernels.chunk.lane_scene``) counts its path-steps ``LANE_SPEEDUP`` times
+    cheaper, and takes whole batches of lanes (``lanes.LANES`` paths; at least one, or ``n``)."""
     steps = max(scene.n_steps, 1)
-    by_cost = max(1, CHUNK_STEPS // steps)
-    least = math.ceil(MIN_CHUNK_STEPS / steps)
-    return max(1, min(by_cost, n, max(math.ceil(n / CHUNKS_PER_POINT), least)))
+    lanes = lane_scene(scene)
+    speed = LANE_SPEEDUP if lanes else 1
+    by_cost = max(1, speed * CHUNK_STEPS // steps)
+    least = math.ceil(speed * MIN_CHUNK_STEPS / steps)
+    size = max(1, min(by_cost, n, max(math.ceil(n / CHUNKS_PER_POINT), least)))
+    if lanes:
+        size = min(n, max(LANES, size // LANES * LANES))
+    return size
 
 
 def sample(study: Study, workers: int | None = None) -> pd.DataFrame:

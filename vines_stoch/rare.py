@@ -52,7 +52,7 @@ import pandas as pd
 
 from .kernels import Path, advance, filter_draws, needed_streams, start_path
 from .kernels.pcg import state_of
-from .kernels.rng import stream_key, tape
+from .kernels.rng import keyed_stream, stream_key, tape
 from .outputs import DRIFT_MAX_K, E1_MAX, LIMIT_E1, SLOTS, X_MAX_K, passage_slots
 from .schemes import SCHEMES
 from .streams import RARE, Streams
@@ -185,7 +185,7 @@ def rare_streams(seed: int, point: int, replica: int, draw: int, scene, philox: 
     Philox streams keyed by (seed, ``RARE``, point, replica, purpose), the draw their place."""
     def gen(purpose: int) -> np.ndarray:  # (the loop's own stream: nothing to sync back)
         if philox:
-            return np.array([stream_key(seed, RARE, PATHS, point, replica, purpose), draw, 0], np.uint64)
+            return keyed_stream(stream_key(seed, RARE, PATHS, point, replica, purpose), draw)
         key = (RARE, PATHS, point, replica, draw, purpose)
         return state_of(np.random.Generator(np.random.PCG64(np.random.SeedSequence(seed, spawn_key=key))))
 
@@ -368,7 +368,7 @@ def subset(scene, limit: int, n: int, seed: int, point: int, replica: int,
     seeded = needed_streams(scene)[1]
     cuda = backend == "cuda"
     # (on the GPU every place holds a counter-based stream: the increments' an empty Philox one)
-    unused = np.zeros(3, np.uint64) if cuda and noise else None
+    unused = keyed_stream(0, 0) if cuda and noise else None
 
     def scores(inputs: np.ndarray, draws: np.ndarray) -> np.ndarray:
         """The scores of the samples ``inputs`` (a row each), sample ``k`` drawing its Brownian

@@ -22,7 +22,7 @@ from tests.helpers import ROOT, changed, cli, example_data, scene_from, study_fr
 from tests.integration.test_ensemble import DATA
 from vines_stoch import gpu, kernels, run
 from vines_stoch.kernels import SLOTS, kernel_for, sample_buffer, simulate
-from vines_stoch.kernels.rng import philox_stream
+from vines_stoch.kernels.rng import keyed_stream, philox_stream
 from vines_stoch.outputs import Record, new_events
 from vines_stoch.store import read_metadata
 from vines_stoch.streams import BRIDGE, FILTER, INCREMENTS, Streams, streams
@@ -376,7 +376,7 @@ def test_paths_run_in_stretches_on_the_gpu_are_the_cpu_loop():
     inputs = np.random.default_rng(3).standard_normal((3, noisy.n_steps + filter_draws(noisy)))
 
     def replayed(s, u):
-        streams = Streams(np.zeros(3, np.uint64), None, tape(u[s.n_steps:]))
+        streams = Streams(keyed_stream(0, 0), None, tape(u[s.n_steps:]))
         return start_path(s, streams, normals=u[:s.n_steps], stretches=False)
 
     paths = [replayed(noisy, u) for u in inputs]

@@ -18,6 +18,7 @@ from scipy.stats import t as student_t
 from tests.helpers import cli, run_interrupted, study_from, toml_text, two_dof_data
 from vines_stoch import ensemble, history, run
 from vines_stoch.kernels import DEFAULT_SIGNALS, simulate
+from vines_stoch.kernels.chunk import realization_streams
 from vines_stoch.scene import build_scene
 from vines_stoch.store import read_metadata
 
@@ -40,7 +41,8 @@ def stored_paths(study, n: int) -> tuple[np.ndarray, np.ndarray]:
     paths = np.empty((2, size, n))
     for r in range(n):
         path = np.full((size, 2), np.nan)
-        simulate(scene, ensemble.generator(study.base.ensemble.seed, 0, r), history=path, stride=stride)
+        gens = realization_streams(scene, study.base.ensemble.seed, 0, r)
+        simulate(scene, gens, history=path, stride=stride)
         paths[:, :, r] = path.T
     return paths, scene.dt * stride * np.arange(size)
 

@@ -16,6 +16,8 @@ the steps (streams, state, the loop's entry), where a Python call a realisation 
 
 from __future__ import annotations
 
+from collections.abc import Iterator
+from contextlib import contextmanager
 from functools import cache, lru_cache
 from typing import NamedTuple
 
@@ -27,7 +29,7 @@ from ..jit.cache import stable_cache
 from ..jit.flags import INLINE, KERNEL
 from ..outputs import EVENT_COLUMNS, Record, new_metrics
 from ..schemes import in_lanes
-from ..streams import BRIDGE, FILTER, INCREMENTS, PARAMETERS
+from ..streams import BRIDGE, FILTER, INCREMENTS, PARAMETERS, Streams, streams
 from . import (
     _NO_CARRY,
     _NO_HISTORY,
@@ -47,7 +49,7 @@ from .bundles import Outputs
 from .lanes import lane_loop
 from .loads import load_path, stationary_start
 from .pcg import PCG_DTYPE, POOL_SIZE, new_stream, pcg_normal, pcg_uniform, seed_pool, seed_stream
-from .rng import STREAM_WORDS, open_stream, stream_key, stream_place
+from .rng import STREAM_WORDS, open_stream, philox_stream, stream_key, stream_place
 
 
 def reseed(stream, keys, purpose, point, realization, common, pool, words) -> None:
@@ -201,10 +203,39 @@ def simulate_chunk(scene, seed: int, point: int, start: int, stop: int, common: 
     return Chunk(raw, samples, history_rows, events)
 
 
+#: Whether the scenes the registry puts in SIMD lanes run there (``scalar_loops`` turns it off).
+_LANES = [True]
+
+
+@contextmanager
+def scalar_loops() -> Iterator[None]:
+    """Within (this process): every scene runs as before SIMD lanes, in the scalar loop on the
+    PCG64 streams of ``streams.streams`` (the benchmark's reference, ``make bench``: the numbers
+    of a scene that runs in lanes are then those of other streams)."""
+    _LANES.append(False)
+    try:
+        yield
+    finally:
+        _LANES.pop()
+
+
 def lane_scene(scene) -> bool:
-    """Whether ``scene``'s CPU ensembles run in SIMD lanes (``schemes.in_lanes``), and so draw
-    from the Philox streams of ``philox_keys``."""
-    return in_lanes(scene.scheme, scene.has_impact, scene.has_hertz, scene.has_filters)
+    """Whether ``scene``'s CPU ensembles run in SIMD lanes (``schemes.in_lanes``; not within
+    ``scalar_loops``), and so draw from the Philox streams of ``philox_keys``."""
+    return _LANES[-1] and in_lanes(scene.scheme, scene.has_impact, scene.has_hertz, scene.has_filters)
+
+
+def realization_streams(scene, seed: int, point: int, realization: int, common: bool = True) -> Streams:
+    """The streams realisation ``realization`` of ``scene`` draws from in a CPU ensemble
+    (``simulate_chunk``), each where the scene draws from it: Philox streams where the scene
+    runs in lanes (``lane_scene``), the PCG64 generators of ``streams.streams`` elsewhere.
+    ``simulate(scene, realization_streams(...))`` gives the realisation's row of the ensemble."""
+    increments, bridge, filters = needed_streams(scene)
+    if not lane_scene(scene):
+        return streams(seed, point, realization, increments=increments, bridge=bridge, filters=filters,
+                       common=common)
+    return Streams(*(philox_stream(seed, purpose, realization, point, common) if wanted else None
+                     for purpose, wanted in ((INCREMENTS, increments), (BRIDGE, bridge), (FILTER, filters))))
 
 
 def lane_call(scene, seed: int, point: int, start: int, common: bool, raw: np.ndarray) -> tuple:
@@ -241,5 +272,5 @@ def parameter_draws(keys, point: int, start: int, common: bool, normal, out) -> 
             out[j, k] = pcg_normal(stream) if normal[k] else pcg_uniform(stream)
 
 
-__all__ = ["Chunk", "chunk_loop", "ground_paths", "parameter_draws", "philox_keys", "reseed", "seed_keys",
-           "simulate_chunk"]
+__all__ = ["Chunk", "chunk_loop", "ground_paths", "lane_call", "lane_scene", "parameter_draws", "philox_keys",
+           "realization_streams", "reseed", "scalar_loops", "seed_keys", "simulate_chunk", "simulate_lanes"]

@@ -52,18 +52,18 @@ from .rng import philox_pair
 
 #: Paths a batch advances together: its state (about 17 numbers a path for a one-storey primary
 #: with one absorber) stays in the core's first-level cache.
-LANES = 256
+LANES = 128
 #: Alignment of the batch's arrays, in bytes (a cache line; numba's own is 32 bytes).
 ALIGN = 64
 
 
 def lane_rows(n_bodies: int, n_floors: int) -> dict[str, int]:
     """The rows of a batch's state array (one column a lane), by name: positions, velocities,
-    the accounts (input work, structure and absorber dissipation, the trapezoid sum of ``E1``,
-    its peak and its last value), the per-floor peaks and ``x_k^2`` sums, the step's normals on
-    each floor, and whether the path has ended (diverged: 1)."""
+    the accounts (input work, structure and absorber dissipation, the trapezoid sum of ``E1``
+    and its peak; its last value is the state's, computed again where needed), the per-floor
+    peaks and ``x_k^2`` sums, and whether the path has ended (diverged: 1)."""
     names = [("x", n_bodies), ("v", n_bodies), ("work", 1), ("d_primary", 1), ("d_absorber", 1),
-             ("e_sum", 1), ("e1_max", 1), ("e1_prev", 1), ("x_max", n_floors), ("drift_max", n_floors),
+             ("e_sum", 1), ("e1_max", 1), ("x_max", n_floors), ("drift_max", n_floors),
              ("acc_max", n_floors), ("x2", n_floors), ("done", 1), ("rows", 0)]
     rows, at = {}, 0
     for name, size in names:
@@ -112,8 +112,8 @@ def lane_loop(spec: Spec):
     PASSAGES = spec.passages
     W = LANES  # (a row's length, a compile-time constant: the rows' distances are known)
     R = lane_rows(NB, NF)
-    X, V, WORK, DP, DA, ESUM, E1MAX, E1PREV = (R["x"], R["v"], R["work"], R["d_primary"], R["d_absorber"],
-                                               R["e_sum"], R["e1_max"], R["e1_prev"])
+    X, V, WORK, DP, DA, ESUM, E1MAX = (R["x"], R["v"], R["work"], R["d_primary"], R["d_absorber"], R["e_sum"],
+                                       R["e1_max"])
     XMAX, DRIFT, ACCMAX, X2, DONE, ROWS = (R["x_max"], R["drift_max"], R["acc_max"], R["x2"], R["done"],
                                            R["rows"])
 
@@ -158,7 +158,7 @@ def lane_loop(spec: Spec):
         for k in range(NF):
             x2[k] = s[(X2 + k) * W + lane]
         if inside and i0 < n_steps:  # (the window's last state at half weight)
-            e_integral = (s[ESUM * W + lane] - 0.5 * s[E1PREV * W + lane]) * dt
+            e_integral = (s[ESUM * W + lane] - 0.5 * primary_energy(mass, storey_k, x, v, NF)) * dt
             for k in range(NF):
                 x2[k] = (x2[k] - 0.5 * x[k] * x[k]) * dt
                 acc_max[k] *= inv_mass[k]
@@ -180,7 +180,7 @@ def lane_loop(spec: Spec):
         x_max, drift_max, acc_max = scratch(NF), scratch(NF), scratch(NF)
         for lane in range(nl):
             load_lane(s, lane, x, v)
-            e1 = s[E1PREV * W + lane]
+            e1 = primary_energy(mass, storey_k, x, v, NF)
             s[WORK * W + lane] = stored_energy(*plain((x, v, mass, NF, storey_k, kind, host, rows)))
             s[E1MAX * W + lane] = e1
             s[ESUM * W + lane] = 0.5 * e1
@@ -230,7 +230,7 @@ def lane_loop(spec: Spec):
             work, d_primary, d_absorber = s[WORK * W + lane], s[DP * W + lane], s[DA * W + lane]
             if inside:
                 work += 0.5 * impulse_work(load, dt, dws, v, vn) - (
-                    0.5 * ag * dt * momentum(mass, v, vn) if ag != 0.0 else 0.0)
+                    0.5 * ag * dt * momentum(mass, v, vn) if GROUND and ag != 0.0 else 0.0)
                 d_primary += structure_dissipation(v, vn, NF, storey_c, floor_c, dt)
                 d_absorber += absorber_dissipation(v, vn, NF, host, rows, dt)
             for b in range(NB):
@@ -241,7 +241,7 @@ def lane_loop(spec: Spec):
             kick(v, 0.5 * dt, dwh, load_next, ag_next, force, inv_mass, vn, GROUND)
             if inside:
                 work += 0.5 * impulse_work(load_next, dt, dws, v, vn) - (
-                    0.5 * ag_next * dt * momentum(mass, v, vn) if ag_next != 0.0 else 0.0)
+                    0.5 * ag_next * dt * momentum(mass, v, vn) if GROUND and ag_next != 0.0 else 0.0)
                 d_primary += structure_dissipation(v, vn, NF, storey_c, floor_c, dt)
                 d_absorber += absorber_dissipation(v, vn, NF, host, rows, dt)
             for b in range(NB):
@@ -249,8 +249,8 @@ def lane_loop(spec: Spec):
                 s[(X + b) * W + lane] = x[b]
                 s[(V + b) * W + lane] = v[b]
             s[WORK * W + lane], s[DP * W + lane], s[DA * W + lane] = work, d_primary, d_absorber
-            e1 = primary_energy(mass, storey_k, x, v, NF)
             if inside:
+                e1 = primary_energy(mass, storey_k, x, v, NF)
                 load_peaks(s, lane, x_max, drift_max, acc_max)
                 for k in range(NF):
                     acc[k] = force[k] + load_next[k]
@@ -259,7 +259,6 @@ def lane_loop(spec: Spec):
                 store_peaks(s, lane, x_max, drift_max, acc_max)
                 s[ESUM * W + lane] += e1
                 s[E1MAX * W + lane] = max(s[E1MAX * W + lane], e1)
-            s[E1PREV * W + lane] = e1
 
     @njit(**INLINE)
     def batch(s_, z_, spare_, nl, bodies_, absorbers_, ex_, fl_, noise_, grid_, limits_, key, places_,
@@ -290,14 +289,11 @@ def lane_loop(spec: Spec):
                 floor_of[int(slot[k])] = k
         ag_next = start_loads(gl, ex, fl, dt, gl.z, False, NF, 0, False, GROUND)
         piecewise = has_breaks(ex)
-        x, v = scratch(NB), scratch(NB)
         for lane in range(nl):
             for b in range(NB):
                 s[(X + b) * W + lane], s[(V + b) * W + lane] = bodies.x[b], bodies.v[b]
-                x[b], v[b] = bodies.x[b], bodies.v[b]
             for r in range(WORK, ROWS):
                 s[r * W + lane] = 0.0
-            s[E1PREV * W + lane] = primary_energy(m, sk, x, v, NF)
             for j in range(limits.shape[0]):
                 passages[j * W + lane] = np.nan
         inside = i0 == 0

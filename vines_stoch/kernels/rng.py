@@ -37,9 +37,10 @@ from ..jit.flags import INLINE
 from ..jit.intrinsics import bits_float, float_bits
 from .pcg import PCG_DTYPE, pcg_normal, pcg_uniform
 
-#: Words of a Philox stream: key, place, blocks drawn.
-STREAM_WORDS = 3
-KEY, PLACE, DRAWN = range(STREAM_WORDS)
+#: Words of a Philox stream: key, place, draws made, and the block (plus one; 0: none) whose
+#: second normal the stream holds, with that normal's bits (``philox_normal``).
+STREAM_WORDS = 5
+KEY, PLACE, DRAWN, PAIRED, SPARE = range(STREAM_WORDS)
 
 _M0, _M1 = np.uint64(0xD2511F53), np.uint64(0xCD9E8D57)  # Philox4x32 multipliers
 _W0, _W1 = np.uint64(0x9E3779B9), np.uint64(0xBB67AE85)  # key schedule (Weyl) increments
@@ -169,10 +170,18 @@ def philox_pair(key, place, block):
 
 @njit(**INLINE)
 def philox_normal(stream) -> float:
-    """A standard normal: the cosine or the sine of the Box-Muller pair of its block."""
-    (w0, w1, w2, w3), half = block_of(stream)
-    c, s = box_muller(w0, w1, w2, w3)
-    return s if half else c
+    """A standard normal: the cosine or the sine of the Box-Muller pair of its block.  The
+    sine of the last pair computed is kept in the stream, so that a stream drawn in order
+    computes each block once."""
+    n = stream[DRAWN]
+    stream[DRAWN] = n + _ONE
+    block = n >> _ONE
+    if n & _ONE and stream[PAIRED] == block + _ONE:
+        return bits_float(stream[SPARE])
+    c, s = philox_pair(stream[KEY], stream[PLACE], block)
+    stream[PAIRED] = block + _ONE
+    stream[SPARE] = float_bits(s)
+    return s if n & _ONE else c
 
 
 @njit(**INLINE)
@@ -181,6 +190,7 @@ def open_stream(stream, key, place) -> None:
     stream[KEY] = key
     stream[PLACE] = place
     stream[DRAWN] = 0
+    stream[PAIRED] = 0
 
 
 def tape(values: np.ndarray) -> np.ndarray:
@@ -255,7 +265,15 @@ def stream_place(realization: int, point: int, common: bool) -> int:
     return realization | (point << 32)
 
 
+def keyed_stream(key: int, place: int) -> np.ndarray:
+    """The Philox stream ``(key, place)`` before its first draw (``STREAM_WORDS`` words: build
+    streams here, never by hand, the kernels reading every word)."""
+    stream = np.zeros(STREAM_WORDS, np.uint64)
+    stream[KEY], stream[PLACE] = key, place
+    return stream
+
+
 def philox_stream(seed: int, purpose: int, realization: int, point: int = 0,
                   common: bool = True) -> np.ndarray:
     """A realisation's Philox stream of one purpose, before its first draw."""
-    return np.array([stream_key(seed, purpose), stream_place(realization, point, common), 0], np.uint64)
+    return keyed_stream(stream_key(seed, purpose), stream_place(realization, point, common))

@@ -1,5 +1,6 @@
-"""The Philox streams of the GPU ensembles (kernels/rng.py): the generator against its published
-known answers, the draws' laws, and each stream a function of (key, place, draw) alone."""
+"""The Philox streams of the GPU ensembles and of the SIMD lanes (kernels/rng.py): the generator
+against its published known answers and an independent implementation, the normal transform's
+polynomials and tails, the draws' laws, and each stream a function of (key, place, draw) alone."""
 
 from __future__ import annotations
 
@@ -11,10 +12,14 @@ from numba import njit
 
 from vines_stoch.kernels.rng import (
     DRAWN,
+    log_positive,
     normal,
     philox4x32,
+    philox_block,
     philox_normal,
+    philox_pair,
     philox_stream,
+    sincos_turn,
     stream_key,
     stream_place,
     uniform,
@@ -81,7 +86,7 @@ def test_a_draw_depends_on_key_place_and_index_alone():
     s = philox_stream(11, 0, 42)
     first = _draws(s.copy(), 100, 0)
     later = s.copy()
-    later[DRAWN] = 60  # jump straight to the 61st block
+    later[DRAWN] = 60  # jump straight to the 61st draw
     assert np.array_equal(_draws(later, 40, 0), first[60:])
     # other realisations, purposes, seeds and (without common random numbers) points differ
     others = [philox_stream(11, 0, 43), philox_stream(11, 3, 42), philox_stream(12, 0, 42),
@@ -103,11 +108,138 @@ def test_streams_of_neighbouring_realisations_are_uncorrelated():
     assert abs(corr.mean()) < 5.0 / math.sqrt(m * corr.size)
 
 
-def test_philox_normal_takes_one_block_a_draw():
+def test_two_draws_share_a_block_the_cosine_then_the_sine():
+    """Draws ``2m`` and ``2m + 1`` are the Box-Muller pair of block ``m``: the same radius."""
     s = philox_stream(9, 0, 0)
-    philox_normal(s)
-    philox_normal(s)
-    assert s[DRAWN] == 2
+    pairs = np.array([[philox_normal(s), philox_normal(s)] for _ in range(50)])
+    assert s[DRAWN] == 100
+    key, place = U(s[0]), U(s[1])
+    for m in (0, 7, 49):
+        assert tuple(pairs[m]) == philox_pair(key, place, U(m))
+    w = philox_block(key, place, U(7))
+    u1 = ((int(w[0]) << 21 | int(w[1]) >> 11) + 1) * 2.0**-53
+    assert math.hypot(*pairs[7]) == pytest.approx(math.sqrt(-2.0 * math.log(u1)), rel=1e-15)
+
+
+def _reference_pair(key: int, place: int, block: int) -> tuple[float, float]:
+    """An independent Philox4x32-10 (Python integers, after the Random123 specification) and
+    Box-Muller pair (the C library's ``log``, ``cos`` and ``sin``)."""
+    mask = 0xFFFFFFFF
+    c = [block & mask, block >> 32, place & mask, place >> 32]
+    k0, k1 = key & mask, key >> 32
+    for _ in range(10):
+        p0, p1 = 0xD2511F53 * c[0], 0xCD9E8D57 * c[2]
+        c = [(p1 >> 32) ^ c[1] ^ k0, p1 & mask, (p0 >> 32) ^ c[3] ^ k1, p0 & mask]
+        k0, k1 = (k0 + 0x9E3779B9) & mask, (k1 + 0xBB67AE85) & mask
+    u1 = ((c[0] << 21 | c[1] >> 11) + 1) * 2.0**-53
+    u2 = (c[2] << 21 | c[3] >> 11) * 2.0**-53
+    r = math.sqrt(-2.0 * math.log(u1))
+    return r * math.cos(2.0 * math.pi * u2), r * math.sin(2.0 * math.pi * u2)
+
+
+def test_normals_match_an_independent_implementation():
+    """Known answers: the first normals of streams of three seeds, purposes and places against
+    ``_reference_pair`` within 4 ulp (the polynomials against the C library: not bitwise)."""
+    for seed, purpose, r in ((0, 0, 0), (2026, 3, 17), (7, 4, 1 << 40)):
+        stream = philox_stream(seed, purpose, r)
+        drawn = _draws(stream, 40, 0)
+        expected = [z for m in range(20) for z in _reference_pair(stream_key(seed, purpose), r, m)]
+        assert np.allclose(drawn, expected, rtol=4 * 2.0**-52, atol=4 * 2.0**-52 * 8.6)
+
+
+@njit
+def _logs(x):
+    out = np.empty_like(x)
+    for i in range(x.shape[0]):
+        out[i] = log_positive(x[i])
+    return out
+
+
+@njit
+def _turns(u):
+    out = np.empty((u.shape[0], 2))
+    for i in range(u.shape[0]):
+        out[i, 0], out[i, 1] = sincos_turn(u[i])
+    return out
+
+
+def test_the_branch_free_log_sine_and_cosine_are_within_an_ulp_or_two():
+    """The polynomials against numpy's ``log`` (within an ulp of the correctly rounded value:
+    2 ulp apart at most) and against ``cos`` and ``sin`` in extended precision (x86's 64-bit
+    mantissa: the reference's own error, ``1e-18`` at most, allowed for near the zeros) on a
+    million arguments each, the ends and the quadrants' edges included; the turn's quadrant
+    points are exact."""
+    if np.finfo(np.longdouble).nmant < 63:
+        pytest.skip("no extended precision for the sine and cosine reference on this platform")
+    rng = np.random.default_rng(5)
+    x = np.concatenate([rng.random(500_000), 2.0 ** -rng.uniform(0.0, 53.0, 500_000),
+                        [1.0, 2.0**-53, 0.5, 1.0 - 2.0**-53, math.sqrt(0.5), math.sqrt(2.0)]])
+    ref = np.log(x)
+    assert np.all(np.abs(_logs(x) - ref) <= 2.0 * np.spacing(np.abs(ref)))
+    u = np.concatenate([np.floor(rng.random(1_000_000) * 2.0**53) * 2.0**-53,
+                        np.arange(16) / 16.0, np.arange(1, 9) / 8.0 - 2.0**-53])
+    got = _turns(u)
+    turn = 2 * np.longdouble("3.14159265358979323846264338327950288") * u.astype(np.longdouble)
+    for k, f in enumerate((np.cos, np.sin)):
+        ref = f(turn).astype(np.float64)
+        assert np.all(np.abs(got[:, k] - ref) <= 2.0 * np.spacing(np.abs(ref)) + 1e-18)
+    quarter = _turns(np.array([0.0, 0.25, 0.5, 0.75]))
+    assert np.array_equal(quarter, [[1.0, 0.0], [0.0, 1.0], [-1.0, 0.0], [0.0, -1.0]])
+
+
+def test_the_tails_are_those_of_the_normal_law_to_8_standard_deviations():
+    """The radius ``R = sqrt(-2 log u1)`` of the 53-bit grid ``u1 = (m + 1) 2^-53``: ``P(R > r)``
+    is the count of grid points whose radius exceeds ``r`` (the transform is monotone), which
+    must be ``2^53 exp(-r^2 / 2)`` within one point, at ``r`` from 3 to 8 (at 8: 114 points);
+    the largest radius is ``sqrt(106 ln 2)``.  With the angle uniform, the normal's tails
+    follow from the radius's law exactly."""
+
+    @njit
+    def radius(m):
+        return math.sqrt(-2.0 * log_positive((m + 1.0) * 2.0**-53))
+
+    for r in (3.0, 4.0, 5.0, 6.0, 7.0, 8.0):
+        lo, hi = 0, 2**53 - 1  # radius(lo) > r >= radius(hi): bisect the count of points past r
+        while hi - lo > 1:
+            mid = (lo + hi) // 2
+            if radius(float(mid)) > r:
+                lo = mid
+            else:
+                hi = mid
+        assert abs(hi - 2.0**53 * math.exp(-0.5 * r * r)) <= 1.0, r
+    assert radius(0.0) == pytest.approx(math.sqrt(106.0 * math.log(2.0)), rel=1e-15)
+
+
+def test_lane_normals_have_the_standard_law_and_no_correlations():
+    """Four million normals of 1,024 lanes (realisations) and 4,096 draws, as the lane loop
+    draws them: mean, variance, skewness and excess kurtosis within 5 standard errors, the
+    frequencies of ``|z| > 3`` and ``> 4`` within 5 binomial standard errors, and no
+    correlation between neighbouring lanes, between successive draws (the two halves of a
+    pair among them) or between a pair's squares."""
+    from vines_stoch.kernels.lanes import lane_normals
+
+    lanes, draws = 1024, 4096
+    key, places = U(stream_key(2026, 0)), np.arange(lanes, dtype=np.uint64)
+    z, spare = np.zeros((draws, lanes)), np.zeros(lanes)
+    for d in range(draws):
+        lane_normals(z[d], spare, lanes, d, key, places, 0)
+    x = z.ravel()
+    n = x.size
+    assert abs(x.mean()) < 5.0 / math.sqrt(n)
+    assert abs(x.var() - 1.0) < 5.0 * math.sqrt(2.0 / n)
+    assert abs(np.mean(x**3)) < 5.0 * math.sqrt(15.0 / n)
+    assert abs(np.mean(x**4) - 3.0) < 5.0 * math.sqrt(96.0 / n)
+    for edge, p in ((3.0, 0.0026997960632601866), (4.0, 6.334248366623996e-05)):
+        assert abs(np.mean(np.abs(x) > edge) - p) < 5.0 * math.sqrt(p * (1 - p) / n)
+
+    def corr(a, b):
+        return float(np.mean((a - a.mean()) * (b - b.mean())) / (a.std() * b.std()))
+
+    pairs = n // 2
+    assert abs(corr(z[:, 1:].ravel(), z[:, :-1].ravel())) < 5.0 / math.sqrt(n)  # neighbouring lanes
+    assert abs(corr(z[1:].ravel(), z[:-1].ravel())) < 5.0 / math.sqrt(n)  # successive draws
+    assert abs(corr(z[2:].ravel(), z[:-2].ravel())) < 5.0 / math.sqrt(n)
+    assert abs(corr(z[0::2].ravel() ** 2, z[1::2].ravel() ** 2)) < 5.0 / math.sqrt(pairs)
 
 
 def test_a_tape_replays_the_filter_noise_a_stream_draws():

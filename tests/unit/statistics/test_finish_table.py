@@ -22,6 +22,7 @@ from tests.helpers import example_data, scene_from, study_from, two_dof_data
 from vines_stoch.dynamics import refine_regimes
 from vines_stoch.ensemble import draw_parameters, run_chunk
 from vines_stoch.kernels import needed_streams, sample_buffer, simulate
+from vines_stoch.kernels.chunk import realization_streams
 from vines_stoch.metrics import (
     MAX_PERIOD,
     PERIODIC_TOLERANCE,
@@ -100,15 +101,13 @@ def reference_chunk(scene, seed: int, point: int, start: int, stop: int, study=N
         if drawn:
             scene = build_scene(study.realise(point, drawn))
         samples = sample_buffer(scene)
-        increments, bridge, filters = needed_streams(scene)
-        gens = streams(seed, point, r, increments=increments, bridge=bridge, filters=filters)
-        raw = simulate(scene, gens, samples=samples)
+        raw = simulate(scene, realization_streams(scene, seed, point, r), samples=samples)
         scenes.append(scene)
         kept.append(samples)
         row = {"point": point, "realization": r, **drawn, **reference_row(raw, scene, samples)}
         if scene.im_period > 0:
             row.update(ground_intensity(scene, streams(seed, point, r, increments=False, bridge=False,
-                                                       filters=filters)))
+                                                       filters=needed_streams(scene)[2])))
         rows.append(row)
     frame = pd.DataFrame(rows)
     frame["regime"] = frame["regime"].astype("string")
@@ -120,10 +119,8 @@ def realisations(scene, n: int) -> tuple[np.ndarray, list[np.ndarray]]:
     """Raw vectors ``(n, slots)`` and Poincare samples of realisations ``0..n-1`` of ``scene``."""
     raws, samples = [], []
     for r in range(n):
-        increments, bridge, filters = needed_streams(scene)
         buffer = sample_buffer(scene)
-        raws.append(simulate(scene, streams(SEED, 0, r, increments=increments, bridge=bridge,
-                                            filters=filters), samples=buffer))
+        raws.append(simulate(scene, realization_streams(scene, SEED, 0, r), samples=buffer))
         samples.append(buffer)
     return np.stack(raws), samples
 

@@ -66,7 +66,8 @@ def scene_data(metric: str = "x1_max") -> dict:
             "loads": [{"type": "white-noise", "intensity": 2.0}],
             "simulation": {"duration": 3.0, "dt": 0.01},
             "ensemble": {"realizations": 4, "seed": 2},
-            "limits": {"roof": {"metric": "x1_max", "value": 0.25}},
+            # (near the median of the roof's peak, 0.3-0.6: its exceedance moves with the stiffness)
+            "limits": {"roof": {"metric": "x1_max", "value": 0.45}},
             "uncertain": {"primary.stiffness": {"distribution": "uniform", "low": 0.8 * OMEGA2,
                                                 "high": 1.2 * OMEGA2},
                           "absorbers.0.mass": {"distribution": "lognormal", "median": 0.05, "cov": 0.2}},

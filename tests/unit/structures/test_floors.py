@@ -373,8 +373,8 @@ def test_history_selects_floor_signals(tmp_path):
     displacement, drift ``x_2 - x_1`` formed here) to round-off; ``x1`` is the roof's."""
     from vines_stoch.ensemble import run
     from vines_stoch.kernels import simulate
+    from vines_stoch.kernels.chunk import realization_streams
     from vines_stoch.scene import build_scene
-    from vines_stoch.streams import streams
 
     study = floor_history(["x_1", "drift_2", "x1"])
     run(study, tmp_path, workers=1)
@@ -384,7 +384,7 @@ def test_history_selects_floor_signals(tmp_path):
     rows = np.empty((12, 51, 5))
     for r in range(12):
         rows[r] = np.nan
-        simulate(scene, streams(3, 0, r, bridge=False, filters=False), history=rows[r], stride=stride)
+        simulate(scene, realization_streams(scene, 3, 0, r), history=rows[r], stride=stride)
     expected = {"x_1": rows[:, :, 2], "drift_2": rows[:, :, 3] - rows[:, :, 2], "x1": rows[:, :, 0]}
     np.testing.assert_array_equal(rows[:, :, 0], rows[:, :, 4])  # the roof is floor 3
     for name, paths in expected.items():
