@@ -193,9 +193,9 @@ def loads(
     import numpy as np
 
     from .kernels import load_history
+    from .kernels.chunk import realization_streams
     from .records import G, write_at2
     from .scene import build_scene
-    from .streams import streams
 
     try:
         study = load_scenario(scenario)
@@ -207,8 +207,8 @@ def loads(
         _fail(f"{out}: the folder {out.parent} does not exist")
     ens = study.base.ensemble
     seed = ens.seed if seed is None else seed
-    gens = streams(seed, point, realization, increments=False, bridge=False, common=ens.common_random_numbers)
     scene = build_scene(study.points[point])
+    gens = realization_streams(scene, seed, point, realization, ens.common_random_numbers)
     t, force, ground = load_history(scene, gens)
     if every > len(t):
         _fail(f"--every {every}: the time grid has {len(t)} samples")
