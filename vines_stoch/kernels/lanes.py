@@ -212,6 +212,23 @@ def lane_loop(spec: Spec):
                 passages[j * W + lane] = t if (before != before and peak > value) else before
 
     @njit(**INLINE)
+    def half_kick(x, v, vn, force, dwh, dws, load, ag, dt, inside, accounts, mass, inv_mass, storey_k,
+                  storey_c, floor_c, host, rows):
+        """A half kick of the step (``kdk.kdk_step``'s: the forces at ``x``, the kick from ``v``
+        into ``vn``) and, inside the metrics window, its input work and dissipation added to the
+        ``accounts``."""
+        attachment_forces(x, v, NF, storey_k, storey_c, floor_c, host, rows, force)
+        geometric_forces(x, NF, host, rows, force, GEOMETRIC)
+        kick(v, 0.5 * dt, dwh, load, ag, force, inv_mass, vn, GROUND)
+        work, d_primary, d_absorber = accounts
+        if inside:
+            work += 0.5 * impulse_work(load, dt, dws, v, vn) - (
+                0.5 * ag * dt * momentum(mass, v, vn) if GROUND and ag != 0.0 else 0.0)
+            d_primary += structure_dissipation(v, vn, NF, storey_c, floor_c, dt)
+            d_absorber += absorber_dissipation(v, vn, NF, host, rows, dt)
+        return work, d_primary, d_absorber
+
+    @njit(**INLINE)
     def update(s, z, nl, inside, dt, ag, ag_next, load, load_next, noise_scale, mass, inv_mass, storey_k,
                storey_c, floor_c, host, rows):
         """One kick-drift-kick step of every lane (``kdk.kdk_step`` without events, then the
@@ -224,26 +241,15 @@ def lane_loop(spec: Spec):
             for k in range(NF):
                 dws[k] = noise_scale[k] * z[k * W + lane] if NOISE else 0.0
                 dwh[k] = 0.5 * dws[k]
-            attachment_forces(x, v, NF, storey_k, storey_c, floor_c, host, rows, force)
-            geometric_forces(x, NF, host, rows, force, GEOMETRIC)
-            kick(v, 0.5 * dt, dwh, load, ag, force, inv_mass, vn, GROUND)
-            work, d_primary, d_absorber = s[WORK * W + lane], s[DP * W + lane], s[DA * W + lane]
-            if inside:
-                work += 0.5 * impulse_work(load, dt, dws, v, vn) - (
-                    0.5 * ag * dt * momentum(mass, v, vn) if GROUND and ag != 0.0 else 0.0)
-                d_primary += structure_dissipation(v, vn, NF, storey_c, floor_c, dt)
-                d_absorber += absorber_dissipation(v, vn, NF, host, rows, dt)
+            accounts = (s[WORK * W + lane], s[DP * W + lane], s[DA * W + lane])
+            accounts = half_kick(x, v, vn, force, dwh, dws, load, ag, dt, inside, accounts, mass, inv_mass,
+                                 storey_k, storey_c, floor_c, host, rows)
             for b in range(NB):
                 x[b] += dt * vn[b]
                 v[b] = vn[b]
-            attachment_forces(x, v, NF, storey_k, storey_c, floor_c, host, rows, force)
-            geometric_forces(x, NF, host, rows, force, GEOMETRIC)
-            kick(v, 0.5 * dt, dwh, load_next, ag_next, force, inv_mass, vn, GROUND)
-            if inside:
-                work += 0.5 * impulse_work(load_next, dt, dws, v, vn) - (
-                    0.5 * ag_next * dt * momentum(mass, v, vn) if GROUND and ag_next != 0.0 else 0.0)
-                d_primary += structure_dissipation(v, vn, NF, storey_c, floor_c, dt)
-                d_absorber += absorber_dissipation(v, vn, NF, host, rows, dt)
+            work, d_primary, d_absorber = half_kick(x, v, vn, force, dwh, dws, load_next, ag_next, dt, inside,
+                                                    accounts, mass, inv_mass, storey_k, storey_c, floor_c,
+                                                    host, rows)
             for b in range(NB):
                 v[b] = vn[b]
                 s[(X + b) * W + lane] = x[b]
