@@ -17,7 +17,7 @@ from tests.helpers import scene_from
 from vines_stoch.jit.flags import KERNEL
 from vines_stoch.kernels import simulate, spec_of
 from vines_stoch.kernels.chunk import lane_call, lane_scene, simulate_chunk
-from vines_stoch.kernels.lanes import LANES, lane_loop, lane_normals
+from vines_stoch.kernels.lanes import ALIGN, LANES, aligned_rows, lane_loop, lane_normals
 from vines_stoch.kernels.rng import philox_stream
 from vines_stoch.outputs import STATUS, STATUS_DIVERGED, Record, new_metrics
 from vines_stoch.schemes import in_lanes
@@ -112,6 +112,15 @@ def test_a_path_that_diverges_ends_as_in_the_scalar_loop():
     for r in range(3):
         assert rows[r][STATUS] == STATUS_DIVERGED
         assert same(rows[r], simulate(scene, philox_streams(r)))
+
+
+def test_a_batch_s_rows_start_on_cache_lines():
+    """The batch's rows are 64-byte aligned (numba's own arrays: 32 bytes): each buffer starts on a
+    cache line, and a row is a whole number of them."""
+    for rows in (1, 3, 17):
+        buffer = aligned_rows(rows)
+        assert buffer.ctypes.data % ALIGN == 0 and ALIGN == 64
+        assert buffer.shape == (rows * LANES,) and (LANES * 8) % ALIGN == 0
 
 
 def test_the_registry_says_which_scenes_run_in_lanes():
