@@ -36,8 +36,8 @@ from ..outputs import ACC_MAX_K, DRIFT_MAX_K, FINAL_ENERGY, STATUS, STATUS_DIVER
 from ..physics.structure import primary_energy
 from .common import (
     CHECK_EVERY,
-    DIVERGED,
     attachment_forces,
+    diverged,
     floor_peaks,
     geometric_forces,
     stored_energy,
@@ -147,11 +147,7 @@ def lane_loop(spec: Spec):
         x, v = scratch(NB), scratch(NB)
         load_lane(s, lane, x, v)
         x_max, drift_max, acc_max, x2 = scratch(NF), scratch(NF), scratch(NF), scratch(NF)
-        diverged = False
-        for b in range(NB):
-            if not (abs(x[b]) < DIVERGED):
-                diverged = True
-        if diverged:
+        if diverged(x):
             out[STATUS] = STATUS_DIVERGED
         e_integral = 0.0
         load_peaks(s, lane, x_max, drift_max, acc_max)
@@ -303,21 +299,20 @@ def lane_loop(spec: Spec):
             for j in range(limits.shape[0]):
                 passages[j * W + lane] = np.nan
         inside = i0 == 0
+        x, v = scratch(NB), scratch(NB)
         for i in range(n_steps):
             if i == i0:
                 inside = True
                 open_lanes(s, nl, i * dt, gl, bodies, absorbers, inv_mass, limits, passages)
             if i % CHECK_EVERY == 0:
                 for lane in range(nl):  # a path that diverged ends here, as the scalar loop's
-                    if s[DONE * W + lane] == 0.0:
+                    load_lane(s, lane, x, v)
+                    if s[DONE * W + lane] == 0.0 and diverged(x):
+                        s[DONE * W + lane] = 1.0
+                        finish_lane(s, lane, raw[first + lane], inside, i0, n_steps, dt, m, sk, NF, kind,
+                                    host, rows, inv_mass, passages, limits)
                         for b in range(NB):
-                            if not (abs(s[(X + b) * W + lane]) < DIVERGED):
-                                s[DONE * W + lane] = 1.0
-                        if s[DONE * W + lane] != 0.0:
-                            finish_lane(s, lane, raw[first + lane], inside, i0, n_steps, dt, m, sk, NF, kind,
-                                        host, rows, inv_mass, passages, limits)
-                            for b in range(NB):
-                                s[(X + b) * W + lane] = s[(V + b) * W + lane] = 0.0
+                            s[(X + b) * W + lane] = s[(V + b) * W + lane] = 0.0
                 reset_phasors(gl, i, dt, ex)
             ag = step_loads(i, dt, gl, ex, fl, ag_next, piecewise, False, GROUND, fl.z)
             ag_next = end_loads(i, dt, gl, ex, fl, False, GROUND)
