@@ -65,6 +65,13 @@ def node_normal(key, node: int) -> float:
     return math.sqrt(-2.0 * math.log(u1)) * math.cos(_TWO_PI * u2)
 
 
+@njit(**INLINE)
+def tree_seed(high: float, low: float):
+    """The seed of a path's trees from two uniforms of its bridge stream (``[0, 1)``): their
+    upper 32 bits each, as one ``uint64``."""
+    return (np.uint64(high * 2.0**32) << np.uint64(32)) | np.uint64(low * 2.0**32)
+
+
 #: Entries of a floor's memo of its last descent (``tree_value``): ``lo, hi, W(lo), W(hi)`` and
 #: the node of each level, then the number of levels kept and the interval they belong to.
 MEMO = 5 * (TREE_DEPTH + 1) + 2
@@ -73,6 +80,13 @@ MEMO = 5 * (TREE_DEPTH + 1) + 2
 def new_memo(n_floors: int) -> np.ndarray:
     """An empty descent memo for ``n_floors`` floors (``tree_value``)."""
     return np.zeros(n_floors * MEMO)
+
+
+@njit(**INLINE)
+def forget(memo) -> None:
+    """Empty every floor's descent memo (``tree_value``): its next query is another path's."""
+    for base in range(0, memo.shape[0], MEMO):
+        memo[base + MEMO - 2] = 0.0
 
 
 @njit(**INLINE)

@@ -222,7 +222,7 @@ def scalar_loops() -> Iterator[None]:
 def lane_scene(scene) -> bool:
     """Whether ``scene``'s CPU ensembles run in SIMD lanes (``schemes.in_lanes``; not within
     ``scalar_loops``), and so draw from the Philox streams of ``philox_keys``."""
-    return _LANES[-1] and in_lanes(scene.scheme, scene.has_impact, scene.has_hertz, scene.has_filters)
+    return _LANES[-1] and in_lanes(scene.scheme, scene.has_filters)
 
 
 def realization_streams(scene, seed: int, point: int, realization: int, common: bool = True) -> Streams:
@@ -244,7 +244,8 @@ def lane_call(scene, seed: int, point: int, start: int, common: bool, raw: np.nd
     places = stream_place(np.arange(start, start + raw.shape[0], dtype=np.uint64), np.uint64(point), common)
     args = bundles(scene, scene.x0.copy(), scene.v0.copy(), filter_tuple(scene, None), np.zeros(0), raw[:0],
                    sample_buffer(scene), _NO_HISTORY, 1, (_UNUSED,) * 3)
-    return (*args[:6], scene.limits, np.uint64(philox_keys(seed)[INCREMENTS]), places, raw)
+    keys = philox_keys(seed)
+    return (*args[:6], scene.limits, np.uint64(keys[INCREMENTS]), np.uint64(keys[BRIDGE]), places, raw)
 
 
 def simulate_lanes(scene, seed: int, point: int, start: int, common: bool, raw: np.ndarray) -> None:

@@ -32,6 +32,10 @@ and integrates by the trapezoid rule) and ``force_peaks`` (``acc`` holds floor f
 peak accelerations being the peak forces over the masses); a third, ``samples``, says whether
 the driver takes Poincare samples around the scheme's steps (where the scene asks for them:
 the deterministic scheme of regimes, ``scene.poincare_samples``; the others compile without).
+A scheme whose step also runs in SIMD lanes (``kernels/lanes.py``) gives ``advance``: the step
+after its loads and increments, ``advance(i, x, v, inv_mass, acc, own, seed, ag, ag_next, acct,
+inside, bodies, absorbers, ex, fl, noise, dt, out, events, impulses) -> acct`` (``seed``: its
+Brownian tree's), which finishes the lanes whose step holds an event.
 """
 
 from __future__ import annotations
@@ -121,6 +125,7 @@ class Step(NamedTuple):
     integrates: bool
     force_peaks: bool
     samples: bool
+    advance: Any = None
 
 
 @njit(**INLINE)

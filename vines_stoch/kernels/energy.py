@@ -46,32 +46,29 @@ def momentum(mass, v, vn) -> float:
 
 
 @njit(**INLINE)
-def structure_dissipation(v, vn, nf: int, storey_c, floor_c, s: float) -> float:
-    """Energy the structure's dashpots take in a half kick of length ``s``: their forces at the
-    velocities ``v`` times the mean of ``v`` and ``vn`` (the kicks of ``kdk``)."""
-    d = 0.0
+def structure_dissipation(v, vn, nf: int, storey_c, floor_c, s: float, d: float) -> float:
+    """``d`` plus the energy the structure's dashpots take in a half kick of length ``s``: their
+    forces at the velocities ``v`` times the mean of ``v`` and ``vn`` (the kicks of ``kdk``).
+    Each term is fused into the sum (``intrinsics.fused``): left to the compiler, whether the
+    last product joined the caller's sum depended on the code around the call, and the loop
+    over SIMD lanes (``kernels/lanes.py``) and the scalar loop differed in the last bit."""
     for k in range(nf):
         dv = v[k] - v[k - 1] if k > 0 else v[k]
         dvn = vn[k] - vn[k - 1] if k > 0 else vn[k]
-        term = storey_c[k] * dv * 0.5 * s * (0.5 * (dv + dvn))
+        d = fused(storey_c[k] * dv * 0.5 * s, 0.5 * (dv + dvn), d)
         if nf > 1:
-            term += floor_c[k] * v[k] * 0.5 * s * (0.5 * (v[k] + vn[k]))
-        # the first term starts the sum: ``0.0 + term`` cannot be folded under IEEE rules, and
-        # these sums cost about 5 % of a smooth scene's step that way
-        d = term if k == 0 else d + term
+            d = fused(floor_c[k] * v[k] * 0.5 * s, 0.5 * (v[k] + vn[k]), d)
     return d
 
 
 @njit(**INLINE)
-def absorber_dissipation(v, vn, nf: int, host, rows, s: float) -> float:
-    """Energy the absorbers' dashpots take in a half kick of length ``s`` (see
+def absorber_dissipation(v, vn, nf: int, host, rows, s: float, d: float) -> float:
+    """``d`` plus the energy the absorbers' dashpots take in a half kick of length ``s`` (see
     ``structure_dissipation``)."""
-    d = 0.0
     for a in range(v.shape[0] - nf):
         h = host_of(host, a, nf)
         w = v[nf + a] - v[h]
-        term = rows[a, DAMPING] * w * 0.5 * s * 0.5 * (w + vn[nf + a] - vn[h])
-        d = term if a == 0 else d + term  # (see ``structure_dissipation``)
+        d = fused(rows[a, DAMPING] * w * 0.5 * s, 0.5 * (w + vn[nf + a] - vn[h]), d)
     return d
 
 

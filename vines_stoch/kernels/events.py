@@ -12,6 +12,8 @@ length of an RK4 sub-step from a linear first guess (``rk4.next_event``).
 
 from __future__ import annotations
 
+import math
+
 from numba import njit
 
 from ..jit.flags import INLINE
@@ -48,6 +50,19 @@ def event_ahead(kind: int, stuck: int, touching: int, clearance: float, wall_lo:
         elif touching > 0 and u < wall_hi:
             event, side, wall = EXIT, 1, wall_hi
     return event, side, wall
+
+
+@njit(**INLINE)
+def quiet_band(kind: int, clearance: float, wall_lo: float, wall_hi: float):
+    """``(lo, hi)``: the displacements ``lo <= u <= hi`` at which an absorber neither stuck nor
+    touching meets no event (``event_ahead``'s ``NONE``): an impact absorber's cavity, a Hertz
+    absorber's room between its contact surfaces, and everywhere for the other laws.  A test
+    ``u < lo or u > hi`` has no branch, so a loop over SIMD lanes keeps it (``kernels/lanes.py``)."""
+    if kind == IMPACT:
+        return -clearance, clearance
+    if kind == HERTZ:
+        return wall_lo, wall_hi
+    return -math.inf, math.inf
 
 
 @njit(**INLINE)

@@ -53,7 +53,7 @@ from ..outputs import CAPPED
 from ..physics.absorbers import CLEARANCE, HERTZ, RESTITUTION, WALL_HI, WALL_LO
 from ..physics.hertz import contact_energy, contact_force_law
 from ..physics.structure import host_of, wall_of
-from .brownian import MEMO, path_value
+from .brownian import MEMO, path_value, tree_seed
 from .carry import REPLAYED, SEED_HIGH, SEED_LOW, restore_absorbers, save_absorbers
 from .common import (
     MAX_EVENTS,
@@ -370,7 +370,7 @@ def kdk_step(spec) -> Step:
                 high, low = carry[SEED_HIGH], carry[SEED_LOW]
             else:
                 high, low = uniform(gen_bridge), uniform(gen_bridge)
-            seed = (np.uint64(high * 2.0**32) << np.uint64(32)) | np.uint64(low * 2.0**32)
+            seed = tree_seed(high, low)
         if GPU:
             stuck, touching = int_scratch(NA), int_scratch(NA)
         else:
@@ -411,37 +411,48 @@ def kdk_step(spec) -> Step:
     @njit(**INLINE)
     def step(i, x, v, inv_mass, acc, own, sc, acct, inside, peaks, bodies, absorbers, ex, fl, noise, grid,
              outputs, gen, gen_filter):
+        dt = grid.dt
+        ag_next, replayed = sc
+        ag = step_loads(i, dt, own.gl, ex, fl, ag_next, own.piecewise, filtered, ground, gen_filter)
+        ag_next = end_loads(i, dt, own.gl, ex, fl, filtered, ground)
+        # the step's Wiener increments on the noisy floors: one normal per noisy floor
+        if has_noise:
+            replayed = step_normals(i, 1, own.noise_scale, own.slot, own.noisy, noise.normals, noise.refine,
+                                    replayed, gen, own.u1, own.u1)
+            for k in range(NF):
+                own.dw[k] = own.noise_scale[k] * own.u1[k]
+        acct = advance(i, x, v, inv_mass, acc, own, own.seed, ag, ag_next, acct, inside, bodies, absorbers,
+                       ex, fl, noise, dt, outputs.out, outputs.events, outputs.impulses)
+        return (ag_next, replayed), acct
+
+    @njit(**INLINE)
+    def advance(i, x, v, inv_mass, acc, own, seed, ag, ag_next, acct, inside, bodies, absorbers, ex, fl,
+                noise, dt, out, events, impulses):
+        """Step ``i`` of the path ``x, v`` (in place), its loads on the grid in ``own.gl`` (ground
+        acceleration ``ag`` at its start, ``ag_next`` at its end) and its increments in
+        ``own.dw``: the sub-steps between its events, each event resolved (``seed``: the step's
+        Brownian tree's); returns the accounts.  (``step``'s, and the SIMD lanes' for the lanes
+        whose step holds an event, ``lanes.py``.)"""
         nb = NB
         nf = NF
         na = NA
         mass, storey_k, storey_c, floor_c = bodies.mass, bodies.storey_k, bodies.storey_c, bodies.floor_c
         kind, host, rows, walls = absorbers.kind, absorbers.host, absorbers.rows, absorbers.wall
         sigma, normals, refine = noise.sigma, noise.normals, noise.refine
-        dt = grid.dt
-        out = outputs.out
         force, vn, vt, vh, gl = own.force, own.vn, own.vt, own.vh, own.gl
         load, load_next, load_end = gl.load, gl.load_next, gl.load_end
         dw, dws, dwh, dwc, w_at = own.dw, own.dws, own.dwh, own.dwc, own.w_at
         slot, memo, stuck, touching = own.slot, own.memo, own.stuck, own.touching
         held, owed = own.held, own.owed
         group_mass, group_sum = own.group_mass, own.group_sum
-        ag_next, replayed = sc
         work, d_primary, d_absorber, e_sum, e1_max, loss_sum, n_left, n_right, contact_time, peak_force, \
             pending = acct
         t_step = i * dt
         tm = t_step + 0.5 * dt
-        ag = step_loads(i, dt, gl, ex, fl, ag_next, own.piecewise, filtered, ground, gen_filter)
-        ag_next = end_loads(i, dt, gl, ex, fl, filtered, ground)
-        # the step's Wiener increments on the noisy floors: one normal per noisy floor
-        if has_noise:
-            replayed = step_normals(i, 1, own.noise_scale, slot, own.noisy, normals, refine, replayed, gen,
-                                    own.u1, own.u1)
-            for k in range(nf):
-                dw[k] = own.noise_scale[k] * own.u1[k]
         left = dt
         t = t_step
         off = 0.0  # the sub-step's start in the step
-        path = (own.seed, i, dt, refine, own.noisy, normals.shape[0] > 0)
+        path = (seed, i, dt, refine, own.noisy, normals.shape[0] > 0)
         if TREE:
             for k in range(nf):
                 w_at[k] = 0.0
@@ -501,8 +512,8 @@ def kdk_step(spec) -> Step:
             if inside:
                 work += 0.5 * impulse_work(load, s, dws, v, vn) - (
                     0.5 * ag * s * momentum(mass, v, vn) if ag != 0.0 else 0.0)
-                d_primary += structure_dissipation(v, vn, nf, storey_c, floor_c, s)
-                d_absorber += absorber_dissipation(v, vn, nf, host, rows, s)
+                d_primary = structure_dissipation(v, vn, nf, storey_c, floor_c, s, d_primary)
+                d_absorber = absorber_dissipation(v, vn, nf, host, rows, s, d_absorber)
                 if has_hertz:  # contact time: the sub-steps that start in contact
                     for a in range(na):
                         if touching[a] != 0:
@@ -534,8 +545,8 @@ def kdk_step(spec) -> Step:
             if inside:
                 work += 0.5 * impulse_work(load_end, s, dws, v, vn) - (
                     0.5 * ag_end * s * momentum(mass, v, vn) if ag_end != 0.0 else 0.0)
-                d_primary += structure_dissipation(v, vn, nf, storey_c, floor_c, s)
-                d_absorber += absorber_dissipation(v, vn, nf, host, rows, s)
+                d_primary = structure_dissipation(v, vn, nf, storey_c, floor_c, s, d_primary)
+                d_absorber = absorber_dissipation(v, vn, nf, host, rows, s, d_absorber)
             for b in range(nb):
                 v[b] = vn[b]
             if has_hertz and inside:
@@ -564,7 +575,7 @@ def kdk_step(spec) -> Step:
                 h = host_of(host, hit, nf)
                 j = nf + hit
                 if LOG and inside and hit_event != EXIT:
-                    log_event(outputs.events, n_left + n_right - 1.0, t, hit, side, v[j] - v[h], 0.0)
+                    log_event(events, n_left + n_right - 1.0, t, hit, side, v[j] - v[h], 0.0)
                 x[j] = x[h] + hit_wall
                 touching[hit] = 0 if hit_event == EXIT else side
             elif has_impact and hit >= 0:  # the impact, at t + s
@@ -574,12 +585,12 @@ def kdk_step(spec) -> Step:
                 last = n_impacts == MAX_EVENTS - 1
                 speed = v[j] - v[h]
                 loss = resolve_impact(mass, v, nf, NW, hit, side, gain, rows[hit, RESTITUTION], last,
-                                      stuck, walls, outputs.impulses)
+                                      stuck, walls, impulses)
                 n_impacts += 1
                 if inside:
                     loss_sum += loss
                     if LOG:
-                        log_event(outputs.events, n_left + n_right - 1.0, t, hit, side, speed, loss)
+                        log_event(events, n_left + n_right - 1.0, t, hit, side, speed, loss)
                 capped = capped or last
         if (has_impact or has_hertz) and capped:
             out[CAPPED] += 1
@@ -590,7 +601,8 @@ def kdk_step(spec) -> Step:
             pin_to_walls(x, nf, NW, stuck, walls, rows)
         for k in range(nf):  # the forces on the floor at the step's end, for the peaks
             acc[k] = force[k] + load_end[k]
-        return (ag_next, replayed), (work, d_primary, d_absorber, e_sum, e1_max, loss_sum, n_left, n_right,
-                                     contact_time, peak_force, pending)
+        return (work, d_primary, d_absorber, e_sum, e1_max, loss_sum, n_left, n_right, contact_time,
+                peak_force, pending)
 
-    return Step(start, opening, check, step, save, finish, integrates=False, force_peaks=True, samples=False)
+    return Step(start, opening, check, step, save, finish, integrates=False, force_peaks=True, samples=False,
+                advance=advance)

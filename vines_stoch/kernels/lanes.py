@@ -32,23 +32,42 @@ from numba import njit
 from ..jit.cache import stable_cache
 from ..jit.flags import INLINE, KERNEL
 from ..jit.intrinsics import borrowed, int_scratch, plain, scratch
-from ..outputs import ACC_MAX_K, DRIFT_MAX_K, FINAL_ENERGY, STATUS, STATUS_DIVERGED, X_MAX_K, passage_slots
-from ..physics.structure import primary_energy
+from ..outputs import (
+    ACC_MAX_K,
+    CONTACT_TIME,
+    DRIFT_MAX_K,
+    EVENT_COLUMNS,
+    FINAL_ENERGY,
+    PEAK_FORCE,
+    STATUS,
+    STATUS_DIVERGED,
+    X_MAX_K,
+    passage_slots,
+)
+from ..physics.absorbers import CLEARANCE, WALL_HI, WALL_LO
+from ..physics.absorbers import HERTZ as HERTZ_LAW
+from ..physics.structure import primary_energy, wall_of
+from .brownian import forget, tree_seed
 from .common import (
     CHECK_EVERY,
     attachment_forces,
+    contact_force,
+    contact_forces,
     diverged,
     floor_peaks,
     geometric_forces,
+    keep_in_cavities,
+    stick_together,
     stored_energy,
     write_floor_metrics,
 )
 from .driver import Spec
 from .energy import absorber_dissipation, impulse_work, momentum, structure_dissipation, write_accounts
+from .events import quiet_band
 from .grid import GridLoads, end_loads, noise_scales, opening_forces, reset_phasors, start_loads, step_loads
-from .kdk import kick
+from .kdk import contact_sides, kdk_step, kick
 from .loads import has_breaks
-from .rng import philox_pair
+from .rng import STREAM_WORDS, block_uniforms, philox_pair
 
 #: Paths a batch advances together: its state (about 17 numbers a path for a one-storey primary
 #: with one absorber) stays in the core's first-level cache.
@@ -57,14 +76,21 @@ LANES = 128
 ALIGN = 64
 
 
-def lane_rows(n_bodies: int, n_floors: int) -> dict[str, int]:
+def lane_rows(n_bodies: int, n_floors: int, events: bool = False) -> dict[str, int]:
     """The rows of a batch's state array (one column a lane), by name: positions, velocities,
-    the accounts (input work, structure and absorber dissipation, the trapezoid sum of ``E1``
-    and its peak; its last value is the state's, computed again where needed), the per-floor
-    peaks and ``x_k^2`` sums, and whether the path has ended (diverged: 1)."""
+    the accounts (input work, structure and absorber dissipation, the trapezoid sum of ``E1``,
+    its peak and its value at the last step's end), the per-floor
+    peaks and ``x_k^2`` sums, and whether the path has ended (diverged: 1).  With ``events``
+    (impact or Hertz absorbers) also the impacts' loss and counts, the contact time and peak
+    force, per absorber the wall it sticks to, the side it touches and what its contact owes
+    (``kdk``'s), each floor's force at the step's end, and whether the step holds an event."""
+    n_absorbers = n_bodies - n_floors if events else 0
     names = [("x", n_bodies), ("v", n_bodies), ("work", 1), ("d_primary", 1), ("d_absorber", 1),
-             ("e_sum", 1), ("e1_max", 1), ("x_max", n_floors), ("drift_max", n_floors),
-             ("acc_max", n_floors), ("x2", n_floors), ("done", 1), ("rows", 0)]
+             ("e_sum", 1), ("e1_max", 1), ("e1", 1), ("x_max", n_floors), ("drift_max", n_floors),
+             ("acc_max", n_floors), ("x2", n_floors), ("done", 1), ("loss", int(events)),
+             ("n_left", int(events)), ("n_right", int(events)), ("contact_time", int(events)),
+             ("peak_force", int(events)), ("stuck", n_absorbers), ("touching", n_absorbers),
+             ("owed", n_absorbers), ("acc", n_floors if events else 0), ("flag", int(events)), ("rows", 0)]
     rows, at = {}, 0
     for name, size in names:
         rows[name] = at
@@ -105,17 +131,26 @@ def lane_loop(spec: Spec):
     vector into ``raw[j]`` (preset to the vector's start)."""
     NB = spec.n_bodies
     NF = spec.n_floors
+    NA = NB - NF
+    NA2 = 2 * NA
     NR = spec.n_rows
+    NW = NB if spec.partners else NF  # (the bodies that may hold an impact absorber's walls)
     GROUND = spec.ground
     GEOMETRIC = spec.geometric
     NOISE = spec.has_noise
     PASSAGES = spec.passages
+    IMPACT, CONTACT = spec.has_impact, spec.has_hertz
+    EVENTS = IMPACT or CONTACT
+    TREE = NOISE and EVENTS  # (the lanes' Brownian trees: a seed each)
+    start, advance = kdk_step(spec).start, kdk_step(spec).advance
     W = LANES  # (a row's length, a compile-time constant: the rows' distances are known)
-    R = lane_rows(NB, NF)
-    X, V, WORK, DP, DA, ESUM, E1MAX = (R["x"], R["v"], R["work"], R["d_primary"], R["d_absorber"], R["e_sum"],
-                                       R["e1_max"])
+    R = lane_rows(NB, NF, EVENTS)
+    X, V, WORK, DP, DA, ESUM, E1MAX, E1 = (R["x"], R["v"], R["work"], R["d_primary"], R["d_absorber"],
+                                           R["e_sum"], R["e1_max"], R["e1"])
     XMAX, DRIFT, ACCMAX, X2, DONE, ROWS = (R["x_max"], R["drift_max"], R["acc_max"], R["x2"], R["done"],
                                            R["rows"])
+    LOSS, LEFT, RIGHT, CTIME, PEAK = R["loss"], R["n_left"], R["n_right"], R["contact_time"], R["peak_force"]
+    STUCK, TOUCHING, OWED, ACC, FLAG = R["stuck"], R["touching"], R["owed"], R["acc"], R["flag"]
 
     @njit(**INLINE)
     def load_lane(s, lane, x, v):
@@ -154,12 +189,19 @@ def lane_loop(spec: Spec):
         for k in range(NF):
             x2[k] = s[(X2 + k) * W + lane]
         if inside and i0 < n_steps:  # (the window's last state at half weight)
-            e_integral = (s[ESUM * W + lane] - 0.5 * primary_energy(mass, storey_k, x, v, NF)) * dt
+            e_integral = (s[ESUM * W + lane] - 0.5 * s[E1 * W + lane]) * dt
             for k in range(NF):
                 x2[k] = (x2[k] - 0.5 * x[k] * x[k]) * dt
                 acc_max[k] *= inv_mass[k]
-        write_accounts(out, s[WORK * W + lane], s[DP * W + lane], s[DA * W + lane], e_integral,
-                       s[E1MAX * W + lane], 0.0, 0.0, 0.0)
+        if EVENTS:
+            write_accounts(out, s[WORK * W + lane], s[DP * W + lane], s[DA * W + lane], e_integral,
+                           s[E1MAX * W + lane], s[LOSS * W + lane], s[LEFT * W + lane], s[RIGHT * W + lane])
+        else:
+            write_accounts(out, s[WORK * W + lane], s[DP * W + lane], s[DA * W + lane], e_integral,
+                           s[E1MAX * W + lane], 0.0, 0.0, 0.0)
+        if CONTACT:
+            out[CONTACT_TIME] = s[CTIME * W + lane]
+            out[PEAK_FORCE] = s[PEAK * W + lane]
         out[FINAL_ENERGY] = stored_energy(*plain((x, v, mass, nf, storey_k, kind, host, rows)))
         write_floor_metrics(out, NF, x_max, drift_max, acc_max, x2)
         base = passage_slots(NF)
@@ -180,6 +222,7 @@ def lane_loop(spec: Spec):
             s[WORK * W + lane] = stored_energy(*plain((x, v, mass, NF, storey_k, kind, host, rows)))
             s[E1MAX * W + lane] = e1
             s[ESUM * W + lane] = 0.5 * e1
+            s[E1 * W + lane] = e1
             opening_forces(force, gl, x, v, acc, bodies, absorbers, NF, GEOMETRIC)
             for k in range(NF):
                 s[(X2 + k) * W + lane] = 0.5 * x[k] * x[k]
@@ -209,69 +252,171 @@ def lane_loop(spec: Spec):
 
     @njit(**INLINE)
     def half_kick(x, v, vn, force, dwh, dws, load, ag, dt, inside, accounts, mass, inv_mass, storey_k,
-                  storey_c, floor_c, host, rows):
-        """A half kick of the step (``kdk.kdk_step``'s: the forces at ``x``, the kick from ``v``
-        into ``vn``) and, inside the metrics window, its input work and dissipation added to the
+                  storey_c, floor_c, kind, host, rows, walls, free, group_mass, group_sum):
+        """A half kick of the step (``kdk.kdk_step``'s without an event: the forces at ``x``, the
+        kick from ``v`` into ``vn``, the floors' common velocity with no absorber stuck, ``free``:
+        with none stuck, none to release, the same arithmetic as ``kdk``'s first kick, which
+        releases) and, inside the metrics window, its input work and dissipation added to the
         ``accounts``."""
         attachment_forces(x, v, NF, storey_k, storey_c, floor_c, host, rows, force)
+        contact_forces(x, NF, kind, host, rows, force, CONTACT)
         geometric_forces(x, NF, host, rows, force, GEOMETRIC)
         kick(v, 0.5 * dt, dwh, load, ag, force, inv_mass, vn, GROUND)
+        stick_together(mass, vn, NF, free, walls, group_mass, group_sum, False, IMPACT)
         work, d_primary, d_absorber = accounts
         if inside:
             work += 0.5 * impulse_work(load, dt, dws, v, vn) - (
                 0.5 * ag * dt * momentum(mass, v, vn) if GROUND and ag != 0.0 else 0.0)
-            d_primary += structure_dissipation(v, vn, NF, storey_c, floor_c, dt)
-            d_absorber += absorber_dissipation(v, vn, NF, host, rows, dt)
+            d_primary = structure_dissipation(v, vn, NF, storey_c, floor_c, dt, d_primary)
+            d_absorber = absorber_dissipation(v, vn, NF, host, rows, dt, d_absorber)
         return work, d_primary, d_absorber
 
     @njit(**INLINE)
+    def observe(s, lane, x, v, acc, mass, storey_k, x_max, drift_max, acc_max):
+        """The loop driver's accounts at a lane's step end, inside the metrics window (its state
+        ``x, v``, each floor's force ``acc``): the trapezoid sums, the peaks."""
+        e1 = primary_energy(mass, storey_k, x, v, NF)
+        load_peaks(s, lane, x_max, drift_max, acc_max)
+        for k in range(NF):
+            s[(X2 + k) * W + lane] += x[k] * x[k]
+        floor_peaks(x, NF, acc, x_max, drift_max, acc_max)
+        store_peaks(s, lane, x_max, drift_max, acc_max)
+        s[ESUM * W + lane] += e1
+        s[E1MAX * W + lane] = max(s[E1MAX * W + lane], e1)
+        s[E1 * W + lane] = e1
+
+    @njit(**INLINE)
     def update(s, z, nl, inside, dt, ag, ag_next, load, load_next, noise_scale, mass, inv_mass, storey_k,
-               storey_c, floor_c, host, rows):
-        """One kick-drift-kick step of every lane (``kdk.kdk_step`` without events, then the
-        loop driver's accounts at the step's end)."""
+               storey_c, floor_c, kind, host, rows, walls, free, group_mass, group_sum, band):
+        """One kick-drift-kick step of every lane, as ``kdk.kdk_step``'s first pass without an
+        event, then (``EVENTS``: the scene has impact or Hertz absorbers) each lane flagged
+        whose step holds an impact, a contact's onset or end or whose absorber sticks or touches,
+        its state as before the step (``fix_lanes`` finishes it; returns how many), or else (no
+        events) the loop driver's accounts at the step's end."""
         x, v, vn, force = scratch(NB), scratch(NB), scratch(NB), scratch(NB)
+        x0, v0 = scratch(NB), scratch(NB)
         dws, dwh, acc = scratch(NF), scratch(NF), scratch(NF)
         x_max, drift_max, acc_max = scratch(NF), scratch(NF), scratch(NF)
+        flagged = 0.0
         for lane in range(nl):
             load_lane(s, lane, x, v)
+            for b in range(NB):
+                x0[b], v0[b] = x[b], v[b]
             for k in range(NF):
                 dws[k] = noise_scale[k] * z[k * W + lane] if NOISE else 0.0
                 dwh[k] = 0.5 * dws[k]
-            accounts = (s[WORK * W + lane], s[DP * W + lane], s[DA * W + lane])
-            accounts = half_kick(x, v, vn, force, dwh, dws, load, ag, dt, inside, accounts, mass, inv_mass,
-                                 storey_k, storey_c, floor_c, host, rows)
+            before = (s[WORK * W + lane], s[DP * W + lane], s[DA * W + lane])
+            accounts = half_kick(x, v, vn, force, dwh, dws, load, ag, dt, inside, before, mass, inv_mass,
+                                 storey_k, storey_c, floor_c, kind, host, rows, walls, free, group_mass,
+                                 group_sum)
+            held = 0.0  # (events ahead, absorbers stuck or touching: a sum, no branch)
+            for a in range(NA if EVENTS else 0):
+                h = wall_of(walls, a, NW)
+                j = NF + a
+                u_end = x[j] - x[h] + dt * (vn[j] - vn[h])  # (``kdk``'s event test at the drift's end)
+                ahead = (u_end < band[2 * a]) | (u_end > band[2 * a + 1])
+                held += (1.0 if ahead else 0.0) + abs(s[(STUCK + a) * W + lane]) + abs(
+                    s[(TOUCHING + a) * W + lane])
             for b in range(NB):
                 x[b] += dt * vn[b]
                 v[b] = vn[b]
             work, d_primary, d_absorber = half_kick(x, v, vn, force, dwh, dws, load_next, ag_next, dt, inside,
                                                     accounts, mass, inv_mass, storey_k, storey_c, floor_c,
-                                                    host, rows)
+                                                    kind, host, rows, walls, free, group_mass, group_sum)
             for b in range(NB):
                 v[b] = vn[b]
+            for k in range(NF):
+                acc[k] = force[k] + load_next[k]
+            if EVENTS:
+                peak = s[PEAK * W + lane]
+                for a in range(NA if CONTACT and inside else 0):
+                    if kind[a] == HERTZ_LAW:
+                        peak = max(peak, contact_force(x, NF, a, host, rows))
+                if IMPACT:
+                    keep_in_cavities(x, NF, NW, kind, walls, rows)
+                keep = held > 0.0 and s[DONE * W + lane] == 0.0
+                for b in range(NB):  # (selects: the stores are unconditional)
+                    s[(X + b) * W + lane] = x0[b] if keep else x[b]
+                    s[(V + b) * W + lane] = v0[b] if keep else v[b]
+                s[WORK * W + lane] = before[0] if keep else work
+                s[DP * W + lane] = before[1] if keep else d_primary
+                s[DA * W + lane] = before[2] if keep else d_absorber
+                s[PEAK * W + lane] = s[PEAK * W + lane] if keep else peak
+                for k in range(NF):
+                    s[(ACC + k) * W + lane] = acc[k]
+                s[FLAG * W + lane] = 1.0 if keep else 0.0
+                flagged += 1.0 if keep else 0.0
+            else:
+                for b in range(NB):
+                    s[(X + b) * W + lane] = x[b]
+                    s[(V + b) * W + lane] = v[b]
+                s[WORK * W + lane], s[DP * W + lane], s[DA * W + lane] = work, d_primary, d_absorber
+                if inside:
+                    observe(s, lane, x, v, acc, mass, storey_k, x_max, drift_max, acc_max)
+        return flagged
+
+    @njit(**INLINE)
+    def fix_lanes(s, z, nl, i, inside, dt, ag, ag_next, gl, own, noise_scale, inv_mass, bodies, absorbers, ex,
+                  fl, noise, seeds, raw, first, events, impulses):
+        """The flagged lanes' steps (``update``), one at a time, by the scalar loop's step after
+        its loads and increments (``kdk``'s ``advance``: the root search on the lane's Brownian
+        tree, the impacts, sticking, the contact's sub-steps): ``own`` is its state and scratch,
+        each lane's absorbers and loads set into it before its step."""
+        x, v, acc = scratch(NB), scratch(NB), scratch(NF)
+        for lane in range(nl):
+            if s[FLAG * W + lane] == 0.0:
+                continue
+            load_lane(s, lane, x, v)
+            for a in range(NA):
+                own.stuck[a] = int(s[(STUCK + a) * W + lane])
+                own.touching[a] = int(s[(TOUCHING + a) * W + lane])
+                own.owed[a] = s[(OWED + a) * W + lane]
+            for k in range(NF):
+                if NOISE:
+                    own.dw[k] = noise_scale[k] * z[k * W + lane]
+                own.gl.load[k], own.gl.load_next[k] = gl.load[k], gl.load_next[k]
+            if TREE:
+                forget(own.memo)
+            acct = (s[WORK * W + lane], s[DP * W + lane], s[DA * W + lane], 0.0, 0.0, s[LOSS * W + lane],
+                    s[LEFT * W + lane], s[RIGHT * W + lane], s[CTIME * W + lane], s[PEAK * W + lane], 0)
+            work, d_primary, d_absorber, _, _, loss, n_left, n_right, contact_time, peak, _ = advance(
+                i, x, v, inv_mass, acc, own, seeds[lane], ag, ag_next, acct, inside, bodies, absorbers, ex,
+                fl, noise, dt, raw[first + lane], events, impulses)
+            for b in range(NB):
                 s[(X + b) * W + lane] = x[b]
                 s[(V + b) * W + lane] = v[b]
+            for a in range(NA):
+                s[(STUCK + a) * W + lane] = own.stuck[a]
+                s[(TOUCHING + a) * W + lane] = own.touching[a]
+                s[(OWED + a) * W + lane] = own.owed[a]
+            for k in range(NF):
+                s[(ACC + k) * W + lane] = acc[k]
             s[WORK * W + lane], s[DP * W + lane], s[DA * W + lane] = work, d_primary, d_absorber
-            if inside:
-                e1 = primary_energy(mass, storey_k, x, v, NF)
-                load_peaks(s, lane, x_max, drift_max, acc_max)
-                for k in range(NF):
-                    acc[k] = force[k] + load_next[k]
-                    s[(X2 + k) * W + lane] += x[k] * x[k]
-                floor_peaks(x, NF, acc, x_max, drift_max, acc_max)
-                store_peaks(s, lane, x_max, drift_max, acc_max)
-                s[ESUM * W + lane] += e1
-                s[E1MAX * W + lane] = max(s[E1MAX * W + lane], e1)
+            s[LOSS * W + lane], s[LEFT * W + lane], s[RIGHT * W + lane] = loss, n_left, n_right
+            s[CTIME * W + lane], s[PEAK * W + lane] = contact_time, peak
+
+    @njit(**INLINE)
+    def observe_lanes(s, nl, mass, storey_k):
+        """``observe`` for every lane, its force at the step's end from the batch (``EVENTS``)."""
+        x, v, acc = scratch(NB), scratch(NB), scratch(NF)
+        x_max, drift_max, acc_max = scratch(NF), scratch(NF), scratch(NF)
+        for lane in range(nl):
+            load_lane(s, lane, x, v)
+            for k in range(NF):
+                acc[k] = s[(ACC + k) * W + lane]
+            observe(s, lane, x, v, acc, mass, storey_k, x_max, drift_max, acc_max)
 
     @njit(**INLINE)
     def batch(s_, z_, spare_, nl, bodies_, absorbers_, ex_, fl_, noise_, grid_, limits_, key, places_,
-              passages_, raw_, first):
+              passages_, raw_, first, own_, seeds_, bridge_key, events_, impulses_):
         # every array as a borrowed view (``jit.intrinsics.borrowed``): no reference counting in
         # the lane loops, whose calls would keep the compiler from vectorising them
         bodies, absorbers, ex, fl, noise, grid = borrowed((bodies_, absorbers_, ex_, fl_, noise_, grid_))
         s, z, spare, limits, places, passages, raw = borrowed((s_, z_, spare_, limits_, places_, passages_,
                                                                raw_))
-        mass, storey_k, kind, host, rows = (bodies.mass, bodies.storey_k, absorbers.kind, absorbers.host,
-                                            absorbers.rows)
+        own, seeds, events, impulses = borrowed((own_, seeds_, events_, impulses_))
+        mass, storey_k, kind, host, rows, walls = (bodies.mass, bodies.storey_k, absorbers.kind,
+                                                   absorbers.host, absorbers.rows, absorbers.wall)
         dt, n_steps, i0 = grid.dt, grid.n_steps, grid.i0
         # what every lane shares, on the stack: the parameters (so that the lane loop's stores
         # alias none of them), the loads on the grid, the noise scales
@@ -281,6 +426,13 @@ def lane_loop(spec: Spec):
             inv_mass[b] = 1.0 / mass[b]
         for k in range(NF):
             sk[k], sc[k], fc[k] = storey_k[k], bodies.storey_c[k], bodies.floor_c[k]
+        # the absorbers' law codes and walls, and the band of each outside which its step holds an
+        # event (``events.quiet_band``): on the stack, so that the lane loop's stores alias none
+        laws, wall_at, band = int_scratch(NA), int_scratch(NA), scratch(NA2)
+        for a in range(NA):
+            laws[a], wall_at[a] = kind[a], walls[a]
+            band[2 * a], band[2 * a + 1] = quiet_band(kind[a], rows[a, CLEARANCE], rows[a, WALL_LO],
+                                                      rows[a, WALL_HI])
         gl = GridLoads(scratch(NF), scratch(NF), scratch(NF), scratch(0), scratch(NR), scratch(NR),
                        scratch(0), scratch(0), scratch(NR), scratch(NR), scratch(0), scratch(0), scratch(0),
                        scratch(0), scratch(0), scratch(0), scratch(0), scratch(NF))
@@ -291,6 +443,11 @@ def lane_loop(spec: Spec):
                 floor_of[int(slot[k])] = k
         ag_next = start_loads(gl, ex, fl, dt, gl.z, False, NF, 0, False, GROUND)
         piecewise = has_breaks(ex)
+        # no absorber stuck (``update``), the scratch of the floors' common velocity; the sides
+        # the Hertz absorbers touch at the start (``kdk.contact_sides``), the same in every lane
+        free, group_mass, group_sum = int_scratch(NA), scratch(NW), scratch(NW)
+        if CONTACT:
+            contact_sides(bodies.x, NF, kind, host, rows, own.touching)
         for lane in range(nl):
             for b in range(NB):
                 s[(X + b) * W + lane], s[(V + b) * W + lane] = bodies.x[b], bodies.v[b]
@@ -298,6 +455,11 @@ def lane_loop(spec: Spec):
                 s[r * W + lane] = 0.0
             for j in range(limits.shape[0]):
                 passages[j * W + lane] = np.nan
+            for a in range(NA if CONTACT else 0):
+                s[(TOUCHING + a) * W + lane] = own.touching[a]
+            if TREE:  # the seed of the lane's Brownian trees: its bridge stream's first two uniforms
+                high, low = block_uniforms(bridge_key, places[first + lane], np.uint64(0))
+                seeds[lane] = tree_seed(high, low)
         inside = i0 == 0
         x, v = scratch(NB), scratch(NB)
         for i in range(n_steps):
@@ -322,27 +484,41 @@ def lane_loop(spec: Spec):
                     lane_normals(*plain((z[k:k + W], spare, nl, i * noisy + q, key, places, first)))
             # (``inside`` a constant in each copy: LLVM vectorises each copy on its own)
             if inside:
-                update(s, z, nl, True, dt, ag, ag_next, gl.load, gl.load_next, noise_scale, m, inv_mass, sk,
-                       sc, fc, host, rows)
-                if PASSAGES:
-                    pass_lanes(s, nl, i * dt + dt, limits, inv_mass, passages)
+                flagged = update(s, z, nl, True, dt, ag, ag_next, gl.load, gl.load_next, noise_scale, m,
+                                 inv_mass, sk, sc, fc, laws, host, rows, wall_at, free, group_mass, group_sum,
+                                 band)
             else:
-                update(s, z, nl, False, dt, ag, ag_next, gl.load, gl.load_next, noise_scale, m, inv_mass, sk,
-                       sc, fc, host, rows)
+                flagged = update(s, z, nl, False, dt, ag, ag_next, gl.load, gl.load_next, noise_scale, m,
+                                 inv_mass, sk, sc, fc, laws, host, rows, wall_at, free, group_mass, group_sum,
+                                 band)
+            if EVENTS and flagged > 0.0:
+                fix_lanes(s, z, nl, i, inside, dt, ag, ag_next, gl, own, noise_scale, inv_mass, bodies,
+                          absorbers, ex, fl, noise, seeds, raw, first, events, impulses)
+            if EVENTS and inside:
+                observe_lanes(s, nl, m, sk)
+            if PASSAGES and inside:
+                pass_lanes(s, nl, i * dt + dt, limits, inv_mass, passages)
         for lane in range(nl):
             if s[DONE * W + lane] == 0.0:
                 finish_lane(s, lane, raw[first + lane], inside, i0, n_steps, dt, m, sk, NF, kind, host, rows,
                             inv_mass, passages, limits)
 
     @njit(**KERNEL)
-    def run(bodies, absorbers, ex, fl, noise, grid, limits, key, places, raw):
+    def run(bodies, absorbers, ex, fl, noise, grid, limits, key, bridge_key, places, raw):
         n = raw.shape[0]
         s, z, spare = aligned_rows(ROWS), aligned_rows(NF), aligned_rows(1)
         passages = aligned_rows(limits.shape[0])
+        # the scalar step's state and scratch for the lanes whose step holds an event (its own
+        # start: the lanes set what is theirs into it), the lanes' tree seeds
+        x = bodies.x.copy()
+        own, _ = start(bodies, absorbers, ex, fl, noise, grid, np.zeros(0), False, x, bodies.v.copy(),
+                       np.zeros(STREAM_WORDS, np.uint64))
+        seeds = np.zeros(W, np.uint64)
+        events, impulses = np.zeros((0, len(EVENT_COLUMNS))), np.zeros(0)
         for first in range(0, n, W):
             nl = min(W, n - first)
             batch(s, z, spare, nl, bodies, absorbers, ex, fl, noise, grid, limits, key, places,
-                  passages, raw, first)
+                  passages, raw, first, own, seeds, bridge_key, events, impulses)
 
     stable_cache(run)  # (its closure holds the lane step's functions: see ``jit.cache.stable_cache``)
     return run

@@ -107,6 +107,14 @@ def philox_uniform(stream) -> float:
 
 
 @njit(**INLINE)
+def block_uniforms(key, place, block):
+    """The two uniforms of block ``block`` of the Philox stream ``(key, place)``: its uniforms
+    ``2 block`` and ``2 block + 1`` (``philox_uniform``)."""
+    w0, w1, w2, w3 = philox_block(key, place, block)
+    return unit_53(w0, w1) * _ULP53, unit_53(w2, w3) * _ULP53
+
+
+@njit(**INLINE)
 def log_positive(x: float) -> float:
     """``log(x)`` for a positive normal ``x``, branch-free (musl's ``log``, after fdlibm's
     ``e_log.c``: ``x = 2^k f`` with ``f`` in ``[sqrt(2)/2, sqrt(2))``, then a minimax polynomial

@@ -6,6 +6,7 @@ from __future__ import annotations
 from numba import njit
 
 from ..jit.flags import INLINE
+from ..jit.intrinsics import fused
 
 
 @njit(**INLINE)
@@ -61,9 +62,12 @@ def structure_power(v, nf: int, storey_c, floor_c) -> float:
 def primary_energy(mass, storey_k, x, v, nf: int) -> float:
     """``E1``: kinetic energy of the ``nf`` floors plus the strain energy of their storeys,
     ``sum m_k v_k^2 / 2 + sum k_k d_k^2 / 2``, ``d_k = x_k - x_{k-1}`` (MODEL.md sections 1a, 4;
-    one floor: ``m1 v1^2 / 2 + k1 x1^2 / 2``)."""
-    e = 0.5 * mass[0] * v[0] * v[0] + 0.5 * storey_k[0] * x[0] * x[0]
+    one floor: ``m1 v1^2 / 2 + k1 x1^2 / 2``).  Each floor's strain term is fused into its
+    kinetic term (``intrinsics.fused``): left to the compiler, which of the two it fused
+    depended on the code around the call, and a loop over SIMD lanes (``kernels/lanes.py``)
+    and the scalar loop differed in the last bit."""
+    e = fused(0.5 * storey_k[0] * x[0], x[0], 0.5 * mass[0] * v[0] * v[0])
     for k in range(1, nf):
         d = x[k] - x[k - 1]
-        e += 0.5 * mass[k] * v[k] * v[k] + 0.5 * storey_k[k] * d * d
+        e += fused(0.5 * storey_k[k] * d, d, 0.5 * mass[k] * v[k] * v[k])
     return e
