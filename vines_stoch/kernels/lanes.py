@@ -16,10 +16,17 @@ loop of their own over the lanes.  A realisation's numbers therefore depend on (
 point, realisation) alone, as the cuda backend's do, and the scalar loop given the same Philox
 streams runs the same arithmetic: the two agree bitwise (``tests/unit/kernels/test_lanes.py``).
 
+Events leave the lanes.  The lane body is the step's first pass without an event, and a test
+without a branch (``events.quiet_band``) flags each lane whose drift ends outside its absorbers'
+bands free of events, or whose absorber sticks or touches; a flagged lane keeps its state as
+before the step, and after the vector loop the flagged lanes take, one at a time, the scalar
+step after its loads and increments (``kdk``'s ``advance``: root search on the lane's Brownian
+tree, impacts, sticking, contact sub-steps), their absorbers' state kept in rows of the batch.
+
 Which scenes run here is the scheme registry's (``schemes.in_lanes``): the kick-drift-kick
-scheme without impacts, Hertz contact or filtered loads, recording the built-in metrics and the
-limits' first passages.  The rest (events, filters, history rows, event logs, declared metrics)
-runs in the scalar loop on the same streams (``chunk.simulate_chunk``).
+scheme without filtered loads, recording the built-in metrics and the limits' first passages.
+The rest (filters, history rows, event logs, declared metrics) runs in the scalar loop on the
+same streams (``chunk.simulate_chunk``).
 """
 
 from __future__ import annotations
@@ -125,8 +132,8 @@ def lane_normals(z, spare, nl: int, draw: int, key, places, first: int) -> None:
 @cache
 def lane_loop(spec: Spec):
     """The lane loop of kick-drift-kick scenes specialised to ``spec`` (``driver.Spec``; no
-    impacts, Hertz contact or filtered loads).  It takes the bundles of ``kernels/bundles.py``
-    (the state's start in ``bodies``), the key of the increments' Philox streams and each
+    filtered loads).  It takes the bundles of ``kernels/bundles.py`` (the state's start in
+    ``bodies``), the keys of the increments' and the bridges' Philox streams and each
     realisation's stream place (``rng.stream_place``), and writes realisation ``j``'s metric
     vector into ``raw[j]`` (preset to the vector's start)."""
     NB = spec.n_bodies

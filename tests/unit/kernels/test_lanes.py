@@ -17,9 +17,13 @@ from tests.helpers import scene_from
 from vines_stoch.jit.flags import KERNEL
 from vines_stoch.kernels import simulate, spec_of
 from vines_stoch.kernels.chunk import lane_call, lane_scene, simulate_chunk
+from vines_stoch.kernels.events import NONE, event_ahead, quiet_band
 from vines_stoch.kernels.lanes import ALIGN, LANES, aligned_rows, lane_loop, lane_normals
 from vines_stoch.kernels.rng import philox_stream
 from vines_stoch.outputs import STATUS, STATUS_DIVERGED, Record, new_metrics
+from vines_stoch.physics.absorbers import HERTZ as HERTZ_LAW
+from vines_stoch.physics.absorbers import IMPACT as IMPACT_LAW
+from vines_stoch.physics.absorbers import LAWS
 from vines_stoch.schemes import in_lanes
 from vines_stoch.streams import BRIDGE, FILTER, INCREMENTS, Streams
 
@@ -189,3 +193,19 @@ def test_the_lane_loops_are_vector_code_on_this_host():
 def new_metrics_rows(scene, n: int) -> np.ndarray:
     """``n`` metric vectors at their start."""
     return np.tile(new_metrics(scene.n_floors, scene.limits.shape[0], scene.reductions.shape[0]), (n, 1))
+
+
+@pytest.mark.parametrize("law", sorted(LAWS))
+def test_the_lanes_event_band_is_the_event_test_of_the_scalar_step(law):
+    """``events.quiet_band`` (the lanes' test, without a branch) says no event exactly where
+    ``events.event_ahead`` (the scalar step's) finds none, for an absorber neither stuck nor
+    touching: on random displacements and on the band's ends."""
+    code, clearance, lo, hi = LAWS[law], 0.05, -0.03, 0.07
+    band = quiet_band(code, clearance, lo, hi)
+    u = np.concatenate([np.random.default_rng(3).uniform(-0.2, 0.2, 2000), [-clearance, clearance, lo, hi]])
+    u = np.concatenate([u, np.nextafter(u[-4:], np.inf), np.nextafter(u[-4:], -np.inf)])
+    for value in u:
+        event = event_ahead(code, 0, 0, clearance, lo, hi, value, True, True, True)[0]
+        assert (event == NONE) == (band[0] <= value <= band[1]), (law, value)
+    if code not in (IMPACT_LAW, HERTZ_LAW):
+        assert band == (-np.inf, np.inf)
