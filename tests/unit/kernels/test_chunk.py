@@ -15,12 +15,12 @@ from scipy.stats import truncnorm
 
 from tests.helpers import example_scene, study_from, two_dof_data
 from vines_stoch.ensemble import chunk_parameters
-from vines_stoch.kernels import load_history, needed_streams, sample_buffer, simulate
-from vines_stoch.kernels.chunk import ground_paths, simulate_chunk
+from vines_stoch.kernels import load_history, sample_buffer, simulate
+from vines_stoch.kernels.chunk import ground_paths, realization_streams, simulate_chunk
 from vines_stoch.kernels.rng import philox_stream
 from vines_stoch.outputs import new_events
 from vines_stoch.physics.spectra import pseudo_acceleration
-from vines_stoch.streams import FILTER, PARAMETERS, generator, streams
+from vines_stoch.streams import FILTER, PARAMETERS, generator
 
 SEED = 11
 SIGNALS = ("x1", "e1")
@@ -40,9 +40,8 @@ def test_a_chunk_records_what_simulate_records_bitwise(case, common):
     scene = example_scene(*SCENES[case])
     start, stop, point, stride, size, rows = 3, 7, 2, 10, 25, 6
     chunk = simulate_chunk(scene, SEED, point, start, stop, common, (stride, size), SIGNALS, rows)
-    increments, bridge, filters = needed_streams(scene)
     for j, r in enumerate(range(start, stop)):
-        gens = streams(SEED, point, r, increments=increments, bridge=bridge, filters=filters, common=common)
+        gens = realization_streams(scene, SEED, point, r, common)  # (Philox where the scene runs in lanes)
         history, events = np.full((size, len(SIGNALS)), np.nan), new_events(rows)
         samples = sample_buffer(scene)
         raw = simulate(scene, gens, samples=samples, history=history, stride=stride, signals=SIGNALS,
