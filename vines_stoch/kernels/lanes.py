@@ -498,11 +498,12 @@ def lane_loop(spec: Spec):
                 flagged = update(s, z, nl, False, dt, ag, ag_next, gl.load, gl.load_next, noise_scale, m,
                                  inv_mass, sk, sc, fc, laws, host, rows, wall_at, free, group_mass, group_sum,
                                  band)
-            if EVENTS and flagged > 0.0:
-                fix_lanes(s, z, nl, i, inside, dt, ag, ag_next, gl, own, noise_scale, inv_mass, bodies,
-                          absorbers, ex, fl, noise, seeds, raw, first, events, impulses)
-            if EVENTS and inside:
-                observe_lanes(s, nl, m, sk)
+            if EVENTS:  # (a compile-time flag alone: a scene without events compiles none of it)
+                if flagged > 0.0:
+                    fix_lanes(s, z, nl, i, inside, dt, ag, ag_next, gl, own, noise_scale, inv_mass, bodies,
+                              absorbers, ex, fl, noise, seeds, raw, first, events, impulses)
+                if inside:
+                    observe_lanes(s, nl, m, sk)
             if PASSAGES and inside:
                 pass_lanes(s, nl, i * dt + dt, limits, inv_mass, passages)
         for lane in range(nl):
