@@ -63,7 +63,7 @@ GROUND = {
               {"type": "white-noise", "intensity": 0.1}],
     "simulation": {"duration": 2.0, "dt": 1e-3, "scheme": "euler-maruyama"},
 }
-#: Impacts under noise (some plastic: sticking), and a double-sided Hertz absorber: the lanes whose
+#: Impacts under noise, and a double-sided Hertz absorber: the lanes whose
 #: step holds an event finish it in the scalar step.
 IMPACT = {**SMOOTH, "name": "lanes-impact",
           "absorbers": [{"type": "cubic", "mass": 0.05, "stiffness": 1.0, "damping": 0.01},
