@@ -16,6 +16,13 @@ call resolutions:
   bytecode, which nothing else holds, and no caller reads the unmutated copy ``inline_ir``
   returns: there it copies nothing.  Compilation holds numba's compiler lock, so the module
   attribute swapped for the call is seen by no other thread.
+* Labels (``compact_labels``).  The inliner offsets a callee's block labels past numba's global
+  label counter; a callee that inlined functions itself already holds labels as large as that
+  counter, so each such inline doubles it, for the life of the process.  After some thousands of
+  them (a test run compiling dozens of step loops) the block names pass LLVM's 1,024 characters
+  and the IR no longer parses ("name is too long").  ``inline_function`` relabels the callee
+  0, 1, 2, ... in its labels' order before the offset: the same order, the same code, a counter
+  that grows by the blocks inlined.
 * Liveness (``live_map_as_bits``).  ``analysis.compute_live_map`` runs after every inlining and
   rewrite; it iterates reaching definitions and then liveness to their least fixed points on
   Python sets, each union copying sets of thousands of names.  The same fixed points on integer
@@ -181,8 +188,12 @@ def share_scope_copies(package: str, swaps: Swaps) -> bool:
         return False
     verified = _source_hash(worker.inline_function) == VERIFIED.get(package, {}).get("inlining")
 
+    ir = importlib.import_module(f"{package}.ir")
+    extensions = importlib.import_module(f"{package}.ir_utils").add_offset_to_labels_extensions
+
     def inline_function(self, caller_ir, block, i, function, arg_typs=None):
         callee_ir = self.run_untyped_passes(function)
+        callee_ir.blocks = compact_labels(callee_ir.blocks, ir, tuple(extensions))
         freevars = function.__code__.co_freevars
         ic.copy = _NoCopy
         try:
@@ -205,6 +216,24 @@ def share_scope_copies(package: str, swaps: Swaps) -> bool:
         inline_function.__doc__ = worker.inline_function.__doc__
         swaps.put(worker, "inline_function", inline_function)
     return verified
+
+
+def compact_labels(blocks: dict, ir: Any, extended: tuple = ()) -> dict:
+    """``blocks`` labelled 0, 1, 2, ... in the order of their labels, their jumps and branches
+    with them (``ir``: the front end's IR module): the labels' order, and so the inlined code, is
+    the same.  Left as they are where a statement of a type in ``extended`` (one that holds
+    labels of its own, as numba's parfors do) is among them."""
+    if extended and any(isinstance(inst, extended) for b in blocks.values() for inst in b.body):
+        return blocks
+    new = {label: n for n, label in enumerate(sorted(blocks))}
+    for b in blocks.values():
+        term = b.body[-1] if b.body else None
+        # (new terminators, as numba's ``add_offset_to_labels`` makes: copies may share the old)
+        if isinstance(term, ir.Jump):
+            b.body[-1] = ir.Jump(new[term.target], term.loc)
+        elif isinstance(term, ir.Branch):
+            b.body[-1] = ir.Branch(term.cond, new[term.truebr], new[term.falsebr], term.loc)
+    return {new[label]: b for label, b in blocks.items()}
 
 
 def _source_hash(*objects: Any) -> str:
