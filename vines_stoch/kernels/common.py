@@ -15,7 +15,7 @@ import numpy as np
 from numba import njit
 
 from ..jit.flags import INLINE, KERNEL
-from ..jit.intrinsics import pick, plain, put, runtime_value
+from ..jit.intrinsics import larger, pick, plain, put, runtime_value, smaller
 from ..outputs import (
     ACC_MAX_K,
     DRIFT_MAX_K,
@@ -205,8 +205,9 @@ def stick_together(mass, values, nf: int, stuck, wall, group_mass, group_sum, re
 
     ``values`` holds velocities (after a kick) or accelerations; each body that holds walls
     (``wall``: ``physics.structure.wall_of``) and the absorbers stuck on it get their
-    mass-weighted common value.  With ``release``, an absorber the wall would have to pull
-    (constraint of the wrong sign) is released first.  ``group_mass`` and ``group_sum`` are
+    mass-weighted common value, and a body with none stuck keeps its own (exactly, not
+    ``(m v) / m``).  With ``release``, an absorber the wall would have to pull (constraint of
+    the wrong sign) is released first.  ``group_mass`` and ``group_sum`` are
     scratch, one entry per body that may hold walls (the floors, or every body where absorbers
     impact absorbers): their length is that count.  Nothing happens unless ``active`` (a flag
     rather than a branch around the call: see ``jit.flags.INLINE``).
@@ -232,14 +233,11 @@ def stick_together(mass, values, nf: int, stuck, wall, group_mass, group_sum, re
                 if stuck[a] * (group_sum[wall_of(wall, a, nw)] - values[nf + a]) > 0.0:
                     stuck[a] = 0
     if passes > 0:
-        for k in range(nf):
-            values[k] = group_sum[k]
         for a in range(values.shape[0] - nf):
             if stuck[a] != 0:
                 h = wall_of(wall, a, nw)
                 values[nf + a] = group_sum[h]
-                if h >= nf:  # an absorber holding the walls: only where one is stuck on it
-                    values[h] = group_sum[h]
+                values[h] = group_sum[h]
 
 
 @njit(**INLINE)
@@ -259,7 +257,7 @@ def keep_in_cavities(x, nf: int, nw: int, kind, wall, rows):
         if kind[a] == IMPACT:
             h = wall_of(wall, a, nw)
             c = rows[a, CLEARANCE]
-            x[nf + a] = x[h] + min(max(x[nf + a] - x[h], -c), c)
+            x[nf + a] = x[h] + smaller(larger(x[nf + a] - x[h], -c), c)
 
 
 @njit(**INLINE)
@@ -311,10 +309,10 @@ def floor_peaks(x, nf: int, acc, x_max, drift_max, acc_max):
     """Fold a state into the per-floor peaks of ``|x_k|``, of the drift ``|x_k - x_{k-1}|``
     and of the absolute acceleration ``|acc[k]|`` (MODEL.md section 4)."""
     for k in range(nf):
-        x_max[k] = max(x_max[k], abs(x[k]))
+        x_max[k] = larger(x_max[k], abs(x[k]))
         if k > 0:  # (the first storey's drift is the first floor's displacement: write_floor_metrics)
-            drift_max[k] = max(drift_max[k], abs(x[k] - x[k - 1]))
-        acc_max[k] = max(acc_max[k], abs(acc[k]))
+            drift_max[k] = larger(drift_max[k], abs(x[k] - x[k - 1]))
+        acc_max[k] = larger(acc_max[k], abs(acc[k]))
 
 
 @njit(**INLINE)

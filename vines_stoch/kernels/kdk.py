@@ -48,7 +48,7 @@ import numpy as np
 from numba import njit
 
 from ..jit.flags import INLINE
-from ..jit.intrinsics import any_set, fused, int_scratch, plain, scratch
+from ..jit.intrinsics import any_set, fused, int_scratch, larger, plain, scratch
 from ..outputs import CAPPED
 from ..physics.absorbers import CLEARANCE, HERTZ, RESTITUTION, WALL_HI, WALL_LO
 from ..physics.hertz import contact_energy, contact_force_law
@@ -552,7 +552,7 @@ def kdk_step(spec) -> Step:
             if has_hertz and inside:
                 for a in range(na):
                     if kind[a] == HERTZ:
-                        peak_force = max(peak_force, contact_force(x, nf, a, host, rows))
+                        peak_force = larger(peak_force, contact_force(x, nf, a, host, rows))
             if not (has_impact or has_hertz) or (hit < 0 and s >= left):
                 break
             # the sub-step's end: an impact, a contact onset or a contact sub-step's end

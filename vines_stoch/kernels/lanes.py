@@ -38,7 +38,7 @@ from numba import njit
 
 from ..jit.cache import stable_cache
 from ..jit.flags import INLINE, KERNEL
-from ..jit.intrinsics import borrowed, int_scratch, plain, scratch
+from ..jit.intrinsics import borrowed, int_scratch, larger, plain, scratch
 from ..outputs import (
     ACC_MAX_K,
     CONTACT_TIME,
@@ -64,7 +64,6 @@ from .common import (
     floor_peaks,
     geometric_forces,
     keep_in_cavities,
-    stick_together,
     stored_energy,
     write_floor_metrics,
 )
@@ -90,14 +89,14 @@ def lane_rows(n_bodies: int, n_floors: int, events: bool = False) -> dict[str, i
     peaks and ``x_k^2`` sums, and whether the path has ended (diverged: 1).  With ``events``
     (impact or Hertz absorbers) also the impacts' loss and counts, the contact time and peak
     force, per absorber the wall it sticks to, the side it touches and what its contact owes
-    (``kdk``'s), each floor's force at the step's end, and whether the step holds an event."""
+    (``kdk``'s), and whether the step holds an event."""
     n_absorbers = n_bodies - n_floors if events else 0
     names = [("x", n_bodies), ("v", n_bodies), ("work", 1), ("d_primary", 1), ("d_absorber", 1),
              ("e_sum", 1), ("e1_max", 1), ("e1", 1), ("x_max", n_floors), ("drift_max", n_floors),
              ("acc_max", n_floors), ("x2", n_floors), ("done", 1), ("loss", int(events)),
              ("n_left", int(events)), ("n_right", int(events)), ("contact_time", int(events)),
              ("peak_force", int(events)), ("stuck", n_absorbers), ("touching", n_absorbers),
-             ("owed", n_absorbers), ("acc", n_floors if events else 0), ("flag", int(events)), ("rows", 0)]
+             ("owed", n_absorbers), ("flag", int(events)), ("rows", 0)]
     rows, at = {}, 0
     for name, size in names:
         rows[name] = at
@@ -157,7 +156,7 @@ def lane_loop(spec: Spec):
     XMAX, DRIFT, ACCMAX, X2, DONE, ROWS = (R["x_max"], R["drift_max"], R["acc_max"], R["x2"], R["done"],
                                            R["rows"])
     LOSS, LEFT, RIGHT, CTIME, PEAK = R["loss"], R["n_left"], R["n_right"], R["contact_time"], R["peak_force"]
-    STUCK, TOUCHING, OWED, ACC, FLAG = R["stuck"], R["touching"], R["owed"], R["acc"], R["flag"]
+    STUCK, TOUCHING, OWED, FLAG = R["stuck"], R["touching"], R["owed"], R["flag"]
 
     @njit(**INLINE)
     def load_lane(s, lane, x, v):
@@ -175,12 +174,12 @@ def lane_loop(spec: Spec):
             acc_max[k] = s[(ACCMAX + k) * W + lane]
 
     @njit(**INLINE)
-    def store_peaks(s, lane, x_max, drift_max, acc_max):
-        """``load_peaks``'s inverse."""
+    def store_peaks(s, lane, x_max, drift_max, acc_max, hold=False):
+        """``load_peaks``'s inverse (``hold``: the lane's peaks stay, a select rather than a branch)."""
         for k in range(NF):
-            s[(XMAX + k) * W + lane] = x_max[k]
-            s[(DRIFT + k) * W + lane] = drift_max[k]
-            s[(ACCMAX + k) * W + lane] = acc_max[k]
+            s[(XMAX + k) * W + lane] = s[(XMAX + k) * W + lane] if hold else x_max[k]
+            s[(DRIFT + k) * W + lane] = s[(DRIFT + k) * W + lane] if hold else drift_max[k]
+            s[(ACCMAX + k) * W + lane] = s[(ACCMAX + k) * W + lane] if hold else acc_max[k]
 
     @njit(**INLINE)
     def finish_lane(s, lane, out, inside, i0, n_steps, dt, mass, storey_k, nf, kind, host, rows, inv_mass,
@@ -259,17 +258,15 @@ def lane_loop(spec: Spec):
 
     @njit(**INLINE)
     def half_kick(x, v, vn, force, dwh, dws, load, ag, dt, inside, accounts, mass, inv_mass, storey_k,
-                  storey_c, floor_c, kind, host, rows, walls, free, group_mass, group_sum):
+                  storey_c, floor_c, kind, host, rows):
         """A half kick of the step (``kdk.kdk_step``'s without an event: the forces at ``x``, the
-        kick from ``v`` into ``vn``, the floors' common velocity with no absorber stuck, ``free``:
-        with none stuck, none to release, the same arithmetic as ``kdk``'s first kick, which
-        releases) and, inside the metrics window, its input work and dissipation added to the
-        ``accounts``."""
+        kick from ``v`` into ``vn``; with no absorber stuck, ``common.stick_together`` leaves every
+        velocity as it is) and, inside the metrics window, its input work and dissipation added to
+        the ``accounts``."""
         attachment_forces(x, v, NF, storey_k, storey_c, floor_c, host, rows, force)
         contact_forces(x, NF, kind, host, rows, force, CONTACT)
         geometric_forces(x, NF, host, rows, force, GEOMETRIC)
         kick(v, 0.5 * dt, dwh, load, ag, force, inv_mass, vn, GROUND)
-        stick_together(mass, vn, NF, free, walls, group_mass, group_sum, False, IMPACT)
         work, d_primary, d_absorber = accounts
         if inside:
             work += 0.5 * impulse_work(load, dt, dws, v, vn) - (
@@ -279,32 +276,36 @@ def lane_loop(spec: Spec):
         return work, d_primary, d_absorber
 
     @njit(**INLINE)
-    def observe(s, lane, x, v, acc, mass, storey_k, x_max, drift_max, acc_max):
+    def observe(s, lane, x, v, acc, mass, storey_k, x_max, drift_max, acc_max, hold=False):
         """The loop driver's accounts at a lane's step end, inside the metrics window (its state
-        ``x, v``, each floor's force ``acc``): the trapezoid sums, the peaks."""
+        ``x, v``, each floor's force ``acc``): the trapezoid sums, the peaks.  ``hold``: none
+        (a lane whose step ``fix_lanes`` finishes, and observes): selects, not a branch, so that
+        the update loop stays vector code."""
         e1 = primary_energy(mass, storey_k, x, v, NF)
         load_peaks(s, lane, x_max, drift_max, acc_max)
         for k in range(NF):
-            s[(X2 + k) * W + lane] += x[k] * x[k]
+            x2 = s[(X2 + k) * W + lane]
+            s[(X2 + k) * W + lane] = x2 if hold else x2 + x[k] * x[k]
         floor_peaks(x, NF, acc, x_max, drift_max, acc_max)
-        store_peaks(s, lane, x_max, drift_max, acc_max)
-        s[ESUM * W + lane] += e1
-        s[E1MAX * W + lane] = max(s[E1MAX * W + lane], e1)
-        s[E1 * W + lane] = e1
+        store_peaks(s, lane, x_max, drift_max, acc_max, hold)
+        e_sum, e1_max, e1_last = s[ESUM * W + lane], s[E1MAX * W + lane], s[E1 * W + lane]
+        s[ESUM * W + lane] = e_sum if hold else e_sum + e1
+        s[E1MAX * W + lane] = e1_max if hold else larger(e1_max, e1)
+        s[E1 * W + lane] = e1_last if hold else e1
 
     @njit(**INLINE)
     def update(s, z, nl, inside, dt, ag, ag_next, load, load_next, noise_scale, mass, inv_mass, storey_k,
-               storey_c, floor_c, kind, host, rows, walls, free, group_mass, group_sum, band):
+               storey_c, floor_c, kind, host, rows, walls, band):
         """One kick-drift-kick step of every lane, as ``kdk.kdk_step``'s first pass without an
         event, then (``EVENTS``: the scene has impact or Hertz absorbers) each lane flagged
         whose step holds an impact, a contact's onset or end or whose absorber sticks or touches,
-        its state as before the step (``fix_lanes`` finishes it; returns how many), or else (no
-        events) the loop driver's accounts at the step's end."""
+        its state as before the step (``fix_lanes`` finishes it; returns how many), and inside the
+        metrics window the loop driver's accounts at the step's end of every lane not flagged."""
         x, v, vn, force = scratch(NB), scratch(NB), scratch(NB), scratch(NB)
         x0, v0 = scratch(NB), scratch(NB)
         dws, dwh, acc = scratch(NF), scratch(NF), scratch(NF)
         x_max, drift_max, acc_max = scratch(NF), scratch(NF), scratch(NF)
-        flagged = 0.0
+        flagged = 0  # (an integer sum: LLVM vectorises it, not a sum of floats, whose order it keeps)
         for lane in range(nl):
             load_lane(s, lane, x, v)
             for b in range(NB):
@@ -314,8 +315,7 @@ def lane_loop(spec: Spec):
                 dwh[k] = 0.5 * dws[k]
             before = (s[WORK * W + lane], s[DP * W + lane], s[DA * W + lane])
             accounts = half_kick(x, v, vn, force, dwh, dws, load, ag, dt, inside, before, mass, inv_mass,
-                                 storey_k, storey_c, floor_c, kind, host, rows, walls, free, group_mass,
-                                 group_sum)
+                                 storey_k, storey_c, floor_c, kind, host, rows)
             held = 0.0  # (events ahead, absorbers stuck or touching: a sum, no branch)
             for a in range(NA if EVENTS else 0):
                 h = wall_of(walls, a, NW)
@@ -329,16 +329,17 @@ def lane_loop(spec: Spec):
                 v[b] = vn[b]
             work, d_primary, d_absorber = half_kick(x, v, vn, force, dwh, dws, load_next, ag_next, dt, inside,
                                                     accounts, mass, inv_mass, storey_k, storey_c, floor_c,
-                                                    kind, host, rows, walls, free, group_mass, group_sum)
+                                                    kind, host, rows)
             for b in range(NB):
                 v[b] = vn[b]
             for k in range(NF):
                 acc[k] = force[k] + load_next[k]
+            keep = False
             if EVENTS:
                 peak = s[PEAK * W + lane]
                 for a in range(NA if CONTACT and inside else 0):
                     if kind[a] == HERTZ_LAW:
-                        peak = max(peak, contact_force(x, NF, a, host, rows))
+                        peak = larger(peak, contact_force(x, NF, a, host, rows))
                 if IMPACT:
                     keep_in_cavities(x, NF, NW, kind, walls, rows)
                 keep = held > 0.0 and s[DONE * W + lane] == 0.0
@@ -349,27 +350,27 @@ def lane_loop(spec: Spec):
                 s[DP * W + lane] = before[1] if keep else d_primary
                 s[DA * W + lane] = before[2] if keep else d_absorber
                 s[PEAK * W + lane] = s[PEAK * W + lane] if keep else peak
-                for k in range(NF):
-                    s[(ACC + k) * W + lane] = acc[k]
                 s[FLAG * W + lane] = 1.0 if keep else 0.0
-                flagged += 1.0 if keep else 0.0
+                flagged += 1 if keep else 0
             else:
                 for b in range(NB):
                     s[(X + b) * W + lane] = x[b]
                     s[(V + b) * W + lane] = v[b]
                 s[WORK * W + lane], s[DP * W + lane], s[DA * W + lane] = work, d_primary, d_absorber
-                if inside:
-                    observe(s, lane, x, v, acc, mass, storey_k, x_max, drift_max, acc_max)
+            if inside:
+                observe(s, lane, x, v, acc, mass, storey_k, x_max, drift_max, acc_max, keep)
         return flagged
 
     @njit(**INLINE)
-    def fix_lanes(s, z, nl, i, inside, dt, ag, ag_next, gl, own, noise_scale, inv_mass, bodies, absorbers, ex,
-                  fl, noise, seeds, raw, first, events, impulses):
+    def fix_lanes(s, z, nl, i, inside, dt, ag, ag_next, gl, own, noise_scale, mass, inv_mass, storey_k,
+                  bodies, absorbers, ex, fl, noise, seeds, raw, first, events, impulses):
         """The flagged lanes' steps (``update``), one at a time, by the scalar loop's step after
         its loads and increments (``kdk``'s ``advance``: the root search on the lane's Brownian
-        tree, the impacts, sticking, the contact's sub-steps): ``own`` is its state and scratch,
-        each lane's absorbers and loads set into it before its step."""
+        tree, the impacts, sticking, the contact's sub-steps), then (inside the metrics window)
+        their accounts at the step's end: ``own`` is its state and scratch, each lane's
+        absorbers and loads set into it before its step."""
         x, v, acc = scratch(NB), scratch(NB), scratch(NF)
+        x_max, drift_max, acc_max = scratch(NF), scratch(NF), scratch(NF)
         for lane in range(nl):
             if s[FLAG * W + lane] == 0.0:
                 continue
@@ -396,22 +397,11 @@ def lane_loop(spec: Spec):
                 s[(STUCK + a) * W + lane] = own.stuck[a]
                 s[(TOUCHING + a) * W + lane] = own.touching[a]
                 s[(OWED + a) * W + lane] = own.owed[a]
-            for k in range(NF):
-                s[(ACC + k) * W + lane] = acc[k]
             s[WORK * W + lane], s[DP * W + lane], s[DA * W + lane] = work, d_primary, d_absorber
             s[LOSS * W + lane], s[LEFT * W + lane], s[RIGHT * W + lane] = loss, n_left, n_right
             s[CTIME * W + lane], s[PEAK * W + lane] = contact_time, peak
-
-    @njit(**INLINE)
-    def observe_lanes(s, nl, mass, storey_k):
-        """``observe`` for every lane, its force at the step's end from the batch (``EVENTS``)."""
-        x, v, acc = scratch(NB), scratch(NB), scratch(NF)
-        x_max, drift_max, acc_max = scratch(NF), scratch(NF), scratch(NF)
-        for lane in range(nl):
-            load_lane(s, lane, x, v)
-            for k in range(NF):
-                acc[k] = s[(ACC + k) * W + lane]
-            observe(s, lane, x, v, acc, mass, storey_k, x_max, drift_max, acc_max)
+            if inside:
+                observe(s, lane, x, v, acc, mass, storey_k, x_max, drift_max, acc_max)
 
     @njit(**INLINE)
     def batch(s_, z_, spare_, nl, bodies_, absorbers_, ex_, fl_, noise_, grid_, limits_, key, places_,
@@ -450,9 +440,8 @@ def lane_loop(spec: Spec):
                 floor_of[int(slot[k])] = k
         ag_next = start_loads(gl, ex, fl, dt, gl.z, False, NF, 0, False, GROUND)
         piecewise = has_breaks(ex)
-        # no absorber stuck (``update``), the scratch of the floors' common velocity; the sides
-        # the Hertz absorbers touch at the start (``kdk.contact_sides``), the same in every lane
-        free, group_mass, group_sum = int_scratch(NA), scratch(NW), scratch(NW)
+        # the sides the Hertz absorbers touch at the start (``kdk.contact_sides``), the same in
+        # every lane
         if CONTACT:
             contact_sides(bodies.x, NF, kind, host, rows, own.touching)
         for lane in range(nl):
@@ -492,18 +481,14 @@ def lane_loop(spec: Spec):
             # (``inside`` a constant in each copy: LLVM vectorises each copy on its own)
             if inside:
                 flagged = update(s, z, nl, True, dt, ag, ag_next, gl.load, gl.load_next, noise_scale, m,
-                                 inv_mass, sk, sc, fc, laws, host, rows, wall_at, free, group_mass, group_sum,
-                                 band)
+                                 inv_mass, sk, sc, fc, laws, host, rows, wall_at, band)
             else:
                 flagged = update(s, z, nl, False, dt, ag, ag_next, gl.load, gl.load_next, noise_scale, m,
-                                 inv_mass, sk, sc, fc, laws, host, rows, wall_at, free, group_mass, group_sum,
-                                 band)
+                                 inv_mass, sk, sc, fc, laws, host, rows, wall_at, band)
             if EVENTS:  # (a compile-time flag alone: a scene without events compiles none of it)
-                if flagged > 0.0:
-                    fix_lanes(s, z, nl, i, inside, dt, ag, ag_next, gl, own, noise_scale, inv_mass, bodies,
-                              absorbers, ex, fl, noise, seeds, raw, first, events, impulses)
-                if inside:
-                    observe_lanes(s, nl, m, sk)
+                if flagged > 0:
+                    fix_lanes(s, z, nl, i, inside, dt, ag, ag_next, gl, own, noise_scale, m, inv_mass, sk,
+                              bodies, absorbers, ex, fl, noise, seeds, raw, first, events, impulses)
             if PASSAGES and inside:
                 pass_lanes(s, nl, i * dt + dt, limits, inv_mass, passages)
         for lane in range(nl):
