@@ -199,12 +199,11 @@ def lane_loop(spec: Spec):
             for k in range(NF):
                 x2[k] = (x2[k] - 0.5 * x[k] * x[k]) * dt
                 acc_max[k] *= inv_mass[k]
-        if EVENTS:
-            write_accounts(out, s[WORK * W + lane], s[DP * W + lane], s[DA * W + lane], e_integral,
-                           s[E1MAX * W + lane], s[LOSS * W + lane], s[LEFT * W + lane], s[RIGHT * W + lane])
-        else:
-            write_accounts(out, s[WORK * W + lane], s[DP * W + lane], s[DA * W + lane], e_integral,
-                           s[E1MAX * W + lane], 0.0, 0.0, 0.0)
+        # (the impacts' rows where the scene has events: none otherwise)
+        loss, n_left, n_right = ((s[LOSS * W + lane], s[LEFT * W + lane], s[RIGHT * W + lane]) if EVENTS
+                                 else (0.0, 0.0, 0.0))
+        write_accounts(out, s[WORK * W + lane], s[DP * W + lane], s[DA * W + lane], e_integral,
+                       s[E1MAX * W + lane], loss, n_left, n_right)
         if CONTACT:
             out[CONTACT_TIME] = s[CTIME * W + lane]
             out[PEAK_FORCE] = s[PEAK * W + lane]
