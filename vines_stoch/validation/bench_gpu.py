@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import math
 import os
+import sys
 import tempfile
 import time
 from concurrent.futures import ThreadPoolExecutor
@@ -56,6 +57,11 @@ SEED = 1
 #: Targets (at 1e6 paths, float64): smooth scene path-steps/s, smooth / roofline,
 #: impact-rich / smooth, whole run / kernel time (at most).
 TARGET_RATE, TARGET_ROOFLINE, TARGET_IMPACT, TARGET_RUN = 1e11, 0.7, 0.5, 1.5
+
+
+def _progress(message: str) -> None:
+    """One line on standard error as each step of a long benchmark ends (the report comes last)."""
+    print(f"bench-gpu: {message}", file=sys.stderr, flush=True)
 
 
 def roofline_kernel():
@@ -167,6 +173,7 @@ def measure(paths: tuple[int, ...] = (10_000, 100_000, 1_000_000), quick: bool =
         start = time.perf_counter()
         gpu.simulate_many(bench_scene(name, WARM_DURATION), SEED, 0, 0, min(paths[0], gpu.THREADS))
         compile_s[name] = time.perf_counter() - start
+        _progress(f"compiled {name} in {compile_s[name]:.1f} s")
     smooth = bench_scene("smooth", duration)
     start = time.perf_counter()
     roofline(min(paths[0], gpu.THREADS), 10, smooth.dt)
@@ -176,10 +183,15 @@ def measure(paths: tuple[int, ...] = (10_000, 100_000, 1_000_000), quick: bool =
         seconds, values = roofline(n, smooth.n_steps, smooth.dt)
         finite &= bool(np.isfinite(values).all() and (values > 0).all())
         roof.append(Row("roofline", n, smooth.n_steps, seconds))
+        _progress(f"roofline, {n:,} paths: {seconds:.3g} s, {roof[-1].rate:.3g} path-steps/s")
         for name in SCENES:
             scene = bench_scene(name, duration)
             rows.append(Row(name, n, scene.n_steps, *_gpu_seconds(scene, n)))
-    cpu = {name: cpu_rate(bench_scene(name, duration), cpu_paths) for name in SCENES}
+            _progress(f"{name}, {n:,} paths: {rows[-1].seconds:.3g} s, {rows[-1].rate:.3g} path-steps/s")
+    cpu = {}
+    for name in SCENES:
+        cpu[name] = cpu_rate(bench_scene(name, duration), cpu_paths)
+        _progress(f"{name} on the CPU, {cpu_paths} paths: {cpu[name]:.3g} path-steps/s")
     top = paths[-1]
     file, changes = SCENES["smooth"]
     with tempfile.TemporaryDirectory() as tmp:
@@ -191,6 +203,7 @@ def measure(paths: tuple[int, ...] = (10_000, 100_000, 1_000_000), quick: bool =
         start = time.perf_counter()
         run(scenes.study(file, whole), Path(tmp) / "run", backend="cuda")
         run_s = time.perf_counter() - start
+        _progress(f"whole run, {top:,} realisations: {run_s:.3g} s")
     kernel_s = next(r.seconds for r in rows if r.scene == "smooth" and r.paths == top)
     return Results(gpu.device_name(), gpu.simulating(), paths, rows, roof, compile_s, cpu, cpu_paths, top,
                    run_s, kernel_s, finite)
