@@ -64,7 +64,8 @@ print(json.dumps(out))
 
 
 def _run(mode: str, name: str, folder) -> dict:
-    env = {**os.environ, "NUMBA_ENABLE_CUDASIM": "0", "NUMBA_CACHE_DIR": str(folder), "PYTHONPATH": str(ROOT)}
+    path = os.pathsep.join(filter(None, [str(ROOT), os.environ.get("PYTHONPATH")]))  # the caller's kept
+    env = {**os.environ, "NUMBA_ENABLE_CUDASIM": "0", "NUMBA_CACHE_DIR": str(folder), "PYTHONPATH": path}
     done = subprocess.run([sys.executable, "-c", SCRIPT, mode, name], capture_output=True, text=True, env=env,
                           cwd=ROOT)
     assert done.returncode == 0, done.stderr[-3000:]
