@@ -28,6 +28,8 @@ from typing import Any
 import numpy as np
 from filelock import FileLock
 
+from .flags import VECTOR_BITS
+
 #: The package's folder.
 PACKAGE = Path(__file__).resolve().parent.parent
 #: The sources compiled functions are built from: the formulas, the step loops and what they
@@ -47,16 +49,19 @@ def files_digest(root: Path, files: list[Path]) -> str:
 
 
 def digest(package: Path = PACKAGE) -> str | None:
-    """A hash of the sources named by ``SOURCES`` (their paths and bytes), 16 hex digits; None
-    where they are not files (a package imported from a zip archive)."""
+    """A hash of the sources named by ``SOURCES`` (their paths and bytes) and of the vector
+    width the lane loops ask for (``flags.VECTOR_BITS``), 16 hex digits; None where the sources
+    are not files (a package imported from a zip archive)."""
     files = []
     for name in SOURCES:
         path = package / name
         files += sorted(path.glob("*.py")) if path.is_dir() else [path]
     try:
-        return files_digest(package, files)[:16]
+        sources = files_digest(package, files)
     except OSError:
         return None
+    # the settings read from the environment that change the machine code (not the sources)
+    return hashlib.sha256(f"{sources} vector-bits={VECTOR_BITS}".encode()).hexdigest()[:16]
 
 
 def key_by_sources(package: str = "numba.core") -> str:

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import os
+
 #: Options of every compiled loop: cached on disk, GIL released, IEEE division (no Python
 #: ZeroDivisionError checks in hot loops), and fused multiply-adds (``contract``: one rounding
 #: instead of two, half the latency on a step's critical path; no other fast-math licence, so
@@ -17,3 +19,28 @@ INLINE = dict(KERNEL, inline="always")
 #: Options of compiled functions that must round as numpy does, operation by operation (no
 #: fused multiply-adds): ``pcg``'s ziggurat, ``order``'s quantiles.
 ROUNDED = dict(cache=True, nogil=True, error_model="numpy")
+
+#: The environment variable that sets the vector width the lane loops ask for (``VECTOR_BITS``).
+VECTOR_SWITCH = "VINES_STOCH_VECTOR_BITS"
+#: The widths it may take (bits).
+VECTOR_CHOICES = (128, 256, 512)
+
+
+def vector_bits() -> int:
+    """The vector width (bits) that the loops over SIMD lanes (``kernels/lanes.py``) ask LLVM to
+    prefer, by the function attribute ``prefer-vector-width`` (``intrinsics.prefer_vectors``):
+    ``VINES_STOCH_VECTOR_BITS``, default 512.  LLVM's own choice on AVX-512 hosts is 256 bits
+    (the frequency cost of 512-bit instructions on early AVX-512 chips); the lane loops are
+    long runs of vector arithmetic that gain from the wider registers (1.3-1.4x on an Emerald
+    Rapids host).  A host without AVX-512 keeps its widest vectors whatever is asked.  The width
+    changes no number: the loops allow no reassociation, so lane ``l`` computes the same bits in
+    any width.  It is part of the cache key (``jit.cache.digest``)."""
+    text = os.environ.get(VECTOR_SWITCH, "512").strip()
+    if text not in {str(bits) for bits in VECTOR_CHOICES}:
+        raise ValueError(f"environment variable {VECTOR_SWITCH}={text!r}: give the vector width in bits, "
+                         f"one of {', '.join(map(str, VECTOR_CHOICES))}")
+    return int(text)
+
+
+#: The vector width the lane loops ask for (``vector_bits``, read once at import).
+VECTOR_BITS = vector_bits()

@@ -13,7 +13,7 @@ from numba.core.imputils import lower_cast
 from numba.extending import intrinsic, register_model
 from numba.np.arrayobj import make_array, populate_array
 
-from .flags import INLINE
+from .flags import INLINE, VECTOR_BITS
 
 
 class StackArray(types.Array):
@@ -181,6 +181,22 @@ def fused(typingctx, a, b, c):
         return builder.call(fma, args)
 
     return types.float64(types.float64, types.float64, types.float64), codegen
+
+
+@intrinsic
+def prefer_vectors(typingctx):
+    """Ask LLVM to vectorise the loops of the calling function with ``flags.VECTOR_BITS``-bit
+    vectors (the string attribute ``"prefer-vector-width"`` on the function being compiled, which
+    the x86 back end reads a function at a time): called first in each function that holds a loop
+    over SIMD lanes, and by no other, so that the rest of the package keeps LLVM's own choice."""
+
+    def codegen(context, builder, signature, args):
+        # llvmlite's attribute set knows no string attributes: added past its check, it prints as
+        # given in the function's definition
+        set.add(builder.function.attributes, f'"prefer-vector-width"="{VECTOR_BITS}"')
+        return context.get_dummy_value()
+
+    return types.none(), codegen
 
 
 def _selected(a: types.Type, b: types.Type, predicate: str):

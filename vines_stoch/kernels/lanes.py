@@ -38,7 +38,7 @@ from numba import njit
 
 from ..jit.cache import stable_cache
 from ..jit.flags import INLINE, KERNEL
-from ..jit.intrinsics import borrowed, int_scratch, larger, plain, scratch
+from ..jit.intrinsics import borrowed, int_scratch, larger, plain, prefer_vectors, scratch
 from ..outputs import (
     ACC_MAX_K,
     CONTACT_TIME,
@@ -119,6 +119,7 @@ def lane_normals(z, spare, nl: int, draw: int, key, places, first: int) -> None:
     lane: at an even draw the Box-Muller pair of its block (``rng.philox_pair``), its second
     half kept in ``spare`` for the next draw; at an odd draw that half.  (Out of line, as the
     lane step: a small function that the compiler vectorises on its own.)"""
+    prefer_vectors()
     if draw & 1 == 0:
         block = np.uint64(draw >> 1)
         for lane in range(nl):
@@ -497,6 +498,7 @@ def lane_loop(spec: Spec):
 
     @njit(**KERNEL)
     def run(bodies, absorbers, ex, fl, noise, grid, limits, key, bridge_key, places, raw):
+        prefer_vectors()
         n = raw.shape[0]
         s, z, spare = aligned_rows(ROWS), aligned_rows(NF), aligned_rows(1)
         passages = aligned_rows(limits.shape[0])

@@ -15,8 +15,8 @@ from numba.core.caching import NullCache
 
 from tests.helpers import scene_from
 from vines_stoch.jit import frontend
-from vines_stoch.jit.flags import KERNEL
-from vines_stoch.kernels import simulate, spec_of
+from vines_stoch.jit.flags import KERNEL, VECTOR_BITS
+from vines_stoch.kernels import SLOTS, simulate, spec_of
 from vines_stoch.kernels.chunk import lane_call, lane_scene, simulate_chunk
 from vines_stoch.kernels.events import NONE, event_ahead, quiet_band
 from vines_stoch.kernels.lanes import ALIGN, LANES, aligned_rows, lane_loop, lane_normals
@@ -172,9 +172,10 @@ def _packed(asm: str, width: str) -> int:
 
 @pytest.mark.parametrize("data", [SMOOTH, IMPACT, HERTZ], ids=["smooth", "impact", "hertz"])
 def test_the_lane_loops_are_vector_code_on_this_host(data):
-    """The update loop and the normals compile to packed arithmetic on 256- or 512-bit registers
-    (``ymm``: AVX2; ``zmm``: AVX-512, where LLVM's tuning for the host takes them), with and
-    without events; skipped on a host without AVX2.  The lane loop holds the normals' loop too:
+    """The update loop and the normals compile to packed arithmetic on the registers of the
+    width they ask for (``flags.VECTOR_BITS``, 512 unless set) as far as the host has them:
+    ``zmm`` on an AVX-512 host, ``ymm`` on an AVX2 host, with and without events; skipped on a
+    host without AVX2.  The lane loop holds the normals' loop too:
     beyond the normals' own packed arithmetic, a scalar update loop left 5 instructions (an
     impact scene's, where one float sum kept it scalar), a vector one 110 to 180 (AVX2 host).
     (Compiled afresh: numba shows no machine code of a loop it loaded from its cache.)"""
@@ -189,10 +190,55 @@ def test_the_lane_loops_are_vector_code_on_this_host(data):
     normals(np.zeros(8), np.zeros(8), 8, 0, np.uint64(1), np.arange(8, dtype=np.uint64), 0)
     update = run.inspect_asm(run.signatures[0])
     drawn = normals.inspect_asm(normals.signatures[0])
-    wide = "zmm" if _packed(update, "zmm") else "ymm"
+    host = 512 if llvm.get_host_cpu_features().get("avx512f") else 256
+    wide = {128: "xmm", 256: "ymm", 512: "zmm"}[min(host, VECTOR_BITS)]
     assert _packed(drawn, wide) >= 10 and re.search(rf"vsqrtpd[^\n]*%{wide}", drawn), \
         "the lanes' normals are not vectorised"
     assert _packed(update, wide) - _packed(drawn, wide) >= 40, "the lane update loop is not vectorised"
+
+
+#: Runs ``simulate_chunk`` of the impact scene (its first argument: the scene's data as JSON) on
+#: 200 realisations and saves the metric rows to the file named by its second.
+_WIDTH_SCRIPT = """
+import json, sys
+import numpy as np
+from tests.helpers import scene_from
+from vines_stoch.kernels.chunk import simulate_chunk
+np.save(sys.argv[2], simulate_chunk(scene_from(json.loads(sys.argv[1])), 20261127, 0, 0, 200).raw)
+"""
+
+
+def test_the_vector_width_changes_no_number(tmp_path):
+    """The lane loops asked for 256-bit vectors (``VINES_STOCH_VECTOR_BITS=256``, in a process of
+    its own, its cache in a folder of its own) give the impact scene's metric rows bitwise as the
+    default width does (on an AVX-512 host: ymm against zmm code); a width outside 128, 256 and
+    512 stops with an error naming the variable, the value and the widths allowed."""
+    import json
+    import os
+    import subprocess
+    import sys
+
+    from tests.helpers import ROOT
+    from vines_stoch.jit import flags
+
+    other = 256 if VECTOR_BITS != 256 else 512
+    path = os.pathsep.join(filter(None, [str(ROOT), os.environ.get("PYTHONPATH")]))
+    env = {**os.environ, "VINES_STOCH_VECTOR_BITS": str(other), "NUMBA_CACHE_DIR": str(tmp_path / "cache"),
+           "PYTHONPATH": path}
+    saved = tmp_path / "rows.npy"
+    done = subprocess.run([sys.executable, "-c", _WIDTH_SCRIPT, json.dumps(IMPACT), str(saved)], env=env,
+                          cwd=ROOT, capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr[-3000:]
+    here = simulate_chunk(scene_from(IMPACT), SEED, 0, 0, 200).raw
+    assert lane_scene(scene_from(IMPACT)) and here[:, SLOTS.index("impacts")].sum() > 0  # (lanes, impacts)
+    np.testing.assert_array_equal(np.load(saved), here)
+
+    os.environ["VINES_STOCH_VECTOR_BITS"] = "300"
+    try:
+        with pytest.raises(ValueError, match=r"VINES_STOCH_VECTOR_BITS='300'.*128, 256, 512"):
+            flags.vector_bits()
+    finally:
+        del os.environ["VINES_STOCH_VECTOR_BITS"]
 
 
 def new_metrics_rows(scene, n: int) -> np.ndarray:
