@@ -75,10 +75,13 @@ HISTORY_CHUNK_BYTES = 8_000_000
 #: ``target_sem`` is tested at every multiple of this many realisations (and never before).
 TARGET_STEP = 100
 #: How many times cheaper a path-step of a scene in SIMD lanes counts in an automatic chunk's
-#: work (``_auto_chunk``): lanes run about 4-5x faster than the scalar loop (``make bench``,
+#: work (``_auto_chunk``): lanes run about 3-4x faster than the scalar loop (``make bench``,
 #: "Paths in SIMD lanes"), and a chunk's fixed costs (its table, its Parquet part) need about 3x
 #: more compute beside them to stay small (measured on the smooth scene, 4,096 paths of 20,000
-#: steps: 124, 158 and 151 M path-steps/s on one worker at 4, 16 and 64).
+#: steps: 124, 158 and 151 M path-steps/s on one worker at 4, 16 and 64).  Not for a scene with
+#: Hertz contact: its lanes finish every step in contact in the scalar step, at the scalar
+#: loop's speed (256 paths of the contact-under-noise scene made one chunk, which a second
+#: worker could not share).
 LANE_WORK = 16
 #: Realisations of an automatic chunk of the cuda backend (a launch fills a large GPU from
 #: about 1e5 threads on; ``gpu.simulate_many`` splits a chunk into launches that fit its memory).
@@ -357,10 +360,11 @@ def _auto_chunk(scene: Scene, n: int) -> int:
     CHUNKS_PER_POINT`` where that leaves a chunk ``MIN_CHUNK_STEPS`` of work.  A scene that runs
     in SIMD lanes (``kernels.chunk.lane_scene``) counts its path-steps ``LANE_WORK`` times
     cheaper and takes at least a batch of lanes (``lanes.LANES`` paths, or ``n``), its chunks
-    then evened out (200 paths: two of 100, not 128 and 72)."""
+    then evened out (200 paths: two of 100, not 128 and 72); one with Hertz contact counts its
+    path-steps at their scalar cost."""
     steps = max(scene.n_steps, 1)
     lanes = lane_scene(scene)
-    work = LANE_WORK if lanes else 1
+    work = LANE_WORK if lanes and not scene.has_hertz else 1
     by_cost = max(1, work * CHUNK_STEPS // steps)
     least = math.ceil(work * MIN_CHUNK_STEPS / steps)
     size = max(1, min(by_cost, n, max(math.ceil(n / CHUNKS_PER_POINT), least)))

@@ -86,3 +86,22 @@ def test_example_scenarios_close_the_energy_balance(tmp_path, name):
     realizations, summary = run(study, tmp_path, realizations=8)
     assert (realizations["status"] == "ok").all()
     assert realizations["energy_residual"].abs().max() < 1e-3
+
+
+def test_automatic_chunks_of_lane_scenes_are_batches_of_lanes_and_contact_counts_at_its_cost():
+    """``ensemble.plan``: a smooth scene in SIMD lanes takes whole batches of lanes, evened out
+    (200 paths of 200,000 steps: two chunks of 100); a scene with Hertz contact, whose steps in contact are
+    finished by the scalar step, is split by its scalar cost, so that two workers share 256
+    paths of 20,000 steps (two chunks of a lane batch each)."""
+    from tests.helpers import ROOT
+    from vines_stoch.ensemble import plan
+    from vines_stoch.kernels.lanes import LANES
+    from vines_stoch.validation import scenes
+
+    smooth = scenes.study("smooth", {"ensemble.realizations": 200, "simulation.duration": 200.0})
+    assert [(c[1], c[2]) for c in plan(smooth).chunks] == [(0, 100), (100, 200)]
+    contact = load_scenario(ROOT / "scenarios" / "contact_noise_parallel.toml")
+    data = {key: value for key, value in contact.data.items() if key != "sweep"}
+    one = scenes.study(data, {**contact.grid[0], "ensemble.realizations": 256, "simulation.duration": 20.0},
+                       directory=contact.directory)
+    assert [(c[1], c[2]) for c in plan(one).chunks] == [(0, LANES), (LANES, 256)]

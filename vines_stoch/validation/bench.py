@@ -26,24 +26,28 @@ section of the report (``make bench-gpu``, ``bench_gpu.py``) is kept when the re
 
 from __future__ import annotations
 
+import contextlib
 import os
 import subprocess
 import sys
 import tempfile
 import time
+from collections.abc import Mapping
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from numba import njit
 
 from ..ensemble import run
-from ..jit.flags import KERNEL
+from ..jit.flags import KERNEL, VECTOR_BITS
 from ..kernels import load_history, needed_streams, simulate
 from ..kernels.pcg import state_of
 from ..kernels.rng import normal
 from ..outputs import ABSORBER_DISS, E1_MAX, FINAL_ENERGY, IMPACT_LOSS, INPUT, PRIMARY_DISS
 from ..physics.hertz import hertz_constant
 from ..records import G, write_at2
+from ..scenario import Study
 from ..scene import build_scene
 from ..streams import streams
 from . import bench_rare, precision, scenes, stability
@@ -165,43 +169,71 @@ def _api_rate(n_paths: int, workers: int, directory: Path, impacts: bool = False
 
 #: Realisations of the lanes' runs (T = 20): 32 chunks of lanes for 2 threads.
 LANE_PATHS = 4096
+#: The scenes of the lanes' runs, by their name in the report: (scene file of ``validation.scenes``
+#: or scenario of the repository, realisations).  The contact scene's paths spend much of their
+#: time in contact, each such step finished in the scalar step: fewer paths keep its scalar runs
+#: as short as the others'.
+LANE_SCENES = {"smooth": ("smooth", LANE_PATHS),
+               "impact-rich": ("smooth_impact", LANE_PATHS),
+               "contact under noise": ("scenarios/contact_noise_parallel.toml", 256)}
 
 
-def _lanes(directory: Path, rounds: int = 3) -> dict[str, float]:
-    """Path-steps/s of ``run`` on the smooth scene (T = 20, ``LANE_PATHS`` realisations) with its
-    paths in SIMD lanes (1 and 2 threads) and as before lanes (``chunk.scalar_loops``: the
-    scalar loop on PCG64 streams), in turn, the best of ``rounds``; the ensemble means of
-    ``x1_rms`` of the two runs and their standard errors (other streams, the same law); the rate of
-    the lanes' normals alone and of the scalar loop's draws from a Philox and from a PCG64 stream."""
+def _scenario_study(path: str, point: int = 0, changes: Mapping[str, Any] | None = None) -> Study:
+    """The one-point study of sweep point ``point`` of the repository's scenario ``path``, with
+    ``changes`` (dotted keys) on top of the point's own."""
+    from ..scenario import load_scenario
+
+    study = load_scenario(REPOSITORY / path)
+    data = {key: value for key, value in study.data.items() if key != "sweep"}
+    return scenes.study(data, {**study.grid[point], **(changes or {})}, source=study.source,
+                        directory=study.directory)
+
+
+def _lane_runs(study: Study, directory: Path, rounds: int) -> dict[str, float]:
+    """Path-steps/s of ``run`` of ``study`` in SIMD lanes (1 and 2 threads) and in the scalar
+    loop on PCG64 streams (``chunk.scalar_loops``), in turn, the best of ``rounds``, and the
+    means of ``x1_rms`` of the two with their standard errors."""
     from ..kernels.chunk import scalar_loops
-    from ..kernels.lanes import lane_normals
-    from ..kernels.rng import philox_stream, stream_key
 
-    study = scenes.study("smooth", {"ensemble.realizations": LANE_PATHS, "simulation.duration": 20.0})
-    steps = round(20.0 / 1e-3)
+    sim = study.points[0].simulation
+    paths, steps = study.points[0].ensemble.realizations, round(sim.duration / sim.dt)
+    runners = (("scalar", 1, True), ("lanes", 1, False), ("lanes, 2 threads", 2, False))
 
-    def timed(name: str, workers: int, scalar: bool) -> tuple[float, object]:
+    def timed(folder: str, workers: int, scalar: bool) -> tuple[float, Any]:
         start = time.perf_counter()
-        if scalar:
-            with scalar_loops():
-                realizations, _ = run(study, directory / name, workers=workers)
-        else:
-            realizations, _ = run(study, directory / name, workers=workers)
-        return LANE_PATHS * steps / (time.perf_counter() - start), realizations
+        with scalar_loops() if scalar else contextlib.nullcontext():
+            realizations, _ = run(study, directory / folder, workers=workers)
+        return paths * steps / (time.perf_counter() - start), realizations
 
     with scalar_loops():
         run(study, directory / "warm-scalar", workers=1, realizations=8)
     run(study, directory / "warm-lanes", workers=1, realizations=8)
-    best = {"scalar": 0.0, "lanes": 0.0, "lanes, 2 threads": 0.0}
+    best = {"paths": paths, "steps": steps, **{runner: 0.0 for runner, _, _ in runners}}
     tables = {}
-    runners = (("scalar", 1, True), ("lanes", 1, False), ("lanes, 2 threads", 2, False))
-    for k in range(rounds):
-        for name, workers, scalar in runners:
-            rate, tables[name] = timed(f"{name}{k}".replace(", ", "-").replace(" ", "-"), workers, scalar)
-            best[name] = max(best[name], rate)
-    for name in ("scalar", "lanes"):
-        x = tables[name]["x1_rms"].to_numpy()
-        best[f"{name} mean"], best[f"{name} sem"] = float(x.mean()), float(x.std(ddof=1) / np.sqrt(x.size))
+    for r in range(rounds):
+        for runner, workers, scalar in runners:
+            folder = f"{r}-{runner}".replace(", ", "-").replace(" ", "-")
+            rate, tables[runner] = timed(folder, workers, scalar)
+            best[runner] = max(best[runner], rate)
+    for runner in ("scalar", "lanes"):
+        x = tables[runner]["x1_rms"].to_numpy()
+        best[f"{runner} mean"] = float(x.mean())
+        best[f"{runner} sem"] = float(x.std(ddof=1) / np.sqrt(x.size))
+    return best
+
+
+def _lanes(directory: Path, rounds: int = 3) -> dict[str, Any]:
+    """``_lane_runs`` of each of ``LANE_SCENES`` (T = 20); the rate of the lanes' normals alone
+    and of the scalar loop's draws from a Philox and from a PCG64 stream."""
+    from ..kernels.lanes import lane_normals
+    from ..kernels.rng import philox_stream, stream_key
+
+    out: dict[str, Any] = {"scenes": {}}
+    for k, (name, (source, paths)) in enumerate(LANE_SCENES.items()):
+        changes = {"ensemble.realizations": paths, "simulation.duration": 20.0}
+        toml = source.endswith(".toml")
+        study = _scenario_study(source, 0, changes) if toml else scenes.study(source, changes)
+        out["scenes"][name] = _lane_runs(study, directory / f"lanes{k}", rounds)
     lanes, draws = 1024, 4096
     z, spare = np.zeros(lanes), np.zeros(lanes)
     key, places = np.uint64(stream_key(1, 0)), np.arange(lanes, dtype=np.uint64)
@@ -209,14 +241,29 @@ def _lanes(directory: Path, rounds: int = 3) -> dict[str, float]:
     start = time.perf_counter()
     for d in range(draws):
         lane_normals(z, spare, lanes, d, key, places, 0)
-    best["normals"] = lanes * draws / (time.perf_counter() - start)
+    out["normals"] = lanes * draws / (time.perf_counter() - start)
     count = 4_000_000
     for name, gen in (("philox", philox_stream(1, 0, 0)), ("pcg", state_of(np.random.default_rng(1)))):
         _draw_sum(gen, 10)
         start = time.perf_counter()
         _draw_sum(gen, count)
-        best[f"{name} ns"] = (time.perf_counter() - start) / count * 1e9
-    return best
+        out[f"{name} ns"] = (time.perf_counter() - start) / count * 1e9
+    return out
+
+
+def _lane_rows(lanes: dict[str, Any]) -> str:
+    """The rows of the lanes' table: each scene's three runners."""
+    rows = []
+    for name, r in lanes["scenes"].items():
+        scalar = r["scalar"]
+        rows += [f"| {name} | {r['paths']:,} | scalar loop, PCG64 streams | 1 | {scalar / 1e6:.1f} | 1.00 | "
+                 f"{r['scalar mean']:.5f} ({r['scalar sem']:.5f}) |",
+                 f"| {name} | {r['paths']:,} | lanes, Philox streams | 1 | {r['lanes'] / 1e6:.1f} | "
+                 f"{r['lanes'] / scalar:.2f} | {r['lanes mean']:.5f} ({r['lanes sem']:.5f}) |",
+                 f"| {name} | {r['paths']:,} | lanes, Philox streams | 2 | "
+                 f"{r['lanes, 2 threads'] / 1e6:.1f} | {r['lanes, 2 threads'] / scalar:.2f} (1 -> 2 threads: "
+                 f"{r['lanes, 2 threads'] / r['lanes']:.2f}x) | - |"]
+    return "\n".join(rows)
 
 
 @njit(**KERNEL)
@@ -246,13 +293,9 @@ def _contact_rates(n_paths: int, directory: Path) -> list[tuple[str, float, floa
     """``(scene, path-steps/s, max abs energy residual, contacts a path, step loop ratio)`` of
     ``vines_stoch.run`` with one thread on the ``CONTACT_SCENES``; the last, the scene's step
     loop (``simulate``) against the smooth scene's, one path of each in turn (``_loop_ratio``)."""
-    from ..scenario import load_scenario
-
     rows = []
     for k, (name, (path, point)) in enumerate(CONTACT_SCENES.items()):
-        study = load_scenario(REPOSITORY / path)
-        data = {key: value for key, value in study.data.items() if key != "sweep"}
-        one = scenes.study(data, study.grid[point], source=study.source, directory=study.directory)
+        one = _scenario_study(path, point)
         run(one, directory / f"warm{k}", workers=1, realizations=2)  # compile or load outside the timing
         start = time.perf_counter()
         realizations, _ = run(one, directory / f"contact{k}", workers=1, realizations=n_paths)
@@ -620,26 +663,26 @@ three rounds, the better 1-thread ratio kept).
 
 ## Paths in SIMD lanes
 
-The smooth scene with T = 20 (20,000 steps), {LANE_PATHS:,} realisations: `vines_stoch.run` with its
-paths in SIMD lanes (`kernels/lanes.py`, the default for this scene, on Philox streams) and as
-before lanes (the scalar loop on PCG64 streams), in turn, the best of three rounds.
+`vines_stoch.run` with T = 20 (20,000 steps) with its paths in SIMD lanes (`kernels/lanes.py`, the
+default for these scenes, on Philox streams; {VECTOR_BITS}-bit vectors asked for) and as before lanes
+(the scalar loop on PCG64 streams), in turn, the best of three rounds. The smooth scene as above;
+the impact-rich scene below; the contact scene of "Contact under noise" (steel-on-steel DSVI and
+a plastic impact NES). A lane whose step holds an impact, a contact onset or end, or sticking,
+or whose absorber touches, is finished by the scalar step: the contact scene's paths spend much
+of their time in contact, and so most of its work stays scalar.
 
-| runner | threads | M path-steps/s | ratio to the scalar loop (1 thread) | mean `x1_rms` (standard error) |
-| --- | ---: | ---: | ---: | ---: |
-| `vines_stoch.run`, scalar loop, PCG64 streams | 1 | {lanes["scalar"] / 1e6:.1f} | 1.00 | \
-{lanes["scalar mean"]:.5f} ({lanes["scalar sem"]:.5f}) |
-| `vines_stoch.run`, lanes, Philox streams | 1 | {lanes["lanes"] / 1e6:.1f} | \
-{lanes["lanes"] / lanes["scalar"]:.2f} | {lanes["lanes mean"]:.5f} ({lanes["lanes sem"]:.5f}) |
-| `vines_stoch.run`, lanes, Philox streams | 2 | {lanes["lanes, 2 threads"] / 1e6:.1f} | \
-{lanes["lanes, 2 threads"] / lanes["scalar"]:.2f} | - |
+| scene | realisations | runner | threads | M path-steps/s | ratio to the scalar loop (1 thread) | \
+mean `x1_rms` (standard error) |
+| --- | ---: | --- | ---: | ---: | ---: | ---: |
+{_lane_rows(lanes)}
 
-Scaling 1 -> 2 threads in lanes: {lanes["lanes, 2 threads"] / lanes["lanes"]:.2f}x. The lanes' normals
-alone (a block of Philox4x32-10 and a branch-free Box-Muller pair every two draws, 1,024 lanes):
-{lanes["normals"] / 1e6:.0f} M normals/s; a normal drawn in the scalar loop costs {lanes["philox ns"]:.1f} ns
-from a Philox stream and {lanes["pcg ns"]:.1f} ns from a PCG64 stream (the ziggurat), so a scene that runs
-in lanes but records what the lanes do not (history rows, event logs, declared metrics: the
-scalar loop on its Philox streams) pays that difference a draw. The impact-rich, contact and
-filtered scenes below do not run in lanes yet (the scalar loop: a ratio of 1).
+The lanes' normals alone (a block of Philox4x32-10 and a branch-free Box-Muller pair every two
+draws, 1,024 lanes): {lanes["normals"] / 1e6:.0f} M normals/s; a normal drawn in the scalar loop costs
+{lanes["philox ns"]:.1f} ns from a Philox stream and {lanes["pcg ns"]:.1f} ns from a PCG64 stream \
+(the ziggurat), so a scene that runs in lanes but records what the lanes do not (history rows,
+event logs, declared metrics: the scalar loop on its Philox streams) pays that difference a
+draw. Filtered loads, the SRA and Runge-Kutta schemes do not run in lanes yet (the scalar
+loop: a ratio of 1).
 
 ## Impact-rich stochastic scene
 
