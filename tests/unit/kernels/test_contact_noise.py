@@ -9,7 +9,9 @@ import numpy as np
 import pytest
 
 from tests.helpers import example_data, raw_metrics, scene_from, study_from
+from vines_stoch.kernels import SLOTS
 from vines_stoch.kernels.brownian import MEMO, new_memo, path_value, tree_value
+from vines_stoch.kernels.chunk import lane_scene, simulate_chunk
 from vines_stoch.validation.precision import same_path_errors, strong_order
 
 #: Soft contact surfaces (K = 7.3e2 N/m^1.5: contacts last long enough to matter for the
@@ -95,7 +97,8 @@ PRESSED = dict(_hertz("single-sided", 0.0, 5.0, SOFT, stiffness=1.0), rest=-1.0)
                           (_hertz("double-sided", 0.2, 0.2, SOFT), 100, 1100.0),
                           (PRESSED, 30, 600.0)],
                          ids=["single-sided", "double-sided", "pressed into its barrier"])
-def test_elastic_hertz_absorber_keeps_gibbs_equipartition(absorber, paths, duration):
+@pytest.mark.parametrize("lanes", [False, True], ids=["scalar loop", "lanes"])
+def test_elastic_hertz_absorber_keeps_gibbs_equipartition(absorber, paths, duration, lanes):
     """An elastic Hertz absorber (no absorber damping) on a primary with damping ``c1`` under white
     noise ``sigma`` on the primary: the Gibbs law makes ``<x1^2> = theta / k1`` and
     ``<v1^2> = theta / m1``, ``theta = sigma^2 / (2 c1)``, whatever the contact law.  Time
@@ -103,7 +106,9 @@ def test_elastic_hertz_absorber_keeps_gibbs_equipartition(absorber, paths, durat
     paths' averages: the paths are independent).  The absorber spends about 2 % (single-sided)
     and 6 % (double-sided) of the time in contact, 150-600 contacts a path; pressed into its
     barrier by its spring (rest 1 m beyond it) about 80 %, so the noise must act inside the
-    contact sub-steps for the law to hold."""
+    contact sub-steps for the law to hold.  Both in the scalar loop (numpy's generators, a path
+    at a time) and in SIMD lanes (``simulate_chunk``: Philox streams, each contact step finished by
+    the scalar step)."""
     c1, sigma, t0 = 0.1, 0.05, 100.0
     theta = sigma**2 / (2.0 * c1)
     scene = scene_from({
@@ -114,9 +119,13 @@ def test_elastic_hertz_absorber_keeps_gibbs_equipartition(absorber, paths, durat
         "simulation": {"duration": duration, "dt": 0.01, "metrics_from": t0},
     })
     window = duration - t0
+    if lanes:
+        assert lane_scene(scene)
+        rows = [dict(zip(SLOTS, row)) for row in simulate_chunk(scene, 20261127, 0, 0, paths).raw]
+    else:
+        rows = [raw_metrics(scene, np.random.default_rng(path)) for path in range(paths)]
     x2, v2, contacts = [], [], []
-    for path in range(paths):
-        m = raw_metrics(scene, np.random.default_rng(path))
+    for m in rows:
         x2.append(m["x1_square_integral"] / window)
         v2.append(2.0 * (m["energy_integral"] / window - 0.5 * x2[-1]))  # E1 = (v1^2 + x1^2) / 2
         contacts.append(m["impacts"])
