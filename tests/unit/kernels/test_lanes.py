@@ -13,7 +13,7 @@ import pytest
 from numba import njit
 from numba.core.caching import NullCache
 
-from tests.helpers import scene_from
+from tests.helpers import changed, example_data, scene_from
 from vines_stoch.jit import frontend
 from vines_stoch.jit.flags import KERNEL, VECTOR_BITS
 from vines_stoch.kernels import SLOTS, simulate, spec_of
@@ -77,6 +77,10 @@ HERTZ = {**SMOOTH, "name": "lanes-hertz",
                         "contact_right": {"k": 1e5}}],
          "loads": [{"type": "harmonic", "amplitude": 0.3, "frequency": 1.0},
                    {"type": "white-noise", "intensity": 0.1}]}
+#: A plastic impact absorber (restitution 0): every impact sticks, and the lanes carry it with
+#: its walls until the wall would pull it.
+STICKY = {**IMPACT, "name": "lanes-sticky",
+          "absorbers": [{"type": "impact", "mass": 0.05, "clearance": 0.05, "restitution": 0.0}]}
 #: A deterministic scene run by the kick-drift-kick scheme: the lanes draw nothing.
 QUIET = {**SMOOTH, "loads": [{"type": "harmonic", "amplitude": 0.1, "frequency": 1.0}]}
 
@@ -91,8 +95,16 @@ def same(a: np.ndarray, b: np.ndarray) -> bool:
     return bool(np.all((a == b) | (np.isnan(a) & np.isnan(b))))
 
 
-@pytest.mark.parametrize("data", [SMOOTH, FRAME, GROUND, QUIET, IMPACT, HERTZ],
-                         ids=["smooth", "frame", "ground", "quiet", "impact", "hertz"])
+def contact_noise_parallel(duration: float = 2.0) -> dict:
+    """The example scenario of steel-on-steel Hertz contact beside a plastic impact absorber
+    under harmonic force and white noise (stuck about half the time), ``duration`` long."""
+    return changed(example_data("contact_noise_parallel"), {"simulation.duration": duration})
+
+
+@pytest.mark.parametrize("data", [SMOOTH, FRAME, GROUND, QUIET, IMPACT, HERTZ, STICKY,
+                                  contact_noise_parallel()],
+                         ids=["smooth", "frame", "ground", "quiet", "impact", "hertz", "sticky",
+                              "contact-noise"])
 def test_a_lane_is_the_scalar_loop_on_its_philox_streams(data):
     scene = scene_from(data)
     assert lane_scene(scene)
