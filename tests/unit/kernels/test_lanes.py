@@ -77,8 +77,8 @@ HERTZ = {**SMOOTH, "name": "lanes-hertz",
                         "contact_right": {"k": 1e5}}],
          "loads": [{"type": "harmonic", "amplitude": 0.3, "frequency": 1.0},
                    {"type": "white-noise", "intensity": 0.1}]}
-#: A plastic impact absorber (restitution 0): every impact sticks, and the lanes carry it with
-#: its walls until the wall would pull it.
+#: A plastic impact absorber (restitution 0): every impact sticks, and the scalar step takes each
+#: step of a lane whose absorber is stuck.
 STICKY = {**IMPACT, "name": "lanes-sticky",
           "absorbers": [{"type": "impact", "mass": 0.05, "clearance": 0.05, "restitution": 0.0}]}
 #: A deterministic scene run by the kick-drift-kick scheme: the lanes draw nothing.
