@@ -668,8 +668,10 @@ default for these scenes, on Philox streams; {VECTOR_BITS}-bit vectors asked for
 (the scalar loop on PCG64 streams), in turn, the best of three rounds. The smooth scene as above;
 the impact-rich scene below; the contact scene of "Contact under noise" (steel-on-steel DSVI and
 a plastic impact NES). A lane whose step holds an impact, a contact onset or end, or sticking,
-or whose absorber touches, is finished by the scalar step: the contact scene's paths spend much
-of their time in contact, and so most of its work stays scalar.
+or whose absorber is stuck or touches, is finished by the scalar step. The contact scene's time
+is in such steps: its plastic absorber is stuck on about half of them, and its events (impacts,
+the contact's sub-steps, the root searches on the Brownian tree) fall on about 3.5 % of them
+and cost most of its scalar loop's time, so its lanes run at the scalar loop's speed.
 
 | scene | realisations | runner | threads | M path-steps/s | ratio to the scalar loop (1 thread) | \
 mean `x1_rms` (standard error) |
@@ -678,11 +680,11 @@ mean `x1_rms` (standard error) |
 
 The lanes' normals alone (a block of Philox4x32-10 and a branch-free Box-Muller pair every two
 draws, 1,024 lanes): {lanes["normals"] / 1e6:.0f} M normals/s; a normal drawn in the scalar loop costs
-{lanes["philox ns"]:.1f} ns from a Philox stream and {lanes["pcg ns"]:.1f} ns from a PCG64 stream \
-(the ziggurat), so a scene that runs in lanes but records what the lanes do not (history rows,
-event logs, declared metrics: the scalar loop on its Philox streams) pays that difference a
-draw. Filtered loads, the SRA and Runge-Kutta schemes do not run in lanes yet (the scalar
-loop: a ratio of 1).
+{lanes["philox ns"]:.1f} ns from a Philox stream and {lanes["pcg ns"]:.1f} ns from a PCG64 stream (the
+ziggurat), so a scene that runs in lanes but records what the lanes do not (history rows, event
+logs, declared metrics: the scalar loop on its Philox streams) pays that difference a draw.
+Filtered loads, the SRA and Runge-Kutta schemes do not run in lanes yet (the scalar loop: a
+ratio of 1).
 
 ## Impact-rich stochastic scene
 
