@@ -21,7 +21,7 @@ from vines_stoch.validation.scenes import text as toml_text
 #: The repository's root folder (scenario examples under ``scenarios/``; ``../shared`` beside it).
 ROOT = Path(__file__).resolve().parents[1]
 
-__all__ = ["ROOT", "changed", "cli", "example_data", "raw_metrics", "scene_from",
+__all__ = ["ROOT", "changed", "cli", "example_data", "lane_metrics", "raw_metrics", "scene_from",
            "run_interrupted", "sdof_fragility_run", "study_from", "toml_text",
            "two_dof_data"]
 
@@ -68,6 +68,14 @@ def raw_metrics(scene, generator=None, **options) -> dict[str, float]:
     """Raw kernel slots of one realisation, by name (``options``: those of ``simulate``, e.g.
     ``final``)."""
     return dict(zip(SLOTS, simulate(scene, generator, **options)))
+
+
+def lane_metrics(scene, seed: int, n: int) -> list[dict[str, float]]:
+    """Raw kernel slots, by name, of realisations ``0 .. n - 1`` of an ensemble chunk
+    (``simulate_chunk``: in SIMD lanes where the scene runs there, on its Philox streams)."""
+    from vines_stoch.kernels.chunk import simulate_chunk
+
+    return [dict(zip(SLOTS, row)) for row in simulate_chunk(scene, seed, 0, 0, n).raw]
 
 
 def cli(*args: str) -> tuple[int, str]:

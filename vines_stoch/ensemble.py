@@ -79,9 +79,9 @@ TARGET_STEP = 100
 #: "Paths in SIMD lanes"), and a chunk's fixed costs (its table, its Parquet part) need about 3x
 #: more compute beside them to stay small (measured on the smooth scene, 4,096 paths of 20,000
 #: steps: 124, 158 and 151 M path-steps/s on one worker at 4, 16 and 64).  Not for a scene with
-#: Hertz contact: its lanes finish every step in contact in the scalar step, at the scalar
-#: loop's speed (256 paths of the contact-under-noise scene made one chunk, which a second
-#: worker could not share).
+#: Hertz contact: the scalar step finishes its steps in contact and its events, and its lanes
+#: run at about the scalar loop's speed (``make bench``: 1.03x on the contact-under-noise scene,
+#: whose 256 paths made one chunk that a second worker could not share).
 LANE_WORK = 16
 #: Realisations of an automatic chunk of the cuda backend (a launch fills a large GPU from
 #: about 1e5 threads on; ``gpu.simulate_many`` splits a chunk into launches that fit its memory).

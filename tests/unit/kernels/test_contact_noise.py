@@ -8,10 +8,9 @@ import math
 import numpy as np
 import pytest
 
-from tests.helpers import example_data, raw_metrics, scene_from, study_from
-from vines_stoch.kernels import SLOTS
+from tests.helpers import example_data, lane_metrics, raw_metrics, scene_from, study_from
 from vines_stoch.kernels.brownian import MEMO, new_memo, path_value, tree_value
-from vines_stoch.kernels.chunk import lane_scene, simulate_chunk
+from vines_stoch.kernels.chunk import lane_scene
 from vines_stoch.validation.precision import same_path_errors, strong_order
 
 #: Soft contact surfaces (K = 7.3e2 N/m^1.5: contacts last long enough to matter for the
@@ -121,7 +120,7 @@ def test_elastic_hertz_absorber_keeps_gibbs_equipartition(absorber, paths, durat
     window = duration - t0
     if lanes:
         assert lane_scene(scene)
-        rows = [dict(zip(SLOTS, row)) for row in simulate_chunk(scene, 20261127, 0, 0, paths).raw]
+        rows = lane_metrics(scene, 20261127, paths)
     else:
         rows = [raw_metrics(scene, np.random.default_rng(path)) for path in range(paths)]
     x2, v2, contacts = [], [], []

@@ -8,9 +8,8 @@ import numpy as np
 import pytest
 from scipy.special import beta
 
-from tests.helpers import raw_metrics, scene_from
-from vines_stoch.kernels import SLOTS
-from vines_stoch.kernels.chunk import lane_scene, simulate_chunk
+from tests.helpers import lane_metrics, raw_metrics, scene_from
+from vines_stoch.kernels.chunk import lane_scene
 
 #: An elastic single-sided Hertz absorber (K = 1e5 N/m^1.5) on a primary m = k = 1, c = 0.1
 #: under white noise 0.2: it crosses its 0.3 m cavity at 1-3 m/s, about 2,800 contacts in
@@ -43,7 +42,7 @@ def test_stiff_frequent_hertz_contact_under_noise_closes_its_energy_balance(lane
     scene = scene_from(SCENE)
     if lanes:
         assert lane_scene(scene)
-        rows = [dict(zip(SLOTS, row)) for row in simulate_chunk(scene, 20261127, 0, 0, 30).raw]
+        rows = lane_metrics(scene, 20261127, 30)
     else:
         rows = [raw_metrics(scene, np.random.default_rng(path)) for path in range(30)]
     residuals, contacts = [], []
