@@ -169,11 +169,25 @@ def box_muller(w0, w1, w2, w3):
 
 
 @njit(**INLINE)
+def packed_block(key, place, block):
+    """Block ``block`` of the Philox stream ``(key, place)`` as two 64-bit words, the first two
+    of its 32-bit words and the last two (what ``packed_pair`` takes)."""
+    w0, w1, w2, w3 = philox_block(key, place, block)
+    return (w0 << _S32) | w1, (w2 << _S32) | w3
+
+
+@njit(**INLINE)
+def packed_pair(a, b):
+    """The Box-Muller pair of a block given as ``packed_block``'s two words."""
+    return box_muller(a >> _S32, a & _LOW, b >> _S32, b & _LOW)
+
+
+@njit(**INLINE)
 def philox_pair(key, place, block):
     """The two normals of block ``block`` of the Philox stream ``(key, place)``: draws
     ``2 block`` and ``2 block + 1`` of its normals."""
-    w0, w1, w2, w3 = philox_block(key, place, block)
-    return box_muller(w0, w1, w2, w3)
+    a, b = packed_block(key, place, block)
+    return packed_pair(a, b)
 
 
 @njit(**INLINE)
