@@ -731,7 +731,7 @@ def _run(study: Study, directory: Path | None, o: _Options) -> Results | None:
     on_disk = {c for c in the_plan.chunks if directory is not None and part_path(directory, *c) in found}
     reusable = folded_chunks if tracked else on_disk
     ready: dict[tuple[int, int, int], tuple[pd.DataFrame, np.ndarray | None, np.ndarray | None]] = {}
-    frames: dict[tuple[int, int, int], pd.DataFrame] = {}  # (in memory: the chunks' tables)
+    frames: dict[tuple[int, int, int], pd.DataFrame] = {}  # (the tables of the chunks this run runs)
     kept_paths: dict[tuple[int, int, int], np.ndarray] = {}
 
     def fold_ready() -> None:
@@ -793,9 +793,8 @@ def _run(study: Study, directory: Path | None, o: _Options) -> Results | None:
             try:
                 for c, (frame, chunk_paths, estimates) in results:
                     _label(frame, study, c[0])
-                    if directory is None:
-                        frames[c] = frame
-                    else:
+                    frames[c] = frame  # (the consolidation's rows: its part is not read back)
+                    if directory is not None:
                         write_table(frame, part_path(directory, *c), {KEY: key})
                     if o.paths:
                         kept_paths[c] = chunk_paths
@@ -879,19 +878,20 @@ def _consolidate(study: Study, the_plan: Plan, states: list[PointState], directo
                  kept_paths: dict[tuple[int, int, int], np.ndarray] | None,
                  signals: tuple[str, ...], views: list[_View | None], chosen: pd.DataFrame | None,
                  studies: dict[str, pd.DataFrame] | None = None) -> Results:
-    """Gather the chunks kept (up to each point's stopping count: from ``frames`` in memory, else
-    the folder's parts) into the result tables, and the points' history statistics and spectra
-    (``views``: their Welch segments), written into ``directory`` where there is one, with the
-    paths of the realisations ``[output] paths`` chooses (``chosen``, ``_chosen_paths``; the
-    results' ``paths`` unless ``kept_paths`` holds every realisation's) and the tables of the
-    studies beside the ensemble (``studies``: ``rare`` and ``sensitivity``, by name)."""
+    """Gather the chunks kept (up to each point's stopping count: from ``frames`` in memory, the
+    chunks this run ran, else the folder's parts, an earlier run's) into the result tables, and
+    the points' history statistics and spectra (``views``: their Welch segments), written into
+    ``directory`` where there is one, with the paths of the realisations ``[output] paths``
+    chooses (``chosen``, ``_chosen_paths``; the results' ``paths`` unless ``kept_paths`` holds
+    every realisation's) and the tables of the studies beside the ensemble (``studies``: ``rare``
+    and ``sensitivity``, by name)."""
     studies = {name: _in_file_types(frame) for name, frame in (studies or {}).items()}
     kept, path_rows = [], []
     for state in states:
         for c in state.chunks:
             if state.stop is not None and c[1] >= state.stop:
                 break
-            frame = frames[c] if directory is None else pd.read_parquet(part_path(directory, *c))
+            frame = frames[c] if c in frames else pd.read_parquet(part_path(directory, *c))
             n = len(frame) if state.stop is None else min(len(frame), state.stop - c[1])
             kept.append(frame.iloc[:n])
             if kept_paths is not None:
