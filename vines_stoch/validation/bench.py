@@ -190,19 +190,21 @@ def _scenario_study(path: str, point: int = 0, changes: Mapping[str, Any] | None
 
 
 def _lane_runs(study: Study, directory: Path, rounds: int) -> dict[str, float]:
-    """Path-steps/s of ``run`` of ``study`` in SIMD lanes (1 and 2 threads) and in the scalar
-    loop on PCG64 streams (``chunk.scalar_loops``), in turn, the best of ``rounds``, and the
-    means of ``x1_rms`` of the two with their standard errors."""
+    """Path-steps/s of ``run`` of ``study`` in SIMD lanes (1 and 2 threads, into a folder and
+    in memory) and in the scalar loop on PCG64 streams (``chunk.scalar_loops``), in turn, the
+    best of ``rounds``, and the means of ``x1_rms`` of the two with their standard errors."""
     from ..kernels.chunk import scalar_loops
 
     sim = study.points[0].simulation
     paths, steps = study.points[0].ensemble.realizations, round(sim.duration / sim.dt)
-    runners = (("scalar", 1, True), ("lanes", 1, False), ("lanes, 2 threads", 2, False))
+    runners = (("scalar", 1, True), ("lanes", 1, False), ("lanes, 2 threads", 2, False),
+               ("lanes, in memory", 1, False), ("lanes, 2 threads, in memory", 2, False))
 
     def timed(folder: str, workers: int, scalar: bool) -> tuple[float, Any]:
         start = time.perf_counter()
         with scalar_loops() if scalar else contextlib.nullcontext():
-            realizations, _ = run(study, directory / folder, workers=workers)
+            where = None if folder.endswith("in-memory") else directory / folder
+            realizations, _ = run(study, where, workers=workers)
         return paths * steps / (time.perf_counter() - start), realizations
 
     with scalar_loops():
@@ -252,17 +254,21 @@ def _lanes(directory: Path, rounds: int = 3) -> dict[str, Any]:
 
 
 def _lane_rows(lanes: dict[str, Any]) -> str:
-    """The rows of the lanes' table: each scene's three runners."""
+    """The rows of the lanes' table: each scene's five runners."""
     rows = []
     for name, r in lanes["scenes"].items():
-        scalar = r["scalar"]
+        scalar, memory1, memory2 = r["scalar"], r["lanes, in memory"], r["lanes, 2 threads, in memory"]
         rows += [f"| {name} | {r['paths']:,} | scalar loop, PCG64 streams | 1 | {scalar / 1e6:.1f} | 1.00 | "
                  f"{r['scalar mean']:.5f} ({r['scalar sem']:.5f}) |",
                  f"| {name} | {r['paths']:,} | lanes, Philox streams | 1 | {r['lanes'] / 1e6:.1f} | "
                  f"{r['lanes'] / scalar:.2f} | {r['lanes mean']:.5f} ({r['lanes sem']:.5f}) |",
                  f"| {name} | {r['paths']:,} | lanes, Philox streams | 2 | "
                  f"{r['lanes, 2 threads'] / 1e6:.1f} | {r['lanes, 2 threads'] / scalar:.2f} (1 -> 2 threads: "
-                 f"{r['lanes, 2 threads'] / r['lanes']:.2f}x) | - |"]
+                 f"{r['lanes, 2 threads'] / r['lanes']:.2f}x) | - |",
+                 f"| {name} | {r['paths']:,} | lanes, in memory | 1 | {memory1 / 1e6:.1f} | "
+                 f"{memory1 / scalar:.2f} | - |",
+                 f"| {name} | {r['paths']:,} | lanes, in memory | 2 | {memory2 / 1e6:.1f} | "
+                 f"{memory2 / scalar:.2f} (1 -> 2 threads: {memory2 / memory1:.2f}x) | - |"]
     return "\n".join(rows)
 
 
@@ -677,6 +683,11 @@ lanes run at about the scalar loop's speed.
 mean `x1_rms` (standard error) |
 | --- | ---: | --- | ---: | ---: | ---: | ---: |
 {_lane_rows(lanes)}
+
+A run into a folder writes each chunk's Parquet part and, at its end, the result tables, in the
+calling thread beside the workers: with one worker that thread has the second core to itself,
+with two it takes time from them. The in-memory rows (`run(study, None)`) write no files, so
+their 1 -> 2 threads ratio is the lanes' own scaling.
 
 The lanes' normals alone (a block of Philox4x32-10 and a branch-free Box-Muller pair every two
 draws, 1,024 lanes): {lanes["normals"] / 1e6:.0f} M normals/s; a normal drawn in the scalar loop costs
