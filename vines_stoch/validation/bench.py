@@ -197,24 +197,24 @@ def _lane_runs(study: Study, directory: Path, rounds: int) -> dict[str, float]:
 
     sim = study.points[0].simulation
     paths, steps = study.points[0].ensemble.realizations, round(sim.duration / sim.dt)
-    runners = (("scalar", 1, True), ("lanes", 1, False), ("lanes, 2 threads", 2, False),
-               ("lanes, in memory", 1, False), ("lanes, 2 threads, in memory", 2, False))
+    # (name, threads, the scalar loop, into a folder)
+    runners = (("scalar", 1, True, True), ("lanes", 1, False, True), ("lanes, 2 threads", 2, False, True),
+               ("lanes, in memory", 1, False, False), ("lanes, 2 threads, in memory", 2, False, False))
 
-    def timed(folder: str, workers: int, scalar: bool) -> tuple[float, Any]:
+    def timed(folder: str | None, workers: int, scalar: bool) -> tuple[float, Any]:
         start = time.perf_counter()
         with scalar_loops() if scalar else contextlib.nullcontext():
-            where = None if folder.endswith("in-memory") else directory / folder
-            realizations, _ = run(study, where, workers=workers)
+            realizations, _ = run(study, folder and directory / folder, workers=workers)
         return paths * steps / (time.perf_counter() - start), realizations
 
     with scalar_loops():
         run(study, directory / "warm-scalar", workers=1, realizations=8)
     run(study, directory / "warm-lanes", workers=1, realizations=8)
-    best = {"paths": paths, **{runner: 0.0 for runner, _, _ in runners}}
+    best = {"paths": paths, **{runner: 0.0 for runner, *_ in runners}}
     tables = {}
     for r in range(rounds):
-        for runner, workers, scalar in runners:
-            folder = f"{r}-{runner}".replace(", ", "-").replace(" ", "-")
+        for runner, workers, scalar, into_folder in runners:
+            folder = f"{r}-{runner}".replace(", ", "-").replace(" ", "-") if into_folder else None
             rate, tables[runner] = timed(folder, workers, scalar)
             best[runner] = max(best[runner], rate)
     for runner in ("scalar", "lanes"):
