@@ -38,7 +38,7 @@ from .kernels.lanes import LANES
 from .metrics import METRICS, finish_table, ground_intensities, summarise
 from .outputs import EVENT_COLUMNS, EVENT_T, POINCARE_SAMPLES, Record
 from .progress import Progress
-from .results import Results, Solution, as_study, check_whole, read_results
+from .results import Results, Solution, as_study, check_whole
 from .scenario import History, Spectra, Study
 from .scenario.fields import MAX_REALIZATIONS
 from .scene import Scene, build_scene
@@ -922,34 +922,22 @@ def _consolidate(study: Study, the_plan: Plan, states: list[PointState], directo
         spectra_df = by_point([state.spectrum.frame(psd.frequencies(view.steps, view.dt),
                                                     tuple(spectra.signals))
                                for state, view in zip(states, views)])
-    paths_df = pd.concat(path_rows, ignore_index=True) if kept_paths is not None else chosen
-    if directory is None:
-        history_df = None if history_df is None else _in_file_types(history_df)
-        events_df = None if events_df is None else _in_file_types(events_df)
-        poincare_df = None if poincare_df is None else _in_file_types(poincare_df)
-        spectra_df = None if spectra_df is None else _in_file_types(spectra_df)
-        return Results(realizations_df, _in_file_types(summary_df), history_df, paths_df, meta, None, study,
-                       events_df, poincare_df, spectra_df, studies.get("rare"), studies.get("sensitivity"))
-    write_table(realizations_df, directory / "realizations.parquet", meta)
-    write_table(summary_df, directory / "summary.parquet", meta)
-    if history_df is not None:
-        write_table(history_df, directory / "history.parquet",
-                    {**meta, "vines_stoch.history_block": str(hist.BLOCK)})
-    if events_df is not None:
-        write_table(events_df, directory / "events.parquet", meta)
-    if poincare_df is not None:
-        write_table(poincare_df, directory / "poincare.parquet", meta)
-    if spectra_df is not None:
-        write_table(spectra_df, directory / "spectra.parquet", meta)
-    if chosen is not None:
-        write_table(chosen, directory / "paths.parquet", meta)
-    for name, frame in studies.items():
-        write_table(frame, directory / f"{name}.parquet", meta)
-    results = read_results(directory)
-    results.study = study
-    if kept_paths is not None:
-        results.paths = paths_df
-    return results
+    # the tables as written and read back (``_in_file_types``): the results a run returns, in
+    # memory or from its folder, are those ``read_results`` of the folder gives
+    summary_df, history_df, events_df, poincare_df, spectra_df, chosen = (
+        None if frame is None else _in_file_types(frame)
+        for frame in (summary_df, history_df, events_df, poincare_df, spectra_df, chosen))
+    paths_df = _in_file_types(pd.concat(path_rows, ignore_index=True)) if kept_paths is not None else chosen
+    if directory is not None:
+        files = {"realizations": realizations_df, "summary": summary_df, "history": history_df,
+                 "events": events_df, "poincare": poincare_df, "spectra": spectra_df, "paths": chosen,
+                 **studies}
+        for name, frame in files.items():
+            if frame is not None:
+                extra = {"vines_stoch.history_block": str(hist.BLOCK)} if name == "history" else {}
+                write_table(frame, directory / f"{name}.parquet", {**meta, **extra})
+    return Results(realizations_df, summary_df, history_df, paths_df, meta, directory, study, events_df,
+                   poincare_df, spectra_df, studies.get("rare"), studies.get("sensitivity"))
 
 
 def _in_file_types(frame: pd.DataFrame) -> pd.DataFrame:

@@ -60,7 +60,8 @@ def test_folder_results_equal_those_in_memory(in_memory, tmp_path):
         pd.testing.assert_frame_equal(other.realizations, results.realizations, check_exact=True)
         pd.testing.assert_frame_equal(other.summary, results.summary, check_exact=True)
         pd.testing.assert_frame_equal(other.history, results.history, check_exact=True)
-    assert again.directory == tmp_path / "out" and again.paths is None
+    assert written.directory == again.directory == tmp_path / "out" and again.paths is written.paths is None
+    assert written.metadata == again.metadata and written.metadata["vines_stoch.seed"] == "5"
     assert again.scenario.base.ensemble.seed == 5  # (parsed from the metadata)
 
 
