@@ -230,7 +230,7 @@ def _lanes(directory: Path, rounds: int = 3) -> dict[str, Any]:
     from ..kernels.lanes import lane_normals
     from ..kernels.rng import philox_stream, stream_key
 
-    out: dict[str, Any] = {"scenes": {}}
+    out: dict[str, Any] = {"scenes": {}, "budget": _lane_budget()}
     for k, (name, (source, paths)) in enumerate(LANE_SCENES.items()):
         changes = {"ensemble.realizations": paths, "simulation.duration": 20.0}
         toml = source.endswith(".toml")
@@ -251,6 +251,28 @@ def _lanes(directory: Path, rounds: int = 3) -> dict[str, Any]:
         _draw_sum(gen, count)
         out[f"{name} ns"] = (time.perf_counter() - start) / count * 1e9
     return out
+
+
+def _lane_budget(paths: int = 512, rounds: int = 3) -> dict[str, float]:
+    """Where a lane-step of the smooth scene (T = 20) goes: path-steps/s of one chunk
+    (``simulate_chunk``, no files) in lanes with the scene's white noise and without it (the
+    same kick-drift-kick update, no normals drawn), and of the scalar loop on PCG64 streams with
+    it, in turn, the best of ``rounds``."""
+    from ..kernels.chunk import scalar_loops, simulate_chunk
+
+    noisy = scenes.scene("smooth", {"simulation.duration": 20.0})
+    quiet = scenes.scene("smooth", {"simulation.duration": 20.0, "loads.1.intensity": 0.0,
+                                    "simulation.scheme": "euler-maruyama"})
+    runners = {"scalar": (noisy, True), "lanes": (noisy, False), "lanes, no noise": (quiet, False)}
+    best = dict.fromkeys(runners, 0.0)
+    for r in range(-1, rounds):  # round -1 compiles or loads the loops
+        for name, (scene, scalar) in runners.items():
+            start = time.perf_counter()
+            with scalar_loops() if scalar else contextlib.nullcontext():
+                simulate_chunk(scene, 1, 0, 0, paths if r >= 0 else 2)
+            if r >= 0:
+                best[name] = max(best[name], paths * scene.n_steps / (time.perf_counter() - start))
+    return best
 
 
 def _lane_rows(lanes: dict[str, Any]) -> str:
@@ -628,6 +650,9 @@ def main(out: Path = Path("reports/benchmarks.md"), n_paths: int = 200) -> str:
     stability_suite = stability.section()
     rare_events = bench_rare.section()
     cores = os.cpu_count()
+    budget = lanes["budget"]  # (a lane-step with and without its normal; one at 8x the scalar loop)
+    step_ns, quiet_ns, eight_ns = (1e9 / budget["lanes"], 1e9 / budget["lanes, no noise"],
+                                   1e9 / (8 * budget["scalar"]))
     scipy_row = (f"| scipy DOP853 + events, rtol {ssvi['scipy_rtol']:.0e} | {ssvi['scipy_s'] * 1e3:.1f} | "
                  f"{ssvi['scipy_error']:.1e} | {ssvi['scipy_s'] / ssvi['ours_s']:.0f}x slower |"
                  if "scipy_s" in ssvi
@@ -688,6 +713,14 @@ A run into a folder writes each chunk's Parquet part and, at its end, the result
 calling thread beside the workers: with one worker that thread has the second core to itself,
 with two it takes time from them. The in-memory rows (`run(study, None)`) write no files, so
 their 1 -> 2 threads ratio is the lanes' own scaling.
+
+Where a lane-step goes (the smooth scene, one chunk of 512 paths, no files; the best of three):
+the lanes run {budget["lanes"] / 1e6:.1f} M path-steps/s ({budget["lanes"] / budget["scalar"]:.2f}x the
+scalar loop's {budget["scalar"] / 1e6:.1f}); without the white noise (the same update, no normals drawn)
+{1e3 / quiet_ns:.1f} M/s, {1e9 / quiet_ns / budget["scalar"]:.2f}x the scalar loop with noise.
+A lane-step takes {step_ns:.2f} ns, its normal {step_ns - quiet_ns:.2f} ns of it
+({1 - quiet_ns / step_ns:.0%}). 8x the scalar loop asks for a lane-step of {eight_ns:.2f} ns, which
+leaves its normal {eight_ns - quiet_ns:.2f} ns.
 
 The lanes' normals alone (a block of Philox4x32-10 and a branch-free Box-Muller pair every two
 draws, 1,024 lanes): {lanes["normals"] / 1e6:.0f} M normals/s; a normal drawn in the scalar loop costs
