@@ -76,14 +76,14 @@ def refusal(scheme: Scheme, noise: bool, filters: bool, impacts: bool, hertz: bo
     return None
 
 
-def in_lanes(scheme: str, filters: bool) -> bool:
+def in_lanes(scheme: str) -> bool:
     """Whether a scene of ``scheme`` runs its ensembles in SIMD lanes (``kernels/lanes.py``):
-    a scheme with a lane step, a scene without filtered loads (impact and Hertz absorbers
-    included: the lanes whose step holds an event finish it in the scalar step).  Such a
-    scene's CPU ensembles draw from counter-based Philox streams (those of the cuda backend,
-    ``kernels/rng.py``), in lanes or, for what the lanes do not record (history rows, event
-    logs, declared metrics), in the scalar loop on the same streams."""
-    return SCHEMES[scheme].lanes and not filters
+    a scheme with a lane step (impact and Hertz absorbers included: the lanes whose step holds
+    an event finish it in the scalar step; filtered loads included: each lane advances its own
+    filters).  Such a scene's CPU ensembles draw from counter-based Philox streams (those of
+    the cuda backend, ``kernels/rng.py``), in lanes or, for what the lanes do not record
+    (history rows, event logs, declared metrics), in the scalar loop on the same streams."""
+    return SCHEMES[scheme].lanes
 
 
 def choose(noise: bool, filters: bool, impacts: bool, hertz: bool) -> str:

@@ -222,7 +222,7 @@ def scalar_loops() -> Iterator[None]:
 def lane_scene(scene) -> bool:
     """Whether ``scene``'s CPU ensembles run in SIMD lanes (``schemes.in_lanes``; not within
     ``scalar_loops``), and so draw from the Philox streams of ``philox_keys``."""
-    return _LANES[-1] and in_lanes(scene.scheme, scene.has_filters)
+    return _LANES[-1] and in_lanes(scene.scheme)
 
 
 def realization_streams(scene, seed: int, point: int, realization: int, common: bool = True) -> Streams:
@@ -245,7 +245,8 @@ def lane_call(scene, seed: int, point: int, start: int, common: bool, raw: np.nd
     args = bundles(scene, scene.x0.copy(), scene.v0.copy(), filter_tuple(scene, None), np.zeros(0), raw[:0],
                    sample_buffer(scene), _NO_HISTORY, 1, (_UNUSED,) * 3)
     keys = philox_keys(seed)
-    return (*args[:6], scene.limits, np.uint64(keys[INCREMENTS]), np.uint64(keys[BRIDGE]), places, raw)
+    return (*args[:6], scene.limits, np.uint64(keys[INCREMENTS]), np.uint64(keys[BRIDGE]),
+            np.uint64(keys[FILTER]), scene.filters["p0"], places, raw)
 
 
 def simulate_lanes(scene, seed: int, point: int, start: int, common: bool, raw: np.ndarray) -> None:

@@ -198,14 +198,14 @@ def step_normals(i: int, parts: int, noise_scale, slot, noisy: int, normals, ref
 
 
 @njit(**INLINE)
-def opening_forces(force, gl, x, v, acc, bodies, absorbers, nf: int, geometric: bool) -> None:
+def opening_forces(force, load, x, v, acc, bodies, absorbers, nf: int, geometric: bool) -> None:
     """Each floor's force at the metrics window's opening (the structure's, the attachments' and
-    the load at the step's start) into ``acc``, for the peaks; ``force``: scratch."""
+    the load at the step's start, ``load``) into ``acc``, for the peaks; ``force``: scratch."""
     attachment_forces(x, v, nf, bodies.storey_k, bodies.storey_c, bodies.floor_c, absorbers.host,
                       absorbers.rows, force)
     geometric_forces(x, nf, absorbers.host, absorbers.rows, force, geometric)
     for k in range(nf):
-        acc[k] = force[k] + gl.load_next[k]
+        acc[k] = force[k] + load[k]
 
 
 @njit(**INLINE)

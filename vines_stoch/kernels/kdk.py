@@ -392,7 +392,7 @@ def kdk_step(spec) -> Step:
     @njit(**INLINE)
     def opening(own, x, v, inv_mass, acc, bodies, absorbers):
         # (the floors' forces: the driver's ``force_peaks``)
-        opening_forces(own.force, own.gl, x, v, acc, bodies, absorbers, NF, geometric)
+        opening_forces(own.force, own.gl.load_next, x, v, acc, bodies, absorbers, NF, geometric)
 
     @njit(**INLINE)
     def check(own, i, dt, ex):

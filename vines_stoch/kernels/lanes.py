@@ -81,7 +81,7 @@ from .energy import absorber_dissipation, impulse_work, momentum, structure_diss
 from .events import quiet_band
 from .grid import GridLoads, end_loads, noise_scales, opening_forces, reset_phasors, start_loads, step_loads
 from .kdk import contact_sides, kdk_step, kick
-from .loads import has_breaks
+from .loads import filter_row, filter_scales, has_breaks, readout, stationary, stationary_state
 from .rng import STREAM_WORDS, block_uniforms, packed_block, packed_pair
 
 #: Paths a batch advances together: its state (about 17 numbers a path for a one-storey primary
@@ -91,21 +91,26 @@ LANES = 128
 ALIGN = 64
 
 
-def lane_rows(n_bodies: int, n_floors: int, events: bool = False) -> dict[str, int]:
+def lane_rows(n_bodies: int, n_floors: int, events: bool = False, n_states: int = 0) -> dict[str, int]:
     """The rows of a batch's state array (one column a lane), by name: positions, velocities,
     the accounts (input work, structure and absorber dissipation, the trapezoid sum of ``E1``,
     its peak and its value at the last step's end), the per-floor
     peaks and ``x_k^2`` sums, and whether the path has ended (diverged: 1).  With ``events``
     (impact or Hertz absorbers) also the impacts' loss and counts, the contact time and peak
     force, per absorber the wall it sticks to, the side it touches and what its contact owes
-    (``kdk``'s), and whether the step holds an event."""
+    (``kdk``'s), and whether the step holds an event.  With ``n_states`` filter states
+    (filtered loads) also the filters' states at the step's start and end and the lane's loads
+    on the floors and ground acceleration at the step's start and end."""
     n_absorbers = n_bodies - n_floors if events else 0
+    filtered = n_states > 0
     names = [("x", n_bodies), ("v", n_bodies), ("work", 1), ("d_primary", 1), ("d_absorber", 1),
              ("e_sum", 1), ("e1_max", 1), ("e1", 1), ("x_max", n_floors), ("drift_max", n_floors),
              ("acc_max", n_floors), ("x2", n_floors), ("done", 1), ("loss", int(events)),
              ("n_left", int(events)), ("n_right", int(events)), ("contact_time", int(events)),
              ("peak_force", int(events)), ("stuck", n_absorbers), ("touching", n_absorbers),
-             ("owed", n_absorbers), ("flag", int(events)), ("rows", 0)]
+             ("owed", n_absorbers), ("flag", int(events)), ("z", n_states), ("zn", n_states),
+             ("load", n_floors * filtered), ("load_next", n_floors * filtered), ("ag", int(filtered)),
+             ("ag_next", int(filtered)), ("rows", 0)]
     rows, at = {}, 0
     for name, size in names:
         rows[name] = at
@@ -166,15 +171,18 @@ def lane_loop(spec: Spec):
     IMPACT, CONTACT = spec.has_impact, spec.has_hertz
     EVENTS = IMPACT or CONTACT
     TREE = NOISE and EVENTS  # (the lanes' Brownian trees: a seed each)
+    FILTERED = spec.filtered
+    NZ = spec.n_states if FILTERED else 0
     start, advance = kdk_step(spec).start, kdk_step(spec).advance
     W = LANES  # (a row's length, a compile-time constant: the rows' distances are known)
-    R = lane_rows(NB, NF, EVENTS)
+    R = lane_rows(NB, NF, EVENTS, NZ)
     X, V, WORK, DP, DA, ESUM, E1MAX, E1 = (R["x"], R["v"], R["work"], R["d_primary"], R["d_absorber"],
                                            R["e_sum"], R["e1_max"], R["e1"])
     XMAX, DRIFT, ACCMAX, X2, DONE, ROWS = (R["x_max"], R["drift_max"], R["acc_max"], R["x2"], R["done"],
                                            R["rows"])
     LOSS, LEFT, RIGHT, CTIME, PEAK = R["loss"], R["n_left"], R["n_right"], R["contact_time"], R["peak_force"]
     STUCK, TOUCHING, OWED, FLAG = R["stuck"], R["touching"], R["owed"], R["flag"]
+    Z, ZN, LOAD, LOAD_NEXT, AG, AG_NEXT = R["z"], R["zn"], R["load"], R["load_next"], R["ag"], R["ag_next"]
 
     @njit(**INLINE)
     def load_lane(s, lane, x, v):
@@ -237,16 +245,19 @@ def lane_loop(spec: Spec):
         work's start, the accounts' and peaks' first values."""
         mass, storey_k, kind, host, rows = (bodies.mass, bodies.storey_k, absorbers.kind, absorbers.host,
                                             absorbers.rows)
-        x, v, force, acc = scratch(NB), scratch(NB), scratch(NB), scratch(NF)
+        x, v, force, acc, own_load = scratch(NB), scratch(NB), scratch(NB), scratch(NF), scratch(NF)
         x_max, drift_max, acc_max = scratch(NF), scratch(NF), scratch(NF)
         for lane in range(nl):
             load_lane(s, lane, x, v)
+            for k in range(NF if FILTERED else 0):
+                own_load[k] = s[(LOAD_NEXT + k) * W + lane]
             e1 = primary_energy(mass, storey_k, x, v, NF)
             s[WORK * W + lane] = stored_energy(*plain((x, v, mass, NF, storey_k, kind, host, rows)))
             s[E1MAX * W + lane] = e1
             s[ESUM * W + lane] = 0.5 * e1
             s[E1 * W + lane] = e1
-            opening_forces(force, gl, x, v, acc, bodies, absorbers, NF, GEOMETRIC)
+            opening_forces(force, own_load if FILTERED else gl.load_next, x, v, acc, bodies, absorbers, NF,
+                           GEOMETRIC)
             for k in range(NF):
                 s[(X2 + k) * W + lane] = 0.5 * x[k] * x[k]
                 x_max[k], drift_max[k], acc_max[k] = 0.0, 0.0, 0.0
@@ -322,17 +333,26 @@ def lane_loop(spec: Spec):
         x0, v0 = scratch(NB), scratch(NB)
         dws, dwh, acc = scratch(NF), scratch(NF), scratch(NF)
         x_max, drift_max, acc_max = scratch(NF), scratch(NF), scratch(NF)
+        own_load, own_next = scratch(NF), scratch(NF)
         flagged = 0  # (an integer sum: LLVM vectorises it, not a sum of floats, whose order it keeps)
         for lane in range(nl):
             load_lane(s, lane, x, v)
+            # the loads: the batch's, or with filtered loads the lane's (``filter_lanes``)
+            for k in range(NF if FILTERED else 0):
+                own_load[k] = s[(LOAD + k) * W + lane]
+                own_next[k] = s[(LOAD_NEXT + k) * W + lane]
+            f_start = own_load if FILTERED else load
+            f_end = own_next if FILTERED else load_next
+            g_start = s[AG * W + lane] if FILTERED and GROUND else ag
+            g_end = s[AG_NEXT * W + lane] if FILTERED and GROUND else ag_next
             for b in range(NB):
                 x0[b], v0[b] = x[b], v[b]
             for k in range(NF):
                 dws[k] = noise_scale[k] * z[k * W + lane] if NOISE else 0.0
                 dwh[k] = 0.5 * dws[k]
             before = (s[WORK * W + lane], s[DP * W + lane], s[DA * W + lane])
-            accounts = half_kick(x, v, vn, force, dwh, dws, load, ag, dt, inside, before, mass, inv_mass,
-                                 storey_k, storey_c, floor_c, kind, host, rows)
+            accounts = half_kick(x, v, vn, force, dwh, dws, f_start, g_start, dt, inside, before, mass,
+                                 inv_mass, storey_k, storey_c, floor_c, kind, host, rows)
             held = 0.0  # (events ahead, absorbers stuck or touching: a sum, no branch)
             for a in range(NA if EVENTS else 0):
                 h = wall_of(walls, a, NW)
@@ -344,13 +364,13 @@ def lane_loop(spec: Spec):
             for b in range(NB):
                 x[b] += dt * vn[b]
                 v[b] = vn[b]
-            work, d_primary, d_absorber = half_kick(x, v, vn, force, dwh, dws, load_next, ag_next, dt, inside,
+            work, d_primary, d_absorber = half_kick(x, v, vn, force, dwh, dws, f_end, g_end, dt, inside,
                                                     accounts, mass, inv_mass, storey_k, storey_c, floor_c,
                                                     kind, host, rows)
             for b in range(NB):
                 v[b] = vn[b]
             for k in range(NF):
-                acc[k] = force[k] + load_next[k]
+                acc[k] = force[k] + f_end[k]
             keep = False
             if EVENTS:
                 peak = s[PEAK * W + lane]
@@ -399,13 +419,18 @@ def lane_loop(spec: Spec):
             for k in range(NF):
                 if NOISE:
                     own.dw[k] = noise_scale[k] * z[k * W + lane]
-                own.gl.load[k], own.gl.load_next[k] = gl.load[k], gl.load_next[k]
+                own.gl.load[k] = s[(LOAD + k) * W + lane] if FILTERED else gl.load[k]
+                own.gl.load_next[k] = s[(LOAD_NEXT + k) * W + lane] if FILTERED else gl.load_next[k]
+            for r in range(NZ):  # (the filters' states: the loads inside the step, ``grid.event_loads``)
+                own.gl.z[r], own.gl.zn[r] = s[(Z + r) * W + lane], s[(ZN + r) * W + lane]
             if TREE:
                 forget(own.memo)
             acct = (s[WORK * W + lane], s[DP * W + lane], s[DA * W + lane], 0.0, 0.0, s[LOSS * W + lane],
                     s[LEFT * W + lane], s[RIGHT * W + lane], s[CTIME * W + lane], s[PEAK * W + lane], 0)
+            g_start = s[AG * W + lane] if FILTERED and GROUND else ag
+            g_end = s[AG_NEXT * W + lane] if FILTERED and GROUND else ag_next
             work, d_primary, d_absorber, _, _, loss, n_left, n_right, contact_time, peak, _ = advance(
-                i, x, v, inv_mass, acc, own, seeds[lane], ag, ag_next, acct, inside, bodies, absorbers, ex,
+                i, x, v, inv_mass, acc, own, seeds[lane], g_start, g_end, acct, inside, bodies, absorbers, ex,
                 fl, noise, dt, raw[first + lane], events, impulses)
             for b in range(NB):
                 s[(X + b) * W + lane] = x[b]
@@ -421,14 +446,66 @@ def lane_loop(spec: Spec):
                 observe(s, lane, x, v, acc, mass, storey_k, x_max, drift_max, acc_max)
 
     @njit(**INLINE)
+    def filter_lanes(s, fz, nl, load, load_next, ag, ag_next, piecewise, fl, scales):
+        """Every lane's filters advanced over the step (``loads.advance_filters``: the lane's
+        normals in rows ``fz``, the envelopes in ``scales``), then its loads at the step's start
+        and end, as ``grid.step_loads`` and ``grid.end_loads`` give them: the loads the lanes
+        share (``load``, ``load_next``, the ground acceleration ``ag``, ``ag_next``: without the
+        filters) plus the filters' read-outs (``loads.excitation``'s).  Without a break in the
+        loads (``piecewise``) a step starts with the last step's end loads."""
+        z, zn, draws = scratch(NZ), scratch(NZ), scratch(NZ)
+        for lane in range(nl):
+            for r in range(NZ):
+                z[r] = s[(ZN + r) * W + lane]
+                draws[r] = fz[r * W + lane]
+            for r in range(NZ):
+                zn[r] = filter_row(z, r, fl.phi, fl.chol, draws, scales[r])
+                s[(Z + r) * W + lane] = z[r]
+                s[(ZN + r) * W + lane] = zn[r]
+            for k in range(NF):
+                at_start = load[k] + readout(fl.c_force, k, z, zn, 0.0)
+                carried = s[(LOAD_NEXT + k) * W + lane]
+                s[(LOAD + k) * W + lane] = at_start if piecewise else carried
+                s[(LOAD_NEXT + k) * W + lane] = load_next[k] + readout(fl.c_force, k, z, zn, 1.0)
+            if GROUND:
+                at_start = ag + readout(fl.c_ground, 0, z, zn, 0.0)
+                carried = s[AG_NEXT * W + lane]
+                s[AG * W + lane] = at_start if piecewise else carried
+                s[AG_NEXT * W + lane] = ag_next + readout(fl.c_ground, 0, z, zn, 1.0)
+
+    @njit(**INLINE)
+    def start_filters(s, fz, fspare, nl, fl, p0, filter_key, places, first, load_next, ag_next):
+        """Every lane's filters at the path's start (``loads.stationary_start``: from their
+        stationary law, the first normals of the lane's filter stream, or from rest) and its loads
+        at the first step's start (``grid.start_loads``'s, the lanes' shared ``load_next`` and
+        ``ag_next`` plus the read-outs); returns the draws the start took."""
+        drawn = NZ if stationary(p0) else 0
+        for c in range(drawn):
+            lane_normals(*plain((fz[c * W:(c + 1) * W], fspare, nl, c, filter_key, places, first)))
+        z, draws = scratch(NZ), scratch(NZ)
+        for lane in range(nl):
+            for r in range(NZ):
+                draws[r] = fz[r * W + lane]
+            stationary_state(p0, draws, z)
+            for r in range(NZ):
+                s[(ZN + r) * W + lane] = z[r]
+            for k in range(NF):
+                s[(LOAD_NEXT + k) * W + lane] = load_next[k] + readout(fl.c_force, k, z, z, 0.0)
+            if GROUND:
+                s[AG_NEXT * W + lane] = ag_next + readout(fl.c_ground, 0, z, z, 0.0)
+        return drawn
+
+    @njit(**INLINE)
     def batch(s_, z_, spare_, nl, bodies_, absorbers_, ex_, fl_, noise_, grid_, limits_, key, places_,
-              passages_, raw_, first, own_, seeds_, bridge_key, events_, impulses_):
+              passages_, raw_, first, own_, seeds_, bridge_key, events_, impulses_, fz_, fspare_, filter_key,
+              p0_):
         # every array as a borrowed view (``jit.intrinsics.borrowed``): no reference counting in
         # the lane loops, whose calls would keep the compiler from vectorising them
         bodies, absorbers, ex, fl, noise, grid = borrowed((bodies_, absorbers_, ex_, fl_, noise_, grid_))
         s, z, spare, limits, places, passages, raw = borrowed((s_, z_, spare_, limits_, places_, passages_,
                                                                raw_))
         own, seeds, events, impulses = borrowed((own_, seeds_, events_, impulses_))
+        fz, fspare, p0 = borrowed((fz_, fspare_, p0_))
         mass, storey_k, kind, host, rows, walls = (bodies.mass, bodies.storey_k, absorbers.kind,
                                                    absorbers.host, absorbers.rows, absorbers.wall)
         dt, n_steps, i0 = grid.dt, grid.n_steps, grid.i0
@@ -473,6 +550,10 @@ def lane_loop(spec: Spec):
             if TREE:  # the seed of the lane's Brownian trees: its bridge stream's first two uniforms
                 high, low = block_uniforms(bridge_key, places[first + lane], np.uint64(0))
                 seeds[lane] = tree_seed(high, low)
+        # the filters' start, and the draw of their first step's normals
+        scales = scratch(NZ)
+        drawn = start_filters(s, fz, fspare, nl, fl, p0, filter_key, places, first, gl.load_next,
+                              ag_next) if FILTERED else 0
         inside = i0 == 0
         x, v = scratch(NB), scratch(NB)
         for i in range(n_steps):
@@ -491,6 +572,12 @@ def lane_loop(spec: Spec):
                 reset_phasors(gl, i, dt, ex)
             ag = step_loads(i, dt, gl, ex, fl, ag_next, piecewise, False, GROUND, fl.z)
             ag_next = end_loads(i, dt, gl, ex, fl, False, GROUND)
+            if FILTERED:  # (the loads above without the filters: each lane adds its own)
+                filter_scales(i * dt, dt, fl.envelope, scales)
+                for c in range(NZ):
+                    lane_normals(*plain((fz[c * W:(c + 1) * W], fspare, nl, drawn + i * NZ + c, filter_key,
+                                         places, first)))
+                filter_lanes(s, fz, nl, gl.load, gl.load_next, ag, ag_next, piecewise, fl, scales)
             if NOISE:
                 for q in range(noisy):
                     k = floor_of[q] * W
@@ -514,10 +601,11 @@ def lane_loop(spec: Spec):
                             inv_mass, passages, limits)
 
     @njit(**KERNEL)
-    def run(bodies, absorbers, ex, fl, noise, grid, limits, key, bridge_key, places, raw):
+    def run(bodies, absorbers, ex, fl, noise, grid, limits, key, bridge_key, filter_key, p0, places, raw):
         prefer_vectors()
         n = raw.shape[0]
         s, z, spare = aligned_rows(ROWS), aligned_rows(NF), aligned_rows(1)
+        fz, fspare = aligned_rows(NZ), aligned_rows(1)  # (the filters' normals)
         passages = aligned_rows(limits.shape[0])
         # the scalar step's state and scratch for the lanes whose step holds an event (its own
         # start: the lanes set what is theirs into it), the lanes' tree seeds
@@ -529,7 +617,7 @@ def lane_loop(spec: Spec):
         for first in range(0, n, W):
             nl = min(W, n - first)
             batch(s, z, spare, nl, bodies, absorbers, ex, fl, noise, grid, limits, key, places,
-                  passages, raw, first, own, seeds, bridge_key, events, impulses)
+                  passages, raw, first, own, seeds, bridge_key, events, impulses, fz, fspare, filter_key, p0)
 
     stable_cache(run)  # (its closure holds the lane step's functions: see ``jit.cache.stable_cache``)
     return run

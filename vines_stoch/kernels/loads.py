@@ -191,20 +191,33 @@ def stationary_start(p0, gen, z, draws) -> None:
     """The filters' initial state ``z = P0 n`` with ``n`` standard normals from ``gen``, drawn
     only where ``P0`` (the root of the stationary covariance) is not zero (else a start from
     rest, ``z = 0``); ``draws`` is scratch for ``n``."""
-    nz = z.shape[0]
-    stationary = False
-    for r in range(nz):
-        z[r] = 0.0
-        for c in range(nz):
-            stationary = stationary or p0[r, c] != 0.0
-    if stationary:
-        for c in range(nz):
+    if stationary(p0):
+        for c in range(z.shape[0]):
             draws[c] = normal(gen)
-        for r in range(nz):
-            acc = 0.0
-            for c in range(nz):
-                acc += p0[r, c] * draws[c]
-            z[r] = acc
+    stationary_state(p0, draws, z)
+
+
+@njit(**INLINE)
+def stationary(p0) -> bool:
+    """Whether the filters start from their stationary law (``P0`` not zero), not from rest:
+    their stream's first normals are then the start's (``stationary_start``)."""
+    for r in range(p0.shape[0]):
+        for c in range(p0.shape[1]):
+            if p0[r, c] != 0.0:
+                return True
+    return False
+
+
+@njit(**INLINE)
+def stationary_state(p0, draws, z) -> None:
+    """``z = P0 n`` (``draws``: ``n``), a sum in a fixed order; 0 where ``P0`` is zero (a start
+    from rest, nothing drawn)."""
+    start = stationary(p0)
+    for r in range(z.shape[0]):
+        acc = 0.0
+        for c in range(z.shape[0] if start else 0):
+            acc += p0[r, c] * draws[c]
+        z[r] = acc
 
 
 @njit(**INLINE)
@@ -216,16 +229,34 @@ def advance_filters(z, zn, t: float, dt: float, phi, chol, envelopes, gen, draws
         draws[c] = normal(gen)
     scale = 1.0
     for r in range(nz):
-        acc = 0.0
-        noise = 0.0
-        for c in range(nz):
-            acc += phi[r, c] * z[c]
-            noise += chol[r, c] * draws[c]
         # a filter's states share its envelope (comparing their rows a step cost the
         # ground-motion contact scene 5-10 % of its speed)
         if r == 0 or envelopes[r, ENVELOPE_FIRST] != 0.0:
             scale = envelope(t + 0.5 * dt, envelopes[r])
-        zn[r] = acc + scale * noise
+        zn[r] = filter_row(z, r, phi, chol, draws, scale)
+
+
+@njit(**INLINE)
+def filter_row(z, r: int, phi, chol, draws, scale: float) -> float:
+    """Row ``r`` of ``advance_filters``' step: ``(Phi z)_r + scale (L n)_r`` (``draws``: ``n``)."""
+    acc = 0.0
+    noise = 0.0
+    for c in range(z.shape[0]):
+        acc += phi[r, c] * z[c]
+        noise += chol[r, c] * draws[c]
+    return acc + scale * noise
+
+
+@njit(**INLINE)
+def filter_scales(t: float, dt: float, envelopes, scales) -> None:
+    """Each filter state's envelope over the step from ``t``, ``e(t + dt/2)``, into ``scales``, as
+    ``advance_filters`` takes it (a filter's states share its first's): what a batch of paths in
+    SIMD lanes shares (``lanes.py``)."""
+    scale = 1.0
+    for r in range(scales.shape[0]):
+        if r == 0 or envelopes[r, ENVELOPE_FIRST] != 0.0:
+            scale = envelope(t + 0.5 * dt, envelopes[r])
+        scales[r] = scale
 
 
 @njit(**INLINE)

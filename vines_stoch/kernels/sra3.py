@@ -162,7 +162,7 @@ def sra3_step(spec) -> Step:
 
     @njit(**INLINE)
     def opening(own, x, v, inv_mass, acc, bodies, absorbers):
-        opening_forces(own.force, own.gl, x, v, acc, bodies, absorbers, NF, geometric)
+        opening_forces(own.force, own.gl.load_next, x, v, acc, bodies, absorbers, NF, geometric)
         for k in range(NF):  # (accelerations)
             acc[k] *= inv_mass[k]
 
