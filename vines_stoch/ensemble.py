@@ -145,9 +145,11 @@ def _intensities(scenes: Scene | list[Scene], seed: int, point: int, start: int,
                  philox: bool = False) -> dict[str, np.ndarray]:
     """``sa`` and ``pga`` of realisations ``start .. stop - 1`` (``scenes``: the point's, or one a
     realisation) from the ground paths they saw, their filter streams replayed (``ground_paths``:
-    PCG64, or the cuda backend's Philox streams with ``philox``); none where no scene asks."""
+    PCG64, or Philox where the scene runs in SIMD lanes, ``lane_scene``, and on the cuda backend,
+    ``philox``); none where no scene asks."""
     def of(s: Scene, first: int, last: int) -> dict[str, np.ndarray]:
-        paths = ground_paths(s, seed, point, first, last, common, philox) if s.im_period > 0 else None
+        paths = (ground_paths(s, seed, point, first, last, common, philox or lane_scene(s)) if s.im_period > 0
+                 else None)
         return ground_intensities(s, paths)
 
     if isinstance(scenes, Scene):

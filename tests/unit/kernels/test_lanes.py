@@ -83,6 +83,16 @@ STICKY = {**IMPACT, "name": "lanes-sticky",
           "absorbers": [{"type": "impact", "mass": 0.05, "clearance": 0.05, "restitution": 0.0}]}
 #: A deterministic scene run by the kick-drift-kick scheme: the lanes draw nothing.
 QUIET = {**SMOOTH, "loads": [{"type": "harmonic", "amplitude": 0.1, "frequency": 1.0}]}
+#: Filtered noise beside white noise, from its stationary law, on a frame (a floor's filter),
+#: and under a half-sine (loads with breaks: each step's start loads evaluated on its own
+#: piece) with an impact absorber: each lane advances its own filters.
+FILTERED = {**FRAME, "name": "lanes-filtered",
+            "loads": [*FRAME["loads"], {"type": "filtered-noise", "intensity": 0.3, "frequency": 5.0,
+                                        "damping": 0.2, "floor": 2, "start": "stationary"}]}
+SHOCK = {**IMPACT, "name": "lanes-shock",
+         "loads": [{"type": "half-sine", "amplitude": 0.5, "duration": 0.7, "start": 0.3},
+                   {"type": "white-noise", "intensity": 0.05},
+                   {"type": "filtered-noise", "intensity": 0.3, "frequency": 2.0, "damping": 0.3}]}
 
 
 def philox_streams(r: int, point: int = 0, common: bool = True) -> Streams:
@@ -101,10 +111,19 @@ def contact_noise_parallel(duration: float = 2.0) -> dict:
     return changed(example_data("contact_noise_parallel"), {"simulation.duration": duration})
 
 
+def under_ground_motion(name: str, duration: float = 2.5) -> dict:
+    """Example scenario ``name`` (Clough-Penzien ground motion with a Jennings envelope, no white
+    noise: the filters' noise alone), ``duration`` long."""
+    return changed(example_data(name), {"simulation.duration": duration})
+
+
 @pytest.mark.parametrize("data", [SMOOTH, FRAME, GROUND, QUIET, IMPACT, HERTZ, STICKY,
-                                  contact_noise_parallel()],
+                                  contact_noise_parallel(), FILTERED, SHOCK,
+                                  under_ground_motion("ground_motion"),
+                                  under_ground_motion("seed003_ss_ground_motion")],
                          ids=["smooth", "frame", "ground", "quiet", "impact", "hertz", "sticky",
-                              "contact-noise"])
+                              "contact-noise", "filtered", "shock", "ground-motion-impact",
+                              "ground-motion-hertz"])
 def test_a_lane_is_the_scalar_loop_on_its_philox_streams(data):
     scene = scene_from(data)
     assert lane_scene(scene)
@@ -155,14 +174,12 @@ def test_a_batch_s_rows_start_on_cache_lines():
 
 
 def test_the_registry_says_which_scenes_run_in_lanes():
-    assert in_lanes("euler-maruyama", filters=False)
-    assert not in_lanes("euler-maruyama", filters=True)
-    assert not in_lanes("sra", False)
-    assert not in_lanes("rk4", False)
+    assert in_lanes("euler-maruyama")
+    assert not in_lanes("sra")
+    assert not in_lanes("rk4")
     assert lane_scene(scene_from(IMPACT)) and lane_scene(scene_from(HERTZ))
-    filtered = {**SMOOTH, "loads": [{"type": "filtered-noise", "intensity": 0.05, "frequency": 2.0,
-                                     "damping": 0.3}]}
-    assert not lane_scene(scene_from(filtered))
+    assert lane_scene(scene_from(FILTERED)) and scene_from(FILTERED).filters["p0"].any()
+    assert not lane_scene(scene_from(changed(SMOOTH, {"simulation.scheme": "sra"})))
 
 
 def test_what_lanes_do_not_record_runs_in_the_scalar_loop_on_the_same_streams():
