@@ -23,10 +23,14 @@ before the step, and after the vector loop the flagged lanes take, one at a time
 step after its loads and increments (``kdk``'s ``advance``: root search on the lane's Brownian
 tree, impacts, sticking, contact sub-steps), their absorbers' state kept in rows of the batch.
 
+Filtered loads are the lanes' own: each lane advances its filters on its Philox filter stream
+(``loads.filter_row``; the envelopes, the same for every lane, once a step), and its loads are
+the batch's closed-form loads plus its filters' read-outs.
+
 Which scenes run here is the scheme registry's (``schemes.in_lanes``): the kick-drift-kick
-scheme without filtered loads, recording the built-in metrics and the limits' first passages.
-The rest (filters, history rows, event logs, declared metrics) runs in the scalar loop on the
-same streams (``chunk.simulate_chunk``).
+scheme, recording the built-in metrics and the limits' first passages.  The rest (history rows,
+event logs, declared metrics) runs in the scalar loop on the same streams
+(``chunk.simulate_chunk``).
 """
 
 from __future__ import annotations
@@ -153,11 +157,12 @@ def lane_normals(z, spare, nl: int, draw: int, key, places, first: int) -> None:
 
 @cache
 def lane_loop(spec: Spec):
-    """The lane loop of kick-drift-kick scenes specialised to ``spec`` (``driver.Spec``; no
-    filtered loads).  It takes the bundles of ``kernels/bundles.py`` (the state's start in
-    ``bodies``), the keys of the increments' and the bridges' Philox streams and each
-    realisation's stream place (``rng.stream_place``), and writes realisation ``j``'s metric
-    vector into ``raw[j]`` (preset to the vector's start)."""
+    """The lane loop of kick-drift-kick scenes specialised to ``spec`` (``driver.Spec``).  It
+    takes the bundles of ``kernels/bundles.py`` (the state's start in ``bodies``), the keys of
+    the increments', the bridges' and the filters' Philox streams, the root of the filters'
+    stationary covariance (``p0``: zero for a start from rest) and each realisation's stream
+    place (``rng.stream_place``), and writes realisation ``j``'s metric vector into ``raw[j]``
+    (preset to the vector's start)."""
     NB = spec.n_bodies
     NF = spec.n_floors
     NA = NB - NF

@@ -172,10 +172,12 @@ LANE_PATHS = 4096
 #: The scenes of the lanes' runs, by their name in the report: (scene file of ``validation.scenes``
 #: or scenario of the repository, realisations).  The contact scene's steps with events or an
 #: absorber stuck are finished by the scalar step, at its speed: fewer paths keep its runs as short
-#: as the others'.
+#: as the others'.  The filtered-noise scene (the parallel NES under filtered noise from its
+#: stationary law) advances each lane's filter.
 LANE_SCENES = {"smooth": ("smooth", LANE_PATHS),
                "impact-rich": ("smooth_impact", LANE_PATHS),
-               "contact under noise": ("scenarios/contact_noise_parallel.toml", 256)}
+               "contact under noise": ("scenarios/contact_noise_parallel.toml", 256),
+               "filtered noise": ("scenarios/filtered_noise.toml", LANE_PATHS)}
 
 
 def _scenario_study(path: str, point: int = 0, changes: Mapping[str, Any] | None = None) -> Study:
@@ -698,8 +700,10 @@ three rounds, the better 1-thread ratio kept).
 default for these scenes, on Philox streams; {VECTOR_BITS}-bit vectors asked for) and as before lanes
 (the scalar loop on PCG64 streams), in turn, the best of three rounds. The smooth scene as above;
 the impact-rich scene below; the contact scene of "Contact under noise" (steel-on-steel DSVI and
-a plastic impact NES). A lane whose step holds an impact, a contact onset or end, or sticking,
-or whose absorber is stuck or touches, is finished by the scalar step. The contact scene's time
+a plastic impact NES); the parallel NES (cubic and impact) under filtered noise from its stationary
+law (`scenarios/filtered_noise.toml`: each lane advances its own filter). A lane whose step
+holds an impact, a contact onset or end, or sticking, or whose absorber is stuck or touches, is
+finished by the scalar step. The contact scene's time
 is in such steps: its plastic absorber is stuck on about half of them, and its events (impacts,
 the contact's sub-steps, the root searches on the Brownian tree) fall on about 3.5 %, so its
 lanes run at about the scalar loop's speed.
@@ -727,8 +731,7 @@ draws, 1,024 lanes): {lanes["normals"] / 1e6:.0f} M normals/s; a normal drawn in
 {lanes["philox ns"]:.1f} ns from a Philox stream and {lanes["pcg ns"]:.1f} ns from a PCG64 stream (the
 ziggurat), so a scene that runs in lanes but records what the lanes do not (history rows, event
 logs, declared metrics: the scalar loop on its Philox streams) pays that difference a draw.
-Filtered loads, the SRA and Runge-Kutta schemes do not run in lanes yet (the scalar loop: a
-ratio of 1).
+The SRA and Runge-Kutta schemes do not run in lanes (the scalar loop: a ratio of 1).
 
 ## Impact-rich stochastic scene
 

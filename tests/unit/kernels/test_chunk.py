@@ -14,11 +14,11 @@ import pytest
 from scipy.stats import truncnorm
 
 from tests.helpers import example_scene, study_from, two_dof_data
-from vines_stoch.ensemble import chunk_parameters
+from vines_stoch.ensemble import chunk_parameters, run_chunk
 from vines_stoch.kernels import load_history, sample_buffer, simulate
-from vines_stoch.kernels.chunk import ground_paths, realization_streams, simulate_chunk
+from vines_stoch.kernels.chunk import ground_paths, lane_scene, realization_streams, simulate_chunk
 from vines_stoch.kernels.rng import philox_stream
-from vines_stoch.outputs import new_events
+from vines_stoch.outputs import X1_MAX, new_events
 from vines_stoch.physics.spectra import pseudo_acceleration
 from vines_stoch.streams import FILTER, PARAMETERS, generator
 
@@ -66,6 +66,21 @@ def test_ground_paths_are_the_paths_the_realisations_saw(philox):
         _, _, ground = load_history(scene, gen)
         assert np.array_equal(paths[j], ground)
     assert np.abs(paths).max() > 0
+
+
+def test_intensity_measures_are_those_of_the_ground_the_realisations_saw():
+    """Stochastic ground motion runs in SIMD lanes, its filters on Philox streams: a chunk's
+    ``pga`` is the peak of the ground acceleration that each realisation's own filter stream
+    gives (``realization_streams``, what ``simulate`` of the realisation draws from)."""
+    scene = example_scene("ground_motion", {"simulation.duration": 3.0, "intensity_measures.period": 1.0})
+    assert lane_scene(scene) and scene.im_period == 1.0
+    frame, _ = run_chunk(scene, SEED, 1, 2, 5)
+    for j, r in enumerate(range(2, 5)):
+        streams = realization_streams(scene, SEED, 1, r)
+        _, _, ground = load_history(scene, streams)
+        assert frame["pga"].iloc[j] == np.abs(ground).max() > 0
+        assert frame["x1_max"].iloc[j] == simulate(scene, streams)[X1_MAX]
+    assert frame["pga"].nunique() == 3
 
 
 def test_spectra_of_a_chunk_are_those_of_each_path():

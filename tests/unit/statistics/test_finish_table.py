@@ -21,7 +21,7 @@ import pytest
 from tests.helpers import example_data, scene_from, study_from, two_dof_data
 from vines_stoch.dynamics import refine_regimes
 from vines_stoch.ensemble import draw_parameters, run_chunk
-from vines_stoch.kernels import needed_streams, sample_buffer, simulate
+from vines_stoch.kernels import sample_buffer, simulate
 from vines_stoch.kernels.chunk import realization_streams
 from vines_stoch.metrics import (
     MAX_PERIOD,
@@ -43,7 +43,6 @@ from vines_stoch.outputs import (
     passage_slots,
 )
 from vines_stoch.scene import build_scene
-from vines_stoch.streams import streams
 
 _S = {name: i for i, name in enumerate(SLOTS)}
 SEED = 5
@@ -106,8 +105,7 @@ def reference_chunk(scene, seed: int, point: int, start: int, stop: int, study=N
         kept.append(samples)
         row = {"point": point, "realization": r, **drawn, **reference_row(raw, scene, samples)}
         if scene.im_period > 0:
-            row.update(ground_intensity(scene, streams(seed, point, r, increments=False, bridge=False,
-                                                       filters=needed_streams(scene)[2])))
+            row.update(ground_intensity(scene, realization_streams(scene, seed, point, r)))
         rows.append(row)
     frame = pd.DataFrame(rows)
     frame["regime"] = frame["regime"].astype("string")
