@@ -29,13 +29,16 @@ import pytest
 from scipy.linalg import eigh, expm
 
 from tests.helpers import ROOT, example_data, study_from
-from vines_stoch.ensemble import sample
+from vines_stoch.ensemble import run_chunk, sample
+from vines_stoch.scene import build_scene
 from vines_stoch.validation.reproduce import (
     FRAME_DEVICES,
     FRAME_STIFFNESSES,
     VIDM_NONLINEAR,
     ZERO_CLEARANCE,
+    _points,
     frame_devices,
+    paired_cut,
 )
 
 SCENARIOS = ROOT / "scenarios"
@@ -333,16 +336,34 @@ def test_each_tuned_device_alone_cuts_the_roof_rms():
     """Seed 001 prints no response (Tables 4-5 are "optimal" and "physical" devices): the cut of the
     roof's rms displacement against the bare frame under the same 16 ground motions, tested at 3
     standard errors (one-sided, 0.13 % a device).  Measured (cut, its standard error): six-column
-    31/4.7, 22/5.8, 23/6.8, 24/6.9 and 22/5.4 %; four-column nonlinear DM 22/3.5 %.  The four-column
-    Table 5 linear DM is tuned to 13.24 rad/s, above that frame's 9.86 rad/s: its cut (2.2/4.1 %)
-    is within 3 standard errors of none."""
+    35.8/4.5, 21.2/2.9, 29.0/5.4, 24.6/3.5 and 17.8/3.2 %; four-column nonlinear DM 30.3/5.1 %.  The
+    four-column Table 5 linear DM is tuned to 13.24 rad/s, above that frame's 9.86 rad/s: a null
+    result asks for a standard error that 16 paths do not give (15.5/4.0 % on this version's
+    streams, 2.2/4.1 % on the PCG64 streams of earlier versions), so it is tested on 128 ground
+    motions, where its cut (2.1/1.9 %; -3.0/2.0 % on the PCG64 streams) is within 3 standard
+    errors of none."""
     for r in devices():
         if r["name"] != "seed001_frame_devices":
             continue
         assert (r["rows"]["status"] == "ok").all() and r["impacts"] == 0
         cut, error = r["x_rms_3"]
         detuned = r["frame"] == "four-column" and "linear DM" in r["label"] and "non" not in r["label"]
+        if detuned:
+            cut, error = detuned_cut(r["label"], 128)
         assert (abs(cut) < 3 * error) if detuned else (cut > 3 * error), (r["label"], r["frame"], cut, error)
+
+
+def detuned_cut(label: str, paths: int) -> tuple[float, float]:
+    """The cut of the roof's rms by the four-column frame's device ``label`` against the bare frame
+    on ``paths`` ground motions (common random numbers: the same motions for both)."""
+    name = "seed001_frame_devices"
+    seed = example_data(name)["ensemble"]["seed"]
+    (point,) = [p for (lab, frame, *_), p in zip(FRAME_DEVICES[name], _points(SCENARIOS, name))
+                if lab == label and frame == "four-column"]
+    changes = {"primary.stiffnesses": list(FRAME_STIFFNESSES["four-column"])}
+    bare = _points(SCENARIOS, name, changes, drop=("absorbers", "sweep"))[0]
+    rows = [run_chunk(build_scene(p), seed, 0, 0, paths)[0] for p in (point, bare)]
+    return paired_cut(*rows, "x_rms_3")
 
 
 def test_vidm_strikes_and_cuts_the_roof_rms():
