@@ -291,8 +291,10 @@ def plan(study: Study, chunk: int | None = None, realizations: int | None = None
             if scene.period > 0:
                 row_bytes += 8 * POINCARE_SAMPLES * (2 * scene.mass.shape[0] + 2)
             size = min(size, max(1, GPU_CHUNK_BYTES // max(row_bytes, 1)))
-        else:
-            size = chunk or _auto_chunk(scene, n)
+        else:  # (a chunk that keeps history rows, an event log or declared metrics: the scalar loop)
+            kept = spec or spectra or scene.event_rows or scene.reductions.shape[0]
+            in_lanes = lane_scene(scene) and not kept
+            size = chunk or _auto_chunk(scene, n, in_lanes)
         if (spec or spectra) and backend != "cuda":
             row_bytes = _recorded_bytes(scene, spec, spectra)
             size = min(size, max(1, HISTORY_CHUNK_BYTES // row_bytes))
@@ -357,15 +359,15 @@ def _chunk(runner, view: _View | None, *args) -> tuple[pd.DataFrame, np.ndarray 
     return frame, kept, np.moveaxis(estimates, 1, 2)
 
 
-def _auto_chunk(scene: Scene, n: int) -> int:
+def _auto_chunk(scene: Scene, n: int, lanes: bool) -> int:
     """Realisations of an automatic CPU chunk: ``CHUNK_STEPS`` of work at most, ``n /
-    CHUNKS_PER_POINT`` where that leaves a chunk ``MIN_CHUNK_STEPS`` of work.  A scene that runs
-    in SIMD lanes (``kernels.chunk.lane_scene``) counts its path-steps ``LANE_WORK`` times
-    cheaper and takes at least a batch of lanes (``lanes.LANES`` paths, or ``n``), its chunks
-    then evened out (200 paths: two of 100, not 128 and 72); one with Hertz contact counts its
-    path-steps at their scalar cost."""
+    CHUNKS_PER_POINT`` where that leaves a chunk ``MIN_CHUNK_STEPS`` of work.  A chunk that runs
+    in SIMD lanes (``lanes``: a scene of ``kernels.chunk.lane_scene`` whose run keeps no history
+    rows, event log or declared metrics, which the scalar loop records) counts its path-steps
+    ``LANE_WORK`` times cheaper and takes at least a batch of lanes (``lanes.LANES`` paths, or
+    ``n``), its chunks then evened out (200 paths: two of 100, not 128 and 72); one with Hertz
+    contact counts its path-steps at their scalar cost."""
     steps = max(scene.n_steps, 1)
-    lanes = lane_scene(scene)
     work = LANE_WORK if lanes and not scene.has_hertz else 1
     by_cost = max(1, work * CHUNK_STEPS // steps)
     least = math.ceil(work * MIN_CHUNK_STEPS / steps)

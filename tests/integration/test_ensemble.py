@@ -105,3 +105,23 @@ def test_automatic_chunks_of_lane_scenes_are_batches_of_lanes_and_contact_counts
     one = scenes.study(data, {**contact.grid[0], "ensemble.realizations": 256, "simulation.duration": 20.0},
                        directory=contact.directory)
     assert [(c[1], c[2]) for c in plan(one).chunks] == [(0, LANES), (LANES, 256)]
+
+
+def test_automatic_chunks_that_keep_history_rows_count_at_the_scalar_cost():
+    """A lane scene whose run keeps history rows runs its chunks in the scalar loop (the lanes
+    record none), so ``ensemble.plan`` sizes them at the scalar loop's cost: 200 paths of 200,000
+    steps make chunks of 200 / CHUNKS_PER_POINT paths (rounded up) with history statistics, two
+    of a batch of lanes each without."""
+    import math
+
+    from vines_stoch.ensemble import CHUNKS_PER_POINT, plan
+    from vines_stoch.kernels.chunk import lane_scene
+    from vines_stoch.scene import build_scene
+    from vines_stoch.validation import scenes
+
+    changes = {"ensemble.realizations": 200, "simulation.duration": 200.0}
+    lanes = scenes.study("smooth", changes)
+    kept = scenes.study("smooth", {**changes, "simulation.history": True})
+    assert lane_scene(build_scene(kept.points[0]))
+    assert len(plan(lanes).chunks) == 2
+    assert {c[2] - c[1] for c in plan(kept).chunks[:-1]} == {math.ceil(200 / CHUNKS_PER_POINT)}
