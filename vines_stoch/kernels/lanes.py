@@ -491,7 +491,7 @@ def lane_loop(spec: Spec):
         for lane in range(nl):
             for r in range(NZ):
                 draws[r] = fz[r * W + lane]
-            stationary_state(p0, draws, z)
+            stationary_state(p0, draws, z, drawn > 0)
             for r in range(NZ):
                 s[(ZN + r) * W + lane] = z[r]
             for k in range(NF):

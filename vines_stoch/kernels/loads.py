@@ -191,10 +191,11 @@ def stationary_start(p0, gen, z, draws) -> None:
     """The filters' initial state ``z = P0 n`` with ``n`` standard normals from ``gen``, drawn
     only where ``P0`` (the root of the stationary covariance) is not zero (else a start from
     rest, ``z = 0``); ``draws`` is scratch for ``n``."""
-    if stationary(p0):
+    drawn = stationary(p0)
+    if drawn:
         for c in range(z.shape[0]):
             draws[c] = normal(gen)
-    stationary_state(p0, draws, z)
+    stationary_state(p0, draws, z, drawn)
 
 
 @njit(**INLINE)
@@ -209,13 +210,12 @@ def stationary(p0) -> bool:
 
 
 @njit(**INLINE)
-def stationary_state(p0, draws, z) -> None:
-    """``z = P0 n`` (``draws``: ``n``), a sum in a fixed order; 0 where ``P0`` is zero (a start
-    from rest, nothing drawn)."""
-    start = stationary(p0)
+def stationary_state(p0, draws, z, drawn: bool) -> None:
+    """``z = P0 n`` (``draws``: ``n``), a sum in a fixed order; 0 where nothing was ``drawn`` (a
+    start from rest: ``stationary``)."""
     for r in range(z.shape[0]):
         acc = 0.0
-        for c in range(z.shape[0] if start else 0):
+        for c in range(z.shape[0] if drawn else 0):
             acc += p0[r, c] * draws[c]
         z[r] = acc
 
