@@ -137,6 +137,10 @@ def run(
 
     with pd.option_context("display.width", 200, "display.max_columns", 24, "display.precision", 4):
         typer.echo(summary[headline(study, summary)].to_string(index=False))
+        from .rvt.table import parted
+
+        for line in parted(summary):
+            typer.echo(f"estimate: {line}", err=True)
         if result.rare is not None:
             typer.echo(f"\n{directory}/rare.parquet: P({study.base.rare.limit} exceeded), "
                        f"{study.base.rare.method}")
@@ -172,6 +176,38 @@ def validate(scenario: Path = typer.Argument(..., help="Scenario TOML file.")) -
         _fail(str(exc))
     _warn(study)
     typer.echo(f"{scenario}: ok ({len(study.points)} sweep point(s))")
+
+
+@app.command()
+def estimate(
+    scenario: Path = typer.Argument(..., help="Scenario TOML file."),
+    out: Path | None = typer.Option(None, "--out", help="Write the table to this Parquet file too."),
+) -> None:
+    """Estimate the response without an ensemble (exact linear random vibration, statistical
+    linearisation, Rice / Poisson / Vanmarcke first passage): one row a sweep point."""
+    import pandas as pd
+
+    from .rvt import estimate as estimate_study
+
+    try:
+        study = load_scenario(scenario)
+    except ScenarioError as exc:
+        _fail(str(exc))
+    started = time.monotonic()
+    table = estimate_study(study)
+    if out is not None:
+        if not out.parent.is_dir():
+            _fail(f"{out}: the folder {out.parent} does not exist")
+        table.to_parquet(out, index=False)
+    shown = [c for c in table.columns if c in ("point", "method", *study.sweep_keys) or c.startswith(
+        ("x1_", "p_")) and not c.endswith("_poisson")]
+    with pd.option_context("display.width", 200, "display.max_columns", 24, "display.precision", 4):
+        typer.echo(table[shown].to_string(index=False))
+    for p, note in zip(table["point"], table["note"]):
+        if note:
+            typer.echo(f"point {p}: {note}", err=True)
+    typer.echo(f"{len(table)} sweep point(s) in {time.monotonic() - started:.2f} s"
+               + (f"; written to {out}" if out is not None else ""), err=True)
 
 
 @app.command()

@@ -39,6 +39,7 @@ from .metrics import METRICS, finish_table, ground_intensities, summarise
 from .outputs import EVENT_COLUMNS, EVENT_T, POINCARE_SAMPLES, Record
 from .progress import Progress
 from .results import Results, Solution, as_study, check_whole
+from .rvt.table import with_estimates
 from .scenario import History, Spectra, Study
 from .scenario.fields import MAX_REALIZATIONS
 from .scene import Scene, build_scene
@@ -908,7 +909,8 @@ def _consolidate(study: Study, the_plan: Plan, states: list[PointState], directo
     poincare_df = None
     if "poincare_t" in realizations_df.columns:
         realizations_df, poincare_df = _poincare(realizations_df, study.sweep_keys)
-    summary_df = summarise(realizations_df, study.sweep_keys, study.base.simulation.residual_tolerance)
+    summary_df = with_estimates(summarise(realizations_df, study.sweep_keys,
+                                          study.base.simulation.residual_tolerance), study)
     def by_point(rows: list[pd.DataFrame]) -> pd.DataFrame:
         """Each point's rows after its index and swept values, one table."""
         for p, rows_p in enumerate(rows):

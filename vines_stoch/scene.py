@@ -241,7 +241,6 @@ def build_scene(scenario: Scenario) -> Scene:
             x0[nf + i] = a.start
     forces = []
     series = []
-    filter_list = []
     variance = np.zeros(nf)
     dt = float(scenario.simulation.dt)
     for load in scenario.loads:
@@ -257,12 +256,8 @@ def build_scene(scenario: Scenario) -> Scene:
             series.append((*load.samples(), GROUND if isinstance(load, RecordLoad) else k))
         elif isinstance(load, WhiteNoiseLoad):
             variance[k] += load.intensity**2
-        elif isinstance(load, (FilteredNoiseLoad, GroundMotionLoad)) and load.intensity > 0:
-            filter_list.append(_filter(load, k))
         elif isinstance(load, WindLoad):
-            mean, turbulence = wind_load(load, nf)
-            forces += closed_form_rows(load, k, nf, mean)
-            filter_list.append(turbulence)
+            forces += closed_form_rows(load, k, nf)
     sim = scenario.simulation
     n_steps = max(1, math.ceil(sim.duration / sim.dt - 1e-9))
     scheme = scenario.scheme
@@ -280,7 +275,7 @@ def build_scene(scenario: Scenario) -> Scene:
         series_v=np.concatenate([v for _, v, _ in series] or [np.zeros(0)]),
         series_ptr=np.cumsum([0] + [len(t) for t, _, _ in series]).astype(np.int64),
         series_target=np.array([g for _, _, g in series], dtype=np.int64),
-        filters=filters.block_diagonal(filter_list, dt, nf),
+        filters=filters.block_diagonal(scene_filters(scenario), dt, nf),
         sigma=np.sqrt(variance), x0=x0, v0=v0, dt=float(sim.dt), n_steps=n_steps,
         i0=min(n_steps - 1, int(round(sim.metrics_from / sim.dt))), scheme=scheme,
         period=period, sample_from=sample_from,
@@ -295,6 +290,19 @@ def build_scene(scenario: Scenario) -> Scene:
             "im_damping": scenario.intensity_measures.damping}
            if scenario.intensity_measures else {}),
     )
+
+
+def scene_filters(scenario: Scenario) -> list[filters.Filter]:
+    """The linear filters of a scenario's filtered loads, in file order: filtered noise, ground
+    motion (those of zero intensity left out) and wind turbulence (MODEL.md section 3)."""
+    roof = scenario.primary.n_floors - 1
+    out = []
+    for load in scenario.loads:
+        if isinstance(load, (FilteredNoiseLoad, GroundMotionLoad)) and load.intensity > 0:
+            out.append(_filter(load, roof if getattr(load, "floor", None) is None else load.floor - 1))
+        elif isinstance(load, WindLoad):
+            out.append(wind_load(load, scenario.primary.n_floors)[1])
+    return out
 
 
 def wind_load(load: WindLoad, n_floors: int) -> tuple[np.ndarray, filters.Filter]:

@@ -86,12 +86,21 @@ def transition(a: np.ndarray, b: np.ndarray, dt: float) -> tuple[np.ndarray, np.
     """``(Phi, L)``: the exact one-step transition matrix and a square root of the step's
     noise covariance ``Q(dt)`` (scaling and squaring of Van Loan's block exponential, module
     docstring), checked against the identity ``A Q + Q A^T + b b^T = Phi b b^T Phi^T``."""
+    cov = step_covariance(a, np.outer(b, b), dt)
+    phi = expm(a * dt)
+    _check_covariance(a, b, phi, cov, dt)
+    return phi, _sqrt_psd(cov)
+
+
+def step_covariance(a: np.ndarray, bb: np.ndarray, dt: float) -> np.ndarray:
+    """``Q(dt) = int_0^dt exp(A s) bb exp(A^T s) ds`` by scaling and squaring of Van Loan's block
+    exponential (module docstring), unchecked (``transition`` checks it)."""
     n = a.shape[0]
     norm = float(np.linalg.norm(a, 1)) * dt
     k = int(np.ceil(np.log2(norm / VAN_LOAN_NORM))) if norm > VAN_LOAN_NORM else 0
     block = np.zeros((2 * n, 2 * n))
     block[:n, :n] = -a
-    block[:n, n:] = np.outer(b, b)
+    block[:n, n:] = bb
     block[n:, n:] = a.T
     e = expm(block * (dt / 2**k))
     step = e[n:, n:].T  # Phi(h)
@@ -99,9 +108,7 @@ def transition(a: np.ndarray, b: np.ndarray, dt: float) -> tuple[np.ndarray, np.
     for _ in range(k):
         cov = _symmetric(cov + step @ cov @ step.T)
         step = step @ step
-    phi = expm(a * dt)
-    _check_covariance(a, b, phi, cov, dt)
-    return phi, _sqrt_psd(cov)
+    return cov
 
 
 def _symmetric(m: np.ndarray) -> np.ndarray:
