@@ -131,7 +131,8 @@ def linearized(scene, filters: list, mu: np.ndarray, s: np.ndarray) -> Model:
 TOLERANCE, ITERATIONS = 1e-9, 300
 
 
-def stationary(scene, filters: list, mu: np.ndarray, s: np.ndarray) -> tuple[Model, np.ndarray, np.ndarray, int]:
+def stationary(scene, filters: list, mu: np.ndarray,
+               s: np.ndarray) -> tuple[Model, np.ndarray, np.ndarray, int]:
     """The fixed point of statistical linearisation reached from ``(mu, s)``: ``(model, mean,
     covariance, iterations)``; NotApplicable where the iteration meets an unstable model or does
     not settle.  Each step moves the standard deviations a share of the way (geometrically) and the

@@ -49,7 +49,8 @@ def upcrossing_rate(b, m, s, dm, ds, cov) -> np.ndarray:
 
 def barrier_rate(b, m, s, dm, ds, cov) -> np.ndarray:
     """The rate of outward crossings of ``|y| = b``: ``y`` up through ``b`` and ``-y`` up through ``b``."""
-    return upcrossing_rate(b, m, s, dm, ds, cov) + upcrossing_rate(b, -np.asarray(m), s, -np.asarray(dm), ds, cov)
+    return (upcrossing_rate(b, m, s, dm, ds, cov)
+            + upcrossing_rate(b, -np.asarray(m), s, -np.asarray(dm), ds, cov))
 
 
 def vanmarcke_factor(r: np.ndarray, delta: float) -> np.ndarray:

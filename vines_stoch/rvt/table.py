@@ -73,7 +73,8 @@ def _statistics(path: moments.Path, out: _Output, b: np.ndarray, feed: np.ndarra
     standard deviation, their covariance; None for the derivative's where ``y`` is not
     differentiable (a noise column reaches it directly)."""
     c = out.row
-    a = np.array([path.model_at(i).a for i in range(len(path.t))]) if len(path.models) > 1 else path.models[0].a
+    a = (np.array([path.model_at(i).a for i in range(len(path.t))]) if len(path.models) > 1
+         else path.models[0].a)
     ca = c @ a if a.ndim == 2 else np.einsum("j,tjk->tk", c, a)
     m = path.m @ c
     s = np.sqrt(np.maximum(np.einsum("j,tjk,k->t", c, path.p, c), 0.0))
@@ -172,7 +173,17 @@ def _point(scenario, limits: dict) -> dict[str, Any]:
         mu, s = linearization.strokes(model, scene, m, p)
         return linearization.linearized(scene, filters, linearization.settle(scene, mu, s), s)
 
-    path = moments.propagate(model, duration, steps, relinearize if nonlinear else None)
+    if stationary is not None and nonlinear:
+        # (the window's statistics are those of the stationary fixed point: re-linearised on a
+        # coarse grid step by step, a stiffening law can run away, and from its symmetric start
+        # the Gaussian closure cannot choose a bistable law's well)
+        notes.append("the stationary fixed point's statistics over the window")
+        t_grid = np.linspace(0.0, duration, steps + 1)
+        path = moments.Path(t_grid, np.repeat(stationary[1][None], steps + 1, axis=0),
+                            np.repeat(stationary[2][None], steps + 1, axis=0), [stationary[0]])
+        model = stationary[0]
+    else:
+        path = moments.propagate(model, duration, steps, relinearize if nonlinear else None)
     if nonlinear and not _settled(path, stationary):
         raise NotApplicable("the time-varying linearisation ran away from its stationary fixed point "
                             "(a stiff contact re-linearised step by step)")
@@ -189,8 +200,10 @@ def _point(scenario, limits: dict) -> dict[str, Any]:
         deltas = dict(zip((o.name for o in outputs), _bandwidth(stationary[0], rows, stationary[2])))
     window = t[-1] - t[0]
     floors = [o for o in outputs if o.name.startswith("x_")]
-    spreads = (dict(zip((o.name for o in floors), _mean_square_spread(path, np.array([o.row for o in floors]), i0)
-                        / window**2)) if random and window > 0 else {})
+    spreads = {}
+    if random and window > 0:
+        values = _mean_square_spread(path, np.array([o.row for o in floors]), i0) / window**2
+        spreads = dict(zip((o.name for o in floors), values))
     for out in outputs:
         stats = _statistics(path, out, b, feed, rate)
         square = (stats["m"] ** 2 + stats["s"] ** 2)[i0:]
@@ -215,7 +228,8 @@ def _point(scenario, limits: dict) -> dict[str, Any]:
         if metric:
             row[f"{metric}_{k}"] = peak
         for name, (lim_metric, value) in limits.items():
-            if lim_metric == f"{metric}_{k}" or (lim_metric == "x1_max" and out.name == f"x_{scene.n_floors}"):
+            roof = lim_metric == "x1_max" and out.name == f"x_{scene.n_floors}"
+            if lim_metric == f"{metric}_{k}" or roof:
                 if not random:
                     row[f"p_{name}"] = float(peak > value)
                     continue
@@ -223,9 +237,11 @@ def _point(scenario, limits: dict) -> dict[str, Any]:
                 row[f"p_{name}"] = (float(passage.exceedance(t, [value], window_stats, delta)[0])
                                     if delta is not None else row[f"p_{name}_poisson"])
                 rates = passage.barrier_rate(value, *(window_stats[q] for q in ("m", "s", "dm", "ds", "cov")))
-                row[f"upcrossing_rate_{name}"] = float(np.trapezoid(rates, t) / window) if window > 0 else math.nan
+                row[f"upcrossing_rate_{name}"] = (float(np.trapezoid(rates, t) / window) if window > 0
+                                                  else math.nan)
     roof = scene.n_floors
-    for src, dst in ((f"x_rms_{roof}", "x1_rms"), (f"x_max_{roof}", "x1_max"), (f"x_rms_sd_{roof}", "x1_rms_sd")):
+    for name in ("x_rms", "x_max", "x_rms_sd"):  # (the roof's, as the realisations table names them)
+        src, dst = f"{name}_{roof}", name.replace("x_", "x1_")
         if src in row:
             row[dst] = row[src]
     row["note"] = "; ".join(notes)
@@ -261,7 +277,8 @@ def _stationary_fixed_point(scene, filters: list, model: Model) -> tuple[tuple |
     if bistable.size:
         well = np.zeros(na)
         well[bistable] = np.sqrt(-scene.rows[bistable, K_LIN] / scene.rows[bistable, K_CUBIC])
-        starts = [("intra-well", well, np.full(na, 0.1 * guess)), ("cross-well", np.zeros(na), np.full(na, guess))]
+        starts = [("intra-well", well, np.full(na, 0.1 * guess)),
+                  ("cross-well", np.zeros(na), np.full(na, guess))]
     found = []
     for label, mu, s in starts:
         try:
@@ -276,9 +293,8 @@ def _stationary_fixed_point(scene, filters: list, model: Model) -> tuple[tuple |
         return None, "no stationary fixed point of statistical linearisation"
     if bistable.size:
         names = ", ".join(label for label, _ in found)
-        return found[0][1], (f"bistable: stationary fixed points {names}; the statistics follow the "
-                             "time-varying linearisation from the scene's start, the bandwidth the "
-                             f"{found[0][0]} fixed point")
+        return found[0][1], (f"bistable: stationary fixed points {names}; the window's statistics are "
+                             f"the {found[0][0]} one's")
     return found[0][1], ""
 
 
