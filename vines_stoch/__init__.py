@@ -6,6 +6,7 @@ Public API (README, "Python API")::
     results = run({"name": "x", ...}, out="results/x", realizations=200)
     realizations, summary = read_results("results/x")              # a Results unpacks as a pair
     solution = solve("scenarios/parallel_nes_impulse.toml")        # one realisation: ts, ys["e1"]
+    table = estimate("scenarios/rare_oscillator.toml")             # no ensemble (MODEL.md section 6)
 
 ``run``, ``solve``, ``read_results``, ``Results`` and ``Solution`` are imported on first use
 (PEP 562): reading and validating a scenario does not import numba, dask or pandas.
@@ -32,10 +33,10 @@ from .scenario import ScenarioError, load_scenario, parse_scenario  # noqa: E402
 
 #: Public names imported on first use, and their modules.
 _LAZY = {"run": "ensemble", "solve": "ensemble", "read_results": "results", "Results": "results",
-         "Solution": "results"}
+         "Solution": "results", "estimate": "rvt"}
 
-__all__ = ["Results", "ScenarioError", "Solution", "__version__", "load_scenario", "parse_scenario",
-           "read_results", "run", "solve"]
+__all__ = ["Results", "ScenarioError", "Solution", "__version__", "estimate", "load_scenario",
+           "parse_scenario", "read_results", "run", "solve"]
 
 
 def __getattr__(name: str) -> Any:

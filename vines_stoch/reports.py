@@ -461,6 +461,28 @@ def _plots(runs: list[Run], out: Path, point: int | None) -> list[str]:
     return files
 
 
+def _estimates(run: Run) -> list[str]:
+    """The report's section on the estimates beside the Monte Carlo means (``rvt.table.beside``):
+    each estimated metric's mean, estimate and distance in standard errors, and in words the
+    metrics that lie more than ``rvt.table.APART`` standard errors away (none: none)."""
+    from .rvt.table import APART, parted
+
+    s = run.summary
+    metrics = [c[:-len("_z")] for c in s.columns if c.endswith("_z")]
+    if "estimate_method" not in s or not metrics:
+        return []
+    columns = ["point", *run.swept, "estimate_method"]
+    for m in metrics:
+        columns += [c for c in (f"{m}_mean" if f"{m}_mean" in s else m, f"{m}_estimate", f"{m}_z")]
+    lines = parted(s)
+    words = ([f"- {line}" for line in lines] if lines
+             else [f"Every estimated metric lies within {APART:g} standard errors of its estimate."])
+    return [f"## Estimates beside the Monte Carlo: {run.label}", "",
+            "Exact linear random vibration or statistical linearisation, Rice / Vanmarcke crossings "
+            "(`vines-stoch estimate`); `_z` is the Monte Carlo mean's distance from the estimate in "
+            "standard errors.", "", markdown(s[columns]), "", *words, ""]
+
+
 def report(directories: list[str | Path], out: str | Path = "reports", labels: list[str] | None = None,
            point: int | None = None) -> Path:
     """Write ``<out>/<name>/report.md`` and its PNG plots for one or several result
@@ -486,6 +508,7 @@ def report(directories: list[str | Path], out: str | Path = "reports", labels: l
                       "Fraction of the ok realisations whose peak exceeded each limit, with its 95 % Wilson "
                       "interval.", "",
                       markdown(run.summary[["point", *run.swept, "n_ok", *columns]]), ""]
+        parts += _estimates(run)
         fits = run.fragility()
         if fits is not None:
             parts += [f"## Fragility: {run.label}", "",
