@@ -32,7 +32,7 @@ from ..physics.absorbers import (
     geometric_force,
 )
 from . import moments
-from .system import Model, NotApplicable, build
+from .system import Model, NotApplicable, bare, with_absorbers
 
 #: Gauss-Hermite nodes (probabilists') of the geometric law's expectations.
 NODES, WEIGHTS = np.polynomial.hermite_e.hermegauss(64)
@@ -123,8 +123,17 @@ def strokes(model: Model, scene, m: np.ndarray, p: np.ndarray) -> tuple[np.ndarr
 
 
 def linearized(scene, filters: list, mu: np.ndarray, s: np.ndarray) -> Model:
-    """The model of ``scene`` linearised at the absorbers' laws ``N(mu, s^2)``."""
-    return build(scene, filters, *coefficients(scene, mu, s))
+    """The model of ``scene`` linearised at the absorbers' laws ``N(mu, s^2)`` (its bare structure
+    built once a scene: ``_BARE``)."""
+    key = (id(scene), id(filters))
+    if key not in _BARE or _BARE[key][0] is not scene or _BARE[key][1] is not filters:
+        _BARE.clear()
+        _BARE[key] = (scene, filters, bare(scene, filters))
+    return with_absorbers(_BARE[key][2], scene, *coefficients(scene, mu, s))
+
+
+#: The bare model of the scene last linearised (the scene and filters kept: their ids stay theirs).
+_BARE: dict = {}
 
 
 #: Relative change of the strokes' moments at which the iteration stops, and its largest count.

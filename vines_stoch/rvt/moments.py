@@ -76,61 +76,149 @@ class Path:
 
 def _step_matrices(model: Model, h: float) -> tuple[np.ndarray, np.ndarray, list[tuple]]:
     """``(Phi, Gamma b, [(envelope, Q)])`` of one step ``h``: the transition, the step's response
-    to the constant forcing (``expm`` of the augmented drift) and the covariance of the noise
-    columns of each envelope (``physics.filters.step_covariance``: Van Loan's exponential by
-    scaling and squaring)."""
+    to the constant forcing and the covariance of the noise columns of each envelope, from the
+    eigen-decomposition ``A = V L V^-1`` (``_modal_step``) where ``V`` is well conditioned, else
+    from ``expm`` of the augmented drift and ``physics.filters.step_covariance`` (Van Loan's
+    exponential by scaling and squaring)."""
+    groups: dict = {}
+    for j, row in enumerate(model.envelopes):
+        key = None if row is None or row[0] == STATIONARY else tuple(row)
+        groups.setdefault(key, []).append(j)
+    covariances = {key: model.noise[:, cols] @ model.noise[:, cols].T for key, cols in groups.items()}
+    modal = _modal_step(model, h, covariances)
+    if modal is not None:
+        return modal
     n = model.size
     block = np.zeros((n + 1, n + 1))
     block[:n, :n] = model.a
     block[:n, n] = model.constant
     e = expm(block * h)
-    groups: dict = {}
-    for j, row in enumerate(model.envelopes):
-        key = None if row is None or row[0] == STATIONARY else tuple(row)
-        groups.setdefault(key, []).append(j)
-    qs = [(key, step_covariance(model.a, model.noise[:, cols] @ model.noise[:, cols].T, h))
-          for key, cols in groups.items()]
+    qs = [(key, step_covariance(model.a, bb, h)) for key, bb in covariances.items()]
     return e[:n, :n], e[:n, n], qs
 
 
-#: Largest change of the drift (relative to its largest entry) over which a relinearised step
-#: keeps the transition of the last model it was computed for.
-MOVED = 1e-4
+#: Largest condition number of the eigenvectors for which ``_modal_step`` is used.
+CONDITION = 1e6
 
 
-def propagate(model: Model, t_end: float, steps: int,
-              relinearize: Callable[[np.ndarray, np.ndarray], Model] | None = None) -> Path:
-    """Means and covariances from the scene's start (``model.m0``, ``model.p0``) at ``steps + 1``
-    times over ``[0, t_end]``.  Linear: one model, exact at the grid's times (harmonic forces by
-    their steady response plus the free decay of the difference).  ``relinearize(m, P)``: the
-    model at the current moments (statistical linearisation), taken at the start of each step (its
-    transition computed afresh where its drift moved by more than ``MOVED``)."""
+def _modal_step(model: Model, h: float, covariances: dict) -> tuple | None:
+    """The step's matrices (``_step_matrices``) in the eigenvectors of ``A``: ``Phi = V e^{L h} V^-1``,
+    ``Gamma b = V ((e^{l h} - 1) / l) V^-1 b``, ``Q = V [C_ij (e^{(l_i + conj l_j) h} - 1) / (l_i + conj
+    l_j)] V^H`` with ``C = V^-1 B B^T V^-H`` (the integrals of ``int_0^h e^{A s} B B^T e^{A^T s} ds`` mode
+    by mode); None where ``V`` is ill-conditioned (repeated eigenvalues, a defective drift)."""
+    lam, v = np.linalg.eig(model.a)
+    if not np.all(np.isfinite(lam)) or np.linalg.cond(v) > CONDITION:
+        return None
+    w = np.linalg.inv(v)
+    growth = np.exp(lam * h)
+
+    def integral(rate: np.ndarray) -> np.ndarray:  # int_0^h e^{rate s} ds, (e^{rate h} - 1) / rate
+        small = np.abs(rate * h) < 1e-8
+        safe = np.where(small, 1.0, rate)
+        return np.where(small, h * (1.0 + 0.5 * rate * h), np.expm1(rate * h) / safe)
+
+    phi = np.real((v * growth) @ w)
+    forced = np.real(v @ (integral(lam) * (w @ model.constant)))
+    pair = integral(lam[:, None] + lam.conj()[None, :])
+    qs = []
+    for key, bb in covariances.items():
+        c = w @ bb @ w.conj().T
+        q = np.real(v @ (c * pair) @ v.conj().T)
+        qs.append((key, 0.5 * (q + q.T)))
+    return phi, forced, qs
+
+
+def propagate(model: Model, t_end: float, steps: int) -> Path:
+    """Means and covariances of a linear model from the scene's start (``model.m0``, ``model.p0``)
+    at ``steps + 1`` times over ``[0, t_end]``, exact at the grid's times (harmonic forces by their
+    steady response plus the free decay of the difference)."""
     h = t_end / steps
     t = np.linspace(0.0, t_end, steps + 1)
     amplitudes = harmonic_amplitudes(model) if model.harmonics else []
-    if amplitudes and relinearize is not None:
-        raise NotApplicable("harmonic forces on a nonlinear absorber: no combined linearisation here")
     steady0 = sum((x.real for _, x in amplitudes), np.zeros(model.size))
     m = np.empty((steps + 1, model.size))
     p = np.empty((steps + 1, model.size, model.size))
     m[0], p[0] = model.m0 - steady0, model.p0
-    current, matrices, models = model, _step_matrices(model, h), [model]
-    taken = model.a
+    phi, forced, qs = _step_matrices(model, h)
     for i in range(steps):
-        if relinearize is not None and i > 0:
-            current = relinearize(m[i], p[i])
-            if np.abs(current.a - taken).max() > MOVED * np.abs(taken).max() or (
-                    current.constant != models[-1].constant).any():
-                matrices, taken = _step_matrices(current, h), current.a
-            models.append(current)
-        phi, forced, qs = matrices
         m[i + 1] = phi @ m[i] + forced
         q = sum((_scale(key, t[i] + 0.5 * h) ** 2 * cov for key, cov in qs), np.zeros_like(phi))
         nxt = phi @ p[i] @ phi.T + q
         p[i + 1] = 0.5 * (nxt + nxt.T)
     for w, x in amplitudes:
         m += np.real(np.exp(1j * w * t)[:, None] * x[None, :])
+    return Path(t, m, p, [model])
+
+
+#: Largest relative change of the drift between a step's start and its midpoint before the step
+#: is split (``propagate_linearized``), and the deepest splitting (a step in 4^depth).
+SPLIT, DEPTH = 0.05, 4
+
+
+def propagate_linearized(model: Model, t_end: float, steps: int,
+                         relinearize: Callable[[np.ndarray, np.ndarray], Model]) -> Path:
+    """Means and covariances of statistical linearisation from the scene's start on the grid of
+    ``steps`` over ``[0, t_end]``: each step is the exact step of the model linearised at the
+    step's midpoint moments (predicted by the exact step of the model at its start: a second-order
+    exponential integrator of the moment equations), split in four where the two models' drifts
+    differ by more than ``SPLIT`` (down to ``DEPTH`` levels; NotApplicable past them).  A model
+    frozen over a whole coarse step instead pumps energy into a stiffening law, as a spring whose
+    stiffness steps up at its largest stretch."""
+    if model.harmonics:
+        raise NotApplicable("harmonic forces on a nonlinear absorber: no combined linearisation here")
+    t = np.linspace(0.0, t_end, steps + 1)
+    m = np.empty((steps + 1, model.size))
+    p = np.empty((steps + 1, model.size, model.size))
+    m[0], p[0] = model.m0, model.p0
+    models = [model]
+    cache: dict = {}
+    for i in range(steps):
+        m[i + 1], p[i + 1], last = _split_step(relinearize, m[i], p[i], t[i], t[i + 1] - t[i], 0, cache)
+        models.append(last)
     return Path(t, m, p, models)
+
+
+#: Largest change of a drift, relative to its largest entry, within which a step reuses the
+#: transition computed for an earlier model (``_exact_step``; a linearised law that has settled).
+MOVED = 1e-3
+
+
+def _exact_step(model: Model, m: np.ndarray, p: np.ndarray, t0: float, h: float,
+                cache: dict) -> tuple[np.ndarray, np.ndarray]:
+    """One exact step ``h`` of ``model`` from ``(m, p)`` at ``t0``; the matrices of the last two
+    models seen are kept in ``cache`` and reused for a model whose drift and forcing lie within
+    ``MOVED`` of theirs."""
+    scale = max(np.abs(model.a).max(), 1e-300)
+    matrices = None
+    for a, constant, step, found in cache.get("kept", []):
+        if (step == h and np.abs(a - model.a).max() <= MOVED * scale
+                and np.abs(constant - model.constant).max() <= MOVED * max(np.abs(constant).max(), 1e-300)):
+            matrices = found
+            break
+    if matrices is None:
+        matrices = _step_matrices(model, h)
+        cache["kept"] = [(model.a, model.constant, h, matrices)] + cache.get("kept", [])[:1]
+    phi, forced, qs = matrices
+    q = sum((_scale(k, t0 + 0.5 * h) ** 2 * cov for k, cov in qs), np.zeros_like(phi))
+    nxt = phi @ p @ phi.T + q
+    return phi @ m + forced, 0.5 * (nxt + nxt.T)
+
+
+def _split_step(relinearize, m, p, t0: float, h: float, depth: int, cache: dict):
+    """``propagate_linearized``'s step: ``(m, p, model)`` at ``t0 + h``."""
+    start = relinearize(m, p)
+    m1, p1 = _exact_step(start, m, p, t0, h, cache)
+    middle = relinearize(0.5 * (m + m1), 0.5 * (p + p1))
+    moved = np.abs(middle.a - start.a).max() / max(np.abs(start.a).max(), 1e-300)
+    if moved > SPLIT and depth < DEPTH:
+        for k in range(4):
+            m, p, middle = _split_step(relinearize, m, p, t0 + k * h / 4, h / 4, depth + 1, cache)
+        return m, p, middle
+    if moved > SPLIT:
+        raise NotApplicable("statistical linearisation moves faster than its steps can follow "
+                            f"(the drift moved {moved:.0%} over a step of {h:.3g} s)")
+    m2, p2 = _exact_step(middle, m, p, t0, h, cache)
+    return m2, p2, middle
 
 
 def _scale(row, t: float) -> float:

@@ -14,7 +14,7 @@ then the absorbers) and the states of the load filters.  ``dz = (A z + b(t)) dt 
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -108,18 +108,34 @@ def check_laws(scene) -> None:
 def build(scene, scenario_filters: list, k_eq: np.ndarray, g0: np.ndarray) -> Model:
     """The model of ``scene`` with absorber ``a``'s law replaced by ``g0[a] + k_eq[a] u -
     c_a w`` (``u``, ``w``: its motion relative to its host floor; ``g0``, ``k_eq`` from
-    ``linearization.py``; for the linear law ``k_eq = k``, ``g0 = k R``, ``R`` the rest offset).
+    ``linearization.py``; for the linear law ``k_eq = -k``, ``g0 = k R``, ``R`` the rest offset).
     ``scenario_filters``: ``scene.scene_filters`` of its scenario."""
+    return with_absorbers(bare(scene, scenario_filters), scene, k_eq, g0)
+
+
+def with_absorbers(base: Model, scene, k_eq: np.ndarray, g0: np.ndarray) -> Model:
+    """``base`` (``bare``) with the absorbers' equivalent springs (slopes ``k_eq``), their constant
+    forces ``g0`` and their dashpots between each absorber and its host floor."""
+    nb = base.n_bodies
+    a, constant, feed = base.a.copy(), base.constant.copy(), base.feed.copy()
+    inv_m = 1.0 / scene.mass
+    for i in range(scene.kind.shape[0]):
+        j, h = base.n_floors + i, int(scene.host[i])
+        for offset, coefficient in ((0, -k_eq[i]), (nb, scene.rows[i, DAMPING])):
+            for body, other in ((j, h), (h, j)):  # (a spring of -k_eq: k_eq is the force's slope)
+                a[nb + body, offset + body] -= coefficient * inv_m[body]
+                a[nb + body, offset + other] += coefficient * inv_m[body]
+        for body, sign in ((j, 1.0), (h, -1.0)):
+            constant[nb + body] += sign * g0[i] * inv_m[body]
+            feed[body] += sign * g0[i] * inv_m[body]
+    return replace(base, a=a, constant=constant, feed=feed)
+
+
+def bare(scene, scenario_filters: list) -> Model:
+    """The model of ``scene`` without its absorbers' attachments (their masses free)."""
     check_laws(scene)
     nb, nf = scene.mass.shape[0], scene.n_floors
     k, c = structure_matrices(scene)
-    constant_force = np.zeros(nb)
-    for a in range(scene.kind.shape[0]):
-        j, h = nf + a, scene.host[a]
-        _couple(k, j, h, -k_eq[a])  # (k_eq is the slope of the force: a stiffness of -k_eq)
-        _couple(c, j, h, scene.rows[a, DAMPING])
-        constant_force[j] += g0[a]
-        constant_force[h] -= g0[a]
     n_f = sum(f.a.shape[0] for f in scenario_filters)
     size = 2 * nb + n_f
     inv_m = 1.0 / scene.mass
@@ -154,7 +170,7 @@ def build(scene, scenario_filters: list, k_eq: np.ndarray, g0: np.ndarray) -> Mo
 
             p0[s, s] = stationary_covariance(f.a, f.b)
         start += f.a.shape[0]
-    feed = constant_force * inv_m
+    feed = np.zeros(nb)
     constant = np.zeros(size)
     harmonics = []
     for row in scene.forces:  # (harmonic rows only: check_laws)
@@ -170,7 +186,6 @@ def build(scene, scenario_filters: list, k_eq: np.ndarray, g0: np.ndarray) -> Mo
             feed = feed + force.real
         else:
             harmonics.append((float(row[2]), g, force))
-    constant[nb:2 * nb] += constant_force * inv_m
     ground = np.zeros(n_f)
     start = 0
     for f in scenario_filters:

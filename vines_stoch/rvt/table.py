@@ -12,13 +12,13 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from ..physics.absorbers import LINEAR
-from . import linearization, moments, passage
-from .system import Model, NotApplicable, build, check_laws
+from ..physics.absorbers import BISTABLE, HERTZ, K_CUBIC, K_GEO
+from . import energy, linearization, moments, passage
+from .system import Model, NotApplicable, bare, build, check_laws
 
 #: Grid steps of the time-varying moments: linear scenes, at most, and nonlinear ones (one
 #: linearisation a step), at most; at least this many points a period of the fastest mode.
-LINEAR_STEPS, NONLINEAR_STEPS, STEPS_PER_PERIOD, MIN_STEPS = 2000, 400, 16, 200
+LINEAR_STEPS, NONLINEAR_STEPS, STEPS_PER_PERIOD, MIN_STEPS = 2000, 200, 16, 100
 #: Frequency points of the spectral moment ``lambda_1`` (Vanmarcke's bandwidth).
 SPECTRUM_POINTS = 1500
 #: Metrics of the realisations table an estimate row may carry (per floor: ``_k``).
@@ -54,17 +54,29 @@ def _grid(model: Model, duration: float, nonlinear: bool) -> int:
     return int(min(max(steps, MIN_STEPS), NONLINEAR_STEPS if nonlinear else LINEAR_STEPS))
 
 
-def _forcing(model: Model, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """``b(t)`` (T, N) and the force accelerations ``feed(t)`` and their rates (T, bodies)."""
-    b = np.repeat(model.constant[None], len(t), axis=0)
-    feed = np.repeat(model.feed[None], len(t), axis=0)
+def _forcing(path: moments.Path) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``b(t)`` (T, N) and the force accelerations ``feed(t)`` and their rates (T, bodies) on the
+    path's grid (the constant parts of the model of each time: a linearised law's mean force)."""
+    t = path.t
+    if len(path.models) > 1:
+        b = np.array([m.constant for m in path.models])
+        feed = np.array([m.feed for m in path.models])
+    else:
+        b = np.repeat(path.models[0].constant[None], len(t), axis=0)
+        feed = np.repeat(path.models[0].feed[None], len(t), axis=0)
     rate = np.zeros_like(feed)
-    for w, g, force in model.harmonics:
+    for w, g, force in path.models[0].harmonics:
         e = np.exp(1j * w * t)[:, None]
         b += np.real(e * g[None])
         feed += np.real(e * force[None])
         rate += np.real(1j * w * e * force[None])
     return b, feed, rate
+
+
+def _nonlinear(scene) -> np.ndarray:
+    """The absorbers whose law is not linear: a cubic or geometric term, or Hertz contact (a
+    ``cubic`` absorber of zero cubic stiffness is a linear one)."""
+    return (scene.rows[:, K_CUBIC] != 0.0) | (scene.rows[:, K_GEO] != 0.0) | (scene.kind == HERTZ)
 
 
 def _statistics(path: moments.Path, out: _Output, b: np.ndarray, feed: np.ndarray,
@@ -101,15 +113,15 @@ def _statistics(path: moments.Path, out: _Output, b: np.ndarray, feed: np.ndarra
 def _bandwidth(model: Model, rows: np.ndarray, p: np.ndarray) -> np.ndarray:
     """Vanmarcke's bandwidth of each stationary output (``rows``): ``lambda_0``, ``lambda_2`` from the
     stationary covariance ``p``, ``lambda_1`` from the one-sided spectrum on a log grid."""
-    eig = np.abs(np.linalg.eigvals(model.a))
-    eig = eig[eig > 0]
+    lam, v = np.linalg.eig(model.a)
+    eig = np.abs(lam[np.abs(lam) > 0])
     omega = np.geomspace(eig.min() * 1e-3, eig.max() * 1e3, SPECTRUM_POINTS)
-    eye = np.eye(model.size)
-    noise = model.noise.astype(complex)
-    spectrum = np.empty((len(omega), rows.shape[0]))
-    for i, w in enumerate(omega):
-        h = rows @ np.linalg.solve(1j * w * eye - model.a, noise)
-        spectrum[i] = np.sum(np.abs(h) ** 2, axis=1) / np.pi  # one-sided: 2 S(omega)
+    # H(w) = rows V (i w - L)^-1 V^-1 B, mode by mode (a defective drift is left to rounding here:
+    # the bandwidth only shapes Vanmarcke's factor)
+    left, right = rows @ v, np.linalg.solve(v, model.noise.astype(complex))
+    modes = 1.0 / (1j * omega[None, :] - lam[:, None])  # (n, omega)
+    h = np.einsum("ok,kw,kq->owq", left, modes, right)
+    spectrum = (np.sum(np.abs(h) ** 2, axis=2) / np.pi).T  # one-sided: 2 S(omega)
     lam1 = np.trapezoid(omega[:, None] * spectrum, omega, axis=0)
     lam0 = np.einsum("ij,jk,ik->i", rows, p, rows)
     ra = rows @ model.a
@@ -151,7 +163,7 @@ def _point(scenario, limits: dict) -> dict[str, Any]:
     scene = build_scene(scenario)
     filters = scene_filters(scenario)
     check_laws(scene)
-    nonlinear = bool((scene.kind != LINEAR).any())
+    nonlinear = bool(_nonlinear(scene).any())
     random = bool(scene.sigma.any() or filters)
     if nonlinear and not random:
         raise NotApplicable("a deterministic load on a nonlinear absorber: statistical linearisation "
@@ -173,27 +185,25 @@ def _point(scenario, limits: dict) -> dict[str, Any]:
         mu, s = linearization.strokes(model, scene, m, p)
         return linearization.linearized(scene, filters, linearization.settle(scene, mu, s), s)
 
-    if stationary is not None and nonlinear:
-        # (the window's statistics are those of the stationary fixed point: re-linearised on a
-        # coarse grid step by step, a stiffening law can run away, and from its symmetric start
-        # the Gaussian closure cannot choose a bistable law's well)
-        notes.append("the stationary fixed point's statistics over the window")
+    if stationary is not None and (scene.kind == BISTABLE).any():
+        # (from its symmetric start the Gaussian closure cannot choose a well: the window's
+        # statistics are those of the reported stationary fixed point)
         t_grid = np.linspace(0.0, duration, steps + 1)
         path = moments.Path(t_grid, np.repeat(stationary[1][None], steps + 1, axis=0),
                             np.repeat(stationary[2][None], steps + 1, axis=0), [stationary[0]])
-        model = stationary[0]
+    elif nonlinear:
+        path = moments.propagate_linearized(model, duration, steps, relinearize)
     else:
-        path = moments.propagate(model, duration, steps, relinearize if nonlinear else None)
+        path = moments.propagate(model, duration, steps)
     if nonlinear and not _settled(path, stationary):
-        raise NotApplicable("the time-varying linearisation ran away from its stationary fixed point "
-                            "(a stiff contact re-linearised step by step)")
+        raise NotApplicable("the time-varying linearisation ran away from its stationary fixed point")
     i0 = int(np.searchsorted(path.t, scene.i0 * scene.dt - 1e-9 * scene.dt))
     i0 = min(i0, steps - 1)
     t = path.t[i0:]
-    b, feed, rate = _forcing(model, path.t)
+    b, feed, rate = _forcing(path)
     row: dict[str, Any] = {"method": "statistical-linearization" if nonlinear else "exact-linear",
                            "stationary_law": stationary is not None}
-    outputs = _outputs(model, scene)
+    outputs = _outputs(path.models[-1], scene)  # (accelerations: the end's linearised forces)
     deltas = {}
     if stationary is not None:
         rows = np.array([o.row for o in outputs])
@@ -239,6 +249,9 @@ def _point(scenario, limits: dict) -> dict[str, Any]:
                 rates = passage.barrier_rate(value, *(window_stats[q] for q in ("m", "s", "dm", "ds", "cov")))
                 row[f"upcrossing_rate_{name}"] = (float(np.trapezoid(rates, t) / window) if window > 0
                                                   else math.nan)
+    base = bare(scene, filters)
+    b_external, _, _ = _forcing(moments.Path(path.t, path.m, path.p, [base]))
+    row.update(energy.accounts(path, i0, scene, base, b_external))
     roof = scene.n_floors
     for name in ("x_rms", "x_max", "x_rms_sd"):  # (the roof's, as the realisations table names them)
         src, dst = f"{name}_{roof}", name.replace("x_", "x1_")
@@ -268,7 +281,7 @@ def _stationary_fixed_point(scene, filters: list, model: Model) -> tuple[tuple |
     start at the bare structure's roof motion; a bistable absorber is tried from both branches
     (intra-well, about a stable position; cross-well, about the barrier's top) and the note names
     the fixed points found and which is reported (intra-well where it exists)."""
-    from ..physics.absorbers import BISTABLE, K_CUBIC, K_LIN
+    from ..physics.absorbers import K_LIN
 
     na = len(scene.kind)
     guess = _bare_rms(scene, filters)

@@ -1,0 +1,100 @@
+"""The energy accounts of MODEL.md section 4 in expectation over the metrics window, from the
+means and covariances of a path (``moments.Path``): the input work (the energy stored at the
+window's opening, then the loads' power ``sum_i m_i E[v_i (F_i / m_i - a_g)]`` and white noise's
+Ito term ``sigma^2 / 2 m``), the dashpots' dissipation ``E[c w^2]``, the integral of ``E[E1]``, and
+the EDM as the ratio of the expected absorbed and input energies (its first-order estimate)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..physics.absorbers import (
+    DAMPING,
+    FREE_LENGTH,
+    K_CUBIC,
+    K_GEO,
+    K_LEFT,
+    K_LIN,
+    K_RIGHT,
+    LENGTH,
+    REST,
+    WALL_HI,
+    WALL_LO,
+    geometric_energy,
+)
+from .linearization import NODES, WEIGHTS, positive_moment
+from .moments import Path
+from .system import Model, structure_matrices
+
+
+def _second(path: Path, i: int) -> np.ndarray:
+    """``E[z z^T]`` at grid time ``i``."""
+    return path.p[i] + np.outer(path.m[i], path.m[i])
+
+
+def coupling_energy(row: np.ndarray, mu: float, s: float) -> float:
+    """``E[V(u)]`` of an absorber's attachment and contacts (``physics.absorbers.coupling_energy``,
+    ``physics.hertz.contact_energy``) for ``u ~ N(mu, s^2)``: the polynomial's moments
+    (``E[y^4] = mu^4 + 6 mu^2 s^2 + 3 s^4``), Gauss-Hermite for the geometric term, ``0.4 K E[z_+^2.5]``
+    for a contact."""
+    y = mu - row[REST]
+    y2, y4 = y * y + s * s, y**4 + 6 * y * y * s * s + 3 * s**4
+    e = 0.5 * row[K_LIN] * y2 + 0.25 * row[K_CUBIC] * y4
+    if row[K_GEO] != 0.0:
+        f = geometric_energy.py_func
+        values = [f(y + s * n, row[K_GEO], row[FREE_LENGTH], row[LENGTH]) for n in NODES]
+        e += float(WEIGHTS @ np.array(values))
+    for k, m in ((row[K_LEFT], row[WALL_LO] - mu), (row[K_RIGHT], mu - row[WALL_HI])):
+        if k > 0.0:
+            e += 0.4 * k * positive_moment(m, s, 2.5)
+    return e
+
+
+def accounts(path: Path, i0: int, scene, base: Model, b_external: np.ndarray) -> dict[str, float]:
+    """``input_energy``, ``absorber_dissipation``, ``primary_dissipation``, ``energy_integral`` and
+    ``edm`` expected over the window from grid time ``i0``; ``base``: the model without absorbers
+    (``system.bare``: the loads' read-outs), ``b_external``: its forcing on the grid (T, N)."""
+    nb, nf = base.n_bodies, base.n_floors
+    mass, t = scene.mass, path.t[i0:]
+    k, c = structure_matrices(scene)
+    loads = base.a[nb:2 * nb, 2 * nb:]  # the filters' read-outs on the bodies' accelerations
+    ito = float(np.sum(scene.sigma**2 / (2.0 * mass[:nf])))
+    power, absorbed, primary, e1 = (np.empty(len(t)) for _ in range(4))
+    for j, i in enumerate(range(i0, len(path.t))):
+        s2 = _second(path, i)
+        sv = s2[nb:2 * nb, nb:2 * nb]
+        power[j] = (np.einsum("i,ij,ij->", mass, loads, s2[nb:2 * nb, 2 * nb:])
+                    + float(mass @ (path.m[i, nb:2 * nb] * b_external[i, nb:2 * nb])) + ito)
+        primary[j] = float(np.sum(c[:nf, :nf] * sv[:nf, :nf]))
+        absorbed[j] = sum(scene.rows[a, DAMPING] * _relative(sv, nf + a, int(scene.host[a]))
+                          for a in range(len(scene.kind)))
+        e1[j] = 0.5 * (float(mass[:nf] @ np.diagonal(sv)[:nf]) + float(np.sum(k[:nf, :nf] * s2[:nf, :nf])))
+    stored = _stored(path, i0, scene, k)
+    out = {"input_energy": stored + _integral(power, t), "absorber_dissipation": _integral(absorbed, t),
+           "primary_dissipation": _integral(primary, t), "energy_integral": _integral(e1, t)}
+    out["edm"] = out["absorber_dissipation"] / out["input_energy"] if out["input_energy"] > 0 else np.nan
+    return out
+
+
+def _integral(values: np.ndarray, t: np.ndarray) -> float:
+    """The trapezoid rule over the window's grid (0 for a window of one time)."""
+    return float(np.trapezoid(values, t)) if len(t) > 1 else 0.0
+
+
+def _relative(second: np.ndarray, j: int, h: int) -> float:
+    """``E[(q_j - q_h)^2]`` from a block of second moments."""
+    return float(second[j, j] - 2.0 * second[j, h] + second[h, h])
+
+
+def _stored(path: Path, i0: int, scene, k: np.ndarray) -> float:
+    """The energy stored at the window's opening: every body's kinetic energy, the storeys' strain
+    energy and the absorbers' attachments and contacts (``coupling_energy``)."""
+    nb, nf = scene.mass.shape[0], scene.n_floors
+    s2 = _second(path, i0)
+    e = 0.5 * float(scene.mass @ np.diagonal(s2)[nb:2 * nb]) + 0.5 * float(np.sum(k[:nf, :nf] * s2[:nf, :nf]))
+    for a in range(len(scene.kind)):
+        j, h = nf + a, int(scene.host[a])
+        mu = path.m[i0, j] - path.m[i0, h]
+        var = path.p[i0, j, j] - 2.0 * path.p[i0, j, h] + path.p[i0, h, h]
+        e += coupling_energy(scene.rows[a], mu, float(np.sqrt(max(var, 0.0))))
+    return e
