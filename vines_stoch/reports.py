@@ -264,6 +264,26 @@ def _plots(runs: list[Run], out: Path, point: int | None) -> list[str]:
                    title="Maximum primary energy with regimes")
             save(fig, "e1_max_regimes.png")
 
+    estimated = [run for run in runs if _estimated(run)]
+    if estimated:  # the Monte Carlo means and their estimates on the same axes, a metric a panel
+        run = estimated[0]
+        metrics = _estimated(run)
+        key = run.axes[0] if len(run.swept) == 1 and run.axes else "point"
+        fig, axes = plt.subplots(1, len(metrics), figsize=(4.2 * len(metrics), 3.4), squeeze=False)
+        for ax, metric in zip(axes[0], metrics):
+            for r in estimated:
+                s = r.summary.sort_values(key)
+                line = ax.errorbar(s[key], s[f"{metric}_mean"], yerr=1.96 * s[f"{metric}_sem"], fmt="o",
+                                   ms=3, capsize=2, label=f"{r.label}: Monte Carlo, 95 %")
+                ax.plot(s[key], s[f"{metric}_estimate"], "-", color=line[0].get_color(),
+                        label=f"{r.label}: {s['estimate_method'].iloc[0]}")
+            if key != "point" and (run.summary[key] > 0).all():
+                ax.set_xscale("log")
+            ax.set(xlabel=label(key, tables) if key != "point" else "sweep point",
+                   ylabel=label(f"{metric}_mean"), title=metric)
+        fig.suptitle("Estimates without an ensemble beside the Monte Carlo means")
+        save(fig, "estimates.png")
+
     walls = [run for run in keyed if (run.realizations["impacts"] > 0).any()]
     if walls:  # where the absorbers meet both walls, one or none, against the swept value
         key = walls[0].axes[0]
@@ -459,6 +479,17 @@ def _plots(runs: list[Run], out: Path, point: int | None) -> list[str]:
         ax.set(xlabel=label("t"))
         save(fig, "primary_energy_history.png")
     return files
+
+
+#: The metrics drawn beside their estimates (``_plots``), where a run has them.
+ESTIMATED = ("x1_rms", "x1_max", "edm")
+
+
+def _estimated(run: Run) -> list[str]:
+    """The metrics of ``ESTIMATED`` with a finite estimate at some sweep point of ``run``."""
+    s = run.summary
+    return [m for m in ESTIMATED
+            if f"{m}_estimate" in s and f"{m}_mean" in s and s[f"{m}_estimate"].notna().any()]
 
 
 def _estimates(run: Run) -> list[str]:
