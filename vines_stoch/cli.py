@@ -161,7 +161,8 @@ def headline(study: Study, summary: pd.DataFrame) -> list[str]:
         means.append("impacts")
     if study.base.optimize is not None and study.base.optimize.objective not in means:
         means.append(study.base.optimize.objective)
-    limits = [c for c in summary.columns if c.startswith("p_")]  # (p_NAME, p_NAME_lo, p_NAME_hi)
+    limits = [c for c in summary.columns  # (p_NAME, p_NAME_lo, p_NAME_hi; not the estimates' columns)
+              if c.startswith("p_") and not c.endswith(("_estimate", "_z"))]
     columns = [*study.sweep_keys, "n_ok", "n_failed", *(f"{m}_mean" for m in means), *limits,
                "energy_residual_mean"]
     return [c for c in dict.fromkeys(columns) if c in summary]
