@@ -59,16 +59,18 @@ def accounts(path: Path, i0: int, scene, base: Model, b_external: np.ndarray) ->
     k, c = structure_matrices(scene)
     loads = base.a[nb:2 * nb, 2 * nb:]  # the filters' read-outs on the bodies' accelerations
     ito = float(np.sum(scene.sigma**2 / (2.0 * mass[:nf])))
-    power, absorbed, primary, e1 = (np.empty(len(t)) for _ in range(4))
-    for j, i in enumerate(range(i0, len(path.t))):
-        s2 = _second(path, i)
-        sv = s2[nb:2 * nb, nb:2 * nb]
-        power[j] = (np.einsum("i,ij,ij->", mass, loads, s2[nb:2 * nb, 2 * nb:])
-                    + float(mass @ (path.m[i, nb:2 * nb] * b_external[i, nb:2 * nb])) + ito)
-        primary[j] = float(np.sum(c[:nf, :nf] * sv[:nf, :nf]))
-        absorbed[j] = sum(scene.rows[a, DAMPING] * _relative(sv, nf + a, int(scene.host[a]))
-                          for a in range(len(scene.kind)))
-        e1[j] = 0.5 * (float(mass[:nf] @ np.diagonal(sv)[:nf]) + float(np.sum(k[:nf, :nf] * s2[:nf, :nf])))
+    m, p = path.m[i0:], path.p[i0:]
+    second = p + np.einsum("ti,tj->tij", m, m)  # E[z z^T] on the window's grid
+    sv = second[:, nb:2 * nb, nb:2 * nb]
+    power = (np.einsum("i,ij,tij->t", mass, loads, second[:, nb:2 * nb, 2 * nb:])
+             + (m[:, nb:2 * nb] * b_external[i0:, nb:2 * nb]) @ mass + ito)
+    primary = np.einsum("ij,tij->t", c[:nf, :nf], sv[:, :nf, :nf])
+    absorbed = np.zeros(len(t))
+    for a in range(len(scene.kind)):
+        j, h = nf + a, int(scene.host[a])
+        absorbed += scene.rows[a, DAMPING] * (sv[:, j, j] - 2.0 * sv[:, j, h] + sv[:, h, h])
+    e1 = 0.5 * (np.einsum("i,tii->t", mass[:nf], sv[:, :nf, :nf])
+                + np.einsum("ij,tij->t", k[:nf, :nf], second[:, :nf, :nf]))
     stored = _stored(path, i0, scene, k)
     out = {"input_energy": stored + _integral(power, t), "absorber_dissipation": _integral(absorbed, t),
            "primary_dissipation": _integral(primary, t), "energy_integral": _integral(e1, t)}
@@ -79,11 +81,6 @@ def accounts(path: Path, i0: int, scene, base: Model, b_external: np.ndarray) ->
 def _integral(values: np.ndarray, t: np.ndarray) -> float:
     """The trapezoid rule over the window's grid (0 for a window of one time)."""
     return float(np.trapezoid(values, t)) if len(t) > 1 else 0.0
-
-
-def _relative(second: np.ndarray, j: int, h: int) -> float:
-    """``E[(q_j - q_h)^2]`` from a block of second moments."""
-    return float(second[j, j] - 2.0 * second[j, h] + second[h, h])
 
 
 def _stored(path: Path, i0: int, scene, k: np.ndarray) -> float:

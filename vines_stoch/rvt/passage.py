@@ -91,7 +91,7 @@ def exceedance(t: np.ndarray, b: np.ndarray, stats: dict[str, np.ndarray], delta
     return 1.0 - survive
 
 
-def mean_peak(t: np.ndarray, stats: dict[str, np.ndarray], delta: float | None, points: int = 160) -> float:
+def mean_peak(t: np.ndarray, stats: dict[str, np.ndarray], delta: float | None, points: int = 64) -> float:
     """``E[max |y|]`` over the times ``t``: ``int_0^inf P(max |y| > b) db`` on ``points`` barriers up
     to 10 standard deviations beyond the largest ``|mean|``."""
     top = float(np.max(np.abs(stats["m"])) + 10.0 * np.max(stats["s"]))

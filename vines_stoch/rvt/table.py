@@ -18,7 +18,7 @@ from .system import Model, NotApplicable, bare, build, check_laws
 
 #: Grid steps of the time-varying moments: linear scenes, at most, and nonlinear ones (one
 #: linearisation a step), at most; at least this many points a period of the fastest mode.
-LINEAR_STEPS, NONLINEAR_STEPS, STEPS_PER_PERIOD, MIN_STEPS = 2000, 200, 16, 100
+LINEAR_STEPS, NONLINEAR_STEPS, STEPS_PER_PERIOD, MIN_STEPS = 1600, 200, 12, 100
 #: Frequency points of the spectral moment ``lambda_1`` (Vanmarcke's bandwidth).
 SPECTRUM_POINTS = 1500
 #: Metrics of the realisations table an estimate row may carry (per floor: ``_k``).
