@@ -615,6 +615,31 @@ def _startup(directory: Path) -> list[tuple[str, float, float]]:
     return rows
 
 
+def _estimate_times(rounds: int = 3) -> list[tuple[str, int, str, float]]:
+    """``vines_stoch.estimate`` of every shipped scenario whose points it can estimate (one
+    ``exact-linear`` or ``statistical-linearization`` row at least), best of ``rounds``: rows
+    ``(scenario, points, methods, seconds)``."""
+    from ..rvt import estimate
+    from ..scenario import ScenarioError, load_scenario
+
+    rows = []
+    for path in sorted((REPOSITORY / "scenarios").glob("*.toml")):
+        try:
+            study = load_scenario(path)
+        except ScenarioError:  # (a record not shipped)
+            continue
+        seconds = []
+        for _ in range(rounds):
+            start = time.perf_counter()
+            table = estimate(study)
+            seconds.append(time.perf_counter() - start)
+        counts = table["method"].value_counts()
+        if set(counts.index) != {"not-applicable"}:
+            methods = ", ".join(f"{n} {m}" for m, n in counts.items())
+            rows.append((path.name, len(table), methods, min(seconds)))
+    return rows
+
+
 def main(out: Path = Path("reports/benchmarks.md"), n_paths: int = 200) -> str:
     """Run the benchmark and write the Markdown report; returns its text."""
     with tempfile.TemporaryDirectory() as tmp:
@@ -644,6 +669,7 @@ def main(out: Path = Path("reports/benchmarks.md"), n_paths: int = 200) -> str:
     short = _short_paths()
     outputs = _output_costs()
     floors = _floors()
+    estimates = _estimate_times()
     ssvi = _ssvi()
     same_path = {kind: precision.same_path_errors(kind, SAME_PATH_LEVELS, paths=20)
                  for kind in ("hertz", "impact")}
@@ -821,6 +847,15 @@ contact onsets and ends located as events.
 {work_precision}
 {stability_suite}
 {rare_events}
+## Estimates without an ensemble
+
+`vines_stoch.estimate` of every shipped scenario it can estimate (MODEL.md section 6; the others
+say why not in a few milliseconds), all sweep points, best of 3, in this process:
+
+| scenario | points | methods | time (s) |
+| --- | ---: | --- | ---: |
+{chr(10).join(f"| {name} | {n} | {methods} | {sec:.2f} |" for name, n, methods, sec in estimates)}
+
 ## Compile time and start-up
 
 `vines-stoch run FILE --quiet` in a fresh process: first on an empty numba cache (every kernel
