@@ -392,8 +392,16 @@ def beside(summary: pd.DataFrame, estimates: pd.DataFrame) -> pd.DataFrame:
 
 
 def with_estimates(summary: pd.DataFrame, study) -> pd.DataFrame:
-    """``beside`` of a run's summary and ``estimate`` of its study."""
-    return beside(summary, estimate(study))
+    """``beside`` of a run's summary and ``estimate`` of its study.  An estimate that fails
+    unexpectedly leaves the ensemble's results whole: the summary keeps no estimates, and a
+    ``RuntimeWarning`` says why (a defect to report)."""
+    try:
+        estimates = estimate(study)
+    except Exception as exc:  # noqa: BLE001 (the ensemble's results come first)
+        warnings.warn(f"the estimates without an ensemble were left out of the summary ({exc!r}); "
+                      "please report it", RuntimeWarning, stacklevel=2)
+        return summary.assign(estimate_method="not-applicable")
+    return beside(summary, estimates)
 
 
 def parted(summary: pd.DataFrame) -> list[str]:

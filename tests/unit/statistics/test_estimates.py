@@ -256,3 +256,20 @@ def test_energy_accounts_of_the_stationary_oscillator():
     assert row["input_energy"] == pytest.approx(SIGMA**2 / 2 * 100 + stored, rel=1e-6)
     assert row["primary_dissipation"] == pytest.approx(SIGMA**2 / 2 * 100, rel=1e-6)
     assert row["energy_integral"] == pytest.approx(stored * 100, rel=1e-6)
+
+
+def test_a_failing_estimate_leaves_the_summary_whole(monkeypatch):
+    """An unexpected failure of the estimates never costs the ensemble's results: the summary
+    comes back with its columns and ``estimate_method``, and a warning says why."""
+    import pandas as pd
+
+    from vines_stoch.rvt import table
+
+    def broken(study):
+        raise ZeroDivisionError("planted")
+
+    monkeypatch.setattr(table, "estimate", broken)
+    summary = pd.DataFrame({"point": [0], "x1_rms_mean": [1.0]})
+    with pytest.warns(RuntimeWarning, match="planted"):
+        out = table.with_estimates(summary, None)
+    assert list(out.columns) == ["point", "x1_rms_mean", "estimate_method"]
