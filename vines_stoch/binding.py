@@ -224,6 +224,9 @@ class Binding:
             bind = self._bind_absorber if head == "absorbers" else self._bind_load
             return bind(scenario, key, int(parts[0]), parts[1:])
         if head == "limits" and parts[1:] == ["value"]:
+            metric = scenario.limits[parts[0]].metric
+            if metric.startswith("drift_ratio_max_"):  # (the kernels watch the storey's drift)
+                return False
             self._slot(key, "limits", (list(scenario.limits).index(parts[0]), 2))
             return True
         if head == "intensity_measures" and parts in (["period"], ["damping"]):

@@ -46,7 +46,9 @@ def metric_columns(frame: pd.DataFrame) -> list[str]:
         n += 1
     declared = [c for c in frame.columns
                 if isinstance(c, str) and METRIC_NAME.fullmatch(c) and c not in METRICS]
-    return list(METRICS) + floor_metrics(n) + declared
+    ratios = [c for c in [*(f"drift_ratio_max_{k}" for k in range(1, n + 1)), "drift_ratio_max"]
+              if c in frame]
+    return list(METRICS) + floor_metrics(n) + ratios + declared
 
 
 def regime(samples: np.ndarray, omega: float) -> str | None:
@@ -150,6 +152,11 @@ def finish_table(raw: np.ndarray, scene: Scene | Sequence[Scene],
             columns[f"x_rms_{k + 1}"] = rms(slots[floor + X_SQ_INT_K * nf])
             columns[f"drift_max_{k + 1}"] = slots[floor + DRIFT_MAX_K * nf]
             columns[f"acc_max_{k + 1}"] = slots[floor + ACC_MAX_K * nf]
+        if scene.heights.size:  # inter-storey drift ratios (MODEL.md 1a) and their largest
+            ratios = [columns[f"drift_max_{k + 1}"] / scene.heights[k] for k in range(nf)]
+            for k, ratio in enumerate(ratios):
+                columns[f"drift_ratio_max_{k + 1}"] = ratio
+            columns["drift_ratio_max"] = np.max(ratios, axis=0)
     finite = np.ones(n, dtype=bool)
     for name, values in columns.items():
         if name not in ("edm", "energy_residual") and values.dtype.kind == "f":

@@ -43,6 +43,7 @@ QUANTITIES: dict[str, tuple[str, str]] = {
     "pga": ("peak ground acceleration", "m/s²"), "envelope_frequency": ("envelope frequency", "rad/s"),
     "lyapunov": ("largest Lyapunov exponent", "1/s"), "settling_time": ("settling time", "s"),
     "share": ("energy share of the absorbers", ""),
+    "drift_ratio_max": ("peak inter-storey drift ratio (largest storey)", ""),
 }
 #: Per-floor columns (``NAME_k``): name and unit.
 FLOOR_QUANTITIES = {"x": ("displacement of floor {k}", "m"), "drift": ("drift of storey {k}", "m"),
@@ -52,6 +53,7 @@ FLOOR_QUANTITIES = {"x": ("displacement of floor {k}", "m"), "drift": ("drift of
                     "x_max": ("peak displacement of floor {k}", "m"),
                     "x_rms": ("r.m.s. displacement of floor {k}", "m"),
                     "drift_max": ("peak drift of storey {k}", "m"),
+                    "drift_ratio_max": ("peak drift ratio of storey {k}", ""),
                     "acc_max": ("peak acceleration of floor {k}", "m/s²")}
 #: Scenario fields (the last part of a dotted key): name and unit.
 FIELDS = {

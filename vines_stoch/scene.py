@@ -93,6 +93,8 @@ class Scene:
     event_rows: int = 0       # rows of a realisation's event log ([output] events; 0: none kept)
     poincare: bool = False    # Poincare samples into poincare.parquet ([output] poincare)
     lyapunov: bool = False    # the largest Lyapunov exponent of every realisation ([output] lyapunov)
+    heights: np.ndarray = field(default_factory=lambda: np.zeros(0))  # (n_floors,) storey heights
+    # (m; none: no drift ratios)
     im_period: float = 0.0    # period (s) and damping of the sa column ([intensity_measures]; 0: none)
     im_damping: float = 0.05
 
@@ -165,15 +167,17 @@ def absorber_row(a) -> np.ndarray:
     return row
 
 
-def limit_row(metric: str, value: float, n_floors: int) -> tuple[float, float, float]:
+def limit_row(metric: str, value: float, n_floors: int, heights=()) -> tuple[float, float, float]:
     """A limit's row for the kernels' first-passage check: the running peak it watches
     (``kernels.common.first_passages``: a per-floor block's code or ``LIMIT_E1``), the floor
-    (body index) and the value."""
+    (body index) and the value (a drift ratio's: the storey's drift, ``value h_k``)."""
     if metric == "e1_max":
         return LIMIT_E1, 0, value
     if metric == "x1_max":
         return X_MAX_K, n_floors - 1, value
     name, floor = metric.rsplit("_", 1)
+    if name == "drift_ratio_max":
+        return DRIFT_MAX_K, int(floor) - 1, value * heights[int(floor) - 1]
     codes = {"x_max": X_MAX_K, "drift_max": DRIFT_MAX_K, "acc_max": ACC_MAX_K}
     return codes[name], int(floor) - 1, value
 
@@ -279,12 +283,14 @@ def build_scene(scenario: Scenario) -> Scene:
         sigma=np.sqrt(variance), x0=x0, v0=v0, dt=float(sim.dt), n_steps=n_steps,
         i0=min(n_steps - 1, int(round(sim.metrics_from / sim.dt))), scheme=scheme,
         period=period, sample_from=sample_from,
-        limits=np.array([limit_row(limit.metric, limit.value, nf) for limit in scenario.limits.values()],
+        limits=np.array([limit_row(limit.metric, limit.value, nf, primary.heights or ())
+                         for limit in scenario.limits.values()],
                         dtype=float).reshape(-1, 3),
         limit_names=tuple(scenario.limits),
         reductions=declare_metrics(scenario.output.metrics, nf, len(absorbers)),
         metric_names=tuple(scenario.output.metrics),
         event_rows=scenario.output.events,
+        heights=np.array(primary.heights or [], dtype=float),
         poincare=scenario.output.poincare, lyapunov=scenario.output.lyapunov,
         **({"im_period": scenario.intensity_measures.period,
             "im_damping": scenario.intensity_measures.damping}

@@ -162,6 +162,7 @@ def _point(scenario, limits: dict) -> dict[str, Any]:
 
     scene = build_scene(scenario)
     filters = scene_filters(scenario)
+    limits = {name: _storey_limit(metric, value, scene.heights) for name, (metric, value) in limits.items()}
     check_laws(scene)
     nonlinear = bool(_nonlinear(scene).any())
     random = bool(scene.sigma.any() or filters)
@@ -257,6 +258,11 @@ def _point(scenario, limits: dict) -> dict[str, Any]:
         src, dst = f"{name}_{roof}", name.replace("x_", "x1_")
         if src in row:
             row[dst] = row[src]
+    if scene.heights.size and all(f"drift_max_{k + 1}" in row for k in range(roof)):  # drift ratios
+        ratios = [row[f"drift_max_{k + 1}"] / scene.heights[k] for k in range(roof)]
+        row.update({f"drift_ratio_max_{k + 1}": r for k, r in enumerate(ratios)})
+        row.update({f"drift_ratio_rms_{k + 1}": row[f"drift_rms_{k + 1}"] / scene.heights[k]
+                    for k in range(roof)})
     row["note"] = "; ".join(notes)
     return row
 
@@ -274,6 +280,14 @@ def _settled(path: moments.Path, stationary: tuple | None) -> bool:
         return True
     end, fixed = np.diagonal(path.p[-1]), np.diagonal(stationary[2])
     return bool(np.all(end <= RUNAWAY * fixed + 1e-300))
+
+
+def _storey_limit(metric: str, value: float, heights: np.ndarray) -> tuple[str, float]:
+    """A limit on a storey's drift ratio as the limit on its drift (``scene.limit_row``)."""
+    if metric.startswith("drift_ratio_max_"):
+        k = int(metric.rsplit("_", 1)[1])
+        return f"drift_max_{k}", value * heights[k - 1]
+    return metric, value
 
 
 def _stationary_fixed_point(scene, filters: list, model: Model) -> tuple[tuple | None, str]:

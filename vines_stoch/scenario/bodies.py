@@ -37,11 +37,15 @@ class Primary(_Model):
     stiffnesses: list[NonNegative] | None = None
     dampings: list[NonNegative] | None = None
     rayleigh: Rayleigh | None = None
+    heights: Annotated[list[Positive], Field(min_length=1, max_length=MAX_FLOORS)] | None = None
 
     @model_validator(mode="after")
     def _layout(self) -> Primary:
         scalars = {"mass": self.mass, "stiffness": self.stiffness, "damping": self.damping}
         lists = {"masses": self.masses, "stiffnesses": self.stiffnesses, "dampings": self.dampings}
+        if self.heights is not None and len(self.heights) != self.n_floors:
+            raise FieldError("heights", self.heights, f"must list {self.n_floors} storey height(s) (m), "
+                             "one per storey from the lowest (as primary.masses)")
         if self.masses is None:
             if self.mass is None:
                 raise FieldError("mass", None, "missing: give mass (one storey) or masses = [...] "

@@ -114,7 +114,7 @@ class Scenario(_Model):
                                  f"signal x1, e1, x_k, v_k or drift_k with k in [1, {n}], or xa_j, va_j, "
                                  f"stroke_j or contact_j with j in [1, {len(self.absorbers)}], the reduction "
                                  "peak, max, min, mean or rms") from None
-        metrics = limit_metrics(n)
+        metrics = limit_metrics(n, self.primary.heights is not None)
         for name, limit in self.limits.items():
             if not LIMIT_NAME.fullmatch(name):
                 raise FieldError("limits", name, "a limit's name must start with a letter and hold letters, "
@@ -123,7 +123,7 @@ class Scenario(_Model):
             if limit.metric not in metrics:
                 raise FieldError(f"limits.{name}.metric", limit.metric,
                                  "must be a peak metric: x1_max, e1_max, or x_max_k, drift_max_k, acc_max_k "
-                                 f"with k in [1, {n}]")
+                                 f"with k in [1, {n}] (drift_ratio_max_k with primary.heights)")
         self._check_rare(n)
         paths = self.output.paths
         if paths is not None:

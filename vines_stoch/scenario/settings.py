@@ -127,12 +127,14 @@ class Optimize(_Model):
         return -1.0 if (self.goal or OBJECTIVES[self.objective]) == "maximize" else 1.0
 
 
-def limit_metrics(n_floors: int) -> list[str]:
+def limit_metrics(n_floors: int, heights: bool = False) -> list[str]:
     """Peak metrics a limit can name on a primary with ``n_floors`` floors: the roof's peak
     displacement ``x1_max``, the structure's peak energy ``e1_max`` and each floor's
-    ``x_max_k``, ``drift_max_k``, ``acc_max_k`` (MODEL.md section 4)."""
+    ``x_max_k``, ``drift_max_k``, ``acc_max_k`` (MODEL.md section 4), and with storey
+    ``heights`` each storey's drift ratio ``drift_ratio_max_k``."""
     floors = range(1, n_floors + 1)
-    return ["x1_max", "e1_max", *(f"{m}_{k}" for m in ("x_max", "drift_max", "acc_max") for k in floors)]
+    kinds = ("x_max", "drift_max", "acc_max", *(("drift_ratio_max",) if heights else ()))
+    return ["x1_max", "e1_max", *(f"{m}_{k}" for m in kinds for k in floors)]
 
 
 class Limit(_Model):
