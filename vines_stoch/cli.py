@@ -20,6 +20,21 @@ app = typer.Typer(add_completion=False, no_args_is_help=True, pretty_exceptions_
                   help="Stochastic Monte Carlo response analysis of vibration absorbers.")
 
 
+def _version(shown: bool) -> None:
+    """``--version``: the package's version, then exit."""
+    if shown:
+        from . import __version__
+
+        typer.echo(f"vines-stoch {__version__}")
+        raise typer.Exit()
+
+
+@app.callback()
+def _options(version: bool = typer.Option(False, "--version", callback=_version, is_eager=True,
+                                          help="Print the version and exit.")) -> None:
+    """Stochastic Monte Carlo response analysis of vibration absorbers."""
+
+
 def _fail(message: str) -> None:
     typer.echo(f"error: {message}", err=True)
     raise typer.Exit(2)
@@ -215,7 +230,7 @@ def estimate(
 def loads(
     scenario: Path = typer.Argument(..., help="Scenario TOML file."),
     out: Path = typer.Argument(..., help="File to write: .AT2 (ground acceleration in g) "
-                                         "or .csv (t, force, ground)."),
+                                         "or .csv (comma-separated, a header row: t, force, ground)."),
     seed: int | None = typer.Option(None, "--seed", min=0, max=2**63 - 1,
                                     help="Seed (default: the scenario's ensemble.seed)."),
     realization: int = typer.Option(0, "--realization", min=0, max=2**63 - 1,
@@ -262,8 +277,8 @@ def loads(
         else:
             floors = force.shape[1]
             names = ["force"] if floors == 1 else [f"force_{k}" for k in range(1, floors + 1)]
-            np.savetxt(out, np.c_[t, force, ground], header=" ".join(["t", *names, "ground_acceleration"]),
-                       comments="# ")
+            np.savetxt(out, np.c_[t, force, ground], delimiter=",", comments="",  # (pandas.read_csv reads it)
+                       header=",".join(["t", *names, "ground_acceleration"]))
     except OSError as exc:
         _fail(f"{out}: cannot write ({exc.strerror})")
     typer.echo(f"wrote {out} ({len(t)} samples)")
