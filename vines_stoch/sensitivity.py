@@ -79,6 +79,7 @@ def table(study, outputs: Callable[[int, dict[str, float]], float], progress: bo
     spec, seed = study.base.sensitivity, study.base.ensemble.seed
     dists = study.base.uncertain
     frames = []
+    cr = "\r" if sys.stderr.isatty() else ""  # (one line, rewritten on a terminal; lines in a log)
     for point in range(len(study.points)):
         def model(unit: np.ndarray, point: int = point) -> np.ndarray:
             values = parameter_values(dists, unit)
@@ -94,9 +95,9 @@ def table(study, outputs: Callable[[int, dict[str, float]], float], progress: bo
                 if saved is not None and ((i + 1) % SAVE_EVERY == 0 or last):
                     saved.put({name: out[:i + 1]})
                 if progress and (i % SAVE_EVERY == 0 or last):
-                    print(f"\rsensitivity: point {point}: {i + 1} of {unit.shape[0]} parameter sets", end="",
-                          file=sys.stderr, flush=True)
-            if progress:
+                    print(f"{cr}sensitivity: point {point}: {i + 1} of {unit.shape[0]} parameter sets",
+                          end="" if cr else "\n", file=sys.stderr, flush=True)
+            if progress and cr:
                 print(file=sys.stderr)
             return out
 

@@ -123,3 +123,16 @@ def test_an_interrupted_design_resumes_from_its_saved_outputs(tmp_path, monkeypa
     resumed = run(data, tmp_path / "out", resume=True).sensitivity
     assert len(calls) == 4 * 64 - sensitivity.SAVE_EVERY
     assert resumed.equals(whole)
+
+
+def test_progress_in_a_log_is_lines_not_carriage_returns(capsys):
+    """Where standard error is not a terminal (a log, a batch job), the design's progress is
+    whole lines, never a carriage return."""
+    from vines_stoch.sensitivity import table
+
+    study = study_from(scene_data())
+    table(study, lambda point, values: sum(values.values()), progress=True)
+    err = capsys.readouterr().err
+    assert "\r" not in err
+    lines = [line for line in err.splitlines() if line.startswith("sensitivity: point 0:")]
+    assert len(lines) >= 2 and lines[-1].endswith("parameter sets")
