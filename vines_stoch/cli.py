@@ -349,20 +349,24 @@ def compare(
     out: Path = typer.Option(Path("reports/compare.md"), "--out", help="Markdown file to write."),
     metric: list[str] | None = typer.Option(None, "--metric",
                                             help="Metric to compare (repeatable; default edm, e1_max, "
-                                                 "energy_integral, impacts)."),
+                                                 "energy_integral, impacts): any metric column, or "
+                                                 "p_NAME for a limit."),
 ) -> None:
-    """Side-by-side summary metrics of several runs, with differences and their standard errors."""
-    from .metrics import METRICS
-    from .reports import COMPARED, Run, markdown
+    """Side-by-side summary metrics of several runs, with differences and their standard errors
+    (any metric of the runs' summaries, floors' and declared ones included, or a limit's
+    exceedance p_NAME)."""
+    from .reports import COMPARED, Run, comparable, markdown
     from .reports import compare as compare_runs
 
     if len(directories) < 2:
         _fail("compare needs at least two result directories")
-    for m in metric or []:
-        if m not in METRICS:
-            _fail(f"--metric {m}: must be one of {', '.join(METRICS)}")
     try:
-        table = compare_runs([Run.read(d) for d in directories], tuple(metric or COMPARED))
+        runs = [Run.read(d) for d in directories]
+        allowed = comparable(runs[0])
+        for m in metric or []:
+            if m not in allowed:
+                _fail(f"--metric {m}: must be one of {', '.join(allowed)}")
+        table = compare_runs(runs, tuple(metric or COMPARED))
     except (OSError, ValueError, KeyError) as exc:
         _fail(str(exc))
     text = markdown(table)

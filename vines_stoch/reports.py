@@ -120,7 +120,7 @@ def compare(runs: list[Run], metrics: tuple[str, ...] = COMPARED) -> pd.DataFram
                 row[k] = first.summary[k].iloc[p]
             row["metric"] = m
             for run in runs:
-                row[run.label] = run.summary[f"{m}_mean"].iloc[p]
+                row[run.label] = _mean_and_sem(run, p, m)[0]
             for run in runs[1:]:
                 diff, se, (low, high), paired = _difference(first, run, p, m)
                 row[f"{run.label} - {first.label}"] = diff
@@ -129,6 +129,33 @@ def compare(runs: list[Run], metrics: tuple[str, ...] = COMPARED) -> pd.DataFram
                 row[f"paired ({run.label})"] = "yes" if paired else "no"
             rows.append(row)
     return pd.DataFrame(rows)
+
+
+def comparable(run: Run) -> list[str]:
+    """What ``compare`` can compare in ``run``: every metric column of its summary (the floors',
+    drift ratios and declared metrics included) and each limit's exceedance ``p_NAME``."""
+    from .metrics import metric_columns
+
+    return [m for m in metric_columns(run.realizations) if f"{m}_mean" in run.summary] + [
+        f"p_{name}" for name in run.limits]
+
+
+def realization_values(frame: pd.DataFrame, metric: str) -> pd.Series:
+    """A metric's value in each row of a realisations table; for a limit's ``p_NAME`` the
+    indicator that the realisation exceeded it (``first_passage_NAME`` not NaN)."""
+    if metric.startswith("p_") and f"first_passage_{metric[2:]}" in frame:
+        return frame[f"first_passage_{metric[2:]}"].notna().astype(float)
+    return frame[metric].astype(float)
+
+
+def _mean_and_sem(run: Run, point: int, metric: str) -> tuple[float, float]:
+    """A metric's mean at ``point`` and its standard error (a limit's ``p_NAME``: the binomial
+    ``sqrt(p (1 - p) / n_ok)``)."""
+    s = run.summary
+    if f"{metric}_mean" in s:
+        return float(s[f"{metric}_mean"].iloc[point]), float(s[f"{metric}_sem"].iloc[point])
+    p, n = float(s[metric].iloc[point]), int(s["n_ok"].iloc[point])
+    return p, math.sqrt(p * (1.0 - p) / n) if n else math.nan
 
 
 def _difference(a: Run, b: Run, point: int,
@@ -141,15 +168,17 @@ def _difference(a: Run, b: Run, point: int,
     ra = a.realizations[(a.realizations["point"] == point) & (a.realizations["status"] == "ok")]
     rb = b.realizations[(b.realizations["point"] == point) & (b.realizations["status"] == "ok")]
     if a.seed == b.seed and a.common and b.common:
-        joined = ra[["realization", metric]].merge(rb[["realization", metric]], on="realization")
+        left = pd.DataFrame({"realization": ra["realization"], metric: realization_values(ra, metric)})
+        right = pd.DataFrame({"realization": rb["realization"], metric: realization_values(rb, metric)})
+        joined = left.merge(right, on="realization")
         if len(joined) > 1:
             y, x = joined[f"{metric}_y"].to_numpy(dtype=float), joined[f"{metric}_x"].to_numpy(dtype=float)
             test = ttest_rel(y, x)
             ci = test.confidence_interval(0.95)
             se = 0.5 * (ci.high - ci.low) / student_t.ppf(0.975, test.df)  # (the interval's half-width)
             return float(np.mean(y - x)), float(se), (float(ci.low), float(ci.high)), True
-    sa, sb = a.summary[f"{metric}_sem"].iloc[point], b.summary[f"{metric}_sem"].iloc[point]
-    diff = float(b.summary[f"{metric}_mean"].iloc[point] - a.summary[f"{metric}_mean"].iloc[point])
+    (ma, sa), (mb, sb) = _mean_and_sem(a, point, metric), _mean_and_sem(b, point, metric)
+    diff = float(mb - ma)
     se = float(math.hypot(sa, sb))
     low, high = norm.interval(0.95, loc=diff, scale=se) if se > 0 else (diff, diff)
     return diff, se, (float(low), float(high)), False

@@ -103,3 +103,29 @@ def test_report_draws_and_words_the_estimates(tmp_path):
     assert "## Estimates beside the Monte Carlo: " in text and "x1_rms_estimate" in text
     assert "point 1: x1_rms Monte Carlo" in text and "point 0: x1_rms" not in text
     assert (path.parent / "estimates.png").stat().st_size > 10_000 and "](estimates.png)" in text
+
+
+def test_compare_takes_exceedance_and_floor_metrics(tmp_path):
+    """``compare`` of two designs on common random numbers: a limit's ``p_NAME`` (each run's
+    fraction, the paired difference of the exceedance indicators) and a floor's metric; an unknown
+    metric is refused with the list of those it takes."""
+    roots = []
+    for name, k3 in (("soft", 1.0), ("stiff", 4.0)):
+        data = {"name": name, **two_dof_data(0.02, k3),
+                "loads": [{"type": "white-noise", "intensity": 0.05}],
+                "simulation": {"duration": 50.0, "dt": 1e-2}, "ensemble": {"realizations": 40, "seed": 5},
+                "limits": {"roof": {"metric": "x1_max", "value": 0.15}}}
+        roots.append(tmp_path / name)
+        run(study_from(data), roots[-1], workers=1)
+    soft, stiff = (Run.read(r) for r in roots)
+    table = compare([soft, stiff], ("p_roof", "x_max_1")).set_index("metric")
+    assert table.loc["p_roof", "soft"] == soft.summary["p_roof"].iloc[0]
+    hit = [r.realizations["first_passage_roof"].notna().to_numpy(dtype=float) for r in (soft, stiff)]
+    assert 0 < hit[0].mean() < 1
+    assert table.loc["p_roof", "stiff - soft"] == pytest.approx(np.mean(hit[1] - hit[0]), abs=1e-12)
+    assert table.loc["p_roof", "paired (stiff)"] == "yes"
+    assert table.loc["x_max_1", "soft"] == soft.summary["x_max_1_mean"].iloc[0]
+    command = ["compare", *map(str, roots), "--metric", "p_nothing", "--out", str(tmp_path / "c.md")]
+    bad = subprocess.run([sys.executable, "-m", "vines_stoch.cli", *command], capture_output=True, text=True)
+    assert bad.returncode == 2 and "--metric p_nothing: must be one of" in bad.stderr
+    assert "p_roof" in bad.stderr
