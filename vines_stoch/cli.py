@@ -192,6 +192,24 @@ def validate(scenario: Path = typer.Argument(..., help="Scenario TOML file.")) -
         _fail(str(exc))
     _warn(study)
     typer.echo(f"{scenario}: ok ({len(study.points)} sweep point(s))")
+    for line in _outline(study):
+        typer.echo(line)
+
+
+def _outline(study: Study) -> list[str]:
+    """``validate``'s account of the base scenario: the bare structure's modal periods and
+    effective masses, and the run's work (sweep points x realisations x steps)."""
+    base = study.base
+    periods, shares = base.primary.modes()
+    modes = ", ".join(f"T{i + 1} = {t:.4g} s ({100 * m:.1f} %)"
+                      for i, (t, m) in enumerate(zip(periods, shares)))
+    steps = [max(1, round(p.simulation.duration / p.simulation.dt)) for p in study.points]
+    count = base.ensemble.realizations if base.is_random else 1
+    return [f"primary: {base.primary.n_floors} floor(s), {len(base.absorbers)} absorber(s); modes of the "
+            f"bare structure (effective mass): {modes}",
+            f"work: {len(steps)} sweep point(s) x {count} realisation(s) x {steps[0]:,} step(s)"
+            + (" (at the first point)" if len(set(steps)) > 1 else "")
+            + f" = {count * sum(steps):.3g} path-steps"]
 
 
 @app.command()

@@ -99,6 +99,18 @@ class Primary(_Model):
         mass, stiffness = np.array(self.floor_masses), shear_stiffness(self.storey_stiffnesses)
         return eigenfrequencies(mass, stiffness)
 
+    def modes(self) -> tuple[np.ndarray, np.ndarray]:
+        """``(periods, shares)`` of the primary alone: its natural periods (s, longest first) and
+        each mode's share of the total mass under base excitation, the effective modal mass
+        ``(phi^T M 1)^2 / (phi^T M phi)`` over ``sum m`` (Chopra, *Dynamics of Structures*, 13.2)."""
+        mass, stiffness = np.array(self.floor_masses), shear_stiffness(self.storey_stiffnesses)
+        scale = 1.0 / np.sqrt(mass)
+        eig, vectors = np.linalg.eigh(stiffness * np.outer(scale, scale))
+        phi = vectors * scale[:, None]  # mass-normalised: phi^T M phi = 1
+        with np.errstate(divide="ignore"):
+            periods = 2.0 * np.pi / np.sqrt(np.clip(eig, 0.0, None))
+        return periods, (phi.T @ mass) ** 2 / mass.sum()
+
     def damping_matrices(self) -> tuple[list[float], list[float]]:
         """``(storey dashpots, mass-proportional dashpots to the ground)``, one per floor:
         the given dashpots, or Rayleigh's ``beta k_k`` and ``alpha m_k``."""
