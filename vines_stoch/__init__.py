@@ -29,13 +29,20 @@ def _version() -> str:
 
 __version__ = _version()
 
+from .notices import (  # noqa: E402
+    CoarseStepWarning,
+    EnergyBalanceWarning,
+    IdenticalRealizationsWarning,
+    VinesStochWarning,
+)
 from .scenario import ScenarioError, load_scenario, parse_scenario  # noqa: E402
 
 #: Public names imported on first use, and their modules.
 _LAZY = {"run": "ensemble", "solve": "ensemble", "read_results": "results", "Results": "results",
          "Solution": "results", "estimate": "rvt"}
 
-__all__ = ["Results", "ScenarioError", "Solution", "__version__", "estimate", "load_scenario",
+__all__ = ["CoarseStepWarning", "EnergyBalanceWarning", "IdenticalRealizationsWarning", "Results",
+           "ScenarioError", "Solution", "VinesStochWarning", "__version__", "estimate", "load_scenario",
            "parse_scenario", "read_results", "run", "solve"]
 
 

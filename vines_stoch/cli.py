@@ -1,16 +1,19 @@
 """Command line:
-``vines-stoch run | validate | loads | report | fragility | compare | optimize | bench | reproduce``."""
+``vines-stoch run | validate | estimate | loads | report | fragility | compare | optimize | bench |
+reproduce``."""
 
 from __future__ import annotations
 
 import os
 import sys
 import time
+import warnings
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 import typer
 
+from .notices import VinesStochWarning
 from .scenario import ScenarioError, Study, load_scenario
 
 if TYPE_CHECKING:
@@ -49,17 +52,11 @@ def _warn(study: Study) -> None:
 
 def _warn_residuals(realizations: pd.DataFrame, study: Study) -> None:
     """One ``warning:`` line per sweep point with realisations whose energy balance does not
-    close (``metrics.residual_notes``, the same words as the summary's ``notes``)."""
-    from .metrics import residual_notes
+    close (``metrics.residual_warnings``)."""
+    from .metrics import residual_warnings
 
-    tolerance = study.base.simulation.residual_tolerance
-    points = realizations.groupby("point", sort=True)
-    for point, group in points:
-        note = residual_notes(group[group["status"] == "ok"], tolerance)
-        if note:
-            where = f"sweep point {point}: " if len(points) > 1 else ""
-            typer.echo(f"warning: {study.source}: {where}{note} (simulation.residual_tolerance = "
-                       f"{tolerance:g})", err=True)
+    for line in residual_warnings(realizations, study.source, study.base.simulation.residual_tolerance):
+        typer.echo(f"warning: {line}", err=True)
 
 
 def _check_backend(backend: str) -> None:
@@ -128,8 +125,10 @@ def run(
         share = (int(i), int(n))  # (the range is checked by run_study)
     directory = output_directory(study, out)
     try:
-        result = run_study(study, directory, workers=workers, chunk=chunk, resume=resume, scheduler=scheduler,
-                           progress=not quiet, shard=share, backend=backend)
+        with warnings.catch_warnings():  # (their lines are printed here: _warn, _warn_residuals)
+            warnings.simplefilter("ignore", VinesStochWarning)
+            result = run_study(study, directory, workers=workers, chunk=chunk, resume=resume,
+                               scheduler=scheduler, progress=not quiet, shard=share, backend=backend)
     except KeyboardInterrupt as exc:  # (Interrupted says how many chunks are kept)
         typer.echo(f"\n{exc if isinstance(exc, Interrupted) else 'interrupted'}", err=True)
         raise typer.Exit(130) from None

@@ -29,13 +29,13 @@ import numpy as np
 import pandas as pd
 
 from . import history as hist
-from . import psd, rare, schedulers, sensitivity
+from . import notices, psd, rare, schedulers, sensitivity
 from .binding import binding
 from .dynamics import refine_regimes
 from .kernels import DEFAULT_SIGNALS, kernel_for
 from .kernels.chunk import chunk_loop, ground_paths, lane_scene, parameter_draws, seed_keys, simulate_chunk
 from .kernels.lanes import LANES
-from .metrics import METRICS, finish_table, ground_intensities, summarise
+from .metrics import METRICS, finish_table, ground_intensities, residual_warnings, summarise
 from .outputs import EVENT_COLUMNS, EVENT_T, POINCARE_SAMPLES, Record
 from .progress import Progress
 from .results import Results, Solution, as_study, check_whole
@@ -647,6 +647,16 @@ def run(scenario: Study | Mapping[str, Any] | str | os.PathLike, out: str | Path
                              "shards; run it in one job")
     options = _Options(workers, chunk, realizations, paths, resume, scheduler, progress, checkpoint_seconds,
                        shard, backend)
+    notices.emit(study.warnings)  # (the lines the command line prints, as warnings of their categories)
+    results = _run_into(study, out, options)
+    if results is not None:
+        notices.emit(residual_warnings(results.realizations, study.source,
+                                       study.base.simulation.residual_tolerance))
+    return results
+
+
+def _run_into(study: Study, out: str | Path | None, options: _Options) -> Results | None:
+    """``_run`` in memory, or into the folder ``out`` (made where missing, locked for the run)."""
     if out is None:
         return _run(study, None, options)
     directory = Path(out)
@@ -654,6 +664,7 @@ def run(scenario: Study | Mapping[str, Any] | str | os.PathLike, out: str | Path
         directory.mkdir(parents=True, exist_ok=True)
     except FileExistsError:
         raise NotADirectoryError(f"{directory}: exists and is not a folder") from None
+    shard = options.shard
     with lock_folder(directory, None if shard is None else f"shard-{shard[0]}-of-{shard[1]}"):
         return _run(study, directory, options)
 

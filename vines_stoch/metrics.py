@@ -8,6 +8,7 @@ from collections.abc import Sequence
 import numpy as np
 import pandas as pd
 
+from .notices import EnergyBalanceWarning, Notice
 from .outputs import (
     ACC_MAX_K,
     DRIFT_MAX_K,
@@ -268,6 +269,20 @@ def residual_notes(ok: pd.DataFrame, tolerance: float) -> str:
     return (f"{int(over.sum())} of {len(ok)} realisation(s) with |energy_residual| above {tolerance:g} "
             f"(largest {residual.max():.3g}): their energy balance does not close; a smaller "
             "simulation.dt makes it")
+
+
+def residual_warnings(realizations: pd.DataFrame, source: str, tolerance: float) -> list[Notice]:
+    """One line per sweep point with realisations whose energy balance does not close
+    (``residual_notes``, the same words as the summary's ``notes``), from the file ``source``."""
+    lines = []
+    points = realizations.groupby("point", sort=True)
+    for point, group in points:
+        note = residual_notes(group[group["status"] == "ok"], tolerance)
+        if note:
+            where = f"sweep point {point}: " if len(points) > 1 else ""
+            lines.append(Notice(f"{source}: {where}{note} (simulation.residual_tolerance = {tolerance:g})",
+                                EnergyBalanceWarning))
+    return lines
 
 
 def limit_names(frame: pd.DataFrame) -> list[str]:

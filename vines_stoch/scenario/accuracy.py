@@ -9,6 +9,7 @@ import math
 from collections.abc import Callable
 from typing import Any
 
+from ..notices import CoarseStepWarning, IdenticalRealizationsWarning, Notice
 from .bodies import ImpactAbsorber
 from .errors import format_error
 from .loads import (
@@ -114,18 +115,21 @@ def _dominant(scenario: Scenario) -> list[tuple[float, str]]:
         load_frequencies(scenario)
 
 
-def warnings(source: str, points: list[Scenario], grid: list[dict[str, Any]], realizations: int) -> list[str]:
+def warnings(source: str, points: list[Scenario], grid: list[dict[str, Any]],
+             realizations: int) -> list[Notice]:
     """The accuracy guard's warnings on the validated sweep ``points`` (their values in ``grid``)
-    of the file ``source`` that asks for ``realizations`` each, one line each."""
+    of the file ``source`` that asks for ``realizations`` each, one line each (with its category:
+    ``notices``)."""
     found = _coarse(source, points, grid, _modes, STEPS_PER_PERIOD, "",
                     "results (energy balance, peaks, EDM) may be wrong without other sign")
     found += _coarse(source, points, grid, _dominant, IMPACT_STEPS_PER_PERIOD, " for impact absorbers",
                      "an impact slower than the relative velocity the loads add in one step (about "
                      "omega dt = {ratio:.2g} of the speed scale) is plastic and starts sticking, so chatter "
                      "ends sooner and 'impacts' counts fewer")
+    found = [Notice(line, CoarseStepWarning) for line in found]
     if realizations > 1 and not any(p.is_random for p in points):
-        found.append(format_error(
+        found.append(Notice(format_error(
             source, "ensemble.realizations", realizations,
             "the scene has neither noise nor uncertain parameters, so every realisation would be the "
-            "same: one runs a sweep point"))
+            "same: one runs a sweep point"), IdenticalRealizationsWarning))
     return found

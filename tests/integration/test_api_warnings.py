@@ -1,0 +1,45 @@
+"""Warnings reach Python users (a notebook, a script) as the command line prints them: each
+through ``warnings.warn`` with a category of the package's own, filterable as usual."""
+
+from __future__ import annotations
+
+import warnings
+
+import pytest
+
+import vines_stoch
+from tests.helpers import cli, toml_text
+
+
+def coarse(realizations: int = 1) -> dict:
+    """An oscillator of period 6.28 with dt = 0.5: stable, coarse (12.6 steps a period), and its
+    energy balance off by 0.65 %."""
+    return {"name": "coarse", "primary": {"mass": 1.0, "stiffness": 1.0, "damping": 0.05},
+            "loads": [{"type": "impulse", "velocity": 1.0}], "simulation": {"duration": 50.0, "dt": 0.5},
+            "ensemble": {"realizations": realizations}}
+
+
+def test_a_coarse_step_warns_in_python():
+    with pytest.warns(vines_stoch.CoarseStepWarning, match=r"simulation.dt = 0.5: coarse") as caught:
+        vines_stoch.run(coarse())
+    ours = [w for w in caught if issubclass(w.category, vines_stoch.VinesStochWarning)]
+    assert vines_stoch.EnergyBalanceWarning in {w.category for w in ours}
+    assert all(w.filename == __file__ for w in ours)  # (they point at the user's call)
+
+
+def test_identical_realisations_warn_and_filter_as_usual():
+    with pytest.warns(vines_stoch.IdenticalRealizationsWarning, match="every realisation would be the same"):
+        vines_stoch.run(coarse(realizations=5))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", vines_stoch.VinesStochWarning)
+        with pytest.raises(vines_stoch.CoarseStepWarning):
+            vines_stoch.run(coarse())
+
+
+def test_the_command_line_prints_each_warning_once(tmp_path):
+    path = tmp_path / "coarse.toml"
+    path.write_text(toml_text(coarse()))
+    code, err = cli("run", path, "--out", tmp_path / "out", "--quiet")
+    assert code == 0, err
+    assert err.count("simulation.dt = 0.5: coarse") == 1 and err.count("energy balance does not close") == 1
+    assert "Warning" not in err  # (no duplicate from the warnings module)

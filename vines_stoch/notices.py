@@ -1,0 +1,43 @@
+"""The package's warnings, one category each, so that a Python user can filter them as usual
+(``warnings.simplefilter("error", vines_stoch.CoarseStepWarning)``); the command line prints the
+same lines as ``warning: ...``.  A ``Notice`` is a warning's line (a ``str``) that knows its
+category."""
+
+from __future__ import annotations
+
+
+class VinesStochWarning(UserWarning):
+    """Every warning of vines_stoch."""
+
+
+class CoarseStepWarning(VinesStochWarning):
+    """``simulation.dt`` is stable but coarse for what the scene holds (``scenario/accuracy.py``)."""
+
+
+class IdenticalRealizationsWarning(VinesStochWarning):
+    """Several realisations asked of a scene without noise or uncertain parameters."""
+
+
+class EnergyBalanceWarning(VinesStochWarning):
+    """Realisations ended ok whose energy balance does not close (``|energy_residual|`` above
+    ``simulation.residual_tolerance``)."""
+
+
+class Notice(str):
+    """A warning's line with its category (``category``)."""
+
+    category: type[VinesStochWarning] = VinesStochWarning
+
+    def __new__(cls, text: str, category: type[VinesStochWarning] = VinesStochWarning) -> Notice:
+        notice = super().__new__(cls, text)
+        notice.category = category
+        return notice
+
+
+def emit(lines, stacklevel: int = 3) -> None:
+    """``warnings.warn`` each line with its category (``Notice.category``; plain lines:
+    ``VinesStochWarning``)."""
+    import warnings
+
+    for line in lines:
+        warnings.warn(str(line), getattr(line, "category", VinesStochWarning), stacklevel=stacklevel)
