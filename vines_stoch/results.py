@@ -62,6 +62,10 @@ def check_whole(name: str, value: object, low: int, high: int | None = None,
         raise ValueError(f"{name} = {value}: must be a whole number {span}")
 
 
+#: Sweep points a ``Results``' text and HTML views show.
+REPR_ROWS = 8
+
+
 @dataclass(eq=False)
 class Results:
     """The tables of a finished run, as pandas DataFrames: ``realizations`` (one row per
@@ -105,6 +109,46 @@ class Results:
     def __iter__(self) -> Iterator[pd.DataFrame]:
         return iter((self.realizations, self.summary))
 
+    def _headline(self) -> tuple[str, pd.DataFrame]:
+        """One line of what ran and where, and the summary's headline columns (``REPR_ROWS`` rows
+        at most): the swept keys, the realisations ok, the mean EDM with its 95 % interval, the
+        peak roof displacement and energy, each limit's exceedance and the estimate's method."""
+        s = self.summary
+        swept = [c for c in s.columns if "." in str(c)]
+        columns = [*swept, "n_ok", "n_failed", "edm_mean", "edm_ci95_lo", "edm_ci95_hi", "x1_max_mean",
+                   "e1_max_mean", *(c for c in s.columns if str(c).startswith("p_")
+                                    and not str(c).endswith(("_lo", "_hi", "_estimate", "_z"))),
+                   "estimate_method"]
+        name = self.metadata.get("vines_stoch.name") or (self.study.name if self.study is not None else "?")
+        where = f"folder {self.directory}" if self.directory is not None else "in memory"
+        tables = [f"{label} {frame.shape[0]:,} x {frame.shape[1]}" for label, frame in
+                  (("realizations", self.realizations), ("summary", s), ("history", self.history),
+                   ("paths", self.paths), ("events", self.events), ("poincare", self.poincare),
+                   ("spectra", self.spectra), ("rare", self.rare), ("sensitivity", self.sensitivity))
+                  if frame is not None]
+        failed = int(s["n_failed"].sum()) if "n_failed" in s else 0
+        line = (f"Results of {name!r} ({where}): {len(s)} sweep point(s), {len(self.realizations):,} "
+                f"realisation(s){f', {failed} failed' if failed else ''}; tables: {', '.join(tables)}")
+        shown = [c for c in dict.fromkeys(columns) if c in s]
+        return line, s[shown].head(REPR_ROWS)
+
+    def __repr__(self) -> str:
+        line, head = self._headline()
+        hidden = len(self.summary) - REPR_ROWS
+        more = f"\n... {hidden} more sweep point(s)" if hidden > 0 else ""
+        with pd.option_context("display.width", 120, "display.max_columns", 12, "display.precision", 4):
+            return f"{line}\n{head.to_string(index=False)}{more}"
+
+    def _repr_html_(self) -> str:
+        """The notebook's view: the line of what ran and the headline table (``_headline``)."""
+        import html
+
+        line, head = self._headline()
+        hidden = len(self.summary) - REPR_ROWS
+        more = f"<p>... {hidden} more sweep point(s)</p>" if hidden > 0 else ""
+        return (f"<p>{html.escape(line)}</p>{head.to_html(index=False, float_format=lambda v: f'{v:.4g}')}"
+                f"{more}")
+
     def __getitem__(self, index: int) -> pd.DataFrame:
         return (self.realizations, self.summary)[index]
 
@@ -147,3 +191,10 @@ class Solution:
     def frame(self) -> pd.DataFrame:
         """The histories as a table: ``t`` and one column per signal."""
         return pd.DataFrame({"t": self.ts, **self.ys})
+
+    def __repr__(self) -> str:
+        m = self.metrics
+        shown = ", ".join(f"{k} = {m[k]:.4g}" for k in ("edm", "x1_max", "e1_max") if k in m)
+        span = f"[{self.ts[0]:g}, {self.ts[-1]:g}] s" if len(self.ts) else "no times"
+        return (f"Solution of sweep point {self.point}, realisation {self.realization}: {len(self.ts):,} "
+                f"times over {span}; signals {', '.join(self.ys)}; {shown}")

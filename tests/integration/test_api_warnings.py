@@ -43,3 +43,27 @@ def test_the_command_line_prints_each_warning_once(tmp_path):
     assert code == 0, err
     assert err.count("simulation.dt = 0.5: coarse") == 1 and err.count("energy balance does not close") == 1
     assert "Warning" not in err  # (no duplicate from the warnings module)
+
+
+def test_short_text_and_html_views_for_notebooks():
+    """``Results``, ``Study`` and ``Solution`` print a few lines (what ran, sizes, the headline
+    metrics with their interval), not their tables and the scenario's text; ``Results`` and
+    ``Study`` have HTML views."""
+    from tests.helpers import ROOT
+
+    path = ROOT / "scenarios" / "parallel_nes_impulse.toml"
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", vines_stoch.VinesStochWarning)
+        results = vines_stoch.run(path)
+    text = repr(results).splitlines()
+    assert len(text) == 2 + 8 + 1  # the line, the header, 8 of the 15 points, "7 more"
+    assert text[0].startswith("Results of 'parallel-nes-impulse' (in memory): 15 sweep point(s)")
+    assert "edm_ci95_lo" in text[1] and text[-1] == "... 7 more sweep point(s)"
+    html = results._repr_html_()
+    assert html.startswith("<p>Results of") and html.count("<tr>") == 8 and "7 more sweep point(s)" in html
+    study = repr(results.scenario)
+    assert len(study.splitlines()) == 1 and "15 sweep point(s) over loads.0.velocity" in study
+    assert "absorbers: cubic, impact" in study and results.scenario._repr_html_().startswith("<p>Study")
+    solution = repr(vines_stoch.solve(path, point=3, points=11))
+    assert len(solution.splitlines()) == 1
+    assert solution.startswith("Solution of sweep point 3, realisation 0: 11 times")

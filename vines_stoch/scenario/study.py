@@ -490,6 +490,23 @@ class Study:
     def name(self) -> str:
         return self.base.name
 
+    def __repr__(self) -> str:
+        base = self.base
+        absorbers = ", ".join(a.type for a in base.absorbers) or "none"
+        loads = ", ".join(load.type for load in base.loads) or "none"
+        sweep = f" over {', '.join(self.sweep_keys)}" if self.sweep_keys else ""
+        sim = base.simulation
+        return (f"Study {base.name!r} ({self.source}): {len(self.points)} sweep point(s){sweep}; "
+                f"{base.primary.n_floors} floor(s), absorbers: {absorbers}; loads: {loads}; "
+                f"{base.ensemble.realizations if base.is_random else 1} realisation(s) a point, "
+                f"{base.scheme}, T = {sim.duration:g}, dt = {sim.dt:g}"
+                + (f"; {len(self.warnings)} warning(s): {self.warnings[0]}" if self.warnings else ""))
+
+    def _repr_html_(self) -> str:
+        import html
+
+        return f"<p>{html.escape(repr(self))}</p>"
+
 
 def _whole(values: list[float], where: str, spec: Any, source: str) -> list[int]:
     """Sweep values of an integer field: whole numbers, as integers."""
