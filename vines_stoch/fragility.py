@@ -237,20 +237,12 @@ def fit(table: pd.DataFrame, samples: int = 1000, seed: int = 0, keep: bool = Fa
     return result
 
 
-def fragility(directory: str | Path, limit: str, im: str, diverged: str = "exclude", samples: int = 1000,
-              seed: int = 0, plot: bool = True) -> pd.DataFrame:
-    """Fit the fragility of ``limit`` against ``im`` for the run in ``directory``; writes
-    ``directory/fragility.parquet`` (one row per stripe with the fit's columns, replacing the
-    rows of an earlier fit of the same limit and intensity) and ``fragility_<limit>.png`` (where
-    matplotlib is installed); returns the rows written."""
-    directory = Path(directory)
-    results = read_results(directory)  # (and fragility.parquet, if there, is this run's)
-    realizations, meta = results.realizations, results.metadata
-    figure = directory / f"fragility_{limit}.png"
-    if plot and figure.exists() and KEY not in png_text(figure):
-        raise ForeignFiles(f"{figure}: not a plot vines-stoch wrote; move it out of the folder to fit "
-                           f"{limit}")
-    table = stripes(realizations, limit, im, diverged, results.rare)
+def fitted(results, limit: str, im: str, diverged: str = "exclude", samples: int = 1000,
+           seed: int = 0) -> tuple[pd.DataFrame, pd.DataFrame, dict, tuple | None]:
+    """The fragility of ``limit`` against ``im`` fitted to a run's ``results`` (``Results``, in
+    memory or read from a folder): ``(rows, stripes, fit, replicates)``, the rows one per stripe
+    with the fit's columns and the fitted curve at the stripe (``fitted``)."""
+    table = stripes(results.realizations, limit, im, diverged, results.rare)
     result = fit(table, samples, seed, keep=True)
     replicates = result.pop("replicates", None)
     policy = "counted as exceedances" if diverged == "exceed" else "excluded"
@@ -259,6 +251,24 @@ def fragility(directory: str | Path, limit: str, im: str, diverged: str = "exclu
         rows["fitted"] = ndtr(np.log(rows["im"] / result["median"]) / result["beta"])
     else:
         rows["fitted"] = np.nan
+    return rows, table, result, replicates
+
+
+def fragility(directory: str | Path, limit: str, im: str, diverged: str = "exclude", samples: int = 1000,
+              seed: int = 0, plot: bool = True) -> pd.DataFrame:
+    """Fit the fragility of ``limit`` against ``im`` for the run in ``directory``; writes
+    ``directory/fragility.parquet`` (one row per stripe with the fit's columns, replacing the
+    rows of an earlier fit of the same limit and intensity) and ``fragility_<limit>.png`` (where
+    matplotlib is installed); returns the rows written."""
+    directory = Path(directory)
+    results = read_results(directory)  # (and fragility.parquet, if there, is this run's)
+    meta = results.metadata
+    figure = directory / f"fragility_{limit}.png"
+    if plot and figure.exists() and KEY not in png_text(figure):
+        raise ForeignFiles(f"{figure}: not a plot vines-stoch wrote; move it out of the folder to fit "
+                           f"{limit}")
+    rows, table, result, replicates = fitted(results, limit, im, diverged, samples, seed)
+    policy = rows["diverged"].iloc[0]
     path = directory / "fragility.parquet"
     if path.is_file():
         old = pd.read_parquet(path)

@@ -109,6 +109,34 @@ class Results:
     def __iter__(self) -> Iterator[pd.DataFrame]:
         return iter((self.realizations, self.summary))
 
+    def exceedance(self, metric: str, value: float) -> pd.DataFrame:
+        """Per sweep point, the fraction of the realisations ended ok whose ``metric`` (a column
+        of ``realizations``: ``x1_max``, ``drift_ratio_max``, ...) exceeds ``value``, with its 95 %
+        Wilson interval (``metrics.exceedance``): columns ``point``, the swept keys, ``n``, ``p``,
+        ``p_lo``, ``p_hi``."""
+        from .metrics import exceedance
+
+        r = self.realizations
+        if metric not in r.columns:
+            raise KeyError(f"metric {metric!r}: not a column of the realisations table")
+        swept = [c for c in self.summary.columns if "." in str(c)]
+        rows = []
+        for point, group in r[r["status"] == "ok"].groupby("point", sort=True):
+            p, low, high = exceedance(int((group[metric] > value).sum()), len(group))
+            rows.append({"point": point, **{k: group[k].iloc[0] for k in swept}, "n": len(group), "p": p,
+                         "p_lo": low, "p_hi": high})
+        return pd.DataFrame(rows)
+
+    def fragility(self, limit: str, im: str, diverged: str = "exclude", samples: int = 1000,
+                  seed: int = 0) -> pd.DataFrame:
+        """The lognormal fragility of ``limit`` against the intensity ``im`` (a swept key, ``sa`` or
+        ``pga``) fitted in memory, as ``vines-stoch fragility`` fits a folder but writing nothing:
+        one row a stripe with ``median``, ``beta`` and their 95 % bootstrap bounds, and the curve
+        at the stripe (``fitted``)."""
+        from .fragility import fitted
+
+        return fitted(self, limit, im, diverged, samples, seed)[0]
+
     def _headline(self) -> tuple[str, pd.DataFrame]:
         """One line of what ran and where, and the summary's headline columns (``REPR_ROWS`` rows
         at most): the swept keys, the realisations ok, the mean EDM with its 95 % interval, the

@@ -154,3 +154,25 @@ def test_fragility_command_on_a_run(tmp_path):
     assert "## Exceedance probabilities" in text and "p_roof_lo" in text and "## Fragility" in text
     assert f"{first['median']:.4g}" in text
     assert (tmp_path / "reports" / "sdof-fragility" / "exceedance.png").stat().st_size > 0
+
+
+def test_results_fit_and_count_in_memory(tmp_path):
+    """``Results.fragility`` fits the run in memory to the rows ``vines-stoch fragility`` wrote
+    into its folder (the same stripes, median, beta and bounds), and ``Results.exceedance`` of
+    the limit's metric at its value is the summary's ``p_roof`` with its interval."""
+    import pandas as pd
+
+    from tests.helpers import sdof_fragility_run
+    from vines_stoch import read_results
+
+    folder = sdof_fragility_run(tmp_path, "in-memory", 60, 5, 200)
+    results = read_results(folder)
+    written = pd.read_parquet(folder / "fragility.parquet")
+    mine = results.fragility("roof", "loads.0.intensity", samples=200)
+    for column in ("im", "n", "exceeded", "median", "beta", "median_lo", "median_hi", "beta_lo", "beta_hi",
+                   "fitted"):
+        np.testing.assert_array_equal(mine[column].to_numpy(), written[column].to_numpy(), err_msg=column)
+    counted = results.exceedance("x1_max", 0.25)
+    for suffix in ("", "_lo", "_hi"):
+        np.testing.assert_allclose(counted[f"p{suffix}"], results.summary[f"p_roof{suffix}"], rtol=1e-12)
+    assert list(counted.columns[:2]) == ["point", "loads.0.intensity"]
