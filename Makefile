@@ -7,15 +7,25 @@ CUDA_STAMP := $(VENV)/.installed-cuda
 
 .PHONY: run test lint bench bench-gpu seeds elcentro env docs clean clean-cache
 
+# The test tools (pytest, ruff, sdeint, numba-cuda for the CUDA simulator's tests): make test,
+# make bench and make env install them.
 $(STAMP): pyproject.toml
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
 	$(BIN)/python -m pip install --quiet -e ".[test]"
 	touch $(STAMP)
 
+# What make run needs: the package and its plots (no test tools, no CUDA wheels).
+RUN_STAMP := $(VENV)/.installed-run
+$(RUN_STAMP): pyproject.toml
+	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
+	$(BIN)/python -m pip install --quiet --upgrade pip
+	$(BIN)/python -m pip install --quiet -e ".[report]"
+	touch $(RUN_STAMP)
+
 env: $(STAMP)
 
-run: $(STAMP)
+run: $(RUN_STAMP)
 	$(BIN)/vines-stoch run scenarios/parallel_nes_impulse.toml
 
 # The linter, then every test (the slow convergence studies included) on one worker process per
