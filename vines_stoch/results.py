@@ -109,6 +109,14 @@ class Results:
     def __iter__(self) -> Iterator[pd.DataFrame]:
         return iter((self.realizations, self.summary))
 
+    @property
+    def plot(self):
+        """The report's plots into matplotlib Axes (``resultplots.ResultsPlot``):
+        ``results.plot.metric("edm")``, ``.exceedance("roof")``, ``.drift_profile(point)``."""
+        from .resultplots import ResultsPlot
+
+        return ResultsPlot(self)
+
     def exceedance(self, metric: str, value: float) -> pd.DataFrame:
         """Per sweep point, the fraction of the realisations ended ok whose ``metric`` (a column
         of ``realizations``: ``x1_max``, ``drift_ratio_max``, ...) exceeds ``value``, with its 95 %

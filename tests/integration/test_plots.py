@@ -97,3 +97,32 @@ def test_fragility_plot_has_its_band_units_and_svg(tmp_path):
     for name in ("edm_histogram", "exceedance", "edm_vs_input_energy"):
         assert (folder / f"{name}.png").stat().st_size > 0 and (folder / f"{name}.svg").stat().st_size > 0
     assert "[SVG](edm_histogram.svg)" in (folder / "report.md").read_text()
+
+
+def test_results_plot_in_memory():
+    """``Results.plot``: a metric against the swept value with its band and estimate, a limit's
+    exceedance and the drift profile, each drawn into an Axes and returned (no file written)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    import vines_stoch
+
+    data = {"name": "frame",
+            "primary": {"masses": [2.0, 2.0, 1.5], "stiffnesses": [900.0, 800.0, 700.0],
+                        "dampings": [3.0, 2.5, 2.0], "heights": [4.0, 3.0, 3.0]},
+            "loads": [{"type": "white-noise", "intensity": 1.0}],
+            "simulation": {"duration": 20.0, "dt": 0.005}, "ensemble": {"realizations": 16, "seed": 1},
+            "sweep": {"loads.0.intensity": [0.5, 1.0, 2.0]},
+            "limits": {"roof": {"metric": "x1_max", "value": 0.1}}}
+    results = vines_stoch.run(data)
+    ax = results.plot.metric("x1_rms")
+    assert len(ax.lines) == 2 and ax.get_xlabel().startswith("load 1 noise intensity")  # mean, estimate
+    np.testing.assert_allclose(ax.lines[0].get_ydata(), results.summary["x1_rms_mean"])
+    np.testing.assert_allclose(ax.lines[1].get_ydata(), results.summary["x1_rms_estimate"])
+    fig, (a, b) = plt.subplots(1, 2)
+    assert results.plot.exceedance("roof", ax=a) is a and results.plot.drift_profile(2, ax=b) is b
+    profile = [results.summary[f"drift_ratio_max_{k}_mean"].iloc[2] for k in (1, 2, 3)]
+    np.testing.assert_allclose(b.lines[0].get_xdata(), profile)
+    plt.close("all")
