@@ -85,6 +85,9 @@ def run(
                                           "0 = automatic)."),
     resume: bool = typer.Option(False, "--resume",
                                 help="Keep the chunks an interrupted run of the same scenario finished."),
+    overwrite: bool = typer.Option(False, "--overwrite",
+                                   help="Discard the work an unfinished run kept in the folder (without "
+                                        "--resume or --overwrite, a run refuses to)."),
     scheduler: str | None = typer.Option(None, "--scheduler",
                                          help="Address of a running dask.distributed scheduler "
                                               "(e.g. tcp://10.0.0.5:8786)."),
@@ -128,7 +131,8 @@ def run(
         with warnings.catch_warnings():  # (their lines are printed here: _warn, _warn_residuals)
             warnings.simplefilter("ignore", VinesStochWarning)
             result = run_study(study, directory, workers=workers, chunk=chunk, resume=resume,
-                               scheduler=scheduler, progress=not quiet, shard=share, backend=backend)
+                               scheduler=scheduler, progress=not quiet, shard=share, backend=backend,
+                               overwrite=overwrite)
     except KeyboardInterrupt as exc:  # (Interrupted says how many chunks are kept)
         typer.echo(f"\n{exc if isinstance(exc, Interrupted) else 'interrupted'}", err=True)
         raise typer.Exit(130) from None

@@ -593,7 +593,7 @@ def run(scenario: Study | Mapping[str, Any] | str | os.PathLike, out: str | Path
         workers: int | None = None, chunk: int | None = None, realizations: int | None = None,
         paths: bool = False, resume: bool = False, scheduler: str | None = None, progress: bool = False,
         checkpoint_seconds: float = 30.0, shard: tuple[int, int] | None = None,
-        backend: str = "cpu") -> Results | None:
+        backend: str = "cpu", overwrite: bool = False) -> Results | None:
     """Run a scenario (a file's path, a dict of its tables or a validated ``Study``) and return
     its ``Results`` (realisations, summary, history statistics where ``[simulation.history]``
     asks for them, and with ``paths`` every realisation's time histories).
@@ -607,7 +607,9 @@ def run(scenario: Study | Mapping[str, Any] | str | os.PathLike, out: str | Path
     ``workers``: threads of the embedded scheduler (default: all cores).  ``scheduler``: the
     address of a running ``dask.distributed`` scheduler to use instead, or the path of its
     scheduler file.  ``resume``: keep what
-    a previous, interrupted run of the same scenario finished.  ``checkpoint_seconds``: how
+    a previous, interrupted run of the same scenario finished; ``overwrite``: discard them (a
+    new run into a folder that holds an unfinished run's work refuses, ``store.UnfinishedRun``,
+    unless it resumes or overwrites).  ``checkpoint_seconds``: how
     often the history statistics are saved for a resume.  ``shard = (i, n)``: run only the
     chunks whose index in the plan is ``i`` modulo ``n`` into the folder, write no results and
     return None (for job arrays: shards run side by side, then a ``resume`` run writes the
@@ -645,8 +647,13 @@ def run(scenario: Study | Mapping[str, Any] | str | os.PathLike, out: str | Path
             raise ValueError(f"--shard: {study.source} asks for history statistics or spectra, which are "
                              "folded from the paths of every realisation in order and cannot be split into "
                              "shards; run it in one job")
+    if not isinstance(overwrite, bool):
+        raise TypeError(f"overwrite = {overwrite!r}: must be True or False")
+    if overwrite and resume:
+        raise ValueError("resume and overwrite: give one (resume keeps an unfinished run's work, overwrite "
+                         "discards it)")
     options = _Options(workers, chunk, realizations, paths, resume, scheduler, progress, checkpoint_seconds,
-                       shard, backend)
+                       shard, backend, overwrite)
     notices.emit(study.warnings)  # (the lines the command line prints, as warnings of their categories)
     results = _run_into(study, out, options)
     if results is not None:
@@ -683,6 +690,7 @@ class _Options:
     checkpoint_seconds: float
     shard: tuple[int, int] | None
     backend: str
+    overwrite: bool = False
 
 
 def structure(scene: Scene) -> str:
@@ -734,7 +742,7 @@ def _run(study: Study, directory: Path | None, o: _Options) -> Results | None:
     key = run_key(study.text, the_plan.chunks, o.backend)
     keep = "--resume" if o.resume else "--shard" if o.shard is not None else None
     found = set() if directory is None else prepare_folder(directory, key, len(the_plan.chunks), study.source,
-                                                           keep)
+                                                           keep, o.overwrite)
     checkpoint = None if directory is None else _Checkpoint(directory / "parts" / CHECKPOINT, key,
                                                             o.checkpoint_seconds)
     states = [PointState([c for c in the_plan.chunks if c[0] == p], tree=hist.Tree() if spec else None,

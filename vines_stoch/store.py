@@ -98,6 +98,10 @@ def write_table(frame: pd.DataFrame, path: Path, meta: dict[str, str] | None = N
     os.replace(tmp, path)
 
 
+class UnfinishedRun(ValueError):
+    """A new run would discard the kept work of an unfinished (interrupted or sharded) run."""
+
+
 class FolderInUse(OSError):
     """An output folder another live run is writing."""
 
@@ -384,7 +388,7 @@ def _named(paths: list[Path], directory: Path) -> str:
 
 
 def prepare_folder(directory: Path, key: str, chunks: int, source: str,
-                   keep: str | None = None) -> set[Path]:
+                   keep: str | None = None, overwrite: bool = False) -> set[Path]:
     """Make ``directory`` the folder of the run ``key`` (of ``chunks`` chunks, scenario file
     ``source``) and return the part files of that run already in it.
 
@@ -392,7 +396,9 @@ def prepare_folder(directory: Path, key: str, chunks: int, source: str,
     the result files and the fragility plots; it refuses (``ForeignFiles``, naming them) where
     ``parts/`` or a result file's name holds a file this program did not write.  A run that
     keeps the parts (``keep``: the option that asks it, ``"--resume"`` or ``"--shard"``) refuses
-    a folder whose parts or results belong to another run, manifest or not."""
+    a folder whose parts or results belong to another run, manifest or not.  A new run refuses
+    (``UnfinishedRun``) to delete the parts of a run that did not finish (parts or saved studies,
+    no summary) unless ``overwrite``."""
     parts = directory / "parts"
     parts.mkdir(parents=True, exist_ok=True)
     results = [directory / name for name in RESULTS if (directory / name).exists()]
@@ -404,6 +410,13 @@ def prepare_folder(directory: Path, key: str, chunks: int, source: str,
             raise ForeignFiles(f"{directory}: holds files vines-stoch did not write "
                                f"({_named(foreign, directory)}); a run never reads or deletes them: move "
                                "them out of the folder, or use another --out folder")
+        kept = [p for p in entries if p.name != MANIFEST]
+        if kept and not overwrite and not (directory / "summary.parquet").exists():
+            of = (_manifest(directory) or {}).get("source", "a run")
+            raise UnfinishedRun(f"{directory}: holds {len(kept)} file(s) of work an unfinished run of {of} "
+                                "kept (interrupted, or run in shards); run again with --resume to go on from "
+                                "them (resume=True from Python), or with --overwrite to discard them "
+                                "(overwrite=True)")
         plots = [p for suffix in ("png", "svg") for p in directory.glob(f"fragility_*.{suffix}")
                  if _written_here(p)]
         for path in entries + results + plots:

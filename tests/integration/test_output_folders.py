@@ -295,3 +295,29 @@ def test_a_checkpoint_is_data_with_its_key_and_checksum(tmp_path, monkeypatch):
         np.savez(stream, **stored)
     with pytest.raises(ForeignFiles, match="damaged"):
         read_arrays(path)
+
+
+def test_a_new_run_refuses_to_discard_an_unfinished_runs_work(tmp_path, monkeypatch):
+    """A run interrupted after some chunks: running again into its folder without ``--resume``
+    refuses (the command line with exit 2 and both ways out named; Python with
+    ``UnfinishedRun``) and leaves the kept parts in place; ``--overwrite`` discards them and runs
+    afresh; a finished run's folder is replaced without a word, as before."""
+    from tests.helpers import run_interrupted
+    from vines_stoch.store import UnfinishedRun
+
+    data = noisy(0.05, realizations=20)
+    out = tmp_path / "out"
+    run_interrupted(monkeypatch, data, out, after=5)
+    kept = parts_of(out)
+    assert kept and not (out / "summary.parquet").exists()
+    with pytest.raises(UnfinishedRun, match="--resume .* or with --overwrite"):
+        run(data, out)
+    assert parts_of(out) == kept
+    path = write(tmp_path, "noisy", data)
+    code, err = cli("run", path, "--out", out, "--quiet")
+    assert code == 2 and "unfinished run" in err and "--overwrite" in err and parts_of(out) == kept
+    with pytest.raises(ValueError, match="resume and overwrite: give one"):
+        run(data, out, resume=True, overwrite=True)
+    fresh = run(data, out, overwrite=True)
+    assert len(fresh.realizations) == 20 and (out / "summary.parquet").exists()
+    assert len(run(data, out).realizations) == 20  # (a finished run's folder: replaced)
