@@ -205,3 +205,24 @@ def test_readme_links_and_included_sections_exist():
     for word in ("EDM", "LPO", "SSVI / DSVI", "VI NES", "Regime `nT,k,m`", "Path-steps", "Seed papers"):
         assert f"**{word}" in glossary, word
     assert "make run" in README and "make test" in README
+
+
+def test_readme_building_example_prints_what_it_shows(tmp_path):
+    """The README's building under earthquakes: the exceedance of a drift ratio of 1/200 and the
+    fragility fitted in memory print the numbers the README shows (to their printed digits)."""
+    code = _block("A building under earthquakes", "python")
+    done = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True, timeout=600)
+    assert done.returncode == 0, done.stderr[-3000:]
+    shown = _block("fitted in memory:\n\n```python", "text")
+    assert done.stdout.split() == shown.split()
+    scope: dict = {}
+    exec(code[:code.index("results = ")], scope)  # (the scenario's dict, not its run)
+    path = tmp_path / "building.toml"
+    from tests.helpers import toml_text
+
+    path.write_text(toml_text(scope["building"]))
+    done = subprocess.run([sys.executable, "-m", "vines_stoch.cli", "validate", str(path)],
+                          capture_output=True, text=True, timeout=120)
+    periods = re.findall(r"T\d = ([0-9.]+) s", done.stdout)
+    assert [f"{float(t):.3g}" for t in periods] == ["0.495", "0.174", "0.121"]
+    assert "modal periods (0.495, 0.174 and 0.121 s)" in " ".join(README.split())
