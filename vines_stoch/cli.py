@@ -372,6 +372,9 @@ def compare(
                                             help="Metric to compare (repeatable; default edm, e1_max, "
                                                  "energy_integral, impacts): any metric column, or "
                                                  "p_NAME for a limit."),
+    label: list[str] | None = typer.Option(None, "--label",
+                                           help="A name for each run, in the directories' order (repeatable; "
+                                                "default the folders' names)."),
 ) -> None:
     """Side-by-side summary metrics of several runs, with differences and their standard errors
     (any metric of the runs' summaries, floors' and declared ones included, or a limit's
@@ -381,8 +384,10 @@ def compare(
 
     if len(directories) < 2:
         _fail("compare needs at least two result directories")
+    if label and len(label) != len(directories):
+        _fail(f"--label: {len(label)} label(s) for {len(directories)} directories; give one a directory")
     try:
-        runs = [Run.read(d) for d in directories]
+        runs = [Run.read(d, name) for d, name in zip(directories, label or [None] * len(directories))]
         allowed = comparable(runs[0])
         for m in metric or []:
             if m not in allowed:

@@ -125,6 +125,10 @@ def test_compare_takes_exceedance_and_floor_metrics(tmp_path):
     assert table.loc["p_roof", "stiff - soft"] == pytest.approx(np.mean(hit[1] - hit[0]), abs=1e-12)
     assert table.loc["p_roof", "paired (stiff)"] == "yes"
     assert table.loc["x_max_1", "soft"] == soft.summary["x_max_1_mean"].iloc[0]
+    command = ["compare", *map(str, roots), "--metric", "p_roof", "--label", "k3 = 1", "--label", "k3 = 4",
+               "--out", str(tmp_path / "l.md")]
+    labelled = subprocess.run([sys.executable, "-m", "vines_stoch.cli", *command], capture_output=True, text=True)
+    assert labelled.returncode == 0 and "k3 = 4 - k3 = 1" in labelled.stdout, labelled.stderr
     command = ["compare", *map(str, roots), "--metric", "p_nothing", "--out", str(tmp_path / "c.md")]
     bad = subprocess.run([sys.executable, "-m", "vines_stoch.cli", *command], capture_output=True, text=True)
     assert bad.returncode == 2 and "--metric p_nothing: must be one of" in bad.stderr
