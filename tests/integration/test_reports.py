@@ -127,7 +127,8 @@ def test_compare_takes_exceedance_and_floor_metrics(tmp_path):
     assert table.loc["x_max_1", "soft"] == soft.summary["x_max_1_mean"].iloc[0]
     command = ["compare", *map(str, roots), "--metric", "p_roof", "--label", "k3 = 1", "--label", "k3 = 4",
                "--out", str(tmp_path / "l.md")]
-    labelled = subprocess.run([sys.executable, "-m", "vines_stoch.cli", *command], capture_output=True, text=True)
+    labelled = subprocess.run([sys.executable, "-m", "vines_stoch.cli", *command], capture_output=True,
+                              text=True)
     assert labelled.returncode == 0 and "k3 = 4 - k3 = 1" in labelled.stdout, labelled.stderr
     command = ["compare", *map(str, roots), "--metric", "p_nothing", "--out", str(tmp_path / "c.md")]
     bad = subprocess.run([sys.executable, "-m", "vines_stoch.cli", *command], capture_output=True, text=True)
