@@ -36,6 +36,7 @@ from .kernels import DEFAULT_SIGNALS, kernel_for
 from .kernels.chunk import chunk_loop, ground_paths, lane_scene, parameter_draws, seed_keys, simulate_chunk
 from .kernels.lanes import LANES
 from .metrics import METRICS, finish_table, ground_intensities, residual_warnings, summarise
+from .notices import LOG
 from .outputs import EVENT_COLUMNS, EVENT_T, POINCARE_SAMPLES, Record
 from .progress import Progress
 from .results import Results, Solution, as_study, check_whole
@@ -706,11 +707,12 @@ def structure(scene: Scene) -> str:
 
 
 def prepare_loops(scenes: list[Scene], seed: int, common: bool, grid: tuple[int, int] | None = None,
-                  signals: tuple[str, ...] = DEFAULT_SIGNALS) -> None:
+                  signals: tuple[str, ...] = DEFAULT_SIGNALS, show: bool = True) -> None:
     """Compile (or load from numba's cache on disk) the step loop of each structure among
-    ``scenes`` that this process has not run yet, before any chunk starts, with one line each on
-    standard error: which structure, and whether it was compiled (once: later runs load it) or
-    loaded.  A chunk of no realisations runs each loop with the argument types of ``run_chunk``."""
+    ``scenes`` that this process has not run yet, before any chunk starts, with one line each
+    (logged at INFO on the ``vines_stoch`` logger, and with ``show`` on standard error): which
+    structure, and whether it was compiled (once: later runs load it) or loaded.  A chunk of no
+    realisations runs each loop with the argument types of ``run_chunk``."""
     seen = set()
     for point, scene in enumerate(scenes):
         columns = declare(signals, scene.n_floors, scene.kind.shape[0]) if grid else None
@@ -719,12 +721,17 @@ def prepare_loops(scenes: list[Scene], seed: int, common: bool, grid: tuple[int,
         if run in seen or run.overloads:
             continue
         seen.add(run)
-        print(f"step loop: {structure(scene)}: compiling or loading ...", end="", file=sys.stderr, flush=True)
+        if show:
+            print(f"step loop: {structure(scene)}: compiling or loading ...", end="", file=sys.stderr,
+                  flush=True)
         hits, start = sum(run.stats.cache_hits.values()), time.monotonic()
         simulate_chunk(scene, seed, point, 0, 0, common, grid, signals, scene.event_rows)
         loaded = sum(run.stats.cache_hits.values()) > hits
-        print(f" {'loaded from the cache' if loaded else 'compiled (cached on disk for later runs)'} "
-              f"in {time.monotonic() - start:.1f} s", file=sys.stderr, flush=True)
+        outcome = (f"{'loaded from the cache' if loaded else 'compiled (cached on disk for later runs)'} "
+                   f"in {time.monotonic() - start:.1f} s")
+        LOG.info("step loop: %s: %s", structure(scene), outcome)
+        if show:
+            print(f" {outcome}", file=sys.stderr, flush=True)
 
 
 def _run(study: Study, directory: Path | None, o: _Options) -> Results | None:
@@ -794,9 +801,9 @@ def _run(study: Study, directory: Path | None, o: _Options) -> Results | None:
         return sum(held(c) or (states[c[0]].stop is not None and c[1] >= states[c[0]].stop) for c in mine)
 
     try:
-        if o.progress and o.backend == "cpu" and not o.scheduler and todo:
+        if o.backend == "cpu" and not o.scheduler and todo:
             prepare_loops(the_plan.scenes, seed, base.ensemble.common_random_numbers, recorded[0][1],
-                          recorded[0][0] or DEFAULT_SIGNALS)
+                          recorded[0][0] or DEFAULT_SIGNALS, show=o.progress)
         with ExitStack() as stack:
             interrupted = stack.enter_context(_noting_interrupts())
             fold_ready()

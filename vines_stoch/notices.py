@@ -1,9 +1,15 @@
 """The package's warnings, one category each, so that a Python user can filter them as usual
 (``warnings.simplefilter("error", vines_stoch.CoarseStepWarning)``); the command line prints the
-same lines as ``warning: ...``.  A ``Notice`` is a warning's line (a ``str``) that knows its
+same lines as ``warning: ...``; what the package compiles goes to the ``vines_stoch`` logger
+(``LOG``) at INFO.  A ``Notice`` is a warning's line (a ``str``) that knows its
 category."""
 
 from __future__ import annotations
+
+import logging
+
+#: The package's logger: what it compiles or loads (``ensemble.prepare_loops``), at INFO.
+LOG = logging.getLogger("vines_stoch")
 
 
 class VinesStochWarning(UserWarning):

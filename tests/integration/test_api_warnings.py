@@ -67,3 +67,21 @@ def test_short_text_and_html_views_for_notebooks():
     solution = repr(vines_stoch.solve(path, point=3, points=11))
     assert len(solution.splitlines()) == 1
     assert solution.startswith("Solution of sweep point 3, realisation 0: 11 times")
+
+
+def test_the_loop_a_run_compiles_or_loads_is_logged():
+    """Python users see what a run compiles through ``logging`` (the command line prints it):
+    in a fresh process, one INFO record on the ``vines_stoch`` logger for the step loop, compiled
+    or loaded from the cache."""
+    import subprocess
+    import sys
+
+    script = ("import logging, warnings, vines_stoch\n"
+              "logging.basicConfig(level=logging.INFO, format='%(name)s %(levelname)s %(message)s')\n"
+              "warnings.simplefilter('ignore')\n"
+              f"vines_stoch.run({ {**coarse(), 'simulation': {'duration': 5.0, 'dt': 0.01}}!r})\n")
+    done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=600)
+    assert done.returncode == 0, done.stderr[-2000:]
+    records = [line for line in done.stderr.splitlines() if line.startswith("vines_stoch INFO step loop: ")]
+    assert len(records) == 1, done.stderr
+    assert "loaded from the cache" in records[0] or "compiled (cached on disk" in records[0]
