@@ -47,9 +47,11 @@ $(DOCS_STAMP): $(STAMP)
 	touch $(DOCS_STAMP)
 
 # The documentation, into docs/_build/html: the scenario and CLI references are written from the
-# code, the examples in examples/ run (docs/conf.py). Nothing is fetched while it builds.
+# code, the examples in examples/ run (docs/conf.py). Nothing is fetched while it builds. Nitpicky
+# (-n) and strict (-W): a broken link or cross-reference, the README's included sections' among
+# them, fails the build.
 docs: $(STAMP) $(DOCS_STAMP)
-	$(BIN)/python -m sphinx -b html -q docs docs/_build/html
+	$(BIN)/python -m sphinx -b html -q -n -W --keep-going docs docs/_build/html
 
 # The cuda extra (numba-cuda with the CUDA 12 compiler wheels), installed once.
 $(CUDA_STAMP): $(STAMP)
