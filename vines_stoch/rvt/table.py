@@ -163,17 +163,49 @@ def _point(scenario, limits: dict) -> dict[str, Any]:
     scene = build_scene(scenario)
     filters = scene_filters(scenario)
     limits = {name: _storey_limit(metric, value, scene.heights) for name, (metric, value) in limits.items()}
+    path, stationary, nonlinear, notes = _moments(scene, filters)
+    random = bool(scene.sigma.any() or filters)
+    i0 = min(int(np.searchsorted(path.t, scene.i0 * scene.dt - 1e-9 * scene.dt)), len(path.t) - 2)
+    t = path.t[i0:]
+    b, feed, rate = _forcing(path)
+    row: dict[str, Any] = {"method": "statistical-linearization" if nonlinear else "exact-linear",
+                           "stationary_law": stationary is not None}
+    outputs = _outputs(path.models[-1], scene)  # (accelerations: the end's linearised forces)
+    deltas = {}
+    if stationary is not None:
+        rows = np.array([o.row for o in outputs])
+        deltas = dict(zip((o.name for o in outputs), _bandwidth(stationary[0], rows, stationary[2])))
+    spreads = {}
+    floors = [o for o in outputs if o.name.startswith("x_")]
+    if random and t[-1] > t[0]:
+        values = _mean_square_spread(path, np.array([o.row for o in floors]), i0) / (t[-1] - t[0]) ** 2
+        spreads = dict(zip((o.name for o in floors), values))
+    for out in outputs:
+        stats = {k: v[i0:] for k, v in _statistics(path, out, b, feed, rate).items()}
+        row.update(_output_columns(out.name, t, stats, spreads.get(out.name), deltas.get(out.name), random))
+        row.update(_limit_columns(out.name, t, stats, deltas.get(out.name), random, limits, scene.n_floors))
+    base = bare(scene, filters)
+    b_external, _, _ = _forcing(moments.Path(path.t, path.m, path.p, [base]))
+    row.update(energy.accounts(path, i0, scene, base, b_external))
+    _aliases(row, scene)
+    row["note"] = "; ".join(notes)
+    return row
+
+
+def _moments(scene, filters: list) -> tuple[moments.Path, tuple | None, bool, list[str]]:
+    """``(path, stationary, nonlinear, notes)``: the moments on the time grid from the scene's start
+    (exact for a linear scene, the time-varying statistical linearisation otherwise, a bistable
+    law's reported fixed point), the stationary law ``(model, mean, covariance)`` where there is
+    one, whether a law is nonlinear, and the notes (the bistable law's fixed points)."""
     check_laws(scene)
     nonlinear = bool(_nonlinear(scene).any())
     random = bool(scene.sigma.any() or filters)
     if nonlinear and not random:
         raise NotApplicable("a deterministic load on a nonlinear absorber: statistical linearisation "
                             "needs a random load (vines_stoch.solve integrates the path)")
-    na = len(scene.kind)
-    zero = np.zeros(na)
+    zero = np.zeros(len(scene.kind))
     model = linearization.linearized(scene, filters, zero, zero)
-    notes = []
-    stationary = None
+    notes, stationary = [], None
     if nonlinear:
         stationary, note = _stationary_fixed_point(scene, filters, model)
         notes += [note] if note else []
@@ -189,82 +221,84 @@ def _point(scenario, limits: dict) -> dict[str, Any]:
     if stationary is not None and (scene.kind == BISTABLE).any():
         # (from its symmetric start the Gaussian closure cannot choose a well: the window's
         # statistics are those of the reported stationary fixed point)
-        t_grid = np.linspace(0.0, duration, steps + 1)
-        path = moments.Path(t_grid, np.repeat(stationary[1][None], steps + 1, axis=0),
-                            np.repeat(stationary[2][None], steps + 1, axis=0), [stationary[0]])
+        _, mean, cov = stationary
+        path = moments.Path(np.linspace(0.0, duration, steps + 1), np.repeat(mean[None], steps + 1, axis=0),
+                            np.repeat(cov[None], steps + 1, axis=0), [stationary[0]])
     elif nonlinear:
         path = moments.propagate_linearized(model, duration, steps, relinearize)
     else:
         path = moments.propagate(model, duration, steps)
     if nonlinear and not _settled(path, stationary):
         raise NotApplicable("the time-varying linearisation ran away from its stationary fixed point")
-    i0 = int(np.searchsorted(path.t, scene.i0 * scene.dt - 1e-9 * scene.dt))
-    i0 = min(i0, steps - 1)
-    t = path.t[i0:]
-    b, feed, rate = _forcing(path)
-    row: dict[str, Any] = {"method": "statistical-linearization" if nonlinear else "exact-linear",
-                           "stationary_law": stationary is not None}
-    outputs = _outputs(path.models[-1], scene)  # (accelerations: the end's linearised forces)
-    deltas = {}
-    if stationary is not None:
-        rows = np.array([o.row for o in outputs])
-        deltas = dict(zip((o.name for o in outputs), _bandwidth(stationary[0], rows, stationary[2])))
+    return path, stationary, nonlinear, notes
+
+
+#: Peak metrics of the outputs' kinds.
+PEAKS = {"x": "x_max", "drift": "drift_max", "acc": "acc_max"}
+
+
+def _output_columns(name: str, t: np.ndarray, stats: dict, spread: float | None, delta: float | None,
+                    random: bool) -> dict[str, float]:
+    """An output's window rms (a floor's with the second-order correction of Jensen's gap from the
+    ``spread``, the variance of its window mean square) and mean peak (Vanmarcke's crossings with
+    the bandwidth ``delta`` for a zero-mean response, else Poisson's; a deterministic one's
+    largest ``|mean|``)."""
+    kind, k = name.split("_")
+    square = stats["m"] ** 2 + stats["s"] ** 2
     window = t[-1] - t[0]
-    floors = [o for o in outputs if o.name.startswith("x_")]
-    spreads = {}
-    if random and window > 0:
-        values = _mean_square_spread(path, np.array([o.row for o in floors]), i0) / window**2
-        spreads = dict(zip((o.name for o in floors), values))
-    for out in outputs:
-        stats = _statistics(path, out, b, feed, rate)
-        square = (stats["m"] ** 2 + stats["s"] ** 2)[i0:]
-        rms = math.sqrt(float(np.trapezoid(square, t) / window) if window > 0 else float(square[0]))
-        kind, k = out.name.split("_")
-        row[f"{kind}_rms_{k}"] = rms
-        if out.name in spreads:
-            spread = spreads[out.name]  # Var of the window's mean square
-            if np.isfinite(spread) and spread >= 0 and rms > 0:  # E[sqrt(ms)] and its spread to second order
-                row[f"x_rms_{k}"] = rms * (1.0 - spread / (8.0 * rms**4))
-                row[f"x_rms_sd_{k}"] = math.sqrt(spread) / (2.0 * rms)
-        if "ds" not in stats:
+    rms = math.sqrt(float(np.trapezoid(square, t) / window) if window > 0 else float(square[0]))
+    out = {f"{kind}_rms_{k}": rms}
+    if spread is not None and np.isfinite(spread) and spread >= 0 and rms > 0:  # E[sqrt(ms)] to second order
+        out[f"x_rms_{k}"] = rms * (1.0 - spread / (8.0 * rms**4))
+        out[f"x_rms_sd_{k}"] = math.sqrt(spread) / (2.0 * rms)
+    if "ds" in stats and kind in PEAKS:
+        out[f"{PEAKS[kind]}_{k}"] = (passage.mean_peak(t, stats, _zero_mean(stats, delta)) if random
+                                     else float(np.max(np.abs(stats["m"]))))
+    return out
+
+
+def _zero_mean(stats: dict, delta: float | None) -> float | None:
+    """``delta`` where the response is zero-mean over the window (Vanmarcke's factor applies), else None."""
+    zero = float(np.max(np.abs(stats["m"]))) <= 1e-9 * float(np.max(stats["s"]) or 1.0)
+    return delta if zero else None
+
+
+def _limit_columns(name: str, t: np.ndarray, stats: dict, delta: float | None, random: bool, limits: dict,
+                   n_floors: int) -> dict[str, float]:
+    """The first-passage columns of the limits on this output's peak (``p_NAME``, Poisson's
+    ``p_NAME_poisson`` and the window's mean rate of outward crossings ``upcrossing_rate_NAME``;
+    a deterministic response's ``p_NAME`` is 0 or 1)."""
+    kind, k = name.split("_")
+    out: dict[str, float] = {}
+    if "ds" not in stats or kind not in PEAKS:
+        return out
+    for limit, (metric, value) in limits.items():
+        if metric != f"{PEAKS[kind]}_{k}" and not (metric == "x1_max" and name == f"x_{n_floors}"):
             continue
-        window_stats = {k: v[i0:] for k, v in stats.items()}
-        zero_mean = float(np.max(np.abs(window_stats["m"]))) <= 1e-9 * float(np.max(window_stats["s"]) or 1.0)
-        delta = deltas.get(out.name) if zero_mean and random else None
-        if random:
-            peak = passage.mean_peak(t, window_stats, delta)
-        else:
-            peak = float(np.max(np.abs(window_stats["m"])))
-        metric = {"x": "x_max", "drift": "drift_max", "acc": "acc_max"}.get(kind)
-        if metric:
-            row[f"{metric}_{k}"] = peak
-        for name, (lim_metric, value) in limits.items():
-            roof = lim_metric == "x1_max" and out.name == f"x_{scene.n_floors}"
-            if lim_metric == f"{metric}_{k}" or roof:
-                if not random:
-                    row[f"p_{name}"] = float(peak > value)
-                    continue
-                row[f"p_{name}_poisson"] = float(passage.exceedance(t, [value], window_stats, None)[0])
-                row[f"p_{name}"] = (float(passage.exceedance(t, [value], window_stats, delta)[0])
-                                    if delta is not None else row[f"p_{name}_poisson"])
-                rates = passage.barrier_rate(value, *(window_stats[q] for q in ("m", "s", "dm", "ds", "cov")))
-                row[f"upcrossing_rate_{name}"] = (float(np.trapezoid(rates, t) / window) if window > 0
-                                                  else math.nan)
-    base = bare(scene, filters)
-    b_external, _, _ = _forcing(moments.Path(path.t, path.m, path.p, [base]))
-    row.update(energy.accounts(path, i0, scene, base, b_external))
+        if not random:
+            out[f"p_{limit}"] = float(np.max(np.abs(stats["m"])) > value)
+            continue
+        delta = _zero_mean(stats, delta)
+        out[f"p_{limit}_poisson"] = float(passage.exceedance(t, [value], stats, None)[0])
+        out[f"p_{limit}"] = (float(passage.exceedance(t, [value], stats, delta)[0]) if delta is not None
+                             else out[f"p_{limit}_poisson"])
+        rates = passage.barrier_rate(value, *(stats[q] for q in ("m", "s", "dm", "ds", "cov")))
+        window = t[-1] - t[0]
+        out[f"upcrossing_rate_{limit}"] = float(np.trapezoid(rates, t) / window) if window > 0 else math.nan
+    return out
+
+
+def _aliases(row: dict[str, Any], scene) -> None:
+    """The roof's columns under the realisations table's names (``x1_rms``, ``x1_max``) and, with
+    storey heights, the drift ratios (``drift_ratio_max_k``, ``drift_ratio_rms_k``)."""
     roof = scene.n_floors
-    for name in ("x_rms", "x_max", "x_rms_sd"):  # (the roof's, as the realisations table names them)
-        src, dst = f"{name}_{roof}", name.replace("x_", "x1_")
-        if src in row:
-            row[dst] = row[src]
-    if scene.heights.size and all(f"drift_max_{k + 1}" in row for k in range(roof)):  # drift ratios
-        ratios = [row[f"drift_max_{k + 1}"] / scene.heights[k] for k in range(roof)]
-        row.update({f"drift_ratio_max_{k + 1}": r for k, r in enumerate(ratios)})
-        row.update({f"drift_ratio_rms_{k + 1}": row[f"drift_rms_{k + 1}"] / scene.heights[k]
-                    for k in range(roof)})
-    row["note"] = "; ".join(notes)
-    return row
+    for name in ("x_rms", "x_max", "x_rms_sd"):
+        if f"{name}_{roof}" in row:
+            row[name.replace("x_", "x1_")] = row[f"{name}_{roof}"]
+    if scene.heights.size and all(f"drift_max_{k + 1}" in row for k in range(roof)):
+        for k in range(roof):
+            row[f"drift_ratio_max_{k + 1}"] = row[f"drift_max_{k + 1}"] / scene.heights[k]
+            row[f"drift_ratio_rms_{k + 1}"] = row[f"drift_rms_{k + 1}"] / scene.heights[k]
 
 
 #: Largest ratio of a variance at the end of the time-varying linearisation to the stationary one.
