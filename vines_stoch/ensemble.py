@@ -51,6 +51,7 @@ from .store import (
     STUDIES,
     ForeignFiles,
     Saved,
+    component,
     lock_folder,
     part_path,
     prepare_folder,
@@ -568,8 +569,8 @@ def _noting_interrupts() -> Iterator[threading.Event]:
 
 def output_directory(study: Study, directory: str | Path | None = None) -> Path:
     """Where a run writes: ``directory``, else the scenario's ``[output] directory``, else
-    ``results/<name>``."""
-    return Path(directory or study.base.output.directory or f"results/{study.base.name}")
+    ``results/<name>`` (the name as one path component: ``store.component``)."""
+    return Path(directory or study.base.output.directory or Path("results") / component(study.base.name))
 
 
 def _check_arguments(out: object, workers: object, chunk: object, realizations: object, paths: object,

@@ -173,10 +173,12 @@ def save(fig: Any, path: str | Path, metadata: Mapping[str, str] | None = None) 
     paths written."""
     import matplotlib.pyplot as plt
 
+    from .store import fresh
+
     stem = Path(path).with_suffix("")
     written = []
     for suffix in FORMATS:
-        target = stem.with_name(stem.name + suffix)
+        target = fresh(stem.with_name(stem.name + suffix))  # (never through a link planted there)
         if suffix == ".png":
             fig.savefig(target, dpi=DPI, metadata=dict(metadata or {}))
         else:

@@ -17,6 +17,7 @@ from .metrics import limit_names
 from .plotting import REPORT_EXTRA, counts, label, legend, pyplot
 from .plotting import save as save_figure
 from .results import read_results
+from .store import component, fresh, within
 
 #: Metrics compared by default.
 COMPARED = ("edm", "e1_max", "energy_integral", "impacts")
@@ -549,8 +550,10 @@ def report(directories: list[str | Path], out: str | Path = "reports", labels: l
     directories (``name``: the first run's scenario name); returns the Markdown path."""
     labels = labels or [None] * len(directories)
     runs = [Run.read(d, label) for d, label in zip(directories, labels)]
-    folder = Path(out) / runs[0].scenario.get("name", runs[0].directory.name)
+    # (the name as one path component, and the folder inside ``out`` once links are followed)
+    folder = Path(out) / component(str(runs[0].scenario.get("name", runs[0].directory.name)))
     folder.mkdir(parents=True, exist_ok=True)
+    within(folder, out)
     files = _plots(runs, folder, point)
     parts = [f"# Report: {', '.join(run.label for run in runs)}", ""]
     for run in runs:
@@ -598,7 +601,7 @@ def report(directories: list[str | Path], out: str | Path = "reports", labels: l
     plots = ([f"![{f}]({f}) ([SVG]({Path(f).with_suffix('.svg')}))" for f in files] if files
              else [f"Not drawn: matplotlib is not installed; `{REPORT_EXTRA}` adds them."])
     parts += ["## Plots", ""] + plots + [""]
-    path = folder / "report.md"
+    path = fresh(folder / "report.md")
     path.write_text("\n".join(parts))
     return path
 

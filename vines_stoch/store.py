@@ -98,6 +98,37 @@ def write_table(frame: pd.DataFrame, path: Path, meta: dict[str, str] | None = N
     os.replace(tmp, path)
 
 
+class OutsideFolder(ValueError):
+    """A path the program would write lies outside the folder the user named."""
+
+
+def component(name: str) -> str:
+    """``name`` (a scenario's, from a file or a results folder's metadata) as one path component
+    that stays where it is put: every run of characters other than letters, digits, ``_``, ``-``
+    and ``.`` becomes ``_`` (separators, NUL), leading dots go (``..``), ``run`` if nothing is
+    left."""
+    return re.sub(r"[^\w.-]+", "_", name).lstrip(".") or "run"
+
+
+def within(path: Path, root: Path) -> Path:
+    """``path``, made sure to lie inside ``root`` once links are followed (a link planted in the
+    folder that points elsewhere is refused, ``OutsideFolder``)."""
+    resolved, base = Path(path).resolve(), Path(root).resolve()
+    if resolved != base and base not in resolved.parents:
+        raise OutsideFolder(f"{path}: leads outside {root} (to {resolved}); the program writes only inside "
+                            "the folder it is given: remove the link, or use another folder")
+    return Path(path)
+
+
+def fresh(path: Path) -> Path:
+    """``path`` with a link planted there removed, so that writing it writes a new file in its
+    folder, never through the link."""
+    path = Path(path)
+    if path.is_symlink():
+        path.unlink()
+    return path
+
+
 class UnfinishedRun(ValueError):
     """A new run would discard the kept work of an unfinished (interrupted or sharded) run."""
 

@@ -321,3 +321,55 @@ def test_a_new_run_refuses_to_discard_an_unfinished_runs_work(tmp_path, monkeypa
     fresh = run(data, out, overwrite=True)
     assert len(fresh.realizations) == 20 and (out / "summary.parquet").exists()
     assert len(run(data, out).realizations) == 20  # (a finished run's folder: replaced)
+
+
+@pytest.mark.parametrize("name", ["../../escaped", "/tmp/absolute-escape", "a/../../b", ".."])
+def test_names_never_lead_outside_the_folder(tmp_path, name):
+    """A scenario ``name`` with ``..`` or an absolute path: the default results folder and the
+    report's folder are one path component inside the folders named (``results/``, ``--out``)."""
+    from vines_stoch.ensemble import output_directory
+    from vines_stoch.reports import report
+    from vines_stoch.store import component
+
+    data = {**fragile(1), "name": name}
+    assert output_directory(study_from(data)).parent == Path("results")
+    assert "/" not in component(name) and component(name) not in ("", ".", "..")
+    run(data, tmp_path / "run")
+    out = tmp_path / "reports"
+    path = report([tmp_path / "run"], out)
+    assert path.parent.parent == out and path.parent.name == component(name)
+    assert sorted(p for p in tmp_path.rglob("*") if p.is_file() and tmp_path / "run" not in p.parents
+                  ) == sorted(p for p in out.rglob("*") if p.is_file())
+
+
+def test_a_nul_in_the_name_is_refused(tmp_path):
+    from vines_stoch.scenario import ScenarioError
+
+    with pytest.raises(ScenarioError, match="name = .*must hold no control characters"):
+        study_from({**fragile(1), "name": "bad\x00name"})
+
+
+def test_links_planted_in_the_report_folder_are_not_followed(tmp_path):
+    """A link planted where the report writes: its folder linked elsewhere is refused; a file
+    linked elsewhere is replaced by a file of the report's own, the link's target untouched."""
+    from vines_stoch.reports import report
+    from vines_stoch.store import OutsideFolder
+
+    run(fragile(1), tmp_path / "run")
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    out = tmp_path / "reports"
+    out.mkdir()
+    (out / "fragile").symlink_to(elsewhere, target_is_directory=True)
+    with pytest.raises(OutsideFolder, match="leads outside"):
+        report([tmp_path / "run"], out)
+    assert not any(elsewhere.iterdir())
+    (out / "fragile").unlink()
+    (out / "fragile").mkdir()
+    victim = elsewhere / "victim.md"
+    victim.write_text("keep me")
+    (out / "fragile" / "report.md").symlink_to(victim)
+    (out / "fragile" / "edm_vs_input_energy.png").symlink_to(elsewhere / "victim.png")
+    path = report([tmp_path / "run"], out)
+    assert victim.read_text() == "keep me" and not (elsewhere / "victim.png").exists()
+    assert not path.is_symlink() and path.read_text().startswith("# Report")

@@ -68,6 +68,9 @@ class Scenario(_Model):
 
     @model_validator(mode="after")
     def _consistency(self) -> Scenario:
+        if any(ord(c) < 32 or ord(c) == 127 for c in self.name):
+            raise FieldError("name", self.name, "must hold no control characters (NUL, tab, newline, ...): "
+                             "it names the default output folder and the report's")
         sim = self.simulation
         if sim.dt > sim.duration:
             raise FieldError("simulation.dt", sim.dt, f"must be <= simulation.duration ({sim.duration:g})")
