@@ -493,6 +493,12 @@ def main() -> None:
     """Console entry point.  Mistakes in the input end in ``error: ...`` and exit status 2; an
     unexpected exception (a bug) in one line and exit status 3, with its traceback only where
     the environment variable ``VINES_STOCH_TRACEBACK`` is set."""
+    from .environment import problems
+
+    for line in problems():  # (before numba reads them: a mistake there is the user's, not a bug)
+        typer.echo(f"error: {line}", err=True)
+    if problems():
+        sys.exit(2)
     try:
         app()
     except Exception as exc:  # the last line of defence: no traceback for users

@@ -13,6 +13,7 @@ finished first.
 
 from __future__ import annotations
 
+import json
 import math
 import os
 import signal
@@ -485,6 +486,14 @@ def _client(scheduler: str, announce: bool = False) -> Iterator[object]:
     from dask.distributed import Client
 
     by_file = "://" not in scheduler and Path(scheduler).is_file()
+    if by_file:
+        try:
+            address = json.loads(Path(scheduler).read_text(errors="replace")).get("address")
+        except (ValueError, AttributeError, OSError):
+            address = None
+        if not isinstance(address, str):
+            raise ValueError(f"--scheduler-file {scheduler}: not a dask scheduler file (the JSON with an "
+                             "'address' that dask scheduler --scheduler-file FILE writes)")
     try:
         client = (Client(scheduler_file=scheduler, timeout="30s") if by_file
                   else Client(scheduler, timeout="30s"))
@@ -574,9 +583,18 @@ def output_directory(study: Study, directory: str | Path | None = None) -> Path:
 
 
 def _check_arguments(out: object, workers: object, chunk: object, realizations: object, paths: object,
-                     checkpoint_seconds: object, backend: object) -> None:
+                     checkpoint_seconds: object, backend: object, shard: object = None,
+                     scheduler: object = None) -> None:
     """Refuse an argument of ``run`` of the wrong type (``TypeError``) or out of its range
     (``ValueError``), naming it, its value and what is allowed."""
+    if shard is not None and not (isinstance(shard, (tuple, list)) and len(shard) == 2
+                                  and all(isinstance(v, (int, np.integer)) and not isinstance(v, bool)
+                                          for v in shard)):
+        raise TypeError(f"shard = {shard!r}: give (i, n), two whole numbers with 0 <= i < n (the i-th of n "
+                        "shares of the chunks), or None")
+    if scheduler is not None and not isinstance(scheduler, (str, os.PathLike)):
+        raise TypeError(f"scheduler = {scheduler!r}: give a dask.distributed scheduler's address "
+                        "('tcp://host:8786') or the path of its scheduler file, or None")
     if out is not None and not isinstance(out, (str, os.PathLike)):
         raise TypeError(f"out = {out!r}: give a folder's path, or None to run in memory")
     check_whole("realizations", realizations, 1, MAX_REALIZATIONS)
@@ -631,7 +649,8 @@ def run(scenario: Study | Mapping[str, Any] | str | os.PathLike, out: str | Path
     run refuses parts, results or a checkpoint of another run.  Ctrl-C raises ``Interrupted``
     (a ``KeyboardInterrupt``) saying how many chunks are kept.
     """
-    _check_arguments(out, workers, chunk, realizations, paths, checkpoint_seconds, backend)
+    _check_arguments(out, workers, chunk, realizations, paths, checkpoint_seconds, backend, shard, scheduler)
+    scheduler = None if scheduler is None else os.fspath(scheduler)
     study = as_study(scenario)
     if backend == "cuda":
         from . import gpu

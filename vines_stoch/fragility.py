@@ -27,8 +27,7 @@ from scipy.special import log_ndtr, ndtr, ndtri
 
 from .metrics import exceedance, limit_names
 from .plotting import label, legend, pyplot, save
-from .results import read_results
-from .store import KEY, ForeignFiles, png_text, write_table
+from .store import KEY, ForeignFiles, check_folder, png_text, read_metadata, write_table
 
 #: Fisher-scoring iterations (a fit converges in well under 20; separated stripes never do).
 ITERATIONS = 60
@@ -237,12 +236,13 @@ def fit(table: pd.DataFrame, samples: int = 1000, seed: int = 0, keep: bool = Fa
     return result
 
 
-def fitted(results, limit: str, im: str, diverged: str = "exclude", samples: int = 1000,
+def fitted(realizations: pd.DataFrame, rare: pd.DataFrame | None, limit: str, im: str,
+           diverged: str = "exclude", samples: int = 1000,
            seed: int = 0) -> tuple[pd.DataFrame, pd.DataFrame, dict, tuple | None]:
-    """The fragility of ``limit`` against ``im`` fitted to a run's ``results`` (``Results``, in
-    memory or read from a folder): ``(rows, stripes, fit, replicates)``, the rows one per stripe
+    """The fragility of ``limit`` against ``im`` fitted to a run's realisations table (and its
+    rare-event estimates, ``rare``): ``(rows, stripes, fit, replicates)``, the rows one per stripe
     with the fit's columns and the fitted curve at the stripe (``fitted``)."""
-    table = stripes(results.realizations, limit, im, diverged, results.rare)
+    table = stripes(realizations, limit, im, diverged, rare)
     result = fit(table, samples, seed, keep=True)
     replicates = result.pop("replicates", None)
     policy = "counted as exceedances" if diverged == "exceed" else "excluded"
@@ -261,13 +261,16 @@ def fragility(directory: str | Path, limit: str, im: str, diverged: str = "exclu
     rows of an earlier fit of the same limit and intensity) and ``fragility_<limit>.png`` (where
     matplotlib is installed); returns the rows written."""
     directory = Path(directory)
-    results = read_results(directory)  # (and fragility.parquet, if there, is this run's)
-    meta = results.metadata
+    check_folder(directory)  # (one run's tables, and fragility.parquet, if there, this run's)
+    meta = read_metadata(directory / "summary.parquet")
+    rare = directory / "rare.parquet"
+    realizations, rare = (pd.read_parquet(directory / "realizations.parquet"),
+                          pd.read_parquet(rare) if rare.is_file() else None)
     figure = directory / f"fragility_{limit}.png"
     if plot and figure.exists() and KEY not in png_text(figure):
         raise ForeignFiles(f"{figure}: not a plot vines-stoch wrote; move it out of the folder to fit "
                            f"{limit}")
-    rows, table, result, replicates = fitted(results, limit, im, diverged, samples, seed)
+    rows, table, result, replicates = fitted(realizations, rare, limit, im, diverged, samples, seed)
     policy = rows["diverged"].iloc[0]
     path = directory / "fragility.parquet"
     if path.is_file():

@@ -216,7 +216,11 @@ def _percent(column: str) -> str:
 
 
 def _point(run: Run, point: int | None) -> int:
-    """The sweep point of the per-point plots: ``point``, or the middle one."""
+    """The sweep point of the per-point plots: ``point``, or the middle one (``ValueError`` for a
+    point the run does not have)."""
+    if point is not None and not 0 <= point < len(run.summary):
+        raise ValueError(f"--point {point}: {run.directory} has {len(run.summary)} sweep point(s), 0 to "
+                         f"{len(run.summary) - 1}")
     return point if point is not None else len(run.summary) // 2
 
 
@@ -550,6 +554,8 @@ def report(directories: list[str | Path], out: str | Path = "reports", labels: l
     directories (``name``: the first run's scenario name); returns the Markdown path."""
     labels = labels or [None] * len(directories)
     runs = [Run.read(d, label) for d, label in zip(directories, labels)]
+    for run in runs:
+        _point(run, point)  # (a point every run has, checked before anything is written)
     # (the name as one path component, and the folder inside ``out`` once links are followed)
     folder = Path(out) / component(str(runs[0].scenario.get("name", runs[0].directory.name)))
     folder.mkdir(parents=True, exist_ok=True)

@@ -32,6 +32,9 @@ def as_study(scenario: Study | Mapping[str, Any] | str | os.PathLike) -> Study:
     if isinstance(scenario, Mapping):
         import tomlkit
 
+        from .scenario.study import _check_depth
+
+        _check_depth(dict(scenario), "<dict>")  # (before tomlkit walks it by recursion)
         try:
             source = tomlkit.dumps(dict(scenario))
         except (TypeError, ValueError) as exc:  # (a value TOML cannot hold)
@@ -143,7 +146,7 @@ class Results:
         at the stripe (``fitted``)."""
         from .fragility import fitted
 
-        return fitted(self, limit, im, diverged, samples, seed)[0]
+        return fitted(self.realizations, self.rare, limit, im, diverged, samples, seed)[0]
 
     def _headline(self) -> tuple[str, pd.DataFrame]:
         """One line of what ran and where, and the summary's headline columns (``REPR_ROWS`` rows

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import os
 
+from ..environment import VECTOR_SWITCH, vector_problem
+
 #: Options of every compiled loop: cached on disk, GIL released, IEEE division (no Python
 #: ZeroDivisionError checks in hot loops), and fused multiply-adds (``contract``: one rounding
 #: instead of two, half the latency on a step's critical path; no other fast-math licence, so
@@ -20,10 +22,6 @@ INLINE = dict(KERNEL, inline="always")
 #: fused multiply-adds): ``pcg``'s ziggurat, ``order``'s quantiles.
 ROUNDED = dict(cache=True, nogil=True, error_model="numpy")
 
-#: The environment variable that sets the vector width the lane loops ask for (``VECTOR_BITS``).
-VECTOR_SWITCH = "VINES_STOCH_VECTOR_BITS"
-#: The widths it may take (bits).
-VECTOR_CHOICES = (128, 256, 512)
 
 
 def vector_bits() -> int:
@@ -35,11 +33,10 @@ def vector_bits() -> int:
     Rapids host).  A host without AVX-512 keeps its widest vectors whatever is asked.  The width
     changes no number: the loops allow no reassociation, so lane ``l`` computes the same bits in
     any width.  It is part of the cache key (``jit.cache.digest``)."""
-    text = os.environ.get(VECTOR_SWITCH, "512").strip()
-    if text not in {str(bits) for bits in VECTOR_CHOICES}:
-        raise ValueError(f"environment variable {VECTOR_SWITCH}={text!r}: give the vector width in bits, "
-                         f"one of {', '.join(map(str, VECTOR_CHOICES))}")
-    return int(text)
+    why = vector_problem()
+    if why:
+        raise ValueError(why)
+    return int(os.environ.get(VECTOR_SWITCH, "512").strip())
 
 
 #: The vector width the lane loops ask for (``vector_bits``, read once at import).

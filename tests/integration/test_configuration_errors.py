@@ -1,0 +1,71 @@
+"""Configuration and argument mistakes are clear errors naming the setting and what it takes
+(exit 2 from the command line), never "internal error" (exit 3, kept for real bugs)."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+
+import pytest
+
+import vines_stoch
+from tests.helpers import ROOT, cli
+
+SCENARIO = ROOT / "scenarios" / "rare_oscillator.toml"
+SMALL = {"name": "small", "primary": {"mass": 1.0, "stiffness": 1.0, "damping": 0.1},
+         "loads": [{"type": "white-noise", "intensity": 0.1}], "simulation": {"duration": 1.0, "dt": 0.01},
+         "ensemble": {"realizations": 2}}
+
+
+def command(*args: str, **env: str) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "vines_stoch.cli", *args], capture_output=True, text=True,
+                          timeout=300, env={**os.environ, **env})
+
+
+@pytest.mark.parametrize("variable, value, words", [
+    ("VINES_STOCH_VECTOR_BITS", "333", "give the vector width in bits, one of 128, 256, 512"),
+    ("NUMBA_NUM_THREADS", "0", "numba's threads, a whole number >= 1"),
+])
+def test_a_bad_environment_variable_is_named(tmp_path, variable, value, words):
+    done = command("run", str(SCENARIO), "--out", str(tmp_path / "o"), "--quiet", **{variable: value})
+    assert done.returncode == 2 and f"environment variable {variable}='{value}': {words}" in done.stderr
+    assert "internal error" not in done.stderr
+    python = subprocess.run([sys.executable, "-c", "import vines_stoch; vines_stoch.run"],
+                            capture_output=True, text=True, timeout=300, env={**os.environ, variable: value})
+    assert python.returncode == 1 and f"ValueError: environment variable {variable}" in python.stderr
+
+
+def test_a_garbage_scheduler_file_is_named(tmp_path):
+    garbage = tmp_path / "scheduler.json"
+    garbage.write_text("not json at all\n")
+    code, err = cli("run", SCENARIO, "--scheduler-file", garbage, "--out", tmp_path / "o", "--quiet")
+    assert code == 2 and "not a dask scheduler file" in err and "internal error" not in err
+
+
+def test_a_report_point_out_of_range_is_named(tmp_path):
+    vines_stoch.run(SMALL, tmp_path / "run")
+    code, err = cli("report", tmp_path / "run", "--point", "999", "--out", tmp_path / "r")
+    assert code == 2 and "--point 999: " in err and "1 sweep point(s), 0 to 0" in err
+    assert not (tmp_path / "r").exists()
+
+
+@pytest.mark.parametrize("arguments, kind, words", [
+    ({"shard": "0/2"}, TypeError, "shard = '0/2': give (i, n)"),
+    ({"shard": (0,)}, TypeError, "shard = (0,): give (i, n)"),
+    ({"scheduler": 123}, TypeError, "scheduler = 123: give a dask.distributed scheduler's address"),
+    ({"overwrite": "yes"}, TypeError, "overwrite = 'yes': must be True or False"),
+])
+def test_api_arguments_are_named(tmp_path, arguments, kind, words):
+    with pytest.raises(kind, match=words.replace("(", r"\(").replace(")", r"\)")):
+        vines_stoch.run(SMALL, tmp_path / "o", **arguments)
+
+
+def test_a_dict_nested_too_deep_is_a_scenario_error():
+    deep: dict = {}
+    node = deep
+    for _ in range(5000):
+        node["x"] = {}
+        node = node["x"]
+    with pytest.raises(vines_stoch.ScenarioError, match="nests more than 12 levels"):
+        vines_stoch.run({**SMALL, "extra": deep})

@@ -1,0 +1,40 @@
+"""The environment variables the package and numba read, checked before either uses them: a
+mistake there is a clear error naming the variable and what it takes, not an internal error.
+(Nothing here imports numba: numba reads ``NUMBA_NUM_THREADS`` when it is first imported.)"""
+
+from __future__ import annotations
+
+import os
+
+#: The environment variable that sets the vector width the lane loops ask for
+#: (``jit.flags.VECTOR_BITS``), and the widths it may take (bits).
+VECTOR_SWITCH = "VINES_STOCH_VECTOR_BITS"
+VECTOR_CHOICES = (128, 256, 512)
+
+
+def vector_problem() -> str | None:
+    """Why ``VINES_STOCH_VECTOR_BITS`` cannot be used (None: unset, or a width it takes)."""
+    bits = os.environ.get(VECTOR_SWITCH)
+    if bits is None or bits.strip() in {str(b) for b in VECTOR_CHOICES}:
+        return None
+    return (f"environment variable {VECTOR_SWITCH}={bits!r}: give the vector width in bits, one of "
+            f"{', '.join(map(str, VECTOR_CHOICES))}")
+
+
+def problems() -> list[str]:
+    """One line for each environment variable set to what it cannot take:
+    ``VINES_STOCH_VECTOR_BITS`` (``vector_problem``) and ``NUMBA_NUM_THREADS`` (numba's threads,
+    a whole number >= 1)."""
+    found = [why] if (why := vector_problem()) else []
+    threads = os.environ.get("NUMBA_NUM_THREADS")
+    if threads is not None and not (threads.strip().isdigit() and int(threads) >= 1):
+        found.append(f"environment variable NUMBA_NUM_THREADS={threads!r}: numba's threads, a whole number "
+                     ">= 1 (unset it to use every core)")
+    return found
+
+
+def check() -> None:
+    """``ValueError`` with every line of ``problems`` (none: nothing)."""
+    found = problems()
+    if found:
+        raise ValueError("; ".join(found))
