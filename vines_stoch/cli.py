@@ -154,7 +154,10 @@ def run(
     import pandas as pd
 
     with pd.option_context("display.width", 200, "display.max_columns", 24, "display.precision", 4):
-        typer.echo(summary[headline(study, summary)].to_string(index=False))
+        shown = headline(study, summary)
+        typer.echo(summary[shown].to_string(index=False))
+        for line in undefined(summary, shown):
+            typer.echo(f"note: {line}", err=True)
         from .rvt.table import parted
 
         for line in parted(summary):
@@ -167,6 +170,19 @@ def run(
         if result.sensitivity is not None:
             typer.echo(f"\n{directory}/sensitivity.parquet: Sobol indices of {study.base.sensitivity.metric}")
             typer.echo(result.sensitivity.to_string(index=False))
+
+
+def undefined(summary: pd.DataFrame, columns: list[str]) -> list[str]:
+    """Why a statistic of ``columns`` is NaN: the summary's ``notes`` of each point where one is
+    (``metrics.undefined_notes``: one realisation, no energy in), one line a point."""
+    if "notes" not in summary:
+        return []
+    numeric = [c for c in columns if summary[c].dtype.kind == "f"]
+    lines = []
+    for i in range(len(summary)):
+        if summary["notes"].iloc[i] and summary[numeric].iloc[i].isna().any():
+            lines.append(f"point {int(summary['point'].iloc[i])}: {summary['notes'].iloc[i]}")
+    return lines
 
 
 def headline(study: Study, summary: pd.DataFrame) -> list[str]:

@@ -566,8 +566,12 @@ def report(directories: list[str | Path], out: str | Path = "reports", labels: l
         s = run.summary
         table = s[["point", *run.swept, "n_ok", "n_failed", "input_energy_mean", "edm_mean", "edm_ci95_lo",
                    "edm_ci95_hi", "e1_max_mean", "energy_integral_mean", "impacts_mean"]]
+        notes = [f"- point {int(p)}: {note}" for p, note in zip(s["point"], s.get("notes", [""] * len(s)))
+                 if note]
+        why = ["Why some statistics are undefined (NaN) or in doubt:", "", *notes, ""] if notes else []
         parts += [f"## {run.label}", "", f"Directory `{run.directory}`, seed {run.seed}, "
-                  f"{int(s['n_ok'].sum() + s['n_failed'].sum())} realisations.", "", markdown(table), ""]
+                  f"{int(s['n_ok'].sum() + s['n_failed'].sum())} realisations.", "", markdown(table), "",
+                  *why]
     parts += [f"## Where mean EDM >= {EDM_LEVEL}", "",
               markdown(pd.DataFrame([effective_range(r) for r in runs])), ""]
     for run in runs:

@@ -69,3 +69,22 @@ def test_a_dict_nested_too_deep_is_a_scenario_error():
         node = node["x"]
     with pytest.raises(vines_stoch.ScenarioError, match="nests more than 12 levels"):
         vines_stoch.run({**SMALL, "extra": deep})
+
+
+def test_nan_statistics_come_with_their_reason(tmp_path):
+    """A sweep point whose loads put no energy in (an impulse of 0) and one realisation: its NaN
+    statistics are explained on the console and in the report, not only in ``notes``."""
+    from tests.helpers import toml_text
+    from vines_stoch.reports import report
+
+    data = {"name": "idle", "primary": {"mass": 1.0, "stiffness": 1.0, "damping": 0.1},
+            "loads": [{"type": "impulse", "velocity": 0.0}], "simulation": {"duration": 5.0, "dt": 0.01},
+            "sweep": {"loads.0.velocity": [0.0, 1.0]}}
+    path = tmp_path / "idle.toml"
+    path.write_text(toml_text(data))
+    code, err = cli("run", path, "--out", tmp_path / "run")
+    assert code == 0
+    assert "note: point 0: one realisation ended ok: std, sem and ci95 undefined" in err
+    assert "1 realisation(s) without input energy" in err
+    text = report([tmp_path / "run"], tmp_path / "r").read_text()
+    assert "Why some statistics are undefined (NaN)" in text and "- point 0: one realisation ended ok" in text
