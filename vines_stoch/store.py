@@ -129,6 +129,10 @@ def fresh(path: Path) -> Path:
     return path
 
 
+class DamagedFile(ValueError):
+    """A file of the program's in an output folder cannot be read: named as damaged."""
+
+
 class UnfinishedRun(ValueError):
     """A new run would discard the kept work of an unfinished (interrupted or sharded) run."""
 
@@ -266,6 +270,15 @@ def read_metadata(path: str | Path) -> dict[str, str]:
     """The vines_stoch key-value metadata of a result file."""
     raw = pq.read_schema(path).metadata or {}
     return {k.decode(): v.decode() for k, v in raw.items() if k.startswith(b"vines_stoch.")}
+
+
+def _starts_as_parquet(path: Path) -> bool:
+    """True when ``path`` begins with Parquet's magic bytes (a Parquet file, readable or not)."""
+    try:
+        with path.open("rb") as stream:
+            return stream.read(4) == b"PAR1"
+    except OSError:
+        return False
 
 
 def _parquet_metadata(path: Path) -> dict[str, str] | None:
@@ -464,7 +477,12 @@ def prepare_folder(directory: Path, key: str, chunks: int, source: str,
                                f"its parts are those of {manifest.get('source', 'another run')}")
         mine, other = set(), []
         for path in parts.glob("point*.parquet"):
-            found = (_parquet_metadata(path) or {}).get(KEY)
+            meta = _parquet_metadata(path)
+            if meta is None and _PART.fullmatch(path.name) and _starts_as_parquet(path):
+                raise DamagedFile(f"{path}: damaged (a Parquet file that cannot be read: cut short by an "
+                                  "interrupted copy or a full disk); delete it and run again with --resume "
+                                  "(its chunk runs again)")
+            found = (meta or {}).get(KEY)
             if found == key:
                 mine.add(path)
             elif found is not None or _PART.fullmatch(path.name):

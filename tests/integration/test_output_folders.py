@@ -373,3 +373,20 @@ def test_links_planted_in_the_report_folder_are_not_followed(tmp_path):
     path = report([tmp_path / "run"], out)
     assert victim.read_text() == "keep me" and not (elsewhere / "victim.png").exists()
     assert not path.is_symlink() and path.read_text().startswith("# Report")
+
+
+def test_a_truncated_part_is_called_damaged(tmp_path, monkeypatch):
+    """A part of an interrupted run cut short (a Parquet file that cannot be read): ``--resume``
+    names it as damaged and says what to do, instead of blaming another run."""
+    from tests.helpers import run_interrupted
+    from vines_stoch.store import DamagedFile
+
+    data = noisy(0.05, realizations=20)
+    out = tmp_path / "out"
+    run_interrupted(monkeypatch, data, out, after=5)
+    part = parts_of(out)[0]
+    part.write_bytes(part.read_bytes()[:len(part.read_bytes()) // 2])
+    with pytest.raises(DamagedFile, match=rf"{part.name}: damaged .* delete it and run again with --resume"):
+        run(data, out, resume=True)
+    part.unlink()
+    assert len(run(data, out, resume=True).realizations) == 20
