@@ -660,6 +660,8 @@ def run(scenario: Study | Mapping[str, Any] | str | os.PathLike, out: str | Path
         raise ValueError(f"{'resume' if resume else 'shard'}: needs a folder (out) to keep the chunks in")
     if paths and (resume or shard is not None):
         raise ValueError("paths: not with resume or shard (the chunks kept in the folder keep no paths)")
+    if paths:
+        _check_paths_memory(study, realizations)
     if shard is not None:
         if not 0 <= shard[0] < shard[1]:
             raise ValueError(f"--shard {shard[0]}/{shard[1]}: give I/N with 0 <= I < N "
@@ -695,6 +697,21 @@ def _run_into(study: Study, out: str | Path | None, options: _Options) -> Result
     shard = options.shard
     with lock_folder(directory, None if shard is None else f"shard-{shard[0]}-of-{shard[1]}"):
         return _run(study, directory, options)
+
+
+def _check_paths_memory(study: Study, realizations: int | None) -> None:
+    """Refuse ``paths=True`` where every realisation's time histories (sweep points x realisations x
+    signals x history points, float64) cannot fit the machine's memory, with the figure."""
+    from .environment import memory_problem
+
+    spec = study.base.simulation.history or History()
+    count = (realizations or study.base.ensemble.realizations) if study.base.is_random else 1
+    need = 8.0 * len(study.points) * count * spec.points * len(spec.signals)
+    why = memory_problem(f"paths=True ({len(study.points)} sweep point(s) x {count} realisation(s) x "
+                         f"{len(spec.signals)} signal(s) x {spec.points} points)", need)
+    if why:
+        raise ValueError(f"paths: {why}; ask for fewer realisations or history points ([simulation.history] "
+                         "points), or keep chosen realisations' paths ([output] paths)")
 
 
 @dataclass(frozen=True)

@@ -38,3 +38,24 @@ def check() -> None:
     found = problems()
     if found:
         raise ValueError("; ".join(found))
+
+
+def physical_memory() -> int:
+    """The machine's memory in bytes (0 where the system does not say)."""
+    try:
+        return int(os.sysconf("SC_PHYS_PAGES")) * int(os.sysconf("SC_PAGE_SIZE"))
+    except (ValueError, OSError, AttributeError):
+        return 0
+
+
+#: The share of the machine's memory a study may plan to keep (paths, bootstrap arrays).
+MEMORY_SHARE = 0.8
+
+
+def memory_problem(what: str, need: float) -> str | None:
+    """Why ``need`` bytes of ``what`` cannot fit (None: they fit, or the memory is unknown)."""
+    have = physical_memory()
+    if have and need > MEMORY_SHARE * have:
+        return (f"{what} would take about {need / 2**30:.3g} GiB, past {100 * MEMORY_SHARE:.0f} % of this "
+                f"machine's {have / 2**30:.3g} GiB")
+    return None

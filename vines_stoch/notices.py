@@ -24,6 +24,10 @@ class IdenticalRealizationsWarning(VinesStochWarning):
     """Several realisations asked of a scene without noise or uncertain parameters."""
 
 
+class LongRunWarning(VinesStochWarning):
+    """A run of more path-steps than ``scenario.study.LONG_RUN``: its cost said before it starts."""
+
+
 class EnergyBalanceWarning(VinesStochWarning):
     """Realisations ended ok whose energy balance does not close (``|energy_residual|`` above
     ``simulation.residual_tolerance``)."""

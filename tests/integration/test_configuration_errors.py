@@ -88,3 +88,26 @@ def test_nan_statistics_come_with_their_reason(tmp_path):
     assert "1 realisation(s) without input energy" in err
     text = report([tmp_path / "run"], tmp_path / "r").read_text()
     assert "Why some statistics are undefined (NaN)" in text and "- point 0: one realisation ended ok" in text
+
+
+def test_work_that_cannot_fit_is_refused_before_it_starts():
+    """``paths=True`` for 10^7 realisations (every one's histories: about 150 GiB) and a Sobol
+    bootstrap of 2^20 samples x 100,000 resamples are refused before anything runs, with the
+    figure and this machine's memory; a run of 10^12 path-steps says its cost first."""
+    from vines_stoch.environment import physical_memory
+
+    if physical_memory() == 0:
+        pytest.skip("the system does not say its memory")
+    with pytest.raises(ValueError, match=r"paths: paths=True .* would take about .* GiB, past 80 % of"):
+        vines_stoch.run(SMALL, realizations=10**7, paths=True)
+    data = {**SMALL, "uncertain": {"primary.damping": {"distribution": "uniform", "low": 0.05, "high": 0.2}},
+            "sensitivity": {"metric": "x1_max", "samples": 1 << 20, "bootstrap": 100_000}}
+    with pytest.raises(vines_stoch.ScenarioError, match=r"sensitivity.bootstrap = 100000: the sensitivity "
+                                                        r"bootstrap .* GiB, past 80 %"):
+        vines_stoch.run(data)
+    from tests.helpers import study_from
+
+    long = {**SMALL, "simulation": {"duration": 1e4, "dt": 0.01}, "ensemble": {"realizations": 10**6}}
+    warned = study_from(long).warnings  # (validated, not run)
+    assert any(w.category is vines_stoch.LongRunWarning and "the run takes 1e+12 path-steps" in w
+               for w in warned)

@@ -19,6 +19,8 @@ from pydantic import BaseModel
 from pydantic.fields import FieldInfo
 
 from .. import schemes
+from ..environment import memory_problem
+from ..notices import LongRunWarning, Notice
 from ..records import RecordError, read_record
 from ..textfile import TextFileError, read_text
 from . import accuracy
@@ -38,6 +40,8 @@ from .loads import _RecordLoad
 from .model import Scenario
 from .sweeps import _grid, _product, _zipped, get_path, set_path
 
+#: Path-steps beyond which a run's cost is said before it starts (``LongRunWarning``).
+LONG_RUN = 1e11
 #: The largest scenario file read (bytes).
 SCENARIO_BYTES = 4 * 2**20
 
@@ -315,6 +319,12 @@ class Study:
         mistakes.raise_any()
         self._check_work(source)
         self.warnings = accuracy.warnings(source, self.points, self.grid, self.base.ensemble.realizations)
+        if self.base.is_random and self.cost > LONG_RUN:
+            self.warnings.append(Notice(format_error(
+                source, "ensemble.realizations", self.base.ensemble.realizations,
+                f"the run takes {self.cost:.3g} path-steps (sweep points x realisations x duration / dt): "
+                f"hours of CPU at the 1e8 path-steps a second of a light scene on one core (make bench "
+                "measures this machine's)"), LongRunWarning))
 
     def _integer(self, key: str) -> bool:
         """True when the (numeric) field at dotted ``key`` holds integers."""
@@ -325,9 +335,19 @@ class Study:
         return isinstance(node, int)
 
     def _check_work(self, source: str) -> None:
-        """Refuse a run past ``ensemble.max_path_steps`` (sweep points x realisations x steps)."""
+        """Refuse a run past ``ensemble.max_path_steps`` (sweep points x realisations x steps) and
+        a sensitivity study whose bootstrap cannot fit the machine's memory; say the cost of a
+        long one (``LONG_RUN``: a ``LongRunWarning`` among the study's warnings)."""
         ens = self.base.ensemble
+        spec = self.base.sensitivity
+        if spec is not None:  # (SALib's bootstrap keeps about six arrays of samples x bootstrap floats)
+            why = memory_problem("the sensitivity bootstrap (samples x bootstrap)",
+                                 48.0 * spec.samples * spec.bootstrap)
+            if why:
+                raise ScenarioError(format_error(source, "sensitivity.bootstrap", spec.bootstrap,
+                                                 f"{why}: lower sensitivity.samples or bootstrap"))
         steps = sum(p.simulation.duration / p.simulation.dt for p in self.points) * ens.realizations
+        self.cost = steps
         if steps > ens.max_path_steps:
             raise ScenarioError(format_error(
                 source, "ensemble.realizations", ens.realizations,
