@@ -111,3 +111,23 @@ def test_work_that_cannot_fit_is_refused_before_it_starts():
     warned = study_from(long).warnings  # (validated, not run)
     assert any(w.category is vines_stoch.LongRunWarning and "the run takes 1e+12 path-steps" in w
                for w in warned)
+
+
+def test_a_failed_scheme_is_diverged_not_ok():
+    """A cubic NES with dt = 0.5 (stable for the linear structure, far too coarse for the NES):
+    a realisation whose energy balance misses more than half the input energy is ``diverged``, so
+    none ended ok carries one (the summary averages only what the scheme computed)."""
+    from vines_stoch.metrics import FAILED_BALANCE
+
+    data = {"name": "unstable", "primary": {"mass": 1.0, "stiffness": 1.0, "damping": 0.05},
+            "absorbers": [{"type": "cubic", "mass": 0.05, "stiffness": 1.0, "damping": 0.01}],
+            "loads": [{"type": "white-noise", "intensity": 0.1}],
+            "simulation": {"duration": 200.0, "dt": 0.5}, "ensemble": {"realizations": 20, "seed": 1}}
+    with pytest.warns(vines_stoch.VinesStochWarning):
+        results = vines_stoch.run(data)
+    r = results.realizations
+    ok = r[r["status"] == "ok"]
+    assert len(ok) > 0 and (ok["energy_residual"].abs() <= FAILED_BALANCE).all()
+    assert (r.loc[r["energy_residual"].abs() > FAILED_BALANCE, "status"] == "diverged").all()
+    assert (r["energy_residual"].abs() > FAILED_BALANCE).any()  # (the case the rule is for)
+    assert results.summary["n_ok"].iloc[0] == len(ok)

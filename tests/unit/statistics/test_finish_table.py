@@ -24,6 +24,7 @@ from vines_stoch.ensemble import draw_parameters, run_chunk
 from vines_stoch.kernels import sample_buffer, simulate
 from vines_stoch.kernels.chunk import realization_streams
 from vines_stoch.metrics import (
+    FAILED_BALANCE,
     MAX_PERIOD,
     PERIODIC_TOLERANCE,
     finish,
@@ -85,7 +86,8 @@ def reference_row(raw: np.ndarray, scene, samples: np.ndarray | None = None) -> 
     passages = passage_slots(nf)
     for limit, name in enumerate(scene.limit_names):
         row[f"first_passage_{name}"] = g(passages + limit)
-    row["status"] = "diverged" if g(_S["status"]) == STATUS_DIVERGED or not finite else "ok"
+    failed = abs(residual) > FAILED_BALANCE  # (a balance off by more than half the input: NaN is not)
+    row["status"] = "diverged" if g(_S["status"]) == STATUS_DIVERGED or not finite or failed else "ok"
     row["regime"] = (regime(samples, 2.0 * np.pi / scene.period)
                      if samples is not None and samples.size and row["status"] == "ok" else None)
     return row
@@ -237,7 +239,9 @@ def test_periodic_rows_get_their_regime_and_edge_values_their_status():
         {"input_energy": 0.0},                               # edm, residual NaN; still ok
         {"input_energy": -2.0},
         {"input_energy": math.nan},                          # diverged
-        {"final_energy": math.inf},                          # only the residual: ok
+        {"final_energy": math.inf},                          # an infinite residual: the scheme failed
+        {"final_energy": raw[_S["final_energy"]] + 0.25 * raw[_S["input_energy"]]},  # residual -0.25: ok
+        {"final_energy": raw[_S["final_energy"]] + 0.75 * raw[_S["input_energy"]]},  # -0.75: diverged
         {"absorber_dissipation": math.nan},                  # edm NaN, but a metric NaN: diverged
         {"impacts": 3.7, "impacts_left": -2.5},              # truncated as int()
         {len(SLOTS) + ACC_MAX_K * n_floors: math.inf},       # a floor metric: diverged
