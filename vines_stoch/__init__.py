@@ -31,6 +31,7 @@ __version__ = _version()
 
 from .notices import (  # noqa: E402
     CoarseStepWarning,
+    DivergedWarning,
     EnergyBalanceWarning,
     IdenticalRealizationsWarning,
     LongRunWarning,
@@ -42,9 +43,9 @@ from .scenario import ScenarioError, load_scenario, parse_scenario  # noqa: E402
 _LAZY = {"run": "ensemble", "solve": "ensemble", "read_results": "results", "Results": "results",
          "Solution": "results", "estimate": "rvt"}
 
-__all__ = ["CoarseStepWarning", "EnergyBalanceWarning", "IdenticalRealizationsWarning", "LongRunWarning",
-           "Results", "ScenarioError", "Solution", "VinesStochWarning", "__version__", "estimate",
-           "load_scenario", "parse_scenario", "read_results", "run", "solve"]
+__all__ = ["CoarseStepWarning", "DivergedWarning", "EnergyBalanceWarning", "IdenticalRealizationsWarning",
+           "LongRunWarning", "Results", "ScenarioError", "Solution", "VinesStochWarning", "__version__",
+           "estimate", "load_scenario", "parse_scenario", "read_results", "run", "solve"]
 
 
 def __getattr__(name: str) -> Any:

@@ -8,7 +8,7 @@ from collections.abc import Sequence
 import numpy as np
 import pandas as pd
 
-from .notices import EnergyBalanceWarning, Notice
+from .notices import DivergedWarning, EnergyBalanceWarning, Notice
 from .outputs import (
     ACC_MAX_K,
     DRIFT_MAX_K,
@@ -281,14 +281,21 @@ FAILED_BALANCE = 0.5
 
 
 def residual_warnings(realizations: pd.DataFrame, source: str, tolerance: float) -> list[Notice]:
-    """One line per sweep point with realisations whose energy balance does not close
-    (``residual_notes``, the same words as the summary's ``notes``), from the file ``source``."""
+    """One line per sweep point with realisations that diverged, and one per sweep point with
+    realisations ended ok whose energy balance does not close (``residual_notes``, the same words
+    as the summary's ``notes``), from the file ``source``."""
     lines = []
     points = realizations.groupby("point", sort=True)
     for point, group in points:
+        where = f"sweep point {point}: " if len(points) > 1 else ""
+        failed = int((group["status"] != "ok").sum())
+        if failed:
+            why = ("status: a path that grew without bound, a metric not finite, or an energy balance off by "
+                   "more than half the input")
+            lines.append(Notice(f"{source}: {where}{failed} of {len(group)} realisation(s) diverged ({why}); "
+                                "a smaller simulation.dt makes them run", DivergedWarning))
         note = residual_notes(group[group["status"] == "ok"], tolerance)
         if note:
-            where = f"sweep point {point}: " if len(points) > 1 else ""
             lines.append(Notice(f"{source}: {where}{note} (simulation.residual_tolerance = {tolerance:g})",
                                 EnergyBalanceWarning))
     return lines

@@ -28,6 +28,11 @@ class LongRunWarning(VinesStochWarning):
     """A run of more path-steps than ``scenario.study.LONG_RUN``: its cost said before it starts."""
 
 
+class DivergedWarning(VinesStochWarning):
+    """Realisations that diverged (``status``): left out of the statistics, counted in
+    ``n_failed``."""
+
+
 class EnergyBalanceWarning(VinesStochWarning):
     """Realisations ended ok whose energy balance does not close (``|energy_residual|`` above
     ``simulation.residual_tolerance``)."""
