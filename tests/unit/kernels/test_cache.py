@@ -22,8 +22,9 @@ from vines_stoch.kernels import _STARTED, kernel_for, simulate
 SCRIPT = r'''
 import numpy as np
 from vines_stoch.kernels.common import stored_energy
+from vines_stoch.physics.absorbers import ROW
 x, v = np.array([0.1, 0.3]), np.array([0.0, 0.0])
-rows = np.zeros((1, 10)); rows[0, 0] = 2.0
+rows = np.zeros((1, ROW)); rows[0, 0] = 2.0  # (every column of a row: the loops read them all)
 print(repr(stored_energy(x, v, np.array([1.0, 0.1]), 1, np.array([1.0]), np.zeros(1, np.int64),
                          np.zeros(1, np.int64), rows)))
 '''
