@@ -139,12 +139,9 @@ def propagate(model: Model, t_end: float, steps: int) -> Path:
     m = np.empty((steps + 1, model.size))
     p = np.empty((steps + 1, model.size, model.size))
     m[0], p[0] = model.m0 - steady0, model.p0
-    phi, forced, qs = _step_matrices(model, h)
+    cache: dict = {}
     for i in range(steps):
-        m[i + 1] = phi @ m[i] + forced
-        q = sum((_scale(key, t[i] + 0.5 * h) ** 2 * cov for key, cov in qs), np.zeros_like(phi))
-        nxt = phi @ p[i] @ phi.T + q
-        p[i + 1] = 0.5 * (nxt + nxt.T)
+        m[i + 1], p[i + 1] = _exact_step(model, m[i], p[i], t[i], h, cache)
     for w, x in amplitudes:
         m += np.real(np.exp(1j * w * t)[:, None] * x[None, :])
     return Path(t, m, p, [model])

@@ -19,6 +19,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from ..physics.absorbers import DAMPING, HERTZ, IMPACT
+from ..physics.filters import stationary_covariance
 from ..physics.loads import FLOOR, GROUND, HARMONIC, STATIONARY
 
 
@@ -166,8 +167,6 @@ def bare(scene, scenario_filters: list) -> Model:
         else:
             a_mat[nb + f.floor, s] += inv_m[f.floor] * f.c
         if f.stationary:
-            from ..physics.filters import stationary_covariance
-
             p0[s, s] = stationary_covariance(f.a, f.b)
         start += f.a.shape[0]
     feed = np.zeros(nb)
