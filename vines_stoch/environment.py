@@ -23,9 +23,13 @@ def vector_problem() -> str | None:
 
 def problems() -> list[str]:
     """One line for each environment variable set to what it cannot take:
-    ``VINES_STOCH_VECTOR_BITS`` (``vector_problem``) and ``NUMBA_NUM_THREADS`` (numba's threads,
-    a whole number >= 1)."""
+    ``VINES_STOCH_VECTOR_BITS`` (``vector_problem``), ``VINES_STOCH_MEMORY_SHARE`` (a share
+    above 0) and ``NUMBA_NUM_THREADS`` (numba's threads, a whole number >= 1)."""
     found = [why] if (why := vector_problem()) else []
+    if memory_share() is None:
+        found.append(f"environment variable {MEMORY_SWITCH}={os.environ[MEMORY_SWITCH]!r}: the share of this "
+                     "machine's memory a study may plan to keep, a number > 0 (default "
+                     f"{MEMORY_SHARE:g}; above 1 counts on swap)")
     threads = os.environ.get("NUMBA_NUM_THREADS")
     if threads is not None and not (threads.strip().isdigit() and int(threads) >= 1):
         found.append(f"environment variable NUMBA_NUM_THREADS={threads!r}: numba's threads, a whole number "
@@ -48,14 +52,30 @@ def physical_memory() -> int:
         return 0
 
 
-#: The share of the machine's memory a study may plan to keep (paths, bootstrap arrays).
+#: The share of the machine's memory a study may plan to keep (paths, bootstrap arrays), unless
+#: the environment variable ``MEMORY_SWITCH`` sets another.
 MEMORY_SHARE = 0.8
+MEMORY_SWITCH = "VINES_STOCH_MEMORY_SHARE"
+
+
+def memory_share() -> float | None:
+    """The share of memory a study may plan to keep: ``VINES_STOCH_MEMORY_SHARE`` where set, else
+    ``MEMORY_SHARE`` (None: the variable holds no number > 0)."""
+    text = os.environ.get(MEMORY_SWITCH)
+    if text is None:
+        return MEMORY_SHARE
+    try:
+        share = float(text)
+    except ValueError:
+        return None
+    return share if 0 < share < float("inf") else None
 
 
 def memory_problem(what: str, need: float) -> str | None:
     """Why ``need`` bytes of ``what`` cannot fit (None: they fit, or the memory is unknown)."""
-    have = physical_memory()
-    if have and need > MEMORY_SHARE * have:
-        return (f"{what} would take about {need / 2**30:.3g} GiB, past {100 * MEMORY_SHARE:.0f} % of this "
-                f"machine's {have / 2**30:.3g} GiB")
+    have, share = physical_memory(), memory_share() or MEMORY_SHARE
+    if have and need > share * have:
+        return (f"{what} would take about {need / 2**30:.3g} GiB, past {100 * share:.0f} % of this "
+                f"machine's {have / 2**30:.3g} GiB (the environment variable {MEMORY_SWITCH} sets that "
+                "share)")
     return None

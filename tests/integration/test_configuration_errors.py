@@ -131,3 +131,37 @@ def test_a_failed_scheme_is_diverged_not_ok():
     assert (r.loc[r["energy_residual"].abs() > FAILED_BALANCE, "status"] == "diverged").all()
     assert (r["energy_residual"].abs() > FAILED_BALANCE).any()  # (the case the rule is for)
     assert results.summary["n_ok"].iloc[0] == len(ok)
+
+
+def test_the_memory_share_is_a_documented_setting(monkeypatch):
+    """``VINES_STOCH_MEMORY_SHARE`` raises (or lowers) the memory a study may plan to keep; a
+    value that is not a share > 0 is named."""
+    from vines_stoch import environment
+
+    need = 0.5 * environment.physical_memory()
+    assert environment.memory_problem("x", need) is None  # (half the machine: under 80 %)
+    monkeypatch.setenv("VINES_STOCH_MEMORY_SHARE", "0.25")
+    assert "past 25 % of this machine's" in environment.memory_problem("x", need)
+    monkeypatch.setenv("VINES_STOCH_MEMORY_SHARE", "4")
+    assert environment.memory_problem("x", 3 * environment.physical_memory()) is None
+    for bad in ("0", "-1", "lots", "inf"):
+        monkeypatch.setenv("VINES_STOCH_MEMORY_SHARE", bad)
+        assert environment.problems() == [
+            f"environment variable VINES_STOCH_MEMORY_SHARE='{bad}': the share of this machine's memory a "
+            "study may plan to keep, a number > 0 (default 0.8; above 1 counts on swap)"]
+
+
+def test_a_swept_value_out_of_range_is_named_at_its_sweep_key(tmp_path):
+    """A value a ``[sweep]`` entry gives (a logspace overflowing the magnitude limit) is named at
+    ``sweep.KEY``, where the file writes it; mistakes of two swept keys at different points are
+    both named."""
+    path = tmp_path / "sweep.toml"
+    path.write_text('name = "s"\n[primary]\nmass = 1.0\nstiffness = 1.0\ndamping = 0.01\n'
+                    '[[loads]]\ntype = "impulse"\nvelocity = 1.0\n[simulation]\nduration = 1.0\ndt = 0.01\n'
+                    '[sweep]\n"loads.0.velocity" = {logspace = [1.0, 1e300, 3]}\n'
+                    '"primary.damping" = [0.1, -1.0]\n')
+    code, err = cli("validate", path)
+    assert code == 2 and sorted(err.removeprefix("error: ").splitlines()) == [
+        f"{path}: sweep.loads.0.velocity = {{'logspace': [1.0, 1e+300, 3]}}: its value 1e+150: its "
+        "magnitude must be <= 1e+15 (use other units)",
+        f"{path}: sweep.primary.damping = [0.1, -1.0]: its value -1.0: must be >= 0"]

@@ -33,6 +33,7 @@ from .errors import (
     _constraints,
     _interval,
     format_error,
+    quote,
     validate,
 )
 from .fields import LARGEST, MAX_DEPTH
@@ -114,6 +115,21 @@ def _mistake(exc: ScenarioError, source: str) -> str:
 
 #: Corners of the other optimised parameters' ranges a bound is tried with, at most (ten others).
 MAX_CORNERS = 2**10
+
+
+def _at_sweep(exc: ScenarioError, source: str, where: str, values: dict[str, Any],
+              sweep: dict[str, Any]) -> list[tuple[str, str]]:
+    """The lines of a sweep point's mistake, each with the swept key it names ("" where none):
+    a swept value out of its field's range is said at ``sweep.KEY``, where the file gives it."""
+    lines = []
+    for line in str(exc).split("\n"):
+        key = next((k for k in values if line.startswith(f"{where}: {k} = ")), "")
+        if key:
+            rule = line[len(f"{where}: {key} = {quote(values[key])}: "):]
+            line = format_error(source, f"sweep.{key}", sweep[key],
+                                f"its value {quote(values[key])}: {rule}")
+        lines.append((key, line))
+    return lines
 
 
 def _stability(scenario: Scenario) -> str | None:
@@ -291,17 +307,22 @@ class Study:
         self.grid = _product(grids, zipped, source)
         self.points: list[Scenario] = []
         self._point_data: list[dict[str, Any]] = []
+        named: set[str] = set() if not mistakes else {""}  # (base mistakes: the points are not read)
         for values in self.grid:
             variant = copy.deepcopy(data)
             for key, value in values.items():
                 set_path(variant, key, value)
             self._point_data.append(variant)
             where = f"{source} (sweep point {values})" if values else source
-            if mistakes:  # (the first sweep point that fails is reported)
-                continue
-            with mistakes.kept():
-                self.points.append(self._read_records(_validate(variant, where), source))
-                _check_stability(self.points[-1], where)
+            try:
+                if "" not in named:  # (of mistakes not at a swept key, the first point's are said)
+                    self.points.append(self._read_records(_validate(variant, where), source))
+                    _check_stability(self.points[-1], where)
+            except ScenarioError as exc:
+                for key, line in _at_sweep(exc, source, where, values, sweep):
+                    if key not in named:
+                        mistakes.lines.append(line)
+                        named.add(key)
         if not mistakes and STEP in self.uncertain_keys:
             dist = self.base.uncertain[STEP]
             with mistakes.kept():

@@ -59,7 +59,7 @@ CASES = [
     ("bad sweep key", GOOD + '[sweep]\n"loads.3.velocity" = [1.0, 2.0]\n',
      "sweep.loads.3.velocity = [1.0, 2.0]: must name an existing numeric field"),
     ("sweep out of range", GOOD + '[sweep]\n"absorbers.1.restitution" = [0.5, 1.5]\n',
-     "absorbers.1.restitution = 1.5: must be in [0, 1]"),
+     "sweep.absorbers.1.restitution = [0.5, 1.5]: its value 1.5: must be in [0, 1]"),
     ("pulse wider than period", GOOD.replace('type = "impulse"\nvelocity = 0.5',
                                              'type = "pulse-train"\namplitude = 1.0\nwidth = 2.0\n'
                                              'period = 1.0'),
