@@ -397,6 +397,7 @@ def compare(
     exceedance p_NAME)."""
     from .reports import COMPARED, Run, comparable, markdown
     from .reports import compare as compare_runs
+    from .signals import floor_name, floors_in
 
     if len(directories) < 2:
         _fail("compare needs at least two result directories")
@@ -405,10 +406,12 @@ def compare(
     try:
         runs = [Run.read(d, name) for d, name in zip(directories, label or [None] * len(directories))]
         allowed = comparable(runs[0])
+        floors = floors_in(runs[0].realizations.columns)
         for m in metric or []:
-            if m not in allowed:
-                _fail(f"--metric {m}: must be one of {', '.join(allowed)}")
-        table = compare_runs(runs, tuple(metric or COMPARED))
+            if floor_name(m, floors) not in allowed:
+                _fail(f"--metric {m}: must be one of {', '.join(allowed)} (or a floor's metric with _roof "
+                      "for the top floor)")
+        table = compare_runs(runs, tuple(floor_name(m, floors) for m in metric or COMPARED))
     except (OSError, ValueError, KeyError) as exc:
         _fail(str(exc))
     text = markdown(table)

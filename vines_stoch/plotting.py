@@ -63,10 +63,10 @@ FIELDS = {
     "frequency": ("frequency", "rad/s"), "phase": ("phase", "rad"), "duration": ("duration", "s"),
     "start": ("start", "s"), "width": ("width", "s"), "period": ("period", "s"), "scale": ("scale", ""),
     "dt": ("time step", "s"),
-    "intensity": ("noise intensity", "N s^½"), "value": ("target", "m/s²"),
+    "intensity": ("noise intensity", r"N s$^{1/2}$"), "value": ("target", "m/s²"),
 }
 #: Fields whose unit depends on the table they are in (load or absorber type).
-_BY_TYPE = {("cubic", "stiffness"): "N/m³", ("ground-motion", "intensity"): "m s^-3/2",
+_BY_TYPE = {("cubic", "stiffness"): "N/m³", ("ground-motion", "intensity"): r"m s$^{-3/2}$",
             ("filtered-noise", "damping"): "", ("ground-motion", "damping"): "",
             ("base-harmonic", "amplitude"): "m/s²"}
 
@@ -77,19 +77,10 @@ def label(column: str, scenario: Mapping[str, Any] | None = None) -> str:
     (``_mean``, ``_q05``) names the statistic.  ``scenario`` (the file's tables) tells the units
     that depend on a load's or an absorber's type.  A column without a known unit is its name."""
     base, statistic = column, ""
-    for suffix in ("_mean", "_std", "_sem", "_q05", "_q50", "_q95"):
-        if column.endswith(suffix) and column[:-len(suffix)] in QUANTITIES:
-            base, statistic = column[:-len(suffix)], {"_mean": "mean", "_std": "std", "_sem": "std. error",
-                                                       "_q05": "5 % quantile", "_q50": "median",
-                                                       "_q95": "95 % quantile"}[suffix]
-    found = QUANTITIES.get(base)
-    if found is None and "_" in base and base.rsplit("_", 1)[1].isdigit():
-        kind, k = base.rsplit("_", 1)
-        if kind in FLOOR_QUANTITIES:
-            name, unit = FLOOR_QUANTITIES[kind]
-            found = (name.format(k=k), unit)
-    if found is None and base.startswith("first_passage_"):
-        found = (f"first passage of {base.removeprefix('first_passage_')}", "s")
+    for suffix, words in _STATISTICS.items():
+        if column.endswith(suffix) and _quantity(column[:-len(suffix)]) is not None:
+            base, statistic = column[:-len(suffix)], words
+    found = _quantity(base)
     if found is None and "." in base:
         found = _field(base, scenario)
     if found is None:
@@ -98,6 +89,24 @@ def label(column: str, scenario: Mapping[str, Any] | None = None) -> str:
     name = f"{name}, {statistic}" if statistic else name
     shown = "" if unit == "count" else f" [{unit or '–'}]"
     return f"{name}{shown}" + ("" if column == "t" else f" ({column})")
+
+
+#: A summary column's statistic suffix and its words.
+_STATISTICS = {"_mean": "mean", "_std": "std", "_sem": "std. error", "_q05": "5 % quantile", "_q50": "median",
+               "_q95": "95 % quantile"}
+
+
+def _quantity(column: str) -> tuple[str, str] | None:
+    """Name and unit of a metric column (``QUANTITIES``, a floor's ``NAME_k``, a first passage)."""
+    found = QUANTITIES.get(column)
+    if found is None and "_" in column and column.rsplit("_", 1)[1].isdigit():
+        kind, k = column.rsplit("_", 1)
+        if kind in FLOOR_QUANTITIES:
+            name, unit = FLOOR_QUANTITIES[kind]
+            found = (name.format(k=k), unit)
+    if found is None and column.startswith("first_passage_"):
+        found = (f"first passage of {column.removeprefix('first_passage_')}", "s")
+    return found
 
 
 def _field(key: str, scenario: Mapping[str, Any] | None) -> tuple[str, str] | None:

@@ -9,6 +9,7 @@ from typing import Any
 import numpy as np
 
 from .plotting import REPORT_EXTRA, label
+from .signals import floor_name, floors_in
 
 
 class ResultsPlot:
@@ -41,6 +42,9 @@ class ResultsPlot:
         has one, its estimate without an ensemble: ``name_estimate``)."""
         ax = self._axes(ax)
         s = self._results.summary
+        name = floor_name(name, floors_in(self._results.realizations.columns))
+        if f"{name}_mean" not in s:
+            raise KeyError(f"metric {name!r}: the summary has no {name}_mean")
         _, x, xlabel = self._x()
         order = np.argsort(x)
         ax.plot(x[order], s[f"{name}_mean"].to_numpy()[order], "o-", ms=3, label="Monte Carlo mean")

@@ -122,12 +122,14 @@ class Results:
 
     def exceedance(self, metric: str, value: float) -> pd.DataFrame:
         """Per sweep point, the fraction of the realisations ended ok whose ``metric`` (a column
-        of ``realizations``: ``x1_max``, ``drift_ratio_max``, ...) exceeds ``value``, with its 95 %
-        Wilson interval (``metrics.exceedance``): columns ``point``, the swept keys, ``n``, ``p``,
-        ``p_lo``, ``p_hi``."""
+        of ``realizations``: ``x1_max``, ``drift_ratio_max``, ``x_max_roof``...) exceeds
+        ``value``, with its 95 % Wilson interval (``metrics.exceedance``): columns ``point``, the
+        swept keys, ``n``, ``p``, ``p_lo``, ``p_hi``."""
         from .metrics import exceedance
+        from .signals import floor_name, floors_in
 
         r = self.realizations
+        metric = floor_name(metric, floors_in(r.columns))
         if metric not in r.columns:
             raise KeyError(f"metric {metric!r}: not a column of the realisations table")
         swept = [c for c in self.summary.columns if "." in str(c)]

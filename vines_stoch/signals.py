@@ -127,6 +127,30 @@ def floor_metrics(n_floors: int) -> list[str]:
     return [f"{name}_{k}" for k in range(1, n_floors + 1) for name in FLOOR_METRICS]
 
 
+#: The suffix naming the top floor in a per-floor metric: ``x_max_roof`` is ``x_max_n`` of an
+#: n-floor primary (``x1_max``, the roof's peak displacement, by another name).
+ROOF = "_roof"
+
+
+def floor_name(name: str, n_floors: int) -> str:
+    """``name`` with its ``_roof`` suffix as the top floor's number (``drift_ratio_max_roof`` ->
+    ``drift_ratio_max_3`` on three floors; ``p_roof`` and other names as given)."""
+    stem = name[:-len(ROOF)]
+    return f"{stem}_{n_floors}" if name.endswith(ROOF) and f"{stem}_1" in _FLOORED and n_floors else name
+
+
+#: The per-floor metrics' first columns, for ``floor_name`` (drift ratios with storey heights).
+_FLOORED = {f"{m}_1" for m in (*FLOOR_METRICS, "drift_ratio_max")}
+
+
+def floors_in(columns: Iterable[str]) -> int:
+    """The floors of a table with per-floor columns ``x_max_k`` (0: none)."""
+    names, n = set(columns), 0
+    while f"x_max_{n + 1}" in names:
+        n += 1
+    return n
+
+
 def sensitivity_metrics(n_floors: int, limits: Sequence[str], declared: Sequence[str]) -> set[str]:
     """What ``[sensitivity] metric`` may name: a metric column (``METRICS``, the floors', the
     declared ``[output] metrics``) or ``p_NAME`` for a limit NAME (its exceedance indicator)."""

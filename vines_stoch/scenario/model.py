@@ -9,7 +9,7 @@ import numpy as np
 from pydantic import Field, model_validator
 
 from .. import schemes
-from ..signals import declare_metrics, sensitivity_metrics, signal_names
+from ..signals import declare_metrics, floor_name, sensitivity_metrics, signal_names
 from .bodies import (
     Absorber,
     HertzAbsorber,
@@ -123,10 +123,11 @@ class Scenario(_Model):
                 raise FieldError("limits", name, "a limit's name must start with a letter and hold letters, "
                                  "digits and '_' only (at most 40 characters): it names the columns "
                                  "first_passage_NAME, p_NAME")
-            if limit.metric not in metrics:
+            if floor_name(limit.metric, n) not in metrics:
                 raise FieldError(f"limits.{name}.metric", limit.metric,
                                  "must be a peak metric: x1_max, e1_max, or x_max_k, drift_max_k, acc_max_k "
-                                 f"with k in [1, {n}] (drift_ratio_max_k with primary.heights)")
+                                 f"with k in [1, {n}] or roof (drift_ratio_max_k with primary.heights)")
+            limit.metric = floor_name(limit.metric, n)
         self._check_rare(n)
         paths = self.output.paths
         if paths is not None:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+import pandas as pd
 import pytest
 
 import vines_stoch
@@ -59,3 +60,20 @@ def test_the_estimate_gives_drift_ratios():
     for k, h in enumerate(HEIGHTS):
         assert row[f"drift_ratio_max_{k + 1}"] == pytest.approx(row[f"drift_max_{k + 1}"] / h, rel=1e-12)
         assert row[f"drift_ratio_rms_{k + 1}"] == pytest.approx(row[f"drift_rms_{k + 1}"] / h, rel=1e-12)
+
+
+def test_roof_names_the_top_floor():
+    """``_roof`` names the top floor: a limit on ``drift_ratio_max_roof`` is the limit on
+    ``drift_ratio_max_3`` (the same first passages), ``x_max_roof`` the roof's ``x1_max``, in
+    ``Results.exceedance`` and ``Results.plot.metric`` as in limits; other names are refused."""
+    results = vines_stoch.run(frame(top={"metric": "drift_ratio_max_roof", "value": 0.002},
+                                    three={"metric": "drift_ratio_max_3", "value": 0.002}))
+    r = results.realizations
+    assert r["first_passage_top"].notna().any()
+    np.testing.assert_array_equal(r["first_passage_top"], r["first_passage_three"])
+    np.testing.assert_array_equal(r["x_max_3"], r["x1_max"])
+    pd.testing.assert_frame_equal(results.exceedance("x_max_roof", 0.01), results.exceedance("x1_max", 0.01))
+    ax = results.plot.metric("drift_max_roof")
+    assert ax.get_ylabel().startswith("peak drift of storey 3")
+    with pytest.raises(ScenarioError, match="limits.top.metric = 'roof_max': must be a peak metric"):
+        vines_stoch.run(frame(top={"metric": "roof_max", "value": 0.01}))
