@@ -167,7 +167,7 @@ class Binding:
         self.slots: list[tuple[str, str, Any, Callable[[float], float]]] = []  # key, field, index, transform
         self.sums: dict[tuple[str, int], _Sum] = {}
         self.items: dict[str, _Item] = {}
-        self.poincare: Callable[[Any], tuple[float, float]] | None = None
+        self.poincare: Callable[[Any], tuple[float, float, int]] | None = None
         for key in study.base.uncertain:
             rule = field_range(scenario, key)
             if rule is not None and self._bind(scenario, key):
@@ -203,7 +203,8 @@ class Binding:
         for item in self.items.values():
             item.apply(values, fields, self.source)
         if self.poincare is not None:
-            fields["period"], fields["sample_from"] = (float(x) for x in self.poincare(fields["forces"]))
+            period, sample_from, count = self.poincare(fields["forces"])
+            fields.update(period=float(period), sample_from=float(sample_from), n_samples=count)
         return dataclasses.replace(self.base, **fields)
 
     def _item(self, key: str, model: BaseModel, parts: list[str]) -> _Item:
@@ -272,7 +273,8 @@ class Binding:
             if isinstance(load, (HarmonicLoad, BaseHarmonicLoad)) and parts[0] == "frequency":
                 sim = scenario.simulation
                 self.poincare = partial(poincare_samples, scenario.scheme, metrics_from=sim.metrics_from,
-                                        n_steps=self.base.n_steps, dt=sim.dt)
+                                        n_steps=self.base.n_steps, dt=sim.dt,
+                                        periods=scenario.output.poincare_periods)
         elif isinstance(load, ImpulseLoad) and parts == ["velocity"]:
             floor = _floor(scenario, load)
             self._term(key, index, "v0", floor, _state_terms(scenario, "velocity", floor))

@@ -18,7 +18,7 @@ saltation matrix of the variational method would give (Muller, Chaos Solitons Fr
 1671, DOI 10.1016/0960-0779(94)00170-U), as long as ``d0`` is small.
 
 ``refine_regimes``: the Poincare samples name a periodic response ``nT,k,m`` (``metrics.regimes``);
-one whose samples do not repeat over the last ``POINCARE_SAMPLES`` forcing periods is
+one whose samples do not repeat over the last ``REGIME_SAMPLES`` forcing periods is
 ``transient`` when they repeat over at least their last half (with its ``settling_time``, the
 first sample of the repeating tail) or when two nearby trajectories converge over the window
 faster than a regular response lets them (still settling past the window), ``chaotic`` when its
@@ -30,8 +30,12 @@ chatter, Lizunov, Pogorelova and Postnikova 2023, Table 2 and Fig. 6), and ``mod
 without impacts.
 
 ``envelope_frequency``: the modulus of the analytic signal (``scipy.signal.hilbert``) is the
-envelope of an amplitude-modulated response; less its mean, it crosses zero twice an envelope
-period, once upward; the least-squares spacing of the upward crossings gives the envelope's
+envelope of an amplitude-modulated response, with a ripple at twice the fast frequency that an
+average over one fast period takes out (in a run the envelope is read once a forcing period,
+from the Poincare samples over the whole window, and has none); less its mean, it crosses zero
+upward once a slow cycle, counted where it goes on to rise past ``HYSTERESIS`` standard
+deviations after falling as far (the relaxation cycles of a strongly modulated response
+wobble near their mean); the least-squares spacing of those crossings gives the envelope's
 angular frequency.
 """
 
@@ -45,6 +49,7 @@ from scipy.signal import hilbert
 
 from .kernels import Path, advance, start_path
 from .metrics import regimes
+from .outputs import REGIME_SAMPLES
 from .scene import Scene
 from .streams import Streams
 
@@ -57,6 +62,10 @@ EDGE = 0.1
 #: Least modulation depth ``envelope_frequency`` reads as modulation: the envelope's range over
 #: its mean (the edge effects leave a ripple of about ``1 / (pi omega s)`` at a distance ``s``).
 DEPTH = 0.05
+#: The marks (in standard deviations of the envelope about its mean) an envelope must pass,
+#: below then above, between two upward crossings of its mean that ``crossing_frequency``
+#: counts as a cycle apart.
+HYSTERESIS = 0.5
 #: A response is chaotic when its companion's distance grows over the metrics window ``W`` by
 #: more than the window's length in forcing periods ``N`` to this power: ``lyapunov W > 2 ln N``.
 #: On a periodic orbit the distance shrinks; along a quasi-periodic (modulated) response's torus
@@ -125,28 +134,40 @@ def largest_lyapunov(scene: Scene, streams: Streams | np.random.Generator | None
     return growth / ((last - first) * scene.dt)
 
 
-def envelope_frequency(signal: np.ndarray, dt: float) -> float:
+def envelope_frequency(signal: np.ndarray, dt: float, period: float | None = None) -> float:
     """Angular frequency (rad/s) of the envelope of ``signal`` (samples ``dt`` apart): the
-    modulus of its analytic signal over the record without ``EDGE`` at each end
-    (``crossing_frequency``)."""
+    modulus of its analytic signal, averaged over one fast period (``period``, s; default the
+    mean spacing of the signal's upward crossings of its mean) to take out the ripple at twice
+    the fast frequency, over the record without ``EDGE`` at each end (``crossing_frequency``)."""
     x = np.asarray(signal, dtype=np.float64)
-    envelope = np.abs(hilbert(x - x.mean()))
-    cut = int(EDGE * x.shape[0])
-    return crossing_frequency(envelope[cut:x.shape[0] - cut], dt)
+    x = x - x.mean()
+    envelope = np.abs(hilbert(x))
+    if period is None:
+        ups = np.flatnonzero((x[:-1] < 0.0) & (x[1:] >= 0.0))
+        period = (ups[-1] - ups[0]) * dt / (ups.shape[0] - 1) if ups.shape[0] > 1 else dt
+    width = max(1, int(round(period / dt)))
+    smooth = np.convolve(envelope, np.full(width, 1.0 / width), mode="same")
+    cut = max(int(EDGE * x.shape[0]), width)
+    return crossing_frequency(smooth[cut:x.shape[0] - cut], dt)
 
 
 def crossing_frequency(envelope: np.ndarray, dt: float) -> float:
     """Angular frequency (rad/s) of an envelope sampled ``dt`` apart: it crosses its mean upward
-    once a period (the crossing linearly interpolated in its step), so the crossing times,
-    fitted by least squares against their count, give the period.  NaN where its range is at
-    most ``DEPTH`` of its mean or it crosses its mean upward fewer than twice (no modulation
-    seen)."""
+    once a slow cycle, counted where it then rises past ``HYSTERESIS`` standard deviations
+    above its mean after falling as far below (a ripple's crossings are not cycles), the
+    crossing linearly interpolated in its step; the crossing times, fitted by least squares
+    against their count, give the period over whole cycles.  NaN where its range is at most
+    ``DEPTH`` of its mean or fewer than two such crossings are seen (no modulation)."""
     envelope = np.asarray(envelope, dtype=np.float64)
     mean = envelope.mean()
     if not np.ptp(envelope) > DEPTH * mean:
         return math.nan
     e = envelope - mean
-    where = np.flatnonzero((e[:-1] < 0.0) & (e[1:] >= 0.0))
+    ups = np.flatnonzero((e[:-1] < 0.0) & (e[1:] >= 0.0))
+    marks = np.flatnonzero(np.abs(e) > HYSTERESIS * e.std())
+    high = e[marks] > 0.0
+    rises = marks[1:][high[1:] & ~high[:-1]]  # (first sample past the upper mark after the lower)
+    where = ups[np.searchsorted(ups, rises) - 1]  # (the last upward crossing before each rise)
     if where.shape[0] < 2:
         return math.nan
     t = (where + e[where] / (e[where] - e[where + 1])) * dt
@@ -184,7 +205,8 @@ def refine_regimes(frame: pd.DataFrame, scenes: Scene | list[Scene], samples: np
     regime = frame["regime"].to_numpy(dtype=object, na_value=None)
     ok = (frame["status"] == "ok").to_numpy()
     nf, nb = first.n_floors, first.mass.shape[0]
-    exponents: dict[int, float] = {}  # (by scene: a scene without noise runs one path, whatever its row)
+    # (by scene and first step: a scene without noise runs one path, whatever its row)
+    exponents: dict[tuple[int, int], float] = {}
     for i in np.flatnonzero(ok):
         if regime[i] != "aperiodic" and not every:
             continue
@@ -192,26 +214,28 @@ def refine_regimes(frame: pd.DataFrame, scenes: Scene | list[Scene], samples: np
         omega = 2.0 * math.pi / scene.period
         row = samples[i]
         count = int((~np.isnan(row[:, 0])).sum())
-        # over the periods the samples span (the regime's own stretch of the window)
-        first = min(math.ceil(scene.sample_from / scene.dt - 1e-9), scene.n_steps - 1)
-        if id(scene) not in exponents:
-            exponents[id(scene)] = largest_lyapunov(scene, first=first)
-        exponent = columns["lyapunov"][i] = exponents[id(scene)]
+        # over the periods of the last REGIME_SAMPLES (the regime's own stretch of the window)
+        tail = max(0, count - REGIME_SAMPLES)
+        start = scene.sample_from + tail * scene.period
+        first = min(math.ceil(start / scene.dt - 1e-9), scene.n_steps - 1)
+        if (id(scene), first) not in exponents:
+            exponents[id(scene), first] = largest_lyapunov(scene, first=first)
+        exponent = columns["lyapunov"][i] = exponents[id(scene), first]
         span = (scene.n_steps - first) * scene.dt
         periods = math.log(max(span / scene.period, 2.0))
         if regime[i] != "aperiodic":
             continue
-        settled = settling(row, omega)
+        settled = settling(row[tail:count], omega)
         if settled is not None:
             regime[i] = "transient"
-            columns["settling_time"][i] = scene.sample_from + settled * scene.period
+            columns["settling_time"][i] = start + settled * scene.period
         elif exponent * span > GROWTH_POWER * periods:
             regime[i] = "chaotic"
         elif exponent * span < -periods:
             regime[i] = "transient"  # (still converging on a periodic orbit past the window)
         else:
-            # the roof's envelope once a period: |x + i v / omega| (the analytic signal of a
-            # response at the forcing frequency)
+            # the roof's envelope once a period over all the samples: |x + i v / omega| (the
+            # analytic signal of a response at the forcing frequency)
             roof = row[:count, nf - 1], row[:count, nb + nf - 1]
             found = crossing_frequency(np.hypot(roof[0], roof[1] / omega), scene.period)
             impacts = row[count - 1, 2 * nb:].sum() - row[0, 2 * nb:].sum()
@@ -222,5 +246,5 @@ def refine_regimes(frame: pd.DataFrame, scenes: Scene | list[Scene], samples: np
         frame[name] = values
 
 
-__all__ = ["D0", "DEPTH", "EDGE", "GROWTH_POWER", "REGIME_COLUMNS", "crossing_frequency",
+__all__ = ["D0", "DEPTH", "EDGE", "GROWTH_POWER", "HYSTERESIS", "REGIME_COLUMNS", "crossing_frequency",
            "envelope_frequency", "largest_lyapunov", "refine_regimes", "settling"]

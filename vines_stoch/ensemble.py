@@ -38,7 +38,7 @@ from .kernels.chunk import chunk_loop, ground_paths, lane_scene, parameter_draws
 from .kernels.lanes import LANES
 from .metrics import METRICS, finish_table, ground_intensities, residual_warnings, summarise
 from .notices import LOG
-from .outputs import EVENT_COLUMNS, EVENT_T, POINCARE_SAMPLES, Record
+from .outputs import EVENT_COLUMNS, EVENT_T, Record
 from .progress import Progress
 from .results import Results, Solution, as_study, check_whole
 from .rvt.table import with_estimates
@@ -139,10 +139,20 @@ def run_chunk(scene: Scene, seed: int, point: int, start: int, stop: int,
                  for r, s in zip(range(start, stop), scenes)]
     intensities = _intensities(scenes, seed, point, start, stop, common)
     raw, samples, history, events = (getattr(parts[0], name) if len(parts) == 1 else
-                                     np.concatenate([getattr(part, name) for part in parts])
+                                     _stacked([getattr(part, name) for part in parts])
                                      for name in ("raw", "samples", "history", "events"))
     paths = None if grid is None else history.transpose(2, 1, 0)
     return _table(raw, scenes, samples, point, start, drawn, intensities, events), paths
+
+
+def _stacked(parts: list[np.ndarray]) -> np.ndarray:
+    """Realisations' output arrays one after the other, each padded with NaN to the longest's
+    second axis (an uncertain forcing frequency changes how many Poincare samples a path keeps)."""
+    if parts[0].ndim < 3:
+        return np.concatenate(parts)
+    longest = max(part.shape[1] for part in parts)
+    return np.concatenate([np.pad(part, ((0, 0), (0, longest - part.shape[1]), (0, 0)),
+                                  constant_values=np.nan) for part in parts])
 
 
 def _intensities(scenes: Scene | list[Scene], seed: int, point: int, start: int, stop: int, common: bool,
@@ -293,7 +303,7 @@ def plan(study: Study, chunk: int | None = None, realizations: int | None = None
             size = chunk or min(n, GPU_CHUNK)
             row_bytes = _recorded_bytes(scene, spec, spectra)
             if scene.period > 0:
-                row_bytes += 8 * POINCARE_SAMPLES * (2 * scene.mass.shape[0] + 2)
+                row_bytes += 8 * scene.n_samples * (2 * scene.mass.shape[0] + 2)
             size = min(size, max(1, GPU_CHUNK_BYTES // max(row_bytes, 1)))
         else:  # (a chunk that keeps history rows, an event log or declared metrics: the scalar loop)
             kept = spec or spectra or scene.event_rows or scene.reductions.shape[0]

@@ -29,7 +29,7 @@ import numpy as np
 
 from .kernels import DEFAULT_SIGNALS, kernel_for, simulate
 from .kernels.rng import philox_stream, stream_key, stream_place
-from .outputs import EVENT_COLUMNS, POINCARE_SAMPLES, Record, new_events, new_metrics
+from .outputs import EVENT_COLUMNS, Record, new_events, new_metrics
 from .scene import Scene
 from .signals import declare
 from .streams import BRIDGE, FILTER, INCREMENTS, Streams
@@ -124,7 +124,7 @@ def _stack(scenes: list[Scene]) -> dict[str, np.ndarray]:
     """The launcher's per-path arrays, with a leading axis: one entry for one scene, one a
     realisation for several (uncertain parameters); the shared arrays must agree."""
     first = scenes[0]
-    for name in (*SHARED, "dt", "n_steps", "i0", "period", "sample_from", "n_floors"):
+    for name in (*SHARED, "dt", "n_steps", "i0", "period", "sample_from", "n_samples", "n_floors"):
         if any(not np.array_equal(getattr(s, name), getattr(first, name)) for s in scenes[1:]):
             raise ValueError(f"backend cuda: the uncertain parameters change the scene's {name}, which "
                              "every realisation of a GPU batch shares")
@@ -177,7 +177,7 @@ class Inputs:
                    {name: np.ascontiguousarray(getattr(scene, name)) for name in SHARED},
                    new_metrics(scene.n_floors, scene.limits.shape[0], scene.reductions.shape[0]),
                    np.array([stream_key(seed, p) for p in (INCREMENTS, BRIDGE, FILTER)], np.uint64),
-                   np.uint64(stream_place(0, point, common)), POINCARE_SAMPLES if scene.period > 0 else 0,
+                   np.uint64(stream_place(0, point, common)), scene.n_samples if scene.period > 0 else 0,
                    stride, size, declare(signals, scene.n_floors, scene.kind.shape[0]), events)
 
     @property

@@ -12,6 +12,7 @@ from .notices import DivergedWarning, EnergyBalanceWarning, Notice
 from .outputs import (
     ACC_MAX_K,
     DRIFT_MAX_K,
+    REGIME_SAMPLES,
     SLOTS,
     STATUS_DIVERGED,
     X_MAX_K,
@@ -63,14 +64,16 @@ def regime(samples: np.ndarray, omega: float) -> str | None:
 
 def regimes(samples: np.ndarray, omega: np.ndarray) -> list[str | None]:
     """``regime`` of the Poincare samples of each realisation (``samples``: ``(rows, samples,
-    columns)``, each row's samples a prefix of it, NaN after; ``omega``: one a row), with numpy
-    over the rows that hold as many samples (a chunk's realisations: one pass)."""
+    columns)``, each row's samples a prefix of it, NaN after; ``omega``: one a row), read from
+    each row's last ``REGIME_SAMPLES``, with numpy over the rows that hold as many samples (a
+    chunk's realisations: one pass)."""
     nb = (samples.shape[2] - 2) // 2
-    counts = (~np.isnan(samples[:, :, 0])).sum(axis=1)
+    ends = (~np.isnan(samples[:, :, 0])).sum(axis=1)
     found: list[str | None] = [None] * samples.shape[0]
-    for count in np.unique(counts[counts >= 3]):
-        where = np.flatnonzero(counts == count)
-        rows = samples[where, :count]
+    for end in np.unique(ends[ends >= 3]):
+        where = np.flatnonzero(ends == end)
+        rows = samples[where, max(0, end - REGIME_SAMPLES):end]
+        count = rows.shape[1]
         state = np.concatenate([rows[:, :, :nb], rows[:, :, nb:2 * nb] / omega[where, None, None]], axis=2)
         scale = np.abs(state).max(axis=(1, 2))
         scale[scale == 0] = 1.0
@@ -195,16 +198,17 @@ def finish_table(raw: np.ndarray, scene: Scene | Sequence[Scene],
 
 def _stacked(samples: Sequence[np.ndarray | None] | np.ndarray | None, n: int) -> np.ndarray | None:
     """Rows' Poincare samples as one array ``(n, samples, columns)`` (a row given None or none:
-    NaN), or None where no row has any."""
+    NaN; a row with fewer samples than the longest: NaN after them), or None where no row has
+    any."""
     if isinstance(samples, np.ndarray):
         return samples if samples.ndim == 3 and samples.shape[1] else None
     given = [np.asarray(s, dtype=float) for s in samples or () if s is not None and np.size(s)]
     if not given:
         return None
-    stacked = np.full((n, *given[0].shape), np.nan)
+    stacked = np.full((n, max(s.shape[0] for s in given), given[0].shape[1]), np.nan)
     for i, s in enumerate(samples):
         if s is not None and np.size(s):
-            stacked[i] = s
+            stacked[i, :len(s)] = s
     return stacked
 
 

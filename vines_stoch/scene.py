@@ -8,7 +8,7 @@ from functools import cached_property
 
 import numpy as np
 
-from .outputs import ACC_MAX_K, DRIFT_MAX_K, LIMIT_E1, POINCARE_SAMPLES, X_MAX_K
+from .outputs import ACC_MAX_K, DRIFT_MAX_K, LIMIT_E1, REGIME_SAMPLES, X_MAX_K
 from .physics import filters, wind
 from .physics.absorbers import (
     COLUMNS,
@@ -85,6 +85,7 @@ class Scene:
     scheme: str               # a name of schemes.SCHEMES
     period: float = 0.0       # forcing period of Poincare samples (0: no regime)
     sample_from: float = 0.0  # time of the first Poincare sample
+    n_samples: int = 0        # Poincare samples a path keeps, one a forcing period from sample_from
     limits: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))  # (n_limits, 3) rows: limit_row
     limit_names: tuple[str, ...] = ()      # the limits' names, in the rows' order
     reductions: np.ndarray = field(default_factory=lambda: np.zeros((0, 3), np.int64))  # declared metrics:
@@ -212,17 +213,22 @@ def closed_form_rows(load, k: int, n_floors: int, mean: np.ndarray | None = None
     return []
 
 
-def poincare_samples(scheme: str, forces, metrics_from: float, n_steps: int,
-                     dt: float) -> tuple[float, float]:
-    """``(period, sample_from)`` of a scene's Poincare samples, at multiples of the forcing
-    period in the last periods of the window: rk4 under one harmonic force row (``forces``) of
-    frequency > 0; ``(0, 0)`` otherwise."""
+def poincare_samples(scheme: str, forces, metrics_from: float, n_steps: int, dt: float,
+                     periods: int | None = None) -> tuple[float, float, int]:
+    """``(period, sample_from, count)`` of a scene's Poincare samples, at the multiples of the
+    forcing period in the metrics window before its end (the last ``periods`` of them where
+    given, ``[output] poincare_periods``; at least ``REGIME_SAMPLES`` where the window holds
+    them; at least one, left NaN, where it holds none): rk4 under one harmonic force row
+    (``forces``) of frequency > 0; ``(0, 0, 0)`` otherwise."""
     frequencies = [f[2] for f in forces if f[0] == HARMONIC]
     if not (scheme == "rk4" and len(frequencies) == 1 and frequencies[0] > 0):
-        return 0.0, 0.0
-    period = 2.0 * math.pi / frequencies[0]
-    first = max(metrics_from, n_steps * dt - POINCARE_SAMPLES * period)
-    return period, math.ceil(first / period - 1e-9) * period
+        return 0.0, 0.0, 0
+    period, end = 2.0 * math.pi / frequencies[0], n_steps * dt
+    first = metrics_from if periods is None else max(metrics_from,
+                                                     end - max(periods, REGIME_SAMPLES) * period)
+    sample_from = math.ceil(first / period - 1e-9) * period
+    count = max(1, math.floor((end - sample_from) / period - 1e-9) + 1)  # (one slot, NaN, past the end)
+    return period, sample_from, count
 
 
 def build_scene(scenario: Scenario) -> Scene:
@@ -265,7 +271,8 @@ def build_scene(scenario: Scenario) -> Scene:
     sim = scenario.simulation
     n_steps = max(1, math.ceil(sim.duration / sim.dt - 1e-9))
     scheme = scenario.scheme
-    period, sample_from = poincare_samples(scheme, forces, sim.metrics_from, n_steps, sim.dt)
+    period, sample_from, n_samples = poincare_samples(scheme, forces, sim.metrics_from, n_steps, sim.dt,
+                                                      scenario.output.poincare_periods)
     return Scene(
         mass=mass, storey_k=np.array(primary.storey_stiffnesses, dtype=float),
         storey_c=np.array(storey_c, dtype=float), floor_c=np.array(floor_c, dtype=float),
@@ -282,7 +289,7 @@ def build_scene(scenario: Scenario) -> Scene:
         filters=filters.block_diagonal(scene_filters(scenario), dt, nf),
         sigma=np.sqrt(variance), x0=x0, v0=v0, dt=float(sim.dt), n_steps=n_steps,
         i0=min(n_steps - 1, int(round(sim.metrics_from / sim.dt))), scheme=scheme,
-        period=period, sample_from=sample_from,
+        period=period, sample_from=sample_from, n_samples=n_samples,
         limits=np.array([limit_row(limit.metric, limit.value, nf, primary.heights or ())
                          for limit in scenario.limits.values()],
                         dtype=float).reshape(-1, 3),

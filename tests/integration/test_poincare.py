@@ -20,7 +20,7 @@ K, C = M * OMEGA_N**2, 2.0 * ZETA * OMEGA_N * M
 
 def scene(omega: float) -> dict:
     """The oscillator under ``F cos(omega t)``, 250 rk4 steps a forcing period, for the whole
-    periods in 100 s; the samples (the last 32 periods) after 60 s, when the start-up transient
+    periods in 100 s; the samples (every period of the metrics window) after 60 s, when the start-up transient
     has decayed by exp(-zeta omega_n t) < 1e-8."""
     period = 2.0 * math.pi / omega
     return {"name": "poincare", "primary": {"mass": M, "stiffness": K, "damping": C},
@@ -39,14 +39,26 @@ def test_one_point_at_the_closed_form_steady_state(ratio):
     h = 1.0 / (K - M * omega**2 + 1j * C * omega)
     x, v = F * h.real, -omega * F * h.imag
     amplitude = F * abs(h)
-    last = math.ceil(100.0 / (2.0 * math.pi / omega))
-    assert len(section) == 32 and list(section["period"]) == list(range(last - 32, last))
+    period = 2.0 * math.pi / omega
+    first, last = math.ceil(60.0 / period - 1e-9), math.ceil(100.0 / period)
+    assert list(section["period"]) == list(range(first, last))  # (every period of the window)
     np.testing.assert_allclose(section["t"], section["period"] * 2.0 * math.pi / omega, rtol=1e-12)
     # RK4's steady-state error: its local error (omega_n dt)^5 / 120 about 2.6e-10 a step of
     # the amplitude, over the 1 / (zeta omega_n dt) steps the damping remembers: about 2e-7
     np.testing.assert_allclose(section["x_1"], x, rtol=0, atol=1e-6 * amplitude)
     np.testing.assert_allclose(section["v_1"], v, rtol=0, atol=1e-6 * amplitude * omega)
     assert (section[["impacts_left", "impacts_right"]] == 0).all().all()
+
+
+def test_poincare_periods_keeps_the_last_periods_of_the_window():
+    """``[output] poincare_periods = 35``: the last 35 forcing periods before the end, at the
+    same states as the whole window's samples."""
+    data = scene(OMEGA_N)
+    whole = run(data).poincare
+    data["output"]["poincare_periods"] = 35
+    last = run(data).poincare
+    assert len(whole) == 40 and list(last["period"]) == list(whole["period"].iloc[-35:])
+    np.testing.assert_array_equal(last["x_1"], whole["x_1"].iloc[-35:])
 
 
 def test_the_same_section_in_memory_and_from_a_folder(tmp_path):

@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 
 from ..jit.cache import compile_once
-from ..outputs import EVENT_COLUMNS, POINCARE_SAMPLES, SLOTS, Record, new_events, new_metrics
+from ..outputs import EVENT_COLUMNS, SLOTS, Record, new_events, new_metrics
 from ..schemes import SCHEMES
 from ..signals import declare
 from ..streams import Streams
@@ -86,7 +86,7 @@ def sample_buffer(scene) -> np.ndarray:
     """Empty Poincare sample rows (positions, velocities, impacts left and right)."""
     if scene.period <= 0:
         return np.empty((0, 2 * scene.mass.shape[0] + 2))
-    return np.full((POINCARE_SAMPLES, 2 * scene.mass.shape[0] + 2), np.nan)
+    return np.full((scene.n_samples, 2 * scene.mass.shape[0] + 2), np.nan)
 
 
 def filter_tuple(scene, generator: np.random.Generator | np.ndarray | None) -> Filters:

@@ -228,6 +228,8 @@ class Paths(_Model):
         return self
 
 
+#: Most forcing periods a path's Poincare samples span (``[output] poincare_periods``).
+MAX_POINCARE_PERIODS = 1_000_000
 #: Most rows of a realisation's event log (``[output] events``).
 MAX_EVENT_ROWS = 1_000_000
 
@@ -244,15 +246,19 @@ class Output(_Model):
     events.parquet (time, absorber, wall, relative velocity, energy lost; 0: none kept).
     ``paths``: time histories of chosen realisations into paths.parquet (``Paths``).
     ``poincare``: the state of every body once a forcing period (the Poincare samples the
-    regimes are read from) into poincare.parquet.  ``lyapunov``: the largest Lyapunov exponent
-    of every realisation of a periodically forced scene (without it, only of those whose samples
-    do not repeat, to name their regime).  ``spectra``: the ensemble-averaged power spectral
-    densities of signals over the metrics window into spectra.parquet (``Spectra``)."""
+    regimes are read from) into poincare.parquet; ``poincare_periods``: how many forcing periods
+    at the window's end are sampled (default: every one of the metrics window; the regime is read
+    from the last ``outputs.REGIME_SAMPLES``, the envelope frequency from all).  ``lyapunov``:
+    the largest Lyapunov exponent of every realisation of a periodically forced scene (without
+    it, only of those whose samples do not repeat, to name their regime).  ``spectra``: the
+    ensemble-averaged power spectral densities of signals over the metrics window into
+    spectra.parquet (``Spectra``)."""
 
     directory: str | None = None
     metrics: list[str] = []
     events: Annotated[int, Field(ge=0, le=MAX_EVENT_ROWS)] = 0
     poincare: bool = False
+    poincare_periods: Annotated[int, Field(ge=1, le=MAX_POINCARE_PERIODS)] | None = None
     lyapunov: bool = False
     spectra: Spectra | None = None
     paths: Paths | None = None

@@ -36,7 +36,7 @@ from vines_stoch.metrics import (
 from vines_stoch.outputs import (
     ACC_MAX_K,
     DRIFT_MAX_K,
-    POINCARE_SAMPLES,
+    REGIME_SAMPLES,
     SLOTS,
     STATUS_DIVERGED,
     X_MAX_K,
@@ -111,7 +111,9 @@ def reference_chunk(scene, seed: int, point: int, start: int, stop: int, study=N
         rows.append(row)
     frame = pd.DataFrame(rows)
     frame["regime"] = frame["regime"].astype("string")
-    refine_regimes(frame, scenes, np.stack(kept), every=scenes[0].lyapunov)
+    longest = max(len(k) for k in kept)  # (an uncertain frequency: as many samples as periods)
+    padded = np.stack([np.pad(k, ((0, longest - len(k)), (0, 0)), constant_values=np.nan) for k in kept])
+    refine_regimes(frame, scenes, padded, every=scenes[0].lyapunov)
     return frame
 
 
@@ -209,10 +211,11 @@ def test_rows_of_simulated_realisations_match_the_oracle(case):
         assert rows[0]["input_energy"] == 0.0 and math.isnan(rows[0]["edm"]) and rows[0]["status"] == "ok"
 
 
-def orbit(n: int) -> np.ndarray:
-    """Poincare rows of an ``n``T orbit of two bodies with one left impact each ``n`` periods."""
+def orbit(n: int, count: int = REGIME_SAMPLES) -> np.ndarray:
+    """``count`` Poincare rows of an ``n``T orbit of two bodies with one left impact each ``n``
+    periods."""
     rows = []
-    for k in range(POINCARE_SAMPLES):
+    for k in range(count):
         state = [0.1 * (k % n), 0.2, 0.5, 0.0]
         rows.append(state + [k // n, 0])
     return np.array(rows, dtype=float)
@@ -252,8 +255,9 @@ def test_periodic_rows_get_their_regime_and_edge_values_their_status():
         for key, value in edit.items():
             table_raw[i, _S[key] if isinstance(key, str) else key] = value
     rng = np.random.default_rng(1)
-    noisy = orbit(1) + rng.normal(0.0, 0.05, size=(POINCARE_SAMPLES, 6)) * [1, 1, 1, 1, 0, 0]
-    rows_samples = [samples[0], orbit(2), noisy] + [samples[0]] * (len(edits) - 3)
+    count = samples[0].shape[0]  # (every forcing period of the window)
+    noisy = orbit(1, count) + rng.normal(0.0, 0.05, size=(count, 6)) * [1, 1, 1, 1, 0, 0]
+    rows_samples = [samples[0], orbit(2, count), noisy] + [samples[0]] * (len(edits) - 3)
     rows_samples[-1] = None
     rows_samples[-2] = np.empty((0, 6))
     short = build_scene(study_from(PERIODIC, {"simulation.metrics_from": 299.99}).points[0])
@@ -264,7 +268,7 @@ def test_periodic_rows_get_their_regime_and_edge_values_their_status():
     assert [w["regime"] for w in want[:4]] == ["T,2,2", "2T,1,0", "aperiodic", None]
     assert [w["status"] for w in want[3:6]] == ["diverged"] * 3
     # samples as one array (realisations, samples, columns)
-    stacked = np.stack([samples[0], orbit(2), noisy])
+    stacked = np.stack([samples[0], orbit(2, count), noisy])
     assert_rows(finish_table(table_raw[:3], scene, stacked), want[:3])
     # the single-row form
     for r, s, w in zip(table_raw, rows_samples, want):
@@ -289,7 +293,7 @@ def test_one_scene_a_row_reads_each_window_and_period():
     assert all(w["regime"] for w in want)
     assert_rows(finish_table(np.stack(raws), scenes, samples), want)
     # velocities alternating by 0.95e-3: a 2T orbit at omega = 0.9, within tolerance of T above
-    alternating = np.zeros((POINCARE_SAMPLES, 6))
+    alternating = np.zeros((REGIME_SAMPLES, 6))
     alternating[:, :2] = 1.0
     alternating[::2, 2] = 0.95e-3
     want = [reference_row(r, sc, alternating) for r, sc in zip(raws, scenes)]
