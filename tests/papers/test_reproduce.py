@@ -34,7 +34,8 @@ def test_an_unknown_section_is_refused(tmp_path):
 
 
 def test_an_impact_zone_is_the_walls_the_absorber_met():
-    """Seed 003 Figs. 3-4, 8: a run's zone is read from the impacts counted on each wall over the
+    """The impact zones of the report's seed 003 Figs. 3-4, 8 (one case): a run's zone is read
+    from the impacts counted on each wall over the
     steady window: a Table 1 double-sided design at the resonance meets both obstacles (the
     paper's T,1,1 zone), and far below it neither (T,0,0, its white zone)."""
     *parameters, _ = next(iter(TABLE_1.values()))

@@ -53,7 +53,8 @@ def test_harmonic_bare_primary_is_the_closed_form_steady_state():
 
 
 def test_harmonic_each_absorber_suppresses_the_primary_the_parallel_most():
-    """Fig. 8: the parallel NES's primary swings an order of magnitude less than the cubic NES's."""
+    """Fig. 8: the parallel NES's primary swings less than the cubic NES's (held at a factor 5;
+    measured 7.5)."""
     none, cubic, parallel = (metrics("harmonic", twin)["x1_rms"][0] for twin in TWINS)
     assert cubic < 0.7 * none
     assert parallel < 0.2 * cubic

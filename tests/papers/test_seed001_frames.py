@@ -12,7 +12,7 @@ to reproduce), so the checks are physics with independent references:
   state-transition solution of the piecewise-linear record (nine storeys);
 - the energy balance of each frame with its absorbers;
 - the absorbers reducing the roof's response: seed 001 calls the SSVI NES "the most effective and
-  efficient" (two and nine storeys) and Tables 4-5 list "optimal control devices" (three storeys);
+  efficient" (two and nine storeys) and Tables 4-5 list control devices (three storeys);
 - each device of Tables 4-5 alone on the six- and four-column frames (``seed001_frame_devices``,
   ``seed001_frame_vitmd``): its parameters as printed, and its cut of the roof's rms under the
   same ground motions as the bare frame, at 3 standard errors; the zero-clearance VITMD against the

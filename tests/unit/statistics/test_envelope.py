@@ -7,8 +7,8 @@
   read by another method: the mean spacing of the stroboscopic amplitude's peaks over 40 cycles;
 - seed 003's Fig. 5 (SS-2(60) at 6.2 rad/s, the amplitude-modulated regime with bilateral
   impacts), against the spacing of the peaks of the run's own stroboscopic amplitude (the
-  paper prints 0.31 rad/s, read off its Hilbert envelope; ours turns at 0.282, 9 % slower: the
-  report's row says so).
+  paper prints 0.31 rad/s, read off its Hilbert envelope; ours turns at 0.282, 9 % slower, cause
+  unknown: the seed ledger's Fig. 5 row says so).
 
 Tolerance 5 % (the issue's): the peak spacing is resolved to a forcing period per cycle, so over
 ``n`` cycles to ``1 / n`` of a period, 0.05 % of a 49-period cycle over 40 cycles; the rest is the
