@@ -21,10 +21,10 @@ STATUSES = {
     "differs": "ours differs from the printed number, and the cause is shown (by a test or the report)",
     "qualitative": "the paper prints no number; a test checks its qualitative statement",
     "not-reproduced": "the case runs, and does not give the paper's result; cause unknown",
-    "not-built": "no scenario or test covers the item yet",
+    "not-built": "no test covers the item yet (the report may draw it: the row says what it shows)",
     "illustration": "a drawing, photograph or sketch: nothing to reproduce",
 }
-#: The papers, by number (``../shared/seeds`` in the project's sources; docs/model.md cites them).
+#: The papers, by number (docs/model.md cites them in full).
 PAPERS = {
     "000": "Wei et al. 2019, the parallel NES",
     "001": "Lizunov, Pogorelova, Postnikova, the model of a VI NES",
