@@ -88,6 +88,33 @@ class ResultsPlot:
         return ax
 
 
+    def scalogram(self, signal: str = "x1", point: int = 0, realization: int | None = None,
+                  omega: np.ndarray | None = None, ax: Any = None) -> Any:
+        """The wavelet scalogram (``psd.scalogram``: local amplitude against time and frequency)
+        of a kept path's ``signal`` (``paths=True`` or ``[output] paths``) at sweep point
+        ``point``, realisation ``realization`` (default: the first kept); ``omega``: the angular
+        frequencies (rad/s; default 120 from four cycles a record to a tenth of the sampling
+        rate, evenly on a log scale)."""
+        from .psd import scalogram
+
+        paths = self._results.paths
+        if paths is None or signal not in paths:
+            raise KeyError(f"scalogram: no kept path of {signal!r} (run with paths=True or [output] paths)")
+        rows = paths[paths["point"] == point]
+        kept = rows["realization"].iloc[0] if realization is None else realization
+        rows = rows[rows["realization"] == kept]
+        t, x = rows["t"].to_numpy(), rows[signal].to_numpy()
+        dt = float(t[1] - t[0])
+        if omega is None:
+            omega = np.geomspace(8.0 * np.pi / (t[-1] - t[0]), 0.2 * np.pi / dt, 120)
+        ax = self._axes(ax)
+        mesh = ax.pcolormesh(t, omega, scalogram(x, dt, omega), shading="auto")
+        ax.figure.colorbar(mesh, ax=ax, label=f"local amplitude of {signal}")
+        ax.set(yscale="log", xlabel="time [s]", ylabel="angular frequency [rad/s]",
+               title=f"Scalogram of {signal}, sweep point {point}")
+        return ax
+
+
 def _log_if_decades(ax: Any, x: np.ndarray) -> None:
     """A logarithmic x axis where the swept values are positive and span two decades or more."""
     if x.size and (x > 0).all() and x.max() >= 100.0 * x.min():
