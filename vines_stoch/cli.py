@@ -500,7 +500,7 @@ def reproduce(
 ) -> None:
     """Write every seed paper figure and table with its status (reproduced, differs, qualitative,
     not reproduced, not built), then run the tested tables of seeds 000-003 beside the printed
-    numbers (about 4 minutes)."""
+    numbers (about 3 minutes on 2 cores)."""
     from .validation.reproduce import reproduce as reproduce_tables
 
     try:
