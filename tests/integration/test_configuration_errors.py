@@ -165,3 +165,20 @@ def test_a_swept_value_out_of_range_is_named_at_its_sweep_key(tmp_path):
         f"{path}: sweep.loads.0.velocity = {{'logspace': [1.0, 1e+300, 3]}}: its value 1e+150: its "
         "magnitude must be <= 1e+15 (use other units)",
         f"{path}: sweep.primary.damping = [0.1, -1.0]: its value -1.0: must be >= 0"]
+
+
+def test_three_mistakes_in_three_tables_are_all_named(tmp_path):
+    """A floor below 1, a text where a number belongs and an unknown key: three lines, the floor
+    named beside the others (its range against the primary's floors waits for a valid file)."""
+    path = tmp_path / "three.toml"
+    path.write_text('name = "t"\n[primary]\nmasses = [1.0, 1.0]\nstiffnesses = [1.0, 1.0]\n'
+                    '[[absorbers]]\nfloor = -1\ntype = "linear"\nmass = 0.1\nstiffness = 0.1\n'
+                    'damping = 0.01\n'
+                    '[[loads]]\ntype = "harmonic"\namplitude = 1.0\nfrequency = "oops"\n'
+                    '[simulation]\nduration = 1.0\ndt = 0.01\nzz = 1\n')
+    code, err = cli("validate", path)
+    lines = err.removeprefix("error: ").splitlines()
+    assert code == 2 and len(lines) == 3, err
+    assert any("absorbers.0.floor = -1: must be in [1, 200]" in line for line in lines)
+    assert any("loads.0.frequency = 'oops'" in line for line in lines)
+    assert any("simulation.zz = 1: unknown key" in line for line in lines)
