@@ -23,7 +23,8 @@ ASSIGNMENT = re.compile(r"^(\s*)([A-Za-z_][A-Za-z0-9_]*)(\s*=\s*)(.+)$")
 #: Replacement values: other types, magnitudes, special floats, sizes.
 VALUES = ['"1.0"', "true", "false", "1.5", "0", "-1", "-1.0", "0.0", "1e308", "-1e308", "1e-300", "1e15",
           "1e16", "nan", "inf", "-inf", "9223372036854775808", "[]", "[1.0, 2.0]", "{}", "{ a = 1 }", '""',
-          '"x"', "[[[[[[[[[[[[[[1]]]]]]]]]]]]]]", "1979-05-27", "100000000000", "2.5e9"]
+          '"x"', "[[[[[[[[[[[[[[1]]]]]]]]]]]]]]", "1979-05-27", "100000000000", "2.5e9",
+          '"../../x"', '"/srv/x"', '"a\\u0000b"', '"a\\tb\\u0007"', "{ logspace = [1.0, 1e300, 3] }"]
 
 
 def mutate(text: str, kind: str, line: int, value: str, cut: float) -> tuple[bytes, str | None]:
