@@ -497,15 +497,18 @@ def reproduce(
     out: Path = typer.Option(Path("reports/seed-tables.md"), "--out", help="Markdown report to write."),
     scenarios: Path = typer.Option(Path("scenarios"), "--scenarios",
                                    help="Folder holding the seed00N_*.toml files."),
+    ledger_only: bool = typer.Option(False, "--ledger-only",
+                                     help="Rewrite only the ledger's section of --out (no run)."),
 ) -> None:
     """Write every seed paper figure and table with its status (reproduced, differs, qualitative,
     not reproduced, not built), then run the tested tables of seeds 000-003 beside the printed
     numbers (about 3 minutes on 2 cores)."""
+    from .validation.ledger import refresh
     from .validation.reproduce import reproduce as reproduce_tables
 
     try:
-        path = reproduce_tables(scenarios, out)
-    except (ScenarioError, OSError) as exc:
+        path = refresh(out) if ledger_only else reproduce_tables(scenarios, out)
+    except (ScenarioError, OSError, ValueError) as exc:
         _fail(str(exc))
     typer.echo(f"wrote {path}")
 

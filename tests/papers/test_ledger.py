@@ -73,3 +73,16 @@ def test_counts_are_by_seed_and_status(tmp_path: Path):
     path.write_text(LEDGER.read_text())
     found = ledger.counts(load(path))
     assert set(found) == set(PAPERS) and sum(sum(c.values()) for c in found.values()) == len(load())
+
+
+def test_refresh_rewrites_only_the_ledger_section(tmp_path: Path):
+    report = tmp_path / "seed-tables.md"
+    report.write_text("# title\n\n## Every seed item and its status\n\nold rows\n\n"
+                      "## Seed 002: runs\n\nkept\n")
+    ledger.refresh(report)
+    text = report.read_text()
+    assert "old rows" not in text and "\n".join(markdown(load())) in text
+    assert text.startswith("# title\n\n") and text.endswith("## Seed 002: runs\n\nkept\n")
+    report.write_text("# no ledger\n")
+    with pytest.raises(ValueError, match="holds no ledger section"):
+        ledger.refresh(report)

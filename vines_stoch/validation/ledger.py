@@ -112,4 +112,17 @@ def markdown(items: list[Item]) -> list[str]:
     return lines + [""]
 
 
-__all__ = ["LEDGER", "PAPERS", "STATUSES", "Item", "counts", "load", "markdown"]
+def refresh(report: Path) -> Path:
+    """Rewrite the ledger's section of a seed report (``reports/seed-tables.md``) from the ledger
+    as it is, leaving the rest (the runs) untouched: ``vines-stoch reproduce --ledger-only``."""
+    lines = report.read_text().split("\n")
+    heading = markdown([])[0]
+    if heading not in lines:
+        raise ValueError(f"{report}: holds no ledger section ({heading!r}): run vines-stoch reproduce")
+    start = lines.index(heading)
+    end = next((i for i in range(start + 1, len(lines)) if lines[i].startswith("## ")), len(lines))
+    report.write_text("\n".join(lines[:start] + markdown(load()) + lines[end:]))
+    return report
+
+
+__all__ = ["LEDGER", "PAPERS", "STATUSES", "Item", "counts", "load", "markdown", "refresh"]
