@@ -136,7 +136,7 @@ def run(
     except KeyboardInterrupt as exc:  # (Interrupted says how many chunks are kept)
         typer.echo(f"\n{exc if isinstance(exc, Interrupted) else 'interrupted'}", err=True)
         raise typer.Exit(130) from None
-    except (OSError, ValueError, TimeoutError) as exc:
+    except (OSError, ValueError, TimeoutError, ImportError) as exc:
         _fail(str(exc))
     if share is not None:
         if not quiet:

@@ -488,12 +488,21 @@ def _stopping_count(edm: np.ndarray, start: int, target: float) -> int | None:
     return None
 
 
+#: How to install what a run on a dask.distributed cluster needs.
+CLUSTER_EXTRA = "pip install 'vines-stoch[cluster]' (or .venv/bin/pip install -e '.[cluster]' in a checkout)"
+
+
 @contextmanager
 def _client(scheduler: str, announce: bool = False) -> Iterator[object]:
     """A ``dask.distributed`` client connected to ``scheduler``: an address, or the path of a
     scheduler file (the JSON ``dask scheduler --scheduler-file`` writes); with ``announce``,
     the dashboard's address goes to standard error."""
-    from dask.distributed import Client
+    try:
+        from dask.distributed import Client
+    except ImportError:
+        where = "--scheduler-file" if Path(scheduler).is_file() else "--scheduler"
+        raise ImportError(f"{where} {scheduler}: a dask.distributed cluster needs the cluster extra: "
+                          f"{CLUSTER_EXTRA}") from None
 
     by_file = "://" not in scheduler and Path(scheduler).is_file()
     if by_file:

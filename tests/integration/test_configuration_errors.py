@@ -182,3 +182,16 @@ def test_three_mistakes_in_three_tables_are_all_named(tmp_path):
     assert any("absorbers.0.floor = -1: must be in [1, 200]" in line for line in lines)
     assert any("loads.0.frequency = 'oops'" in line for line in lines)
     assert any("simulation.zz = 1: unknown key" in line for line in lines)
+
+
+def test_a_cluster_without_the_cluster_extra_says_what_to_install(monkeypatch, tmp_path):
+    """dask.distributed is the ``cluster`` extra's: without it, ``--scheduler`` names the extra
+    (an ImportError from Python, exit 2 from the command line), not an internal error."""
+    import sys
+
+    monkeypatch.setitem(sys.modules, "dask.distributed", None)  # (as if not installed)
+    with pytest.raises(ImportError, match=r"--scheduler tcp://127.0.0.1:1: a dask.distributed cluster needs "
+                                          r"the cluster extra: pip install 'vines-stoch\[cluster\]'"):
+        vines_stoch.run(SMALL, scheduler="tcp://127.0.0.1:1")
+    code, err = cli("run", SCENARIO, "--scheduler", "tcp://127.0.0.1:1", "--out", tmp_path / "o", "--quiet")
+    assert code == 2 and "needs the cluster extra" in err and "internal error" not in err
