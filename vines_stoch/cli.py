@@ -13,6 +13,7 @@ from typing import TYPE_CHECKING
 
 import typer
 
+from .environment import MissingExtra
 from .notices import VinesStochWarning
 from .scenario import ScenarioError, Study, load_scenario
 
@@ -136,7 +137,7 @@ def run(
     except KeyboardInterrupt as exc:  # (Interrupted says how many chunks are kept)
         typer.echo(f"\n{exc if isinstance(exc, Interrupted) else 'interrupted'}", err=True)
         raise typer.Exit(130) from None
-    except (OSError, ValueError, TimeoutError, ImportError) as exc:
+    except (OSError, ValueError, TimeoutError, MissingExtra) as exc:
         _fail(str(exc))
     if share is not None:
         if not quiet:
@@ -484,8 +485,10 @@ def bench(
         return
     if paths is not None:
         _fail("--paths: only with --backend cuda")
-    if importlib.util.find_spec("sdeint") is None:
-        _fail("vines-stoch bench compares against sdeint, which is not installed: "
+    missing = [name for name in ("sdeint", "distributed") if importlib.util.find_spec(name) is None]
+    if missing:
+        _fail(f"vines-stoch bench needs {' and '.join(missing)} (sdeint: the peer of its work-precision "
+              "study; distributed: its cluster-overhead row), not installed: "
               'pip install "vines-stoch[bench]"')
     from .validation.bench import main as bench_main
 

@@ -49,7 +49,7 @@ from scipy.signal import hilbert
 
 from .kernels import Path, advance, start_path
 from .metrics import regimes
-from .outputs import REGIME_SAMPLES
+from .scenario.settings import REGIME_SAMPLES
 from .scene import Scene
 from .streams import Streams
 
@@ -159,6 +159,8 @@ def crossing_frequency(envelope: np.ndarray, dt: float) -> float:
     against their count, give the period over whole cycles.  NaN where its range is at most
     ``DEPTH`` of its mean or fewer than two such crossings are seen (no modulation)."""
     envelope = np.asarray(envelope, dtype=np.float64)
+    if envelope.shape[0] < 3:
+        return math.nan
     mean = envelope.mean()
     if not np.ptp(envelope) > DEPTH * mean:
         return math.nan
@@ -238,7 +240,7 @@ def refine_regimes(frame: pd.DataFrame, scenes: Scene | list[Scene], samples: np
             # analytic signal of a response at the forcing frequency)
             roof = row[:count, nf - 1], row[:count, nb + nf - 1]
             found = crossing_frequency(np.hypot(roof[0], roof[1] / omega), scene.period)
-            impacts = row[count - 1, 2 * nb:].sum() - row[0, 2 * nb:].sum()
+            impacts = row[count - 1, 2 * nb:].sum() - row[tail, 2 * nb:].sum()  # (over the regime's stretch)
             regime[i] = "chatter" if math.isnan(found) and impacts > 0 else "modulated"
             columns["envelope_frequency"][i] = found
     frame["regime"] = pd.array(regime, dtype="string")

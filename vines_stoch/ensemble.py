@@ -33,6 +33,7 @@ from . import history as hist
 from . import notices, psd, rare, schedulers, sensitivity
 from .binding import binding
 from .dynamics import refine_regimes
+from .environment import memory_problem, require_cluster
 from .kernels import DEFAULT_SIGNALS, kernel_for
 from .kernels.chunk import chunk_loop, ground_paths, lane_scene, parameter_draws, seed_keys, simulate_chunk
 from .kernels.lanes import LANES
@@ -488,21 +489,12 @@ def _stopping_count(edm: np.ndarray, start: int, target: float) -> int | None:
     return None
 
 
-#: How to install what a run on a dask.distributed cluster needs.
-CLUSTER_EXTRA = "pip install 'vines-stoch[cluster]' (or .venv/bin/pip install -e '.[cluster]' in a checkout)"
-
-
 @contextmanager
 def _client(scheduler: str, announce: bool = False) -> Iterator[object]:
     """A ``dask.distributed`` client connected to ``scheduler``: an address, or the path of a
     scheduler file (the JSON ``dask scheduler --scheduler-file`` writes); with ``announce``,
     the dashboard's address goes to standard error."""
-    try:
-        from dask.distributed import Client
-    except ImportError:
-        where = "--scheduler-file" if Path(scheduler).is_file() else "--scheduler"
-        raise ImportError(f"{where} {scheduler}: a dask.distributed cluster needs the cluster extra: "
-                          f"{CLUSTER_EXTRA}") from None
+    from dask.distributed import Client
 
     by_file = "://" not in scheduler and Path(scheduler).is_file()
     if by_file:
@@ -614,6 +606,8 @@ def _check_arguments(out: object, workers: object, chunk: object, realizations: 
     if scheduler is not None and not isinstance(scheduler, (str, os.PathLike)):
         raise TypeError(f"scheduler = {scheduler!r}: give a dask.distributed scheduler's address "
                         "('tcp://host:8786') or the path of its scheduler file, or None")
+    if scheduler is not None:
+        require_cluster(str(scheduler))
     if out is not None and not isinstance(out, (str, os.PathLike)):
         raise TypeError(f"out = {out!r}: give a folder's path, or None to run in memory")
     check_whole("realizations", realizations, 1, MAX_REALIZATIONS)
@@ -721,8 +715,6 @@ def _run_into(study: Study, out: str | Path | None, options: _Options) -> Result
 def _check_paths_memory(study: Study, realizations: int | None) -> None:
     """Refuse ``paths=True`` where every realisation's time histories (sweep points x realisations x
     signals x history points, float64) cannot fit the machine's memory, with the figure."""
-    from .environment import memory_problem
-
     spec = study.base.simulation.history or History()
     count = (realizations or study.base.ensemble.realizations) if study.base.is_random else 1
     need = 8.0 * len(study.points) * count * spec.points * len(spec.signals)

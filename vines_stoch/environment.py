@@ -79,3 +79,25 @@ def memory_problem(what: str, need: float) -> str | None:
                 f"machine's {have / 2**30:.3g} GiB (the environment variable {MEMORY_SWITCH} sets that "
                 "share)")
     return None
+
+
+class MissingExtra(ImportError):
+    """An optional dependency a request needs is not installed: the message names the extra."""
+
+
+#: How to install what a run on a dask.distributed cluster needs.
+CLUSTER_EXTRA = "pip install 'vines-stoch[cluster]' (or .venv/bin/pip install -e '.[cluster]' in a checkout)"
+
+
+def require_cluster(scheduler: str) -> None:
+    """``MissingExtra`` where dask.distributed, which a run on ``scheduler`` needs, is not
+    installed (the ``cluster`` extra), checked before anything is written."""
+    import importlib.util
+
+    try:
+        found = importlib.util.find_spec("dask.distributed") is not None
+    except (ImportError, ValueError):  # (a module set to None in sys.modules)
+        found = False
+    if not found:
+        raise MissingExtra(f"scheduler {scheduler}: a dask.distributed cluster needs the cluster extra: "
+                           f"{CLUSTER_EXTRA}")

@@ -12,7 +12,6 @@ from .notices import DivergedWarning, EnergyBalanceWarning, Notice
 from .outputs import (
     ACC_MAX_K,
     DRIFT_MAX_K,
-    REGIME_SAMPLES,
     SLOTS,
     STATUS_DIVERGED,
     X_MAX_K,
@@ -20,6 +19,7 @@ from .outputs import (
     declared_slots,
     passage_slots,
 )
+from .scenario.settings import REGIME_SAMPLES
 from .scene import Scene
 from .signals import (  # (the metric columns' names: beside the declared metrics')
     METRIC_NAME,

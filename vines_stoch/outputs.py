@@ -39,10 +39,6 @@ LIMIT_E1 = len(FLOOR_SLOTS)
 #: Status codes written into the ``status`` slot.
 STATUS_OK, STATUS_DIVERGED = 0, 1
 
-#: Poincare samples (one per forcing period) at the end of the window the regime is read from:
-#: a periodic response repeats over them (``metrics.regimes``); the samples kept span the whole
-#: metrics window (``scene.poincare_samples``), for sections and slow modulations.
-REGIME_SAMPLES = 32
 
 
 @njit(**INLINE)

@@ -99,7 +99,8 @@ class Spectrum:
 
 
 #: The wavelet of ``scalogram``: a complex Morlet of bandwidth 1.5 and centre frequency 1
-#: (PyWavelets' ``cmor1.5-1.0``): about 1.2 cycles of the analysed frequency a standard deviation.
+#: (PyWavelets' ``cmor1.5-1.0``): its Gaussian envelope's standard deviation is about 0.87 cycles
+#: of the analysed frequency.
 WAVELET = "cmor1.5-1.0"
 
 
@@ -109,8 +110,8 @@ def scalogram(signal: np.ndarray, dt: float, omega: np.ndarray, wavelet: str = W
     transform (``pywt.cwt``; Torrence and Compo, Bull. Am. Meteorol. Soc. 79 (1998) 61, DOI
     10.1175/1520-0477(1998)079<0061:APGTWA>2.0.CO;2) at the scales that put the wavelet's centre
     frequency at ``omega``, as ``2 |W| / sqrt(scale)``: a sinusoid of amplitude ``A`` and frequency
-    ``w`` gives a ridge of height ``A`` at ``omega = w``.  Within about one period of the longest
-    analysed wave from either end the record's edges bias it.  Needs PyWavelets (the ``report``
+    ``w`` gives a ridge of height ``A`` at ``omega = w``.  Within two or three periods of the
+    longest analysed wave from either end the record's edges bias it.  Needs PyWavelets (the ``report``
     extra)."""
     import pywt
 
@@ -119,5 +120,5 @@ def scalogram(signal: np.ndarray, dt: float, omega: np.ndarray, wavelet: str = W
         raise ValueError("scalogram: omega must be a list of angular frequencies > 0 (rad/s)")
     scales = pywt.central_frequency(wavelet) * 2.0 * math.pi / (omega * dt)
     x = np.asarray(signal, dtype=np.float64)
-    coefficients, _ = pywt.cwt(x - x.mean(), scales, wavelet, sampling_period=dt)
+    coefficients, _ = pywt.cwt(x - x.mean(), scales, wavelet, sampling_period=dt, method="fft")
     return 2.0 * np.abs(coefficients) / np.sqrt(scales)[:, None]

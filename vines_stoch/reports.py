@@ -17,6 +17,7 @@ from .metrics import limit_names
 from .plotting import REPORT_EXTRA, counts, label, legend, pyplot
 from .plotting import save as save_figure
 from .results import read_results
+from .scenario.settings import REGIME_SAMPLES
 from .store import component, fresh, within
 
 #: Metrics compared by default.
@@ -382,10 +383,11 @@ def _plots(runs: list[Run], out: Path, point: int | None) -> list[str]:
         if swept:
             key = swept[0].axes[0]
             fig, ax = plt.subplots()
-            for run in swept:
-                ax.plot(run.poincare[key], run.poincare[x], ".", ms=2, label=run.label)
+            for run in swept:  # (the last REGIME_SAMPLES of each realisation: its steady regime)
+                steady = run.poincare.groupby(["point", "realization"], sort=False).tail(REGIME_SAMPLES)
+                ax.plot(steady[key], steady[x], ".", ms=2, label=run.label)
             ax.set(xlabel=label(key, tables), ylabel=f"{label(x)} at t = n T",
-                   title="Bifurcation diagram: the roof once a forcing period")
+                   title=f"Bifurcation diagram: the roof once a forcing period (last {REGIME_SAMPLES})")
             save(fig, "bifurcation.png")
         fig, ax = plt.subplots()
         for run in sections:

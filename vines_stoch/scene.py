@@ -8,7 +8,7 @@ from functools import cached_property
 
 import numpy as np
 
-from .outputs import ACC_MAX_K, DRIFT_MAX_K, LIMIT_E1, REGIME_SAMPLES, X_MAX_K
+from .outputs import ACC_MAX_K, DRIFT_MAX_K, LIMIT_E1, X_MAX_K
 from .physics import filters, wind
 from .physics.absorbers import (
     COLUMNS,
@@ -50,6 +50,7 @@ from .scenario import (
     WhiteNoiseLoad,
     WindLoad,
 )
+from .scenario.settings import REGIME_SAMPLES
 from .signals import declare_metrics
 
 

@@ -138,6 +138,7 @@ def test_the_memory_share_is_a_documented_setting(monkeypatch):
     value that is not a share > 0 is named."""
     from vines_stoch import environment
 
+    monkeypatch.delenv("VINES_STOCH_MEMORY_SHARE", raising=False)
     need = 0.5 * environment.physical_memory()
     assert environment.memory_problem("x", need) is None  # (half the machine: under 80 %)
     monkeypatch.setenv("VINES_STOCH_MEMORY_SHARE", "0.25")
@@ -169,7 +170,7 @@ def test_a_swept_value_out_of_range_is_named_at_its_sweep_key(tmp_path):
 
 def test_three_mistakes_in_three_tables_are_all_named(tmp_path):
     """A floor below 1, a text where a number belongs and an unknown key: three lines, the floor
-    named beside the others (its range against the primary's floors waits for a valid file)."""
+    named beside the others with the primary's floors (``model.floor_mistakes``)."""
     path = tmp_path / "three.toml"
     path.write_text('name = "t"\n[primary]\nmasses = [1.0, 1.0]\nstiffnesses = [1.0, 1.0]\n'
                     '[[absorbers]]\nfloor = -1\ntype = "linear"\nmass = 0.1\nstiffness = 0.1\n'
@@ -179,7 +180,7 @@ def test_three_mistakes_in_three_tables_are_all_named(tmp_path):
     code, err = cli("validate", path)
     lines = err.removeprefix("error: ").splitlines()
     assert code == 2 and len(lines) == 3, err
-    assert any("absorbers.0.floor = -1: must be in [1, 200]" in line for line in lines)
+    assert any("absorbers.0.floor = -1: must be in [1, 2] (the primary has 2 floors)" in x for x in lines)
     assert any("loads.0.frequency = 'oops'" in line for line in lines)
     assert any("simulation.zz = 1: unknown key" in line for line in lines)
 
@@ -190,8 +191,39 @@ def test_a_cluster_without_the_cluster_extra_says_what_to_install(monkeypatch, t
     import sys
 
     monkeypatch.setitem(sys.modules, "dask.distributed", None)  # (as if not installed)
-    with pytest.raises(ImportError, match=r"--scheduler tcp://127.0.0.1:1: a dask.distributed cluster needs "
+    with pytest.raises(ImportError, match=r"scheduler tcp://127.0.0.1:1: a dask.distributed cluster needs "
                                           r"the cluster extra: pip install 'vines-stoch\[cluster\]'"):
-        vines_stoch.run(SMALL, scheduler="tcp://127.0.0.1:1")
+        vines_stoch.run(SMALL, tmp_path / "api", scheduler="tcp://127.0.0.1:1")
+    assert not (tmp_path / "api").exists()  # (refused before anything is written)
     code, err = cli("run", SCENARIO, "--scheduler", "tcp://127.0.0.1:1", "--out", tmp_path / "o", "--quiet")
     assert code == 2 and "needs the cluster extra" in err and "internal error" not in err
+
+
+def test_a_later_swept_mistake_is_named_after_an_earlier_points_other_mistake(tmp_path):
+    """Point 0 breaks a rule of a key not swept (dt past the stability limit of its tiny mass);
+    point 3 gives a swept value out of range: both are named."""
+    path = tmp_path / "sweep.toml"
+    path.write_text('name = "s"\n[primary]\nmass = 1.0\nstiffness = 1.0\ndamping = 0.01\n'
+                    '[[loads]]\ntype = "impulse"\nvelocity = 1.0\n[simulation]\nduration = 10.0\ndt = 0.01\n'
+                    '[sweep]\n"primary.mass" = [1e-6, 1.0]\n"primary.damping" = [0.1, -1.0]\n')
+    code, err = cli("validate", path)
+    lines = err.removeprefix("error: ").splitlines()
+    assert code == 2 and len(lines) == 2, err
+    assert "(sweep point {'primary.mass': 1e-06, 'primary.damping': 0.1}): simulation.dt = 0.01" in lines[0]
+    assert lines[1] == f"{path}: sweep.primary.damping = [0.1, -1.0]: its value -1.0: must be >= 0"
+
+
+def test_poincare_samples_that_cannot_fit_are_refused(monkeypatch):
+    """``[output] poincare`` keeps every realisation's state once a forcing period over the
+    window: past the memory share (here set tiny) it is refused before anything runs, naming
+    ``poincare_periods``."""
+    from vines_stoch.scenario import parse_scenario
+
+    text = ('name = "p"\n[primary]\nmass = 1.0\nstiffness = 1.0\ndamping = 0.1\n'
+            '[[loads]]\ntype = "harmonic"\namplitude = 1.0\nfrequency = 1.0\n'
+            '[simulation]\nduration = 1000.0\ndt = 0.05\nscheme = "rk4"\n[output]\npoincare = true\n')
+    parse_scenario(text)  # (160 periods of 4 numbers: fits)
+    monkeypatch.setenv("VINES_STOCH_MEMORY_SHARE", "1e-12")
+    words = r"output.poincare = True: the Poincare samples kept .* set \[output\] poincare_periods"
+    with pytest.raises(vines_stoch.ScenarioError, match=words):
+        parse_scenario(text)

@@ -37,6 +37,6 @@ MAX_REALIZATIONS = 10_000_000
 MAX_STEPS = 1_000_000_000
 
 
-#: A floor number, 1 (lowest) to the roof: at least 1 on its own (a mistake named beside the
-#: file's others); its range is checked against the primary's floors once the file is valid.
-Floor = Annotated[int, Field(ge=1, le=MAX_FLOORS)]
+#: A floor number, 1 (lowest) to the roof; its range is checked against the primary's floors
+#: (``model.floor_mistakes``: beside the file's other mistakes).
+Floor = int

@@ -47,6 +47,28 @@ from .settings import (
 LIMIT_NAME = re.compile(r"[A-Za-z][A-Za-z0-9_]{0,39}")
 
 
+def floor_rule(n_floors: int) -> str:
+    """What a floor number may be on a primary of ``n_floors`` floors."""
+    return f"must be in [1, {n_floors}] (the primary has {n_floors} floor{'s' * (n_floors > 1)})"
+
+
+def floor_mistakes(data: dict[str, Any]) -> list[tuple[str, Any, str]]:
+    """The absorbers' and loads' whole-number floors outside the primary's, read from a file's
+    raw tables (key, value, rule): named beside the file's other mistakes, which stop the
+    model's own check (``Scenario``) from running."""
+    primary = data.get("primary")
+    masses = primary.get("masses") if isinstance(primary, dict) else None
+    n = len(masses) if isinstance(masses, list) and masses else 1
+    found = []
+    for table in ("absorbers", "loads"):
+        rows = data.get(table)
+        for i, row in enumerate(rows if isinstance(rows, list) else []):
+            floor = row.get("floor") if isinstance(row, dict) else None
+            if isinstance(floor, int) and not isinstance(floor, bool) and not 1 <= floor <= n:
+                found.append((f"{table}.{i}.floor", floor, floor_rule(n)))
+    return found
+
+
 class Scenario(_Model):
     """A complete scenario file (SCENARIOS.md)."""
 
@@ -88,8 +110,7 @@ class Scenario(_Model):
                        [(f"loads.{i}", load) for i, load in enumerate(self.loads)]:
             floor = getattr(item, "floor", None)
             if floor is not None and not 1 <= floor <= n:
-                raise FieldError(f"{i}.floor", floor,
-                                 f"must be in [1, {n}] (the primary has {n} floor{'s' * (n > 1)})")
+                raise FieldError(f"{i}.floor", floor, floor_rule(n))
         self._check_partners()
         for i, load in enumerate(self.loads):
             if isinstance(load, WindLoad) and (bad := load.floors_error(n)) is not None:

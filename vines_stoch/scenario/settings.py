@@ -228,6 +228,10 @@ class Paths(_Model):
         return self
 
 
+#: Poincare samples (one per forcing period) at the end of the window the regime is read from:
+#: a periodic response repeats over them (``metrics.regimes``); the samples kept span the whole
+#: metrics window (``scene.poincare_samples``), for sections and slow modulations.
+REGIME_SAMPLES = 32
 #: Most forcing periods a path's Poincare samples span (``[output] poincare_periods``).
 MAX_POINCARE_PERIODS = 1_000_000
 #: Most rows of a realisation's event log (``[output] events``).

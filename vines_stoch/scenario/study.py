@@ -38,7 +38,8 @@ from .errors import (
 )
 from .fields import LARGEST, MAX_DEPTH
 from .loads import _RecordLoad
-from .model import Scenario
+from .model import Scenario, floor_mistakes
+from .settings import REGIME_SAMPLES
 from .sweeps import _grid, _product, _zipped, get_path, set_path
 
 #: Path-steps beyond which a run's cost is said before it starts (``LongRunWarning``).
@@ -277,6 +278,7 @@ class Study:
             base = self.base = self._read_records(_validate(data, source), source)
         except ScenarioError as exc:
             mistakes.lines += str(exc).split("\n")
+            mistakes.lines += [format_error(source, *m) for m in floor_mistakes(data) if m[0] not in exc.keys]
             invalid = exc.keys
         refused = tuple(k for k in invalid if k)  # (keys at or inside these are not named again)
         sweep = dict(data["sweep"]) if isinstance(data.get("sweep"), dict) else {}
@@ -307,22 +309,25 @@ class Study:
         self.grid = _product(grids, zipped, source)
         self.points: list[Scenario] = []
         self._point_data: list[dict[str, Any]] = []
-        named: set[str] = set() if not mistakes else {""}  # (base mistakes: the points are not read)
-        for values in self.grid:
+        named: set[str] = set()  # (swept keys whose mistake is said)
+        first: int | None = None  # (the first point with a mistake at a key not swept: its lines are said)
+        for point, values in enumerate(self.grid):
             variant = copy.deepcopy(data)
             for key, value in values.items():
                 set_path(variant, key, value)
             self._point_data.append(variant)
             where = f"{source} (sweep point {values})" if values else source
             try:
-                if "" not in named:  # (of mistakes not at a swept key, the first point's are said)
-                    self.points.append(self._read_records(_validate(variant, where), source))
-                    _check_stability(self.points[-1], where)
+                self.points.append(self._read_records(_validate(variant, where), source))
+                _check_stability(self.points[-1], where)
             except ScenarioError as exc:
                 for key, line in _at_sweep(exc, source, where, values, sweep):
-                    if key not in named:
-                        mistakes.lines.append(line)
+                    if key and key not in named:
                         named.add(key)
+                        mistakes.lines.append(line)
+                    elif not key and first in (None, point):
+                        first = point
+                        mistakes.lines.append(line)
         if not mistakes and STEP in self.uncertain_keys:
             dist = self.base.uncertain[STEP]
             with mistakes.kept():
@@ -367,6 +372,7 @@ class Study:
             if why:
                 raise ScenarioError(format_error(source, "sensitivity.bootstrap", spec.bootstrap,
                                                  f"{why}: lower sensitivity.samples or bootstrap"))
+        self._check_sections(source)
         steps = sum(p.simulation.duration / p.simulation.dt for p in self.points) * ens.realizations
         self.cost = steps
         if steps > ens.max_path_steps:
@@ -375,6 +381,29 @@ class Study:
                 f"the run would take {steps:.3g} path-steps ({len(self.points)} sweep point(s) x "
                 f"{ens.realizations} realisation(s) x duration / dt), past ensemble.max_path_steps = "
                 f"{ens.max_path_steps:.3g}: raise that if the run is meant"))
+
+    def _check_sections(self, source: str) -> None:
+        """Refuse ``[output] poincare`` where the samples it keeps (every realisation's state once a
+        forcing period over the window, ``scene.poincare_samples``) cannot fit the machine's memory."""
+        out = self.base.output
+        if not out.poincare:
+            return
+        count = self.base.ensemble.realizations if self.base.is_random else 1
+        need = 0.0
+        for point in self.points:
+            omega = point.forcing_frequency
+            if omega is None:
+                continue
+            sim, columns = point.simulation, 2 * (point.primary.n_floors + len(point.absorbers)) + 2
+            periods = (sim.duration - sim.metrics_from) * omega / (2.0 * math.pi) + 1.0
+            if out.poincare_periods:
+                periods = min(periods, max(out.poincare_periods, REGIME_SAMPLES))
+            need += 8.0 * columns * periods * count
+        why = memory_problem("the Poincare samples kept (sweep points x realisations x forcing periods)",
+                             need)
+        if why:
+            raise ScenarioError(format_error(source, "output.poincare", True,
+                                             f"{why}: set [output] poincare_periods to keep fewer"))
 
     def _check_uncertain(self, data: dict[str, Any], key: str, base: Scenario | None,
                          refused: tuple[str, ...], source: str) -> None:

@@ -36,13 +36,13 @@ from vines_stoch.metrics import (
 from vines_stoch.outputs import (
     ACC_MAX_K,
     DRIFT_MAX_K,
-    REGIME_SAMPLES,
     SLOTS,
     STATUS_DIVERGED,
     X_MAX_K,
     X_SQ_INT_K,
     passage_slots,
 )
+from vines_stoch.scenario.settings import REGIME_SAMPLES
 from vines_stoch.scene import build_scene
 
 _S = {name: i for i, name in enumerate(SLOTS)}
