@@ -15,8 +15,21 @@ from vines_stoch.validation import ledger
 from vines_stoch.validation.ledger import LEDGER, PAPERS, STATUSES, Item, load, markdown
 
 SEEDS = ROOT.parent / "shared" / "seeds"
-#: A figure or table named in a paper's text: its caption or a reference to it.
-NAMED = re.compile(r"\b(Fig\.|Figure|Table)\s?(\d+)")
+#: Figures or tables named in a paper's text: a caption or a reference, one or a list ("Figs. 7
+#: and 8", "Fig. 11, 12", "Tables 2-4").
+NAMED = re.compile(r"\b(Figs?\.|Figures?|Tables?)\s*(\d+(?:\s*(?:,|and|&|-|–)\s*\d+)*)", re.IGNORECASE)
+
+
+def named_items(text: str) -> set[tuple[str, int]]:
+    """("Fig." or "Table", number) of every figure and table ``text`` names, lists and ranges
+    spelled out."""
+    found = set()
+    for kind, numbers in NAMED.findall(text):
+        kind = "Table" if kind.lower().startswith("table") else "Fig."
+        for first, dash, last in re.findall(r"(\d+)(?:\s*([-–])\s*(\d+))?", numbers):
+            span = range(int(first), int(last) + 1) if dash and int(last) - int(first) < 20 else [int(first)]
+            found |= {(kind, n) for n in span}
+    return found
 
 
 def test_every_row_holds_to_its_status():
@@ -54,9 +67,7 @@ def test_every_figure_and_table_of_the_papers_has_a_row():
     rows = {(item.seed, item.item) for item in load()}
     for seed in PAPERS:
         text = next(SEEDS.glob(f"{seed}_*.txt")).read_text()
-        named = {("Fig." if kind != "Table" else "Table", int(number))
-                 for kind, number in NAMED.findall(text)}
-        for kind, number in sorted(named):
+        for kind, number in sorted(named_items(text)):
             assert (seed, f"{kind} {number}") in rows, f"seed {seed} {kind} {number} has no row"
 
 
@@ -73,6 +84,12 @@ def test_counts_are_by_seed_and_status(tmp_path: Path):
     path.write_text(LEDGER.read_text())
     found = ledger.counts(load(path))
     assert set(found) == set(PAPERS) and sum(sum(c.values()) for c in found.values()) == len(load())
+
+
+def test_lists_and_ranges_of_figures_are_read():
+    assert named_items("see Figs. 7 and 8, Fig.3, figure 2; Tables 2-4 and Fig. 11, 12") == {
+        ("Fig.", 7), ("Fig.", 8), ("Fig.", 3), ("Fig.", 2), ("Table", 2), ("Table", 3), ("Table", 4),
+        ("Fig.", 11), ("Fig.", 12)}
 
 
 def test_refresh_rewrites_only_the_ledger_section(tmp_path: Path):

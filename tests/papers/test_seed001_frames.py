@@ -336,16 +336,16 @@ def test_steady_pulse_train_on_a_vi_damper():
 def test_nine_storey_nes_take_the_energy_of_a_blast():
     """``seed001_nine_storey_blast`` (the blast of Wierschem et al. 2017, ref. [17]; the pulse
     assumed): the energy balance closes (the bound above; measured 5e-7), the two SSVI NES
-    dissipate a third of the input or more (EDM measured 0.33) and the frame's roof rms and
-    time-integrated energy fall by at least a quarter (measured 41 % and 39 %); the roof's first
-    peak is not cut (the impulse acts before the NES can take energy: 0.0107 against 0.0082 m)."""
+    dissipate a quarter of the input or more (EDM measured 0.33) and the frame's roof rms and
+    time-integrated energy fall by at least a quarter (measured 41 % and 39 %).  The roof's peak
+    is not cut (measured 0.0107 m with the NES against 0.0082 m without; not held)."""
     from vines_stoch import run
 
     data = example_data("seed001_nine_storey_blast")
     nes = run(data).realizations.iloc[0]
     bare = run({**data, "absorbers": []}).realizations.iloc[0]
     assert nes["status"] == "ok" and nes["impacts"] > 0 and abs(nes["energy_residual"]) < 1e-6
-    assert nes["edm"] > 0.3
+    assert nes["edm"] > 0.25
     assert nes["x1_rms"] < 0.75 * bare["x1_rms"] and nes["energy_integral"] < 0.75 * bare["energy_integral"]
 
 

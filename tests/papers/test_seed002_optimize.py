@@ -9,11 +9,12 @@ makes the candidates with D >= C infeasible: never run, never the optimum.
 Each stage's outcome, run in full (60 evaluations, about 5 s each): the paper prints no bound
 and no intermediate result, so the stages ask whether the printed design is a local optimum of
 their parameters.  It is not of the first stage's: in both versions the mass climbs to its upper
-bound (70 kg) and the objective falls by more than 40 % (measured: 884 to 494 J at 6.3 rad/s;
-76.3 to 18.0 J at 7.23 rad/s); the second version's stage 2 (c2, D, C) too (884 to 464 J); the
-first version's stage 2 (c2, D) and both stage 3s (the moduli) move it by under 5 % (measured
-3.0 %, 0.5 %, 0.5 %).  The objective is deterministic (one realisation), so the outcomes are held
-with margins, not standard errors."""
+bound (70 kg; held within 5 % of it) and the objective falls by more than 30 % (measured: 884 to
+494 J at 6.3 rad/s; 76.3 to 18.0 J at 7.23 rad/s); the second version's stage 2 (c2, D, C) too
+(884 to 464 J); the first version's stage 2 (c2, D) and both stage 3s (the moduli) move it by
+under 10 % (measured 3.0 %, 0.5 %, 0.5 %).  The objective is deterministic (one realisation) but
+impacting and in places chaotic, so a search's path may differ in its last bits from host to
+host: the outcomes are held with wide margins."""
 
 from __future__ import annotations
 
@@ -32,10 +33,10 @@ STAGES = [ROOT / "scenarios" / f"seed002_optimize_stage{n}.toml" for n in (1, 2,
 FIRST_VERSION = [ROOT / "scenarios" / f"seed002_optimize_v1_stage{n}.toml" for n in (1, 2, 3)]
 #: Each stage's outcome (module text): the most the objective keeps of its start's, whether the
 #: mass reaches its upper bound, and the least it keeps (a stage that barely moves the design).
-OUTCOMES = {"seed002_optimize_stage1": (0.6, True, 0.0), "seed002_optimize_stage2": (0.6, False, 0.0),
-            "seed002_optimize_stage3": (1.0, False, 0.95), "seed002_optimize_v1_stage1": (0.6, True, 0.0),
-            "seed002_optimize_v1_stage2": (1.0, False, 0.95),
-            "seed002_optimize_v1_stage3": (1.0, False, 0.95)}
+OUTCOMES = {"seed002_optimize_stage1": (0.7, True, 0.0), "seed002_optimize_stage2": (0.7, False, 0.0),
+            "seed002_optimize_stage3": (1.0, False, 0.9), "seed002_optimize_v1_stage1": (0.7, True, 0.0),
+            "seed002_optimize_v1_stage2": (1.0, False, 0.9),
+            "seed002_optimize_v1_stage3": (1.0, False, 0.9)}
 D, C = "absorbers.0.offset", "absorbers.0.gap"
 
 
@@ -68,7 +69,7 @@ def test_each_stage_outcome(path, tmp_path):
     start = float(best.history[study.base.optimize.objective].iloc[0])
     assert least * start <= best.objective <= most * start
     mass = study.base.optimize.parameters.get("absorbers.0.mass")
-    assert (mass is not None and best.values["absorbers.0.mass"] >= 0.999 * mass.high) == to_bound
+    assert (mass is not None and best.values["absorbers.0.mass"] >= 0.95 * mass.high) == to_bound
 
 
 def test_stage_2_ranges_overlap_and_d_at_or_past_c_is_refused():

@@ -11,8 +11,8 @@ chaotically with asymmetric impacts on both obstacles in the paper.  Here, with 
 values, the damper never reaches an obstacle in the window: T,0,0, from rest and from a start
 with the damper at 8 m/s (and, tried beside, primary displacements to 0.3 m).  The cause: a grazing case.  The
 damper's non-impacting steady motion stops about 4 % short of the obstacles: with C 4 % smaller
-(0.766 m or less) it reaches them and the motion is chaotic with impacts on both sides, in
-unequal numbers, as the figure shows; between 0.764 and 0.768 m periodic impacting orbits
+(0.766 m or less) it reaches them and the motion is chaotic with impacts on both sides (in
+unequal numbers, measured, as the figure shows); between 0.764 and 0.768 m periodic impacting orbits
 (6T,1,2, T,1,1) come and go.  So the printed C sits just past a grazing threshold, and the
 paper's chaos rests on its third digit or on a convention for V that moves an obstacle by a few
 centimetres.
@@ -57,8 +57,8 @@ def test_as_printed_the_damper_never_reaches_the_obstacles(gap, start):
 def test_with_the_obstacles_four_percent_nearer_the_motion_is_chaotic_with_asymmetric_impacts():
     row = run(ds_4_10(0.76)).realizations.iloc[0]
     assert row["regime"] == "chaotic"
-    assert min(row["impacts_left"], row["impacts_right"]) >= 50
-    assert row["impacts_left"] != row["impacts_right"]
+    assert min(row["impacts_left"], row["impacts_right"]) >= 50  # (measured 143 and 121: not held equal
+    # or unequal, a chaotic count)
 
 
 @pytest.mark.parametrize("window", [(400.0, 100.0), (1000.0, 500.0)])
