@@ -28,6 +28,7 @@ from .signals import (  # (the metric columns' names: beside the declared metric
     REDUCE_RMS,
     REDUCTION_SLOTS,
     floor_metrics,
+    floors_in,
 )
 
 #: Longest period (in forcing periods) the regime detection looks for.
@@ -43,9 +44,7 @@ _S = {name: i for i, name in enumerate(SLOTS)}
 def metric_columns(frame: pd.DataFrame) -> list[str]:
     """The metric columns present in a realisations table: ``METRICS``, the floors', then the
     declared ones (``[output] metrics``: ``signals.METRIC_NAME``)."""
-    n = 0
-    while f"x_max_{n + 1}" in frame.columns:
-        n += 1
+    n = floors_in(frame.columns)
     declared = [c for c in frame.columns
                 if isinstance(c, str) and METRIC_NAME.fullmatch(c) and c not in METRICS]
     ratios = [c for c in [*(f"drift_ratio_max_{k}" for k in range(1, n + 1)), "drift_ratio_max"]
