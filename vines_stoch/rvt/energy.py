@@ -1,5 +1,5 @@
 """The energy accounts of MODEL.md section 4 in expectation over the metrics window, from the
-means and covariances of a path (``moments.Path``): the input work (the energy stored at the
+means and covariances of a path (``moments.Trajectory``): the input work (the energy stored at the
 window's opening, then the loads' power ``sum_i m_i E[v_i (F_i / m_i - a_g)]`` and white noise's
 Ito term ``sigma^2 / 2 m``), the dashpots' dissipation ``E[c w^2]``, the integral of ``E[E1]``, and
 the EDM as the ratio of the expected absorbed and input energies (its first-order estimate)."""
@@ -23,11 +23,11 @@ from ..physics.absorbers import (
     geometric_energy,
 )
 from .linearization import NODES, WEIGHTS, positive_moment
-from .moments import Path
+from .moments import Trajectory
 from .system import Model, structure_matrices
 
 
-def _second(path: Path, i: int) -> np.ndarray:
+def _second(path: Trajectory, i: int) -> np.ndarray:
     """``E[z z^T]`` at grid time ``i``."""
     return path.p[i] + np.outer(path.m[i], path.m[i])
 
@@ -50,7 +50,7 @@ def coupling_energy(row: np.ndarray, mu: float, s: float) -> float:
     return e
 
 
-def accounts(path: Path, i0: int, scene, base: Model, b_external: np.ndarray) -> dict[str, float]:
+def accounts(path: Trajectory, i0: int, scene, base: Model, b_external: np.ndarray) -> dict[str, float]:
     """``input_energy``, ``absorber_dissipation``, ``primary_dissipation``, ``energy_integral`` and
     ``edm`` expected over the window from grid time ``i0``; ``base``: the model without absorbers
     (``system.bare``: the loads' read-outs), ``b_external``: its forcing on the grid (T, N)."""
@@ -83,7 +83,7 @@ def _integral(values: np.ndarray, t: np.ndarray) -> float:
     return float(np.trapezoid(values, t)) if len(t) > 1 else 0.0
 
 
-def _stored(path: Path, i0: int, scene, k: np.ndarray) -> float:
+def _stored(path: Trajectory, i0: int, scene, k: np.ndarray) -> float:
     """The energy stored at the window's opening: every body's kinetic energy, the storeys' strain
     energy and the absorbers' attachments and contacts (``coupling_energy``)."""
     nb, nf = scene.mass.shape[0], scene.n_floors

@@ -61,7 +61,7 @@ def psd(model: Model, row: np.ndarray, omega: np.ndarray) -> np.ndarray:
 
 
 @dataclass
-class Path:
+class Trajectory:
     """Moments on a time grid: ``t`` (N + 1,), means ``m`` (N + 1, n), covariances ``p``
     (N + 1, n, n), and the models they were propagated with (one, or one a step: ``models``)."""
 
@@ -128,7 +128,7 @@ def _modal_step(model: Model, h: float, covariances: dict) -> tuple | None:
     return phi, forced, qs
 
 
-def propagate(model: Model, t_end: float, steps: int) -> Path:
+def propagate(model: Model, t_end: float, steps: int) -> Trajectory:
     """Means and covariances of a linear model from the scene's start (``model.m0``, ``model.p0``)
     at ``steps + 1`` times over ``[0, t_end]``, exact at the grid's times (harmonic forces by their
     steady response plus the free decay of the difference)."""
@@ -144,7 +144,7 @@ def propagate(model: Model, t_end: float, steps: int) -> Path:
         m[i + 1], p[i + 1] = _exact_step(model, m[i], p[i], t[i], h, cache)
     for w, x in amplitudes:
         m += np.real(np.exp(1j * w * t)[:, None] * x[None, :])
-    return Path(t, m, p, [model])
+    return Trajectory(t, m, p, [model])
 
 
 #: Largest relative change of the drift between a step's start and its midpoint before the step
@@ -153,7 +153,7 @@ SPLIT, DEPTH = 0.05, 4
 
 
 def propagate_linearized(model: Model, t_end: float, steps: int,
-                         relinearize: Callable[[np.ndarray, np.ndarray], Model]) -> Path:
+                         relinearize: Callable[[np.ndarray, np.ndarray], Model]) -> Trajectory:
     """Means and covariances of statistical linearisation from the scene's start on the grid of
     ``steps`` over ``[0, t_end]``: each step is the exact step of the model linearised at the
     step's midpoint moments (predicted by the exact step of the model at its start: a second-order
@@ -172,7 +172,7 @@ def propagate_linearized(model: Model, t_end: float, steps: int,
     for i in range(steps):
         m[i + 1], p[i + 1], last = _split_step(relinearize, m[i], p[i], t[i], t[i + 1] - t[i], 0, cache)
         models.append(last)
-    return Path(t, m, p, models)
+    return Trajectory(t, m, p, models)
 
 
 #: Largest change of a drift, relative to its largest entry, within which a step reuses the

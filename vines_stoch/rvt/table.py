@@ -54,7 +54,7 @@ def _grid(model: Model, duration: float, nonlinear: bool) -> int:
     return int(min(max(steps, MIN_STEPS), NONLINEAR_STEPS if nonlinear else LINEAR_STEPS))
 
 
-def _forcing(path: moments.Path) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _forcing(path: moments.Trajectory) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """``b(t)`` (T, N) and the force accelerations ``feed(t)`` and their rates (T, bodies) on the
     path's grid (the constant parts of the model of each time: a linearised law's mean force)."""
     t = path.t
@@ -79,7 +79,7 @@ def _nonlinear(scene) -> np.ndarray:
     return (scene.rows[:, K_CUBIC] != 0.0) | (scene.rows[:, K_GEO] != 0.0) | (scene.kind == HERTZ)
 
 
-def _statistics(path: moments.Path, out: _Output, b: np.ndarray, feed: np.ndarray,
+def _statistics(path: moments.Trajectory, out: _Output, b: np.ndarray, feed: np.ndarray,
                 rate: np.ndarray) -> dict[str, np.ndarray] | None:
     """The output's moments on the grid: mean, standard deviation, the derivative's mean and
     standard deviation, their covariance; None for the derivative's where ``y`` is not
@@ -130,7 +130,7 @@ def _bandwidth(model: Model, rows: np.ndarray, p: np.ndarray) -> np.ndarray:
         return np.sqrt(np.clip(1.0 - lam1**2 / (lam0 * lam2), 0.0, 1.0))
 
 
-def _mean_square_spread(path: moments.Path, rows: np.ndarray, i0: int) -> np.ndarray:
+def _mean_square_spread(path: moments.Trajectory, rows: np.ndarray, i0: int) -> np.ndarray:
     """``Var(int_{t0}^{T} y^2 dt)`` of the zero-mean part of each output ``y = rows[i] . z``:
     ``4 int g_s^T G(T - s) g_s ds``, ``g_s = P(s) c``, ``G(tau) = G_inf - e^{A^T tau} G_inf e^{A tau}``
     the output's Gramian over ``tau`` (Gaussian fourth moments, ``Cov(y_t^2, y_s^2) = 2 R(t, s)^2``;
@@ -185,14 +185,14 @@ def _point(scenario, limits: dict) -> dict[str, Any]:
         row.update(_output_columns(out.name, t, stats, spreads.get(out.name), deltas.get(out.name), random))
         row.update(_limit_columns(out.name, t, stats, deltas.get(out.name), random, limits, scene.n_floors))
     base = bare(scene, filters)
-    b_external, _, _ = _forcing(moments.Path(path.t, path.m, path.p, [base]))
+    b_external, _, _ = _forcing(moments.Trajectory(path.t, path.m, path.p, [base]))
     row.update(energy.accounts(path, i0, scene, base, b_external))
     _aliases(row, scene)
     row["note"] = "; ".join(notes)
     return row
 
 
-def _moments(scene, filters: list) -> tuple[moments.Path, tuple | None, bool, list[str]]:
+def _moments(scene, filters: list) -> tuple[moments.Trajectory, tuple | None, bool, list[str]]:
     """``(path, stationary, nonlinear, notes)``: the moments on the time grid from the scene's start
     (exact for a linear scene, the time-varying statistical linearisation otherwise, a bistable
     law's reported fixed point), the stationary law ``(model, mean, covariance)`` where there is
@@ -222,8 +222,9 @@ def _moments(scene, filters: list) -> tuple[moments.Path, tuple | None, bool, li
         # (from its symmetric start the Gaussian closure cannot choose a well: the window's
         # statistics are those of the reported stationary fixed point)
         _, mean, cov = stationary
-        path = moments.Path(np.linspace(0.0, duration, steps + 1), np.repeat(mean[None], steps + 1, axis=0),
-                            np.repeat(cov[None], steps + 1, axis=0), [stationary[0]])
+        path = moments.Trajectory(np.linspace(0.0, duration, steps + 1),
+                                  np.repeat(mean[None], steps + 1, axis=0),
+                                  np.repeat(cov[None], steps + 1, axis=0), [stationary[0]])
     elif nonlinear:
         path = moments.propagate_linearized(model, duration, steps, relinearize)
     else:
@@ -305,7 +306,7 @@ def _aliases(row: dict[str, Any], scene) -> None:
 RUNAWAY = 10.0
 
 
-def _settled(path: moments.Path, stationary: tuple | None) -> bool:
+def _settled(path: moments.Trajectory, stationary: tuple | None) -> bool:
     """False where the time-varying moments are not finite, or end far above the stationary
     fixed point's variances (``RUNAWAY``)."""
     if not np.all(np.isfinite(path.p)):
