@@ -150,9 +150,29 @@ def _steady_zone(scenario: Scenario) -> tuple[float, str, str]:
     ``"right"`` where it meets one (the left wall of a single-sided absorber is the primary
     itself), ``"none"`` where it moves without impacts (seed 003 Figs. 3-4, 8)."""
     row = _row(scenario)
-    left, right = int(row["impacts_left"]), int(row["impacts_right"])
-    zone = "bilateral" if left and right else "left" if left else "right" if right else "none"
-    return float(row["e1_max"]), str(row["regime"]), zone
+    return float(row["e1_max"]), str(row["regime"]), zone(int(row["impacts_left"]), int(row["impacts_right"]))
+
+
+def zone(left: int, right: int) -> str:
+    """The impact zone of a run that met the left wall ``left`` and the right one ``right`` times
+    over its window: ``"bilateral"``, ``"left"``, ``"right"`` or ``"none"``."""
+    return "bilateral" if left and right else "left" if left else "right" if right else "none"
+
+
+def zone_sweep(scenarios: Path, mass: int) -> dict[str, list[str]]:
+    """Each design of one seed 003 mass class (``_class_designs``: the 60, 20 or 10 kg designs)
+    with its impact zone at each of ``E1MAX_FREQUENCIES``: the zones of the report's Figs. 3-4, 8
+    and 11, from ``vines_stoch.run`` sweeps (the lanes)."""
+    from ..ensemble import run
+
+    zones = {}
+    for label, name, (m2, k2, c2, offset, gap), _ in _class_designs(scenarios, mass):
+        data = tomllib.loads((scenarios / f"{name}.toml").read_text())
+        data["absorbers"][0].update(mass=m2, stiffness=k2, damping=c2, offset=offset, gap=gap)
+        data["sweep"] = {"loads.0.frequency": list(E1MAX_FREQUENCIES)}
+        rows = run(data).realizations
+        zones[label] = [zone(left, right) for left, right in zip(rows["impacts_left"], rows["impacts_right"])]
+    return zones
 
 
 def _points(scenarios: Path, name: str, changes: Mapping[str, Any] | None = None,
@@ -814,4 +834,4 @@ def reproduce(scenarios: Path = Path("scenarios"), out: Path = Path("reports/see
 __all__ = ["FIG4_FREQUENCIES", "FRAME_DEVICES", "FRAME_STIFFNESSES", "PRIMARY_E1MAX", "REGIMES_MISSED",
            "REGIMES_PRINTED", "SECTIONS", "SEED002_FREQUENCIES", "SS_4_60", "TABLES", "TABLE_1", "TABLE_5",
            "TABLE_6", "WANE", "WEAK", "ZERO_CLEARANCE", "design", "fig4_sweep", "frame_devices", "paired_cut",
-           "reproduce"]
+           "reproduce", "zone", "zone_sweep"]
