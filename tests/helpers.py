@@ -134,9 +134,9 @@ def run_interrupted(monkeypatch: Any, scenario: Any, folder: Path, after: int, *
     the folder a resume starts from."""
     import pytest
 
-    from vines_stoch import ensemble, run
+    from vines_stoch import run, store
 
-    writes, real_write = [], ensemble.write_table
+    writes, real_write = [], store.write_table
 
     def interrupting(frame, path, meta=None):
         if len(writes) == after:
@@ -144,7 +144,7 @@ def run_interrupted(monkeypatch: Any, scenario: Any, folder: Path, after: int, *
         writes.append(path)
         real_write(frame, path, meta)
 
-    monkeypatch.setattr(ensemble, "write_table", interrupting)
+    monkeypatch.setattr(store, "write_table", interrupting)
     with pytest.raises(KeyboardInterrupt):
         run(scenario, folder, checkpoint_seconds=0.0, **options)
-    monkeypatch.setattr(ensemble, "write_table", real_write)
+    monkeypatch.setattr(store, "write_table", real_write)

@@ -282,8 +282,7 @@ def loads(
     realisation ``--realization`` of an ensemble run with ``--seed`` sees (the same streams)."""
     import numpy as np
 
-    from .kernels import load_history
-    from .kernels.chunk import realization_streams
+    from .kernels import load_history, realization_streams
     from .records import G, write_at2
     from .scene import build_scene
 

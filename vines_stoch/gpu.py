@@ -5,14 +5,14 @@ The launcher (``kernels/launch.py``) is a small CUDA kernel around the step loop
 the scene's structure (``kernels.kernel_for``): numba-cuda compiles that loop, and every
 physics function it inlines, for the GPU from the same source, so both backends share their
 schemes, impact and contact events, loads and metrics.  Each thread copies its realisation's
-initial state to its stack, opens its Philox streams (``kernels/rng.py``), draws its filters'
+initial state to its stack, opens its Philox streams (``streams/rng.py``), draws its filters'
 stationary start and runs the loop into its row of the metric table; the metric rows (and the
 Poincare samples and history rows a scene asks for) are all that comes back.
 
 Streams: realisation ``r`` of sweep point ``p`` draws from Philox streams keyed by (seed,
 purpose) with the counter (draw, ``r`` [, ``p`` without common random numbers]), so its
 numbers depend on nothing else: not on the launch configuration, the batch or the chunk.  They
-are not the CPU's PCG64 streams (``streams.py``): a scenario's GPU and CPU ensembles are two
+are not the CPU's PCG64 streams (``streams/``): a scenario's GPU and CPU ensembles are two
 independent samples of the same law, each reproducible on its own.
 
 Without a GPU, numba-cuda's simulator (``NUMBA_ENABLE_CUDASIM=1``) runs the launcher as
@@ -28,11 +28,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from .kernels import DEFAULT_SIGNALS, kernel_for, simulate
-from .kernels.rng import philox_stream, stream_key, stream_place
 from .outputs import EVENT_COLUMNS, Record, new_events, new_metrics
 from .scene import Scene
 from .signals import declare
 from .streams import BRIDGE, FILTER, INCREMENTS, Streams
+from .streams.rng import philox_stream, stream_key, stream_place
 
 #: Threads of a block (one realisation each).
 THREADS = 128
@@ -245,7 +245,7 @@ def simulate_many(scenes: Scene | list[Scene], seed: int, point: int, start: int
     from numba import cuda
 
     from .jit.cache import compile_once
-    from .kernels.launch import launcher
+    from .kernels import launcher
 
     scenes = [scenes] if isinstance(scenes, Scene) else list(scenes)
     n = stop - start
@@ -306,12 +306,12 @@ def _stacked(arrays: list[np.ndarray], name: str) -> np.ndarray:
 
 def advance_many(paths: list, stops: list[int]) -> None:
     """Run each of ``paths`` (``kernels.Path``s of one structure, their streams counter-based:
-    Philox streams or tapes, ``kernels/rng.py``) from the step it has reached to its stop on the
+    Philox streams or tapes, ``streams/rng.py``) from the step it has reached to its stop on the
     GPU, one path a thread, in place: what ``kernels.advance`` does for each, bitwise under the
     simulator (which runs the CPU loop), up to rounding on a GPU (see ``simulate_many``).  The
     rare-event estimates' paths on the cuda backend (``rare.py``)."""
     from .kernels import compile_first, stretch_to
-    from .kernels.pcg import PCG_DTYPE
+    from .streams.pcg import PCG_DTYPE
 
     todo = []
     for path, stop in zip(paths, stops):
@@ -328,7 +328,7 @@ def advance_many(paths: list, stops: list[int]) -> None:
     require()
     from numba import cuda
 
-    from .kernels.launch import stretcher
+    from .kernels import stretcher
 
     first = todo[0][0]
     grid = first.args[5]

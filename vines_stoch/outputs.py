@@ -82,7 +82,7 @@ class Record(NamedTuple):
     whether one of them folds the absorbers' energy share (the signal ``share``), and whether a
     history column or a declared metric reads a contact force (``contact_j``: the loop then keeps
     each step's impact impulses).
-    The Poincare samples are the scheme's (``driver.Step``).
+    The Poincare samples are the scheme's (``protocol.Step``).
     A loop compiles the code of a record only when it is asked for."""
 
     passages: bool = False

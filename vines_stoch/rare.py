@@ -51,11 +51,11 @@ import numpy as np
 import pandas as pd
 
 from .kernels import Path, advance, filter_draws, needed_streams, start_path
-from .kernels.pcg import state_of
-from .kernels.rng import keyed_stream, stream_key, tape
 from .outputs import DRIFT_MAX_K, E1_MAX, LIMIT_E1, SLOTS, X_MAX_K, passage_slots
 from .schemes import SCHEMES
 from .streams import RARE, Streams
+from .streams.pcg import state_of
+from .streams.rng import keyed_stream, stream_key, tape
 
 #: Methods of ``[rare]``.
 METHODS = ("splitting", "subset")

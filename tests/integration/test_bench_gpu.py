@@ -16,9 +16,9 @@ import pytest
 from tests.helpers import ROOT, cli
 from vines_stoch import gpu
 from vines_stoch.kernels import simulate
-from vines_stoch.kernels.rng import philox_stream
 from vines_stoch.outputs import E1_MAX
 from vines_stoch.streams import BRIDGE, FILTER, INCREMENTS, Streams
+from vines_stoch.streams.rng import philox_stream
 from vines_stoch.validation import bench_gpu
 
 needs_cuda = pytest.mark.skipif(gpu.unavailable() is not None, reason=f"cuda backend: {gpu.unavailable()}")

@@ -22,10 +22,10 @@ from tests.helpers import ROOT, changed, cli, example_data, scene_from, study_fr
 from tests.integration.test_ensemble import DATA
 from vines_stoch import gpu, kernels, run
 from vines_stoch.kernels import SLOTS, kernel_for, sample_buffer, simulate
-from vines_stoch.kernels.rng import keyed_stream, philox_stream
 from vines_stoch.outputs import Record, new_events
 from vines_stoch.store import read_metadata
 from vines_stoch.streams import BRIDGE, FILTER, INCREMENTS, Streams, streams
+from vines_stoch.streams.rng import keyed_stream, philox_stream
 from vines_stoch.validation import bench_gpu
 from vines_stoch.validation.scenes import scene_data
 
@@ -178,7 +178,7 @@ def test_the_simulated_threads_find_the_loop_compiled(monkeypatch):
         return Recording(kernel_for(scene, gpu, record))
 
     monkeypatch.setattr(gpu, "kernel_for", recording)
-    monkeypatch.setattr(kernels, "kernel_for", recording)
+    monkeypatch.setattr(kernels.paths, "kernel_for", recording)
     gpu.simulate_many(contact_noise(0.1), seed=2, point=0, start=0, stop=3)
     assert calls[0][0]  # the caller's thread ran the loop first
     assert [c for c in calls if not c[0]] == [(False, 0)] * 3  # three threads, none compiled
@@ -397,7 +397,7 @@ def test_paths_run_in_stretches_on_the_gpu_are_the_cpu_loop():
     normals from a tape (subset simulation's)."""
     from tests.unit.statistics.test_rare import filtered_oscillator, impact_oscillator
     from vines_stoch.kernels import advance, filter_draws, start_path
-    from vines_stoch.kernels.rng import tape
+    from vines_stoch.streams.rng import tape
 
     scene = scene_from(impact_oscillator(3.0))
     firsts = [50, 60, 0, 100, 200]

@@ -53,7 +53,7 @@ if name == "stretcher":  # (a rare-event path: impacts under white noise, on Phi
     from vines_stoch.gpu import stretch_types
     from vines_stoch.kernels import start_path
     from vines_stoch.kernels.launch import stretcher
-    from vines_stoch.kernels.rng import philox_stream
+    from vines_stoch.streams.rng import philox_stream
     from vines_stoch.streams import Streams
     scene = scene_from({"name": "stretch", "primary": {"mass": 1.0, "stiffness": 39.5, "damping": 0.6},
                         "absorbers": [{"type": "impact", "mass": 0.05, "clearance": 0.2, "restitution": 0.6}],

@@ -216,3 +216,41 @@ def test_the_floors_stand_on_what_is_below_them(floor):
         reached = _reach(module)
         banned = [m for m in reached for b in FLOORS[floor] if m == b or m.startswith(b + ".")]
         assert banned == [], (module, banned)
+
+
+#: The schemes' steps (``kernels/protocol.py``) and the executors that run them: the scalar loop,
+#: the SIMD lanes, the cuda kernel, and the chunk and path runners around them.
+SCHEMES = ("vines_stoch.kernels.kdk", "vines_stoch.kernels.sra3", "vines_stoch.kernels.rk4")
+EXECUTORS = ("vines_stoch.kernels.driver", "vines_stoch.kernels.lanes", "vines_stoch.kernels.launch",
+             "vines_stoch.kernels.chunk", "vines_stoch.kernels.paths", "vines_stoch.kernels")
+
+
+def _imported(start: str) -> set[str]:
+    """The modules ``start`` imports, directly or through the modules it imports (inside
+    functions too), not counting the packages Python runs first."""
+    graph = _imports()
+    seen: set[str] = set()
+    todo = [start]
+    while todo:
+        module = todo.pop()
+        if module not in seen:
+            seen.add(module)
+            todo += [target for target, _ in graph.get(module, ())]
+    return seen - {start}
+
+
+@pytest.mark.parametrize("scheme", SCHEMES)
+def test_a_scheme_imports_no_executor(scheme):
+    """A step knows the protocol (``kernels/protocol.py``), not the loops that run it."""
+    assert scheme in MODULES
+    assert sorted(set(EXECUTORS) & _imported(scheme)) == []
+
+
+def test_nothing_outside_the_kernels_imports_a_kernel_module():
+    """The kernels' one front is their package (``kernels/__init__.py``): no module of the package
+    outside ``kernels/`` imports ``kernels.<module>``, at module level or inside a function."""
+    inside = "vines_stoch.kernels."
+    found = [(module, target) for module, targets in _imports().items() if not module.startswith(inside)
+             and module != "vines_stoch.kernels" for target, _ in targets if target.startswith(inside)]
+    assert found == []
+    assert any(target == "vines_stoch.kernels" for targets in _imports().values() for target, _ in targets)

@@ -18,7 +18,7 @@ import pandas as pd
 import pytest
 
 from tests.helpers import ROOT, cli, study_from, toml_text, two_dof_data
-from vines_stoch import ensemble, history, load_scenario, run
+from vines_stoch import history, load_scenario, run, store
 from vines_stoch.store import KEY, ForeignFiles, png_text, read_arrays, read_metadata, write_arrays
 
 
@@ -251,7 +251,7 @@ def test_a_ctrl_c_lost_on_its_way_still_stops_the_run(tmp_path, monkeypatch):
     status 130 and what is kept."""
     scenario = write(tmp_path, "a", noisy(0.1, 20))
     out = tmp_path / "out"
-    real_write = ensemble.write_table
+    real_write = store.write_table
     written = []
 
     def write_and_drop_a_ctrl_c(frame, path, meta=None):
@@ -264,7 +264,7 @@ def test_a_ctrl_c_lost_on_its_way_still_stops_the_run(tmp_path, monkeypatch):
             except KeyboardInterrupt:
                 pass  # (... and dropped)
 
-    monkeypatch.setattr(ensemble, "write_table", write_and_drop_a_ctrl_c)
+    monkeypatch.setattr(store, "write_table", write_and_drop_a_ctrl_c)
     previous = signal.signal(signal.SIGINT, signal.default_int_handler)  # (as in a command's process)
     try:
         code, err = cli("run", scenario, "--out", out, "--quiet", "--workers", "1")

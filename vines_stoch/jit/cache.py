@@ -34,8 +34,8 @@ from .flags import VECTOR_BITS
 PACKAGE = Path(__file__).resolve().parent.parent
 #: The sources compiled functions are built from: the formulas, the step loops and what they
 #: inline, the compiler settings, and the modules whose constants they read (the signal and
-#: reduction codes of ``signals.py``, the stream purposes of ``streams.py``).
-SOURCES = ("physics", "jit", "outputs.py", "kernels", "signals.py", "streams.py")
+#: reduction codes of ``signals.py``, the stream purposes and the generators of ``streams/``).
+SOURCES = ("physics", "jit", "outputs.py", "kernels", "signals.py", "streams")
 
 
 def files_digest(root: Path, files: list[Path]) -> str:

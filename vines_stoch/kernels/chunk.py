@@ -30,7 +30,12 @@ from ..jit.flags import INLINE, KERNEL
 from ..outputs import EVENT_COLUMNS, Record, new_metrics
 from ..schemes import in_lanes
 from ..streams import BRIDGE, FILTER, INCREMENTS, PARAMETERS, Streams, streams
-from . import (
+from ..streams.pcg import PCG_DTYPE, POOL_SIZE, new_stream, pcg_normal, pcg_uniform, seed_pool, seed_stream
+from ..streams.rng import STREAM_WORDS, open_stream, philox_stream, stream_key, stream_place
+from .bundles import Outputs
+from .lanes import lane_loop
+from .loads import load_path, stationary_start
+from .paths import (
     _NO_CARRY,
     _NO_HISTORY,
     _NO_SIGNALS,
@@ -45,11 +50,6 @@ from . import (
     sample_buffer,
     spec_of,
 )
-from .bundles import Outputs
-from .lanes import lane_loop
-from .loads import load_path, stationary_start
-from .pcg import PCG_DTYPE, POOL_SIZE, new_stream, pcg_normal, pcg_uniform, seed_pool, seed_stream
-from .rng import STREAM_WORDS, open_stream, philox_stream, stream_key, stream_place
 
 
 def reseed(stream, keys, purpose, point, realization, common, pool, words) -> None:

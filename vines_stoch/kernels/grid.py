@@ -12,10 +12,10 @@ from numba import njit
 
 from ..jit.flags import INLINE, KERNEL
 from ..jit.intrinsics import plain, runtime_value
+from ..streams.rng import normal
 from .carry import GROUND_NEXT, restore_loads, restore_rows, save_loads, save_rows
 from .common import attachment_forces, geometric_forces
 from .loads import advance_filters, copy_into, excitation, phasors, rotations, turn
-from .rng import normal
 
 
 class GridLoads(NamedTuple):

@@ -53,6 +53,7 @@ from ..outputs import CAPPED
 from ..physics.absorbers import CLEARANCE, HERTZ, RESTITUTION, WALL_HI, WALL_LO
 from ..physics.hertz import contact_energy, contact_force_law
 from ..physics.structure import host_of, wall_of
+from ..streams.rng import uniform
 from .brownian import MEMO, path_value, tree_seed
 from .carry import REPLAYED, SEED_HIGH, SEED_LOW, restore_absorbers, save_absorbers
 from .common import (
@@ -69,7 +70,6 @@ from .common import (
     resolve_impact,
     stick_together,
 )
-from .driver import Step
 from .energy import absorber_dissipation, impulse_work, momentum, structure_dissipation
 from .events import EXIT, NONE, event_ahead, gap_sign
 from .grid import (
@@ -86,7 +86,7 @@ from .grid import (
     step_normals,
 )
 from .loads import has_breaks
-from .rng import uniform
+from .protocol import Step
 
 #: Iterations of the bracketed search for the impact instant (Illinois method).
 ROOT_ITERATIONS = 100
@@ -322,7 +322,7 @@ class KdkState(NamedTuple):
 @cache
 def kdk_step(spec) -> Step:
     """The kick-drift-kick Euler-Maruyama step for a loop specialised to ``spec``
-    (``driver.Spec``), as the driver's ``Step``.  Ground acceleration is a compile-time flag
+    (``protocol.Spec``), as the driver's ``Step``.  Ground acceleration is a compile-time flag
     (``Scene.has_ground``: as a run-time value it cost the smooth scene 7 % of its speed, the
     ground term joining every kick); loads with kinks or jumps (``loads.has_breaks``) are a
     run-time value, costing nothing measurable.  Harmonic loads on the step grid come from

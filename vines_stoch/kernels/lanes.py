@@ -67,6 +67,7 @@ from ..outputs import (
 from ..physics.absorbers import CLEARANCE, WALL_HI, WALL_LO
 from ..physics.absorbers import HERTZ as HERTZ_LAW
 from ..physics.structure import primary_energy, wall_of
+from ..streams.rng import STREAM_WORDS, block_uniforms, packed_block, packed_pair
 from .brownian import forget, tree_seed
 from .common import (
     CHECK_EVERY,
@@ -80,13 +81,12 @@ from .common import (
     stored_energy,
     write_floor_metrics,
 )
-from .driver import Spec
 from .energy import absorber_dissipation, impulse_work, momentum, structure_dissipation, write_accounts
 from .events import quiet_band
 from .grid import GridLoads, end_loads, noise_scales, opening_forces, reset_phasors, start_loads, step_loads
 from .kdk import contact_sides, kdk_step, kick
 from .loads import filter_row, filter_scales, has_breaks, readout, stationary, stationary_state
-from .rng import STREAM_WORDS, block_uniforms, packed_block, packed_pair
+from .protocol import Spec
 
 #: Paths a batch advances together: its state (about 17 numbers a path for a one-storey primary
 #: with one absorber) stays in the core's first-level cache.
@@ -157,7 +157,7 @@ def lane_normals(z, spare, nl: int, draw: int, key, places, first: int) -> None:
 
 @cache
 def lane_loop(spec: Spec):
-    """The lane loop of kick-drift-kick scenes specialised to ``spec`` (``driver.Spec``).  It
+    """The lane loop of kick-drift-kick scenes specialised to ``spec`` (``protocol.Spec``).  It
     takes the bundles of ``kernels/bundles.py`` (the state's start in ``bodies``), the keys of
     the increments', the bridges' and the filters' Philox streams, the root of the filters'
     stationary covariance (``p0``: zero for a start from rest) and each realisation's stream

@@ -15,9 +15,9 @@ from numba import cuda, float64, njit, uint64
 
 from ..jit.cache import cache_on_disk
 from ..jit.intrinsics import register_cuda_model
+from ..streams.rng import STREAM_WORDS, open_stream
 from .bundles import Absorbers, Bodies, Filters, Grid, Loads, Noise, Outputs
 from .loads import stationary_start
-from .rng import STREAM_WORDS, open_stream
 
 register_cuda_model()  # (the steps' stack arrays: ``jit.intrinsics.StackArray``)
 

@@ -48,7 +48,7 @@ from ..physics.loads import (
     closed_form_force,
     envelope,
 )
-from .rng import normal
+from ..streams.rng import normal
 
 
 @njit(**INLINE)

@@ -46,9 +46,9 @@ from .common import (
     resolve_impact,
     stick_together,
 )
-from .driver import Step
 from .events import EXIT, IMPACT_EVENT, NONE, ONSET, event_ahead, gap_sign
 from .loads import applied, has_breaks, next_break
+from .protocol import Step
 
 NEWTON_ITERATIONS = 12
 #: Bits of the ``contact`` argument of ``accelerations``: Hertz contact forces (at run time:
@@ -231,7 +231,7 @@ class Rk4State(NamedTuple):
 
 @cache
 def rk4_step(spec) -> Step:
-    """The RK4 step with located events for a loop specialised to ``spec`` (``driver.Spec``:
+    """The RK4 step with located events for a loop specialised to ``spec`` (``protocol.Spec``:
     the bodies and floors, impact and Hertz absorbers, geometric attachments; no noise), as the
     driver's ``Step``.  It integrates the energy accounts with its stages and observes the peaks
     and first passages at each sub-step's end (``integrates``); loads with kinks or jumps

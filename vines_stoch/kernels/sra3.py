@@ -25,7 +25,6 @@ from ..physics.absorbers import DAMPING
 from ..physics.structure import host_of
 from .carry import REPLAYED
 from .common import accelerate, attachment_forces, geometric_forces
-from .driver import Step
 from .energy import momentum
 from .grid import (
     GridLoads,
@@ -41,6 +40,7 @@ from .grid import (
     step_normals,
 )
 from .loads import has_breaks
+from .protocol import Step
 
 
 @njit(**INLINE)
@@ -135,7 +135,7 @@ class SraState(NamedTuple):
 
 @cache
 def sra3_step(spec) -> Step:
-    """The SRA3 step for a loop specialised to ``spec`` (``driver.Spec``), as the driver's
+    """The SRA3 step for a loop specialised to ``spec`` (``protocol.Spec``), as the driver's
     ``Step``: two normals a step and noisy floor (replayed: all floors' first normals, then
     their second)."""
     NB = spec.n_bodies

@@ -42,14 +42,14 @@ from numba import njit
 from ..ensemble import run
 from ..jit.flags import KERNEL, VECTOR_BITS
 from ..kernels import load_history, needed_streams, simulate
-from ..kernels.pcg import state_of
-from ..kernels.rng import normal
 from ..outputs import ABSORBER_DISS, E1_MAX, FINAL_ENERGY, IMPACT_LOSS, INPUT, PRIMARY_DISS
 from ..physics.hertz import hertz_constant
 from ..records import G, write_at2
 from ..scenario import Study
 from ..scene import build_scene
 from ..streams import streams
+from ..streams.pcg import state_of
+from ..streams.rng import normal
 from . import bench_rare, precision, scenes, stability
 from .bench_gpu import replace_section, section_of
 from .reference import hertz_reference
@@ -195,7 +195,7 @@ def _lane_runs(study: Study, directory: Path, rounds: int) -> dict[str, float]:
     """Path-steps/s of ``run`` of ``study`` in SIMD lanes (1 and 2 threads, into a folder and
     in memory) and in the scalar loop on PCG64 streams (``chunk.scalar_loops``), in turn, the
     best of ``rounds``, and the means of ``x1_rms`` of the two with their standard errors."""
-    from ..kernels.chunk import scalar_loops
+    from ..kernels import scalar_loops
 
     sim = study.points[0].simulation
     paths, steps = study.points[0].ensemble.realizations, round(sim.duration / sim.dt)
@@ -229,8 +229,8 @@ def _lane_runs(study: Study, directory: Path, rounds: int) -> dict[str, float]:
 def _lanes(directory: Path, rounds: int = 3) -> dict[str, Any]:
     """``_lane_runs`` of each of ``LANE_SCENES`` (T = 20); the rate of the lanes' normals alone
     and of the scalar loop's draws from a Philox and from a PCG64 stream."""
-    from ..kernels.lanes import lane_normals
-    from ..kernels.rng import philox_stream, stream_key
+    from ..kernels import lane_normals
+    from ..streams.rng import philox_stream, stream_key
 
     out: dict[str, Any] = {"scenes": {}, "budget": _lane_budget()}
     for k, (name, (source, paths)) in enumerate(LANE_SCENES.items()):
@@ -260,7 +260,7 @@ def _lane_budget(paths: int = 512, rounds: int = 3) -> dict[str, float]:
     (``simulate_chunk``, no files) in lanes with the scene's white noise and without it (the
     same kick-drift-kick update, no normals drawn), and of the scalar loop on PCG64 streams with
     it, in turn, the best of ``rounds``."""
-    from ..kernels.chunk import scalar_loops, simulate_chunk
+    from ..kernels import scalar_loops, simulate_chunk
 
     noisy = scenes.scene("smooth", {"simulation.duration": 20.0})
     quiet = scenes.scene("smooth", {"simulation.duration": 20.0, "loads.1.intensity": 0.0,

@@ -28,10 +28,10 @@ import numpy as np
 from .. import gpu
 from ..ensemble import run
 from ..kernels import needed_streams, simulate
-from ..kernels.rng import stream_key
 from ..outputs import E1_MAX, STATUS, STATUS_OK
 from ..scene import Scene
 from ..streams import INCREMENTS, streams
+from ..streams.rng import stream_key
 from . import scenes
 
 #: The heading of the GPU section of the benchmark report.

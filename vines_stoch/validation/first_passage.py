@@ -19,8 +19,8 @@ import numpy as np
 from scipy import stats
 
 from ..kernels import filter_draws, simulate
-from ..kernels.rng import tape
 from ..streams import Streams
+from ..streams.rng import tape
 
 
 def response_matrix(scene) -> np.ndarray:

@@ -7,7 +7,7 @@ import math
 
 from numba import cuda, uint64
 
-from ..kernels.rng import STREAM_WORDS, open_stream, philox_normal
+from ..streams.rng import STREAM_WORDS, open_stream, philox_normal
 
 
 @cuda.jit

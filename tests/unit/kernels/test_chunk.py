@@ -17,10 +17,10 @@ from tests.helpers import example_scene, study_from, two_dof_data
 from vines_stoch.ensemble import chunk_parameters, run_chunk
 from vines_stoch.kernels import load_history, sample_buffer, simulate
 from vines_stoch.kernels.chunk import ground_paths, lane_scene, realization_streams, simulate_chunk
-from vines_stoch.kernels.rng import philox_stream
 from vines_stoch.outputs import X1_MAX, new_events
 from vines_stoch.physics.spectra import pseudo_acceleration
 from vines_stoch.streams import FILTER, PARAMETERS, generator
+from vines_stoch.streams.rng import philox_stream
 
 SEED = 11
 SIGNALS = ("x1", "e1")

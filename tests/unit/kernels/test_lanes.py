@@ -20,13 +20,13 @@ from vines_stoch.kernels import SLOTS, simulate, spec_of
 from vines_stoch.kernels.chunk import lane_call, lane_scene, simulate_chunk
 from vines_stoch.kernels.events import NONE, event_ahead, quiet_band
 from vines_stoch.kernels.lanes import ALIGN, LANES, aligned_rows, lane_loop, lane_normals
-from vines_stoch.kernels.rng import philox_stream
 from vines_stoch.outputs import STATUS, STATUS_DIVERGED, Record, new_metrics
 from vines_stoch.physics.absorbers import HERTZ as HERTZ_LAW
 from vines_stoch.physics.absorbers import IMPACT as IMPACT_LAW
 from vines_stoch.physics.absorbers import LAWS
 from vines_stoch.schemes import in_lanes
 from vines_stoch.streams import BRIDGE, FILTER, INCREMENTS, Streams
+from vines_stoch.streams.rng import philox_stream
 
 SEED = 20261127
 

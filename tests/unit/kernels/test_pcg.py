@@ -1,4 +1,4 @@
-"""numpy's CPU streams in compiled code (``kernels/pcg.py``): ``SeedSequence`` hashing, the
+"""numpy's CPU streams in compiled code (``streams/pcg.py``): ``SeedSequence`` hashing, the
 ``PCG64`` state and ``Generator.standard_normal`` / ``Generator.random`` agree with numpy's,
 bitwise, and a numpy generator handed to the step loops ends where numpy would have left it."""
 
@@ -11,7 +11,8 @@ from numba.np.random._constants import ziggurat_nor_r
 
 from tests.helpers import scene_from, two_dof_data
 from vines_stoch.kernels import simulate
-from vines_stoch.kernels.pcg import (
+from vines_stoch.streams import Streams
+from vines_stoch.streams.pcg import (
     PCG_DTYPE,
     pcg_normal,
     pcg_uniform,
@@ -20,7 +21,6 @@ from vines_stoch.kernels.pcg import (
     set_state,
     state_of,
 )
-from vines_stoch.streams import Streams
 
 #: Seeds of one to five 32-bit words (numpy pads a seed shorter than its pool of four words).
 SEEDS = [0, 1, 2026, 2**32 + 5, 2**70 + 3, 2**130 + 11]

@@ -1,4 +1,4 @@
-"""The Philox streams of the GPU ensembles and of the SIMD lanes (kernels/rng.py): the generator
+"""The Philox streams of the GPU ensembles and of the SIMD lanes (streams/rng.py): the generator
 against its published known answers and an independent implementation, the normal transform's
 polynomials and tails, the draws' laws, and each stream a function of (key, place, draw) alone."""
 
@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from numba import njit
 
-from vines_stoch.kernels.rng import (
+from vines_stoch.streams.rng import (
     DRAWN,
     log_positive,
     normal,
@@ -249,8 +249,8 @@ def test_a_tape_replays_the_filter_noise_a_stream_draws():
     end a tape gives NaN, and no uniforms."""
     from tests.helpers import scene_from
     from vines_stoch.kernels import filter_draws, simulate
-    from vines_stoch.kernels.rng import tape
     from vines_stoch.streams import Streams
+    from vines_stoch.streams.rng import tape
 
     filtered = {"type": "filtered-noise", "intensity": 3.0, "frequency": 6.0, "damping": 0.3,
                 "start": "stationary"}

@@ -100,10 +100,11 @@ def test_an_interrupted_design_resumes_from_its_saved_outputs(tmp_path, monkeypa
     """Ctrl-C at the 100th of the 256 design points: the 64 saved are not run again, and the
     indices are those of a run in one go."""
     from vines_stoch import ensemble, sensitivity
+    from vines_stoch.ensemble import running
 
     data = scene_data()
     whole = run(data).sensitivity
-    calls, real = [], ensemble._design_output
+    calls, real = [], running._design_output
 
     def counting(*args):
         output = real(*args)
@@ -115,7 +116,7 @@ def test_an_interrupted_design_resumes_from_its_saved_outputs(tmp_path, monkeypa
             return output(point, values)
         return counted
 
-    monkeypatch.setattr(ensemble, "_design_output", counting)
+    monkeypatch.setattr(running, "_design_output", counting)
     interrupt = True
     with pytest.raises(ensemble.Interrupted):
         run(data, tmp_path / "out")

@@ -5,7 +5,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from vines_stoch.ensemble import _in_file_types
+from vines_stoch.ensemble.tables import in_file_types
 from vines_stoch.metrics import _quantiles
 from vines_stoch.store import write_table
 
@@ -45,7 +45,7 @@ def test_in_memory_types_are_those_read_back(tmp_path):
     }, index=[3, 1, 2, 0])
     write_table(frame.reset_index(drop=True), tmp_path / "t.parquet", {})
     read = pd.read_parquet(tmp_path / "t.parquet")
-    got = _in_file_types(frame)
+    got = in_file_types(frame)
     pd.testing.assert_frame_equal(got, read, check_exact=True)
     assert list(got.dtypes) == list(read.dtypes)
 

@@ -1,5 +1,5 @@
 """Random draws of the kernels from each kind of stream: a PCG64 stream (the CPU ensembles,
-``streams.py``; ``pcg.py``: numpy's generator in compiled code, a ``pcg.PCG_DTYPE`` record
+``streams/__init__.py``; ``pcg.py``: numpy's generator in compiled code, a ``pcg.PCG_DTYPE`` record
 array), a counter-based Philox stream (the GPU ensembles, ``gpu.py``), a tape of given normals
 (``tape``: a ``float64`` array, replayed in order; subset simulation's filter noise, ``rare.py``)
 or a numpy ``Generator`` (of a bit generator other than ``PCG64``, passed by a user).

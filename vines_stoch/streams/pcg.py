@@ -1,7 +1,7 @@
 """numpy's CPU streams in compiled code: ``SeedSequence`` hashing, the ``PCG64`` bit generator
 and ``Generator.standard_normal`` / ``Generator.random``, bit for bit.
 
-A CPU realisation draws from ``PCG64(SeedSequence(seed, spawn_key=key))`` (``streams.py``).
+A CPU realisation draws from ``PCG64(SeedSequence(seed, spawn_key=key))`` (``streams/``).
 Here the stream is a ``PCG_DTYPE`` record array of one element (the generator's 128-bit state
 and increment), made from the key inside the compiled ensemble loop (``seed_stream``: no Python
 object per realisation) or taken from a numpy ``Generator`` and written back to it

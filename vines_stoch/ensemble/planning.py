@@ -1,0 +1,146 @@
+"""What runs where: an ensemble's chunks and their sizes, the backends, and the step loops
+compiled (or loaded) before the first chunk starts."""
+
+from __future__ import annotations
+
+import math
+import sys
+import time
+from dataclasses import dataclass
+
+from ..kernels import DEFAULT_SIGNALS, LANES, chunk_loop, kernel_for, lane_scene, simulate_chunk
+from ..notices import LOG
+from ..outputs import Record
+from ..scenario import History, Study
+from ..scene import Scene, build_scene
+from ..signals import declare
+from .chunks import recorded_bytes
+
+#: Target work of one chunk, in path-steps (about 0.1-0.3 s of compute).
+CHUNK_STEPS = 5_000_000
+#: Automatic chunks split a sweep point's ensemble into at least this many tasks ...
+CHUNKS_PER_POINT = 32
+#: ... each of at least this many path-steps (where the ensemble has them): a chunk's fixed
+#: costs, its table and its Parquet part written and read back, are about 5-10 ms, the compute
+#: of 0.2-0.5 M path-steps of contact under ground motion (200 paths of 30,000 steps: in
+#: chunks of 7 paths, 7.0-9.0 M path-steps/s; of 34, 9.2-10.7).
+MIN_CHUNK_STEPS = 1_000_000
+#: Largest history paths buffer of one chunk, in bytes (caps the chunk size when history
+#: statistics are asked for).
+HISTORY_CHUNK_BYTES = 8_000_000
+#: How many times cheaper a path-step of a scene in SIMD lanes counts in an automatic chunk's
+#: work (``_auto_chunk``): lanes run about 3-4x faster than the scalar loop (``make bench``,
+#: "Paths in SIMD lanes"), and a chunk's fixed costs (its table, its Parquet part) need about 3x
+#: more compute beside them to stay small (measured on the smooth scene, 4,096 paths of 20,000
+#: steps: 124, 158 and 151 M path-steps/s on one worker at 4, 16 and 64).  Not for a scene with
+#: Hertz contact: the scalar step finishes its steps in contact and its events, and its lanes
+#: run at about the scalar loop's speed (``make bench``: 1.03x on the contact-under-noise scene,
+#: whose 256 paths made one chunk that a second worker could not share).
+LANE_WORK = 16
+#: Realisations of an automatic chunk of the cuda backend (a launch fills a large GPU from
+#: about 1e5 threads on; ``gpu.simulate_many`` splits a chunk into launches that fit its memory).
+GPU_CHUNK = 1 << 20
+#: Largest history paths and Poincare samples of one cuda chunk on the host, in bytes.
+GPU_CHUNK_BYTES = 1 << 29
+#: Where ensembles run: ``run_chunk`` on CPU threads or ``run_chunk_cuda`` on an NVIDIA GPU.
+BACKENDS = ("cpu", "cuda")
+
+
+@dataclass
+class Plan:
+    """Scenes of the sweep points and the chunks ``(point, start, stop)`` covering them."""
+
+    scenes: list[Scene]
+    chunks: list[tuple[int, int, int]]
+
+
+def plan(study: Study, chunk: int | None = None, realizations: int | None = None,
+         backend: str = "cpu", history: History | None = None) -> Plan:
+    """Split every sweep point's realisations into chunks (``chunk`` 0 or None: automatic,
+    from the scene's cost and the backend alone, so the plan is the same on any cluster or
+    GPU).  With history statistics (or the time histories ``history``, where given, kept) a chunk
+    holds at most ``HISTORY_CHUNK_BYTES`` of paths (cuda: ``GPU_CHUNK_BYTES`` of paths and
+    Poincare samples)."""
+    scenes = [build_scene(s) for s in study.points]
+    wanted = study.base.ensemble.realizations if realizations is None else realizations
+    chunk = study.base.ensemble.chunk if chunk is None else chunk
+    spec = history or study.base.simulation.history
+    spectra = study.base.output.spectra
+    random = bool(study.base.uncertain)
+    counts = [wanted if scene.has_noise or random else 1 for scene in scenes]
+    chunks = []
+    for p, (scene, n) in enumerate(zip(scenes, counts)):
+        if backend == "cuda":
+            size = chunk or min(n, GPU_CHUNK)
+            row_bytes = recorded_bytes(scene, spec, spectra)
+            if scene.period > 0:
+                row_bytes += 8 * scene.n_samples * (2 * scene.mass.shape[0] + 2)
+            size = min(size, max(1, GPU_CHUNK_BYTES // max(row_bytes, 1)))
+        else:  # (a chunk that keeps history rows, an event log or declared metrics: the scalar loop)
+            kept = spec or spectra or scene.event_rows or scene.reductions.shape[0]
+            in_lanes = lane_scene(scene) and not kept
+            size = chunk or _auto_chunk(scene, n, in_lanes)
+        if (spec or spectra) and backend != "cuda":
+            row_bytes = recorded_bytes(scene, spec, spectra)
+            size = min(size, max(1, HISTORY_CHUNK_BYTES // row_bytes))
+        chunks += [(p, s, min(s + size, n)) for s in range(0, n, size)]
+    return Plan(scenes, chunks)
+
+
+def _auto_chunk(scene: Scene, n: int, lanes: bool) -> int:
+    """Realisations of an automatic CPU chunk: ``CHUNK_STEPS`` of work at most, ``n /
+    CHUNKS_PER_POINT`` where that leaves a chunk ``MIN_CHUNK_STEPS`` of work.  A chunk that runs
+    in SIMD lanes (``lanes``: a scene of ``kernels.chunk.lane_scene`` whose run keeps no history
+    rows, event log or declared metrics, which the scalar loop records) counts its path-steps
+    ``LANE_WORK`` times cheaper and takes at least a batch of lanes (``lanes.LANES`` paths, or
+    ``n``), its chunks then evened out (200 paths: two of 100, not 128 and 72); one with Hertz
+    contact counts its path-steps at their scalar cost."""
+    steps = max(scene.n_steps, 1)
+    work = LANE_WORK if lanes and not scene.has_hertz else 1
+    by_cost = max(1, work * CHUNK_STEPS // steps)
+    least = math.ceil(work * MIN_CHUNK_STEPS / steps)
+    size = max(1, min(by_cost, n, max(math.ceil(n / CHUNKS_PER_POINT), least)))
+    if lanes and n > 0:
+        size = max(size, min(n, LANES))
+        size = math.ceil(n / math.ceil(n / size))
+    return size
+
+
+def structure(scene: Scene) -> str:
+    """The structure a step loop is compiled for, in words (its scheme, bodies, floors and what
+    the loop carries)."""
+    features = [name for name, present in (("impacts", scene.has_impact), ("Hertz contact", scene.has_hertz),
+                                           ("white noise", scene.has_white_noise),
+                                           ("filtered loads", scene.has_filters),
+                                           ("ground motion", scene.has_ground),
+                                           ("geometric absorber", scene.has_geometric)) if present]
+    return (f"{scene.scheme} loop, {scene.mass.shape[0]} bodies, {scene.n_floors} floor(s)"
+            + "".join(f", {f}" for f in features))
+
+
+def prepare_loops(scenes: list[Scene], seed: int, common: bool, grid: tuple[int, int] | None = None,
+                  signals: tuple[str, ...] = DEFAULT_SIGNALS, show: bool = True) -> None:
+    """Compile (or load from numba's cache on disk) the step loop of each structure among
+    ``scenes`` that this process has not run yet, before any chunk starts, with one line each
+    (logged at INFO on the ``vines_stoch`` logger, and with ``show`` on standard error): which
+    structure, and whether it was compiled (once: later runs load it) or loaded.  A chunk of no
+    realisations runs each loop with the argument types of ``run_chunk``."""
+    seen = set()
+    for point, scene in enumerate(scenes):
+        columns = declare(signals, scene.n_floors, scene.kind.shape[0]) if grid else None
+        record = Record.of(scene, grid[1] if grid else 0, scene.event_rows, columns)
+        run = chunk_loop(kernel_for(scene, record=record))
+        if run in seen or run.overloads:
+            continue
+        seen.add(run)
+        if show:
+            print(f"step loop: {structure(scene)}: compiling or loading ...", end="", file=sys.stderr,
+                  flush=True)
+        hits, start = sum(run.stats.cache_hits.values()), time.monotonic()
+        simulate_chunk(scene, seed, point, 0, 0, common, grid, signals, scene.event_rows)
+        loaded = sum(run.stats.cache_hits.values()) > hits
+        outcome = (f"{'loaded from the cache' if loaded else 'compiled (cached on disk for later runs)'} "
+                   f"in {time.monotonic() - start:.1f} s")
+        LOG.info("step loop: %s: %s", structure(scene), outcome)
+        if show:
+            print(f" {outcome}", file=sys.stderr, flush=True)

@@ -1,0 +1,88 @@
+"""The protocol between a step loop (an executor: ``driver.step_loop``, ``lanes.lane_loop``, the
+cuda kernel of ``launch.py``) and a scheme's step (``kdk.py``, ``sra3.py``, ``rk4.py``): what a
+loop is specialised to (``Spec``), the step's functions (``Step``) and the accounts they pass
+(``ACCOUNTS``).
+
+The protocol (every function inlined; ``own``: the scheme's state and scratch, a named tuple
+its ``start`` makes on the loop's stack; ``sc``: its scalar state, a tuple carried from step
+to step; ``acct``: the accounts, ``ACCOUNTS``):
+
+- ``start(spec arrays..., x, v, carry, resume, gen_bridge) -> (own, sc)``: the scheme's state
+  at the path's start, or restored from the carry;
+- ``opening(own, x, v, inv_mass, acc, bodies, absorbers)``: at the metrics window's opening, each
+  floor's force or acceleration for the peaks into ``acc``;
+- ``check(own, i, dt, ex)``: every ``common.CHECK_EVERY`` steps (the phasors' exact reset);
+- ``step(i, x, v, inv_mass, acc, own, sc, acct, inside, peaks, bodies, absorbers, ex, fl,
+  noise, grid, outputs, gen, gen_filter) -> (sc, acct)``: one step of the grid, ``x, v`` in
+  place; ``acc`` is left with each floor's force or acceleration at the step's end for the
+  peaks;
+- ``save(carry, own, sc)``, ``finish(own, sc, fl, out)``: the scheme's part of the carry, and
+  of the metric vector and the filter bundle at the end.
+
+Two constants say how a scheme's step meets the accounts: ``integrates`` (the step integrates
+``E1`` and ``x_k^2`` with its own stages and observes the peaks and first passages at its own
+sub-steps' ends, as RK4 at its located events; otherwise the driver observes every step's end
+and integrates by the trapezoid rule) and ``force_peaks`` (``acc`` holds floor forces, the
+peak accelerations being the peak forces over the masses); a third, ``samples``, says whether
+the driver takes Poincare samples around the scheme's steps (where the scene asks for them:
+the deterministic scheme of regimes, ``scene.poincare_samples``; the others compile without).
+A scheme whose step also runs in SIMD lanes (``kernels/lanes.py``) gives ``advance``: the step
+after its loads and increments, ``advance(i, x, v, inv_mass, acc, own, seed, ag, ag_next, acct,
+inside, bodies, absorbers, ex, fl, noise, dt, out, events, impulses) -> acct`` (``seed``: its
+Brownian tree's), which finishes the lanes whose step holds an event.
+"""
+
+from __future__ import annotations
+
+from typing import Any, NamedTuple
+
+#: The accounts a step takes and returns, in this order (``energy``): input work, structure
+#: and absorber dissipation, the sum (or integral) of ``E1``, its peak, the impacts' loss and
+#: counts, contact time, peak contact force, limits not passed yet.
+ACCOUNTS = ("work", "d_primary", "d_absorber", "e_sum", "e1_max", "loss", "n_left", "n_right",
+            "contact_time", "peak_force", "pending")
+
+
+class Spec(NamedTuple):
+    """What a loop is specialised to (compile-time constants): the numbers of bodies, floors,
+    closed-form load rows and filter states (the sizes of its arrays on the stack), white
+    noise, impact and Hertz absorbers, impacts between absorbers (an impact absorber in
+    another's cavity: ``physics.structure.wall_of``), filtered loads, ground acceleration,
+    geometric attachments, the cuda backend's loop (per-absorber flags on the stack), and what the run
+    records beyond the built-in metrics (``outputs.Record``: first passages, history rows, the
+    event log, declared metrics, the absorbers' energy share among them, the impacts' impulses
+    for the signal ``contact_j``), whose code the loop holds only where asked."""
+
+    n_bodies: int
+    n_floors: int
+    n_rows: int
+    n_states: int
+    has_noise: bool
+    has_impact: bool
+    has_hertz: bool
+    partners: bool
+    filtered: bool
+    ground: bool
+    geometric: bool
+    gpu: bool
+    passages: bool
+    history: bool
+    events: bool
+    declared: bool
+    share: bool
+    contact: bool
+
+
+class Step(NamedTuple):
+    """A scheme's step and its hooks (see the module's docstring)."""
+
+    start: Any
+    opening: Any
+    check: Any
+    step: Any
+    save: Any
+    finish: Any
+    integrates: bool
+    force_peaks: bool
+    samples: bool
+    advance: Any = None
