@@ -123,7 +123,7 @@ def _table(raw: np.ndarray, scenes: Scene | list[Scene], samples: np.ndarray, po
     metrics (``finish_table``, ``samples``: the Poincare samples, ``(rows, samples, columns)``),
     then the intensity measures where the scene asks for them (``intensities``), and the event
     logs where it keeps them (``logs``: ``(rows, log rows, EVENT_COLUMNS)``), as list columns
-    ``event_<column>`` (a chunk's part holds them; ``_events`` makes them events.parquet's rows)."""
+    ``event_<column>`` (a chunk's part holds them; ``tables._events`` makes them events.parquet's rows)."""
     frame = finish_table(raw, scenes, samples if samples.shape[1] else None)
     first = scenes if isinstance(scenes, Scene) else scenes[0]
     refine_regimes(frame, scenes, samples, every=first.lyapunov)

@@ -29,7 +29,7 @@ def label_points(frame: pd.DataFrame, study: Study, point: int) -> pd.DataFrame:
 
 
 def _poincare(realizations: pd.DataFrame, sweep_keys: list[str]) -> tuple[pd.DataFrame, pd.DataFrame]:
-    """The realisations table without its Poincare list columns (``_table``), and
+    """The realisations table without its Poincare list columns (``chunks._table``), and
     poincare.parquet's rows: point, the swept values, realisation, ``period`` (the forcing
     period's index: the sample is at ``t = period T``), ``t``, then the state
     (``poincare_columns``); samples the path did not reach (a window shorter than the samples
@@ -43,7 +43,7 @@ def _poincare(realizations: pd.DataFrame, sweep_keys: list[str]) -> tuple[pd.Dat
 
 def _unlisted(realizations: pd.DataFrame, sweep_keys: list[str],
               prefix: str) -> tuple[pd.DataFrame, pd.DataFrame]:
-    """The realisations table without its list columns ``<prefix><name>`` (``_table``: a list a
+    """The realisations table without its list columns ``<prefix><name>`` (``chunks._table``: a list a
     realisation, the columns' lists of one length in a row), and their entries as rows: point,
     the swept values, realisation, then each list column (floats, named ``<name>``)."""
     listed = [c for c in realizations.columns if c.startswith(prefix)]
@@ -57,7 +57,7 @@ def _unlisted(realizations: pd.DataFrame, sweep_keys: list[str],
 
 
 def _events(realizations: pd.DataFrame, sweep_keys: list[str]) -> tuple[pd.DataFrame, pd.DataFrame]:
-    """The realisations table without its event log columns (``_table``), and events.parquet's
+    """The realisations table without its event log columns (``chunks._table``), and events.parquet's
     rows: point, the swept values, realisation, then each event's ``t``, ``absorber`` (from 1, in
     file order), ``wall`` (``"left"`` or ``"right"``), ``speed`` (the absorber's velocity relative
     to its host floor just before the event) and ``loss`` (the energy it took out)."""

@@ -32,7 +32,6 @@ from .chunk import (
 )
 from .lanes import LANES, lane_normals
 from .paths import (
-    _STARTED,
     DEFAULT_SIGNALS,
     SLOTS,
     Path,
@@ -67,7 +66,7 @@ def stretcher(*args: Any, **kwargs: Any):
     return make(*args, **kwargs)
 
 
-__all__ = ["DEFAULT_SIGNALS", "LANES", "SLOTS", "_STARTED", "Path", "advance", "bundles", "chunk_loop",
+__all__ = ["DEFAULT_SIGNALS", "LANES", "SLOTS", "Path", "advance", "bundles", "chunk_loop",
            "compile_first", "filter_draws", "ground_paths", "history_columns", "kernel_for",
            "lane_normals", "lane_scene", "launcher", "load_history", "needed_streams",
            "parameter_draws", "realization_streams", "sample_buffer", "scalar_loops", "seed_keys",

@@ -15,7 +15,8 @@ import numpy as np
 
 from tests.helpers import ROOT, example_data, scene_from
 from vines_stoch.jit import cache
-from vines_stoch.kernels import _STARTED, kernel_for, simulate
+from vines_stoch.kernels import kernel_for, simulate
+from vines_stoch.kernels.paths import _STARTED
 
 #: Stored energy of a primary with one linear absorber (``kernels.common.stored_energy``
 #: inlines ``physics.spring_damper_energy``), printed in full.
