@@ -4,12 +4,15 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 import pytest
 
 from tests.helpers import study_from
 from vines_stoch import load_scenario, read_results, run
-from vines_stoch.metrics import METRICS
+from vines_stoch.kernels import EXECUTORS, realization_streams, simulate
+from vines_stoch.metrics import METRICS, finish_table
+from vines_stoch.scene import build_scene
 from vines_stoch.store import read_metadata
 
 DATA = {
@@ -125,3 +128,36 @@ def test_automatic_chunks_that_keep_history_rows_count_at_the_scalar_cost():
     assert lane_scene(build_scene(kept.points[0]))
     assert len(plan(lanes).chunks) == 2
     assert {c[2] - c[1] for c in plan(kept).chunks[:-1]} == {math.ceil(200 / CHUNKS_PER_POINT)}
+
+
+def test_the_executor_is_an_argument_of_the_run():
+    """``executor="scalar"`` runs the scalar loop on the PCG64 streams of ``streams.streams``: a
+    realisation's row is ``simulate``'s on those streams, bitwise; the lanes draw from other
+    streams.  Runs of the two executors side by side, in two threads of one process, each give
+    the numbers they give alone (the executor is the run's, not a process-wide switch)."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    study = study_from(DATA)
+
+    def table(executor: str) -> pd.DataFrame:
+        return run(study, None, workers=1, executor=executor).realizations[METRIC_COLUMNS]
+
+    alone = {executor: table(executor) for executor in EXECUTORS}
+    assert (alone["lanes"]["edm"].to_numpy() != alone["scalar"]["edm"].to_numpy()).all()
+    point, r = 1, 5
+    scene = build_scene(study.points[point])
+    gens = realization_streams(scene, study.base.ensemble.seed, point, r, executor="scalar")
+    assert isinstance(gens.increments, np.random.Generator)  # (PCG64, not a Philox stream)
+    row = finish_table(simulate(scene, gens)[None, :], scene)
+    got = alone["scalar"][(alone["scalar"]["point"] == point) & (alone["scalar"]["realization"] == r)]
+    assert got["edm"].item() == row["edm"].item() and got["impacts"].item() == row["impacts"].item()
+    with ThreadPoolExecutor(2) as pool:
+        together = dict(zip(EXECUTORS, pool.map(table, EXECUTORS)))
+    for executor in EXECUTORS:
+        pd.testing.assert_frame_equal(together[executor], alone[executor], check_exact=True)
+
+
+@pytest.mark.parametrize("executor, backend", [("simd", "cpu"), (None, "cpu"), ("scalar", "cuda")])
+def test_a_wrong_executor_is_named(executor, backend):
+    with pytest.raises(ValueError, match=rf"executor = {executor!r}: .*'lanes'"):
+        run(study_from(DATA), None, executor=executor, backend=backend)

@@ -42,26 +42,27 @@ def draw_parameters(study: Study, seed: int, point: int, realization: int,
 
 def run_chunk(scene: Scene, seed: int, point: int, start: int, stop: int,
               grid: tuple[int, int] | None = None, study: Study | None = None,
-              common: bool = True,
-              signals: tuple[str, ...] = DEFAULT_SIGNALS) -> tuple[pd.DataFrame, np.ndarray | None]:
+              common: bool = True, signals: tuple[str, ...] = DEFAULT_SIGNALS,
+              executor: str = "lanes") -> tuple[pd.DataFrame, np.ndarray | None]:
     """Realisations ``start..stop-1`` of one sweep point: one metric row each and, when a
     history ``grid = (stride, size)`` is asked for, the paths of the history ``signals``
-    ``(len(signals), size, stop - start)``.  The realisations run in one compiled call
-    (``kernels.chunk.simulate_chunk``).  With ``study`` (a study with uncertain parameters) each
-    realisation runs its own scene (``binding``: the point's scene with the drawn values set), its
-    drawn values in columns named by their keys.
+    ``(len(signals), size, stop - start)``.  The realisations run in one compiled call of
+    ``executor`` (``kernels.EXECUTORS``, ``kernels.simulate_chunk``).  With ``study`` (a study
+    with uncertain parameters) each realisation runs its own scene (``binding``: the point's scene
+    with the drawn values set), its drawn values in columns named by their keys.
     ``common``: common random numbers across sweep points (see ``generator``)."""
     if study is None:
         drawn, scenes = {}, scene
-        parts = [simulate_chunk(scene, seed, point, start, stop, common, grid, signals, scene.event_rows)]
+        parts = [simulate_chunk(scene, seed, point, start, stop, common, grid, signals, scene.event_rows,
+                                executor)]
     else:
         drawn = chunk_parameters(study, seed, point, start, stop, common)
         bound = binding(study, point)
         scenes = [bound.scene({key: float(values[j]) for key, values in drawn.items()})
                   for j in range(stop - start)]
-        parts = [simulate_chunk(s, seed, point, r, r + 1, common, grid, signals, s.event_rows)
+        parts = [simulate_chunk(s, seed, point, r, r + 1, common, grid, signals, s.event_rows, executor)
                  for r, s in zip(range(start, stop), scenes)]
-    intensities = _intensities(scenes, seed, point, start, stop, common)
+    intensities = _intensities(scenes, seed, point, start, stop, common, executor=executor)
     raw, samples, history, events = (getattr(parts[0], name) if len(parts) == 1 else
                                      _stacked([getattr(part, name) for part in parts])
                                      for name in ("raw", "samples", "history", "events"))
@@ -80,14 +81,14 @@ def _stacked(parts: list[np.ndarray]) -> np.ndarray:
 
 
 def _intensities(scenes: Scene | list[Scene], seed: int, point: int, start: int, stop: int, common: bool,
-                 philox: bool = False) -> dict[str, np.ndarray]:
+                 philox: bool = False, executor: str = "lanes") -> dict[str, np.ndarray]:
     """``sa`` and ``pga`` of realisations ``start .. stop - 1`` (``scenes``: the point's, or one a
     realisation) from the ground paths they saw, their filter streams replayed (``ground_paths``:
-    PCG64, or Philox where the scene runs in SIMD lanes, ``lane_scene``, and on the cuda backend,
-    ``philox``); none where no scene asks."""
+    PCG64, or Philox where the scene runs in SIMD lanes under ``executor``, ``lane_scene``, and on
+    the cuda backend, ``philox``); none where no scene asks."""
     def of(s: Scene, first: int, last: int) -> dict[str, np.ndarray]:
-        paths = (ground_paths(s, seed, point, first, last, common, philox or lane_scene(s)) if s.im_period > 0
-                 else None)
+        in_philox = philox or lane_scene(s, executor)
+        paths = ground_paths(s, seed, point, first, last, common, in_philox) if s.im_period > 0 else None
         return ground_intensities(s, paths)
 
     if isinstance(scenes, Scene):

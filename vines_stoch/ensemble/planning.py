@@ -55,12 +55,13 @@ class Plan:
 
 
 def plan(study: Study, chunk: int | None = None, realizations: int | None = None,
-         backend: str = "cpu", history: History | None = None) -> Plan:
+         backend: str = "cpu", history: History | None = None,
+         executor: str = "lanes") -> Plan:
     """Split every sweep point's realisations into chunks (``chunk`` 0 or None: automatic,
-    from the scene's cost and the backend alone, so the plan is the same on any cluster or
-    GPU).  With history statistics (or the time histories ``history``, where given, kept) a chunk
-    holds at most ``HISTORY_CHUNK_BYTES`` of paths (cuda: ``GPU_CHUNK_BYTES`` of paths and
-    Poincare samples)."""
+    from the scene's cost, the backend and the CPU's ``executor`` alone, so the plan is the same
+    on any cluster or GPU).  With history statistics (or the time histories ``history``, where
+    given, kept) a chunk holds at most ``HISTORY_CHUNK_BYTES`` of paths (cuda: ``GPU_CHUNK_BYTES``
+    of paths and Poincare samples)."""
     scenes = [build_scene(s) for s in study.points]
     wanted = study.base.ensemble.realizations if realizations is None else realizations
     chunk = study.base.ensemble.chunk if chunk is None else chunk
@@ -78,7 +79,7 @@ def plan(study: Study, chunk: int | None = None, realizations: int | None = None
             size = min(size, max(1, GPU_CHUNK_BYTES // max(row_bytes, 1)))
         else:  # (a chunk that keeps history rows, an event log or declared metrics: the scalar loop)
             kept = spec or spectra or scene.event_rows or scene.reductions.shape[0]
-            in_lanes = lane_scene(scene) and not kept
+            in_lanes = lane_scene(scene, executor) and not kept
             size = chunk or _auto_chunk(scene, n, in_lanes)
         if (spec or spectra) and backend != "cuda":
             row_bytes = recorded_bytes(scene, spec, spectra)
@@ -119,12 +120,13 @@ def structure(scene: Scene) -> str:
 
 
 def prepare_loops(scenes: list[Scene], seed: int, common: bool, grid: tuple[int, int] | None = None,
-                  signals: tuple[str, ...] = DEFAULT_SIGNALS, show: bool = True) -> None:
+                  signals: tuple[str, ...] = DEFAULT_SIGNALS, show: bool = True,
+                  executor: str = "lanes") -> None:
     """Compile (or load from numba's cache on disk) the step loop of each structure among
     ``scenes`` that this process has not run yet, before any chunk starts, with one line each
     (logged at INFO on the ``vines_stoch`` logger, and with ``show`` on standard error): which
     structure, and whether it was compiled (once: later runs load it) or loaded.  A chunk of no
-    realisations runs each loop with the argument types of ``run_chunk``."""
+    realisations runs each loop with the argument types of ``run_chunk`` under ``executor``."""
     seen = set()
     for point, scene in enumerate(scenes):
         columns = declare(signals, scene.n_floors, scene.kind.shape[0]) if grid else None
@@ -137,7 +139,7 @@ def prepare_loops(scenes: list[Scene], seed: int, common: bool, grid: tuple[int,
             print(f"step loop: {structure(scene)}: compiling or loading ...", end="", file=sys.stderr,
                   flush=True)
         hits, start = sum(run.stats.cache_hits.values()), time.monotonic()
-        simulate_chunk(scene, seed, point, 0, 0, common, grid, signals, scene.event_rows)
+        simulate_chunk(scene, seed, point, 0, 0, common, grid, signals, scene.event_rows, executor)
         loaded = sum(run.stats.cache_hits.values()) > hits
         outcome = (f"{'loaded from the cache' if loaded else 'compiled (cached on disk for later runs)'} "
                    f"in {time.monotonic() - start:.1f} s")

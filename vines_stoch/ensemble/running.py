@@ -8,6 +8,7 @@ import os
 from collections.abc import Callable, Mapping
 from contextlib import ExitStack, closing
 from dataclasses import dataclass
+from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -18,7 +19,7 @@ from .. import history as hist
 from .. import notices, psd, rare, schedulers, sensitivity, store
 from ..binding import binding
 from ..environment import memory_problem, require_cluster
-from ..kernels import DEFAULT_SIGNALS
+from ..kernels import DEFAULT_SIGNALS, check_executor
 from ..metrics import residual_warnings
 from ..progress import Progress
 from ..results import Results, Solution, as_study, check_whole
@@ -53,7 +54,7 @@ def output_directory(study: Study, directory: str | Path | None = None) -> Path:
 
 def _check_arguments(out: object, workers: object, chunk: object, realizations: object, paths: object,
                      checkpoint_seconds: object, backend: object, shard: object = None,
-                     scheduler: object = None) -> None:
+                     scheduler: object = None, executor: object = "lanes") -> None:
     """Refuse an argument of ``run`` of the wrong type (``TypeError``) or out of its range
     (``ValueError``), naming it, its value and what is allowed."""
     if shard is not None and not (isinstance(shard, (tuple, list)) and len(shard) == 2
@@ -78,13 +79,17 @@ def _check_arguments(out: object, workers: object, chunk: object, realizations: 
         raise ValueError(f"checkpoint_seconds = {checkpoint_seconds!r}: must be a number >= 0")
     if backend not in BACKENDS:
         raise ValueError(f"backend {backend!r}: must be one of {', '.join(BACKENDS)}")
+    check_executor(executor)
+    if backend == "cuda" and executor != "lanes":
+        raise ValueError(f"executor = {executor!r}: chooses how the CPU runs realisations; the cuda backend "
+                         "runs one a GPU thread (leave executor at 'lanes')")
 
 
 def run(scenario: Study | Mapping[str, Any] | str | os.PathLike, out: str | Path | None = None, *,
         workers: int | None = None, chunk: int | None = None, realizations: int | None = None,
         paths: bool = False, resume: bool = False, scheduler: str | None = None, progress: bool = False,
         checkpoint_seconds: float = 30.0, shard: tuple[int, int] | None = None,
-        backend: str = "cpu", overwrite: bool = False) -> Results | None:
+        backend: str = "cpu", overwrite: bool = False, executor: str = "lanes") -> Results | None:
     """Run a scenario (a file's path, a dict of its tables or a validated ``Study``) and return
     its ``Results`` (realisations, summary, history statistics where ``[simulation.history]``
     asks for them, and with ``paths`` every realisation's time histories).
@@ -111,7 +116,12 @@ def run(scenario: Study | Mapping[str, Any] | str | os.PathLike, out: str | Path
     ``backend``: ``"cpu"`` (numba loops on CPU threads) or ``"cuda"`` (the same loops on an
     NVIDIA GPU, one realisation a thread: ``gpu.py``; its realisations draw from Philox streams,
     not the CPU's, so the two backends give two independent samples of the same law; where no
-    GPU is, ``gpu.GPUUnavailable`` says why).
+    GPU is, ``gpu.GPUUnavailable`` says why).  ``executor`` (the CPU's, ``kernels.EXECUTORS``):
+    ``"lanes"`` runs the scenes whose scheme allows it in SIMD lanes on Philox streams, the others
+    in the scalar loop; ``"scalar"`` runs every scene in the scalar loop on the PCG64 streams of
+    ``streams.streams`` (slower: the loop before SIMD lanes, kept as the benchmark's reference).
+    The two draw from different streams, so they give two independent samples of the same law;
+    within one, the numbers depend on nothing else.
 
     The directory is owned by one run at a time (``store.lock_folder``): a run into a folder
     another live run writes is refused with ``store.FolderInUse``.  Every file the run writes
@@ -120,7 +130,8 @@ def run(scenario: Study | Mapping[str, Any] | str | os.PathLike, out: str | Path
     run refuses parts, results or a checkpoint of another run.  Ctrl-C raises ``Interrupted``
     (a ``KeyboardInterrupt``) saying how many chunks are kept.
     """
-    _check_arguments(out, workers, chunk, realizations, paths, checkpoint_seconds, backend, shard, scheduler)
+    _check_arguments(out, workers, chunk, realizations, paths, checkpoint_seconds, backend, shard, scheduler,
+                     executor)
     scheduler = None if scheduler is None else os.fspath(scheduler)
     study = as_study(scenario)
     if backend == "cuda":
@@ -147,7 +158,7 @@ def run(scenario: Study | Mapping[str, Any] | str | os.PathLike, out: str | Path
         raise ValueError("resume and overwrite: give one (resume keeps an unfinished run's work, overwrite "
                          "discards it)")
     options = _Options(workers, chunk, realizations, paths, resume, scheduler, progress, checkpoint_seconds,
-                       shard, backend, overwrite)
+                       shard, backend, overwrite, executor)
     notices.emit(study.warnings)  # (the lines the command line prints, as warnings of their categories)
     results = _run_into(study, out, options)
     if results is not None:
@@ -198,6 +209,7 @@ class _Options:
     shard: tuple[int, int] | None
     backend: str
     overwrite: bool = False
+    executor: str = "lanes"
 
 
 def _run(study: Study, directory: Path | None, o: _Options) -> Results | None:
@@ -206,13 +218,14 @@ def _run(study: Study, directory: Path | None, o: _Options) -> Results | None:
     spec, spectra = base.simulation.history, base.output.spectra
     tracked = bool(spec or spectra)  # (folded from every realisation's paths, in order)
     grid_spec = spec or (History() if o.paths else None)  # (the grid of the paths kept)
-    the_plan = plan(study, o.chunk, o.realizations, o.backend, grid_spec)
+    the_plan = plan(study, o.chunk, o.realizations, o.backend, grid_spec, o.executor)
     seed, target = base.ensemble.seed, base.ensemble.target_sem
     signals = tuple(grid_spec.signals) if grid_spec else DEFAULT_SIGNALS
     grids = [hist.grid(scene.n_steps, grid_spec.points) if grid_spec else None for scene in the_plan.scenes]
     recorded = [recording(scene, grid_spec, spectra) for scene in the_plan.scenes]
     views = [view_of(scene, grid_spec, spectra) for scene in the_plan.scenes]
-    key = run_key(study.text, the_plan.chunks, o.backend)
+    # (the scalar executor's numbers are other streams': a run key of its own)
+    key = run_key(study.text, the_plan.chunks, o.backend if o.executor == "lanes" else f"{o.backend}, scalar")
     keep = "--resume" if o.resume else "--shard" if o.shard is not None else None
     found = set() if directory is None else prepare_folder(directory, key, len(the_plan.chunks), study.source,
                                                            keep, o.overwrite)
@@ -248,7 +261,7 @@ def _run(study: Study, directory: Path | None, o: _Options) -> Results | None:
     todo = [c for c in mine if c not in reusable]
     total = sum(c[2] - c[1] for c in mine)
     done = total - sum(c[2] - c[1] for c in todo)
-    chunk_runner = run_chunk_cuda if o.backend == "cuda" else run_chunk
+    chunk_runner = run_chunk_cuda if o.backend == "cuda" else partial(run_chunk, executor=o.executor)
 
     def call(c: tuple[int, int, int]) -> tuple:
         signals_c, grid_c = recorded[c[0]]
@@ -269,7 +282,7 @@ def _run(study: Study, directory: Path | None, o: _Options) -> Results | None:
     try:
         if o.backend == "cpu" and not o.scheduler and todo:
             prepare_loops(the_plan.scenes, seed, base.ensemble.common_random_numbers, recorded[0][1],
-                          recorded[0][0] or DEFAULT_SIGNALS, show=o.progress)
+                          recorded[0][0] or DEFAULT_SIGNALS, show=o.progress, executor=o.executor)
         with ExitStack() as stack:
             interrupted = stack.enter_context(noting_interrupts())
             fold_ready()
@@ -314,6 +327,7 @@ def _run(study: Study, directory: Path | None, o: _Options) -> Results | None:
                 raise KeyboardInterrupt
         if o.shard is not None:
             return None
+        where += ", scalar loop" if o.executor == "scalar" else ""
         meta = provenance(study.text, study.source, seed, where, o.backend, key)
         chosen = chosen_paths(study, the_plan, states, chunk_runner) if base.output.paths else None
         studies = {}

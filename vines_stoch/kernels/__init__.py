@@ -21,12 +21,13 @@ from __future__ import annotations
 from typing import Any
 
 from .chunk import (
+    EXECUTORS,
+    check_executor,
     chunk_loop,
     ground_paths,
     lane_scene,
     parameter_draws,
     realization_streams,
-    scalar_loops,
     seed_keys,
     simulate_chunk,
 )
@@ -66,8 +67,8 @@ def stretcher(*args: Any, **kwargs: Any):
     return make(*args, **kwargs)
 
 
-__all__ = ["DEFAULT_SIGNALS", "LANES", "SLOTS", "Path", "advance", "bundles", "chunk_loop",
-           "compile_first", "filter_draws", "ground_paths", "history_columns", "kernel_for",
-           "lane_normals", "lane_scene", "launcher", "load_history", "needed_streams",
-           "parameter_draws", "realization_streams", "sample_buffer", "scalar_loops", "seed_keys",
+__all__ = ["DEFAULT_SIGNALS", "EXECUTORS", "LANES", "SLOTS", "Path", "advance", "bundles",
+           "check_executor", "chunk_loop", "compile_first", "filter_draws", "ground_paths",
+           "history_columns", "kernel_for", "lane_normals", "lane_scene", "launcher", "load_history",
+           "needed_streams", "parameter_draws", "realization_streams", "sample_buffer", "seed_keys",
            "simulate", "simulate_chunk", "spec_of", "start_path", "step_of", "stretch_to", "stretcher"]

@@ -16,8 +16,6 @@ the steps (streams, state, the loop's entry), where a Python call a realisation 
 
 from __future__ import annotations
 
-from collections.abc import Iterator
-from contextlib import contextmanager
 from functools import cache, lru_cache
 from typing import NamedTuple
 
@@ -164,15 +162,15 @@ class Chunk(NamedTuple):
 
 def simulate_chunk(scene, seed: int, point: int, start: int, stop: int, common: bool = True,
                    history: tuple[int, int] | None = None, signals: tuple[str, ...] | None = None,
-                   event_rows: int = 0) -> Chunk:
+                   event_rows: int = 0, executor: str = "lanes") -> Chunk:
     """Realisations ``start .. stop - 1`` of ``scene`` at sweep point ``point`` on the streams of
-    ``seed`` (``streams.streams``; ``common``: common random numbers), in one compiled call:
-    what ``simulate`` gives for each, bitwise.  ``history = (stride, size)`` keeps ``size``
-    history rows of ``signals`` (``signals.declare``) every ``stride`` steps; ``event_rows``
-    rows of event log."""
+    ``seed`` (``realization_streams``; ``common``: common random numbers), in one compiled call
+    of ``executor`` (``EXECUTORS``): what ``simulate`` gives for each, bitwise.  ``history =
+    (stride, size)`` keeps ``size`` history rows of ``signals`` (``signals.declare``) every
+    ``stride`` steps; ``event_rows`` rows of event log."""
     n = stop - start
     wanted = np.array(needed_streams(scene), np.bool_)
-    philox = lane_scene(scene)
+    philox = lane_scene(scene, executor)
     gens = tuple((np.zeros(STREAM_WORDS, np.uint64) if philox else new_stream()) if w else _UNUSED
                  for w in wanted)
     stride, size = history or (1, 0)
@@ -203,35 +201,35 @@ def simulate_chunk(scene, seed: int, point: int, start: int, stop: int, common: 
     return Chunk(raw, samples, history_rows, events)
 
 
-#: Whether the scenes the registry puts in SIMD lanes run there (``scalar_loops`` turns it off).
-_LANES = [True]
+#: The CPU executors of an ensemble's realisations: ``"lanes"`` (the scenes whose scheme runs in
+#: SIMD lanes run there, ``lanes.lane_loop``, on Philox streams; the others in the scalar loop) and
+#: ``"scalar"`` (every scene in the scalar loop, ``driver.step_loop``, on the PCG64 streams of
+#: ``streams.streams``: the executor before SIMD lanes, the benchmark's reference).  The two draw
+#: from different streams, so they give two independent samples of the same law.
+EXECUTORS = ("lanes", "scalar")
 
 
-@contextmanager
-def scalar_loops() -> Iterator[None]:
-    """Within (this process): every scene runs as before SIMD lanes, in the scalar loop on the
-    PCG64 streams of ``streams.streams`` (the benchmark's reference, ``make bench``: the numbers
-    of a scene that runs in lanes are then those of other streams)."""
-    _LANES.append(False)
-    try:
-        yield
-    finally:
-        _LANES.pop()
+def check_executor(executor: object) -> None:
+    """Refuse an executor that is not one of ``EXECUTORS``, naming it and those allowed."""
+    if not (isinstance(executor, str) and executor in EXECUTORS):
+        raise ValueError(f"executor = {executor!r}: must be one of {', '.join(map(repr, EXECUTORS))}")
 
 
-def lane_scene(scene) -> bool:
-    """Whether ``scene``'s CPU ensembles run in SIMD lanes (``schemes.in_lanes``; not within
-    ``scalar_loops``), and so draw from the Philox streams of ``philox_keys``."""
-    return _LANES[-1] and in_lanes(scene.scheme)
+def lane_scene(scene, executor: str = "lanes") -> bool:
+    """Whether ``scene``'s CPU realisations run in SIMD lanes under ``executor`` (``EXECUTORS``:
+    the lanes executor, and a scheme the registry puts in lanes, ``schemes.in_lanes``), and so
+    draw from the Philox streams of ``philox_keys``."""
+    return executor == "lanes" and in_lanes(scene.scheme)
 
 
-def realization_streams(scene, seed: int, point: int, realization: int, common: bool = True) -> Streams:
-    """The streams realisation ``realization`` of ``scene`` draws from in a CPU ensemble
-    (``simulate_chunk``), each where the scene draws from it: Philox streams where the scene
-    runs in lanes (``lane_scene``), the PCG64 generators of ``streams.streams`` elsewhere.
+def realization_streams(scene, seed: int, point: int, realization: int, common: bool = True,
+                        executor: str = "lanes") -> Streams:
+    """The streams realisation ``realization`` of ``scene`` draws from in a CPU ensemble run by
+    ``executor`` (``simulate_chunk``), each where the scene draws from it: Philox streams where
+    the scene runs in lanes (``lane_scene``), the PCG64 generators of ``streams.streams`` elsewhere.
     ``simulate(scene, realization_streams(...))`` gives the realisation's row of the ensemble."""
     increments, bridge, filters = needed_streams(scene)
-    if not lane_scene(scene):
+    if not lane_scene(scene, executor):
         return streams(seed, point, realization, increments=increments, bridge=bridge, filters=filters,
                        common=common)
     return Streams(*(philox_stream(seed, purpose, realization, point, common) if wanted else None
@@ -275,4 +273,4 @@ def parameter_draws(keys, point: int, start: int, common: bool, normal, out) -> 
 
 
 __all__ = ["Chunk", "chunk_loop", "ground_paths", "lane_call", "lane_scene", "parameter_draws", "philox_keys",
-           "realization_streams", "reseed", "scalar_loops", "seed_keys", "simulate_chunk", "simulate_lanes"]
+           "realization_streams", "reseed", "seed_keys", "simulate_chunk", "simulate_lanes"]

@@ -26,7 +26,6 @@ section of the report (``make bench-gpu``, ``bench_gpu.py``) is kept when the re
 
 from __future__ import annotations
 
-import contextlib
 import os
 import subprocess
 import sys
@@ -193,10 +192,8 @@ def _scenario_study(path: str, point: int = 0, changes: Mapping[str, Any] | None
 
 def _lane_runs(study: Study, directory: Path, rounds: int) -> dict[str, float]:
     """Path-steps/s of ``run`` of ``study`` in SIMD lanes (1 and 2 threads, into a folder and
-    in memory) and in the scalar loop on PCG64 streams (``chunk.scalar_loops``), in turn, the
+    in memory) and in the scalar loop on PCG64 streams (``executor="scalar"``), in turn, the
     best of ``rounds``, and the means of ``x1_rms`` of the two with their standard errors."""
-    from ..kernels import scalar_loops
-
     sim = study.points[0].simulation
     paths, steps = study.points[0].ensemble.realizations, round(sim.duration / sim.dt)
     # (name, threads, the scalar loop, into a folder)
@@ -205,12 +202,11 @@ def _lane_runs(study: Study, directory: Path, rounds: int) -> dict[str, float]:
 
     def timed(folder: str | None, workers: int, scalar: bool) -> tuple[float, Any]:
         start = time.perf_counter()
-        with scalar_loops() if scalar else contextlib.nullcontext():
-            realizations, _ = run(study, folder and directory / folder, workers=workers)
+        realizations, _ = run(study, folder and directory / folder, workers=workers,
+                              executor="scalar" if scalar else "lanes")
         return paths * steps / (time.perf_counter() - start), realizations
 
-    with scalar_loops():
-        run(study, directory / "warm-scalar", workers=1, realizations=8)
+    run(study, directory / "warm-scalar", workers=1, realizations=8, executor="scalar")
     run(study, directory / "warm-lanes", workers=1, realizations=8)
     best = {"paths": paths, **{runner: 0.0 for runner, *_ in runners}}
     tables = {}
@@ -260,7 +256,7 @@ def _lane_budget(paths: int = 512, rounds: int = 3) -> dict[str, float]:
     (``simulate_chunk``, no files) in lanes with the scene's white noise and without it (the
     same kick-drift-kick update, no normals drawn), and of the scalar loop on PCG64 streams with
     it, in turn, the best of ``rounds``."""
-    from ..kernels import scalar_loops, simulate_chunk
+    from ..kernels import simulate_chunk
 
     noisy = scenes.scene("smooth", {"simulation.duration": 20.0})
     quiet = scenes.scene("smooth", {"simulation.duration": 20.0, "loads.1.intensity": 0.0,
@@ -270,8 +266,7 @@ def _lane_budget(paths: int = 512, rounds: int = 3) -> dict[str, float]:
     for r in range(-1, rounds):  # round -1 compiles or loads the loops
         for name, (scene, scalar) in runners.items():
             start = time.perf_counter()
-            with scalar_loops() if scalar else contextlib.nullcontext():
-                simulate_chunk(scene, 1, 0, 0, paths if r >= 0 else 2)
+            simulate_chunk(scene, 1, 0, 0, paths if r >= 0 else 2, executor="scalar" if scalar else "lanes")
             if r >= 0:
                 best[name] = max(best[name], paths * scene.n_steps / (time.perf_counter() - start))
     return best
