@@ -102,6 +102,9 @@ def run(
     backend: str = typer.Option("cpu", "--backend",
                                 help="cpu (numba on CPU threads) or cuda (an NVIDIA GPU through numba-cuda, "
                                      "one realisation a thread; its own random streams)."),
+    executor: str = typer.Option("lanes", "--executor",
+                                 help="How the CPU runs realisations: lanes (SIMD lanes, Philox streams) or "
+                                      "scalar (one path at a time, PCG64 streams; slower, another sample)."),
 ) -> None:
     """Run a scenario and write realizations.parquet and summary.parquet."""
     from .ensemble import Interrupted, output_directory
@@ -133,7 +136,7 @@ def run(
             warnings.simplefilter("ignore", VinesStochWarning)
             result = run_study(study, directory, workers=workers, chunk=chunk, resume=resume,
                                scheduler=scheduler, progress=not quiet, shard=share, backend=backend,
-                               overwrite=overwrite)
+                               overwrite=overwrite, executor=executor)
     except KeyboardInterrupt as exc:  # (Interrupted says how many chunks are kept)
         typer.echo(f"\n{exc if isinstance(exc, Interrupted) else 'interrupted'}", err=True)
         raise typer.Exit(130) from None

@@ -8,8 +8,9 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from tests.helpers import study_from
-from vines_stoch import load_scenario, read_results, run
+from tests.helpers import cli, study_from, toml_text
+from vines_stoch import load_scenario, read_results, run, solve
+from vines_stoch.ensemble import sample
 from vines_stoch.kernels import EXECUTORS, realization_streams, simulate
 from vines_stoch.metrics import METRICS, finish_table
 from vines_stoch.scene import build_scene
@@ -155,6 +156,30 @@ def test_the_executor_is_an_argument_of_the_run():
         together = dict(zip(EXECUTORS, pool.map(table, EXECUTORS)))
     for executor in EXECUTORS:
         pd.testing.assert_frame_equal(together[executor], alone[executor], check_exact=True)
+
+
+def test_solve_sample_and_the_command_line_take_the_executor(tmp_path):
+    """``solve``, ``sample`` and ``vines-stoch run --executor`` give, bitwise, the rows ``run``
+    gives with the same executor; the command line's folder says which loop ran."""
+    data = {**DATA, "ensemble": {"realizations": 6, "seed": 11}}
+    study = study_from(data)
+    scenario = tmp_path / "s.toml"
+    scenario.write_text(toml_text(data))
+    for executor in EXECUTORS:
+        rows = run(study, None, workers=1, executor=executor).realizations
+        sampled = sample(study, workers=1, executor=executor)
+        assert (sampled["edm"].to_numpy() == rows["edm"].to_numpy()).all()
+        got = solve(study, point=1, realization=4, points=11, executor=executor).metrics
+        row = rows[(rows["point"] == 1) & (rows["realization"] == 4)]
+        assert got["edm"] == row["edm"].item() and got["impacts"] == row["impacts"].item()
+        out = tmp_path / executor
+        assert cli("run", scenario, "--out", out, "--quiet", "--workers", "1", "--executor", executor)[0] == 0
+        written, _ = read_results(out)
+        assert (written["edm"].to_numpy() == rows["edm"].to_numpy()).all()
+        assert ("scalar loop" in read_metadata(out / "summary.parquet")["vines_stoch.scheduler"]) == (
+            executor == "scalar")
+    code, err = cli("run", scenario, "--out", tmp_path / "x", "--quiet", "--executor", "simd")
+    assert code != 0 and "executor = 'simd'" in err
 
 
 @pytest.mark.parametrize("executor, backend", [("simd", "cpu"), (None, "cpu"), ("scalar", "cuda")])

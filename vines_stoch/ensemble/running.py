@@ -383,27 +383,33 @@ def _design_output(study: Study, runner: Callable = run_chunk) -> Callable[[int,
     return output
 
 
-def sample(study: Study, workers: int | None = None) -> pd.DataFrame:
+def sample(study: Study, workers: int | None = None, executor: str = "lanes") -> pd.DataFrame:
     """Every realisation of every sweep point, in memory (no files, no history, no early
-    stopping): the metric rows in point and realisation order."""
-    the_plan = plan(study)
+    stopping): the metric rows in point and realisation order, the numbers ``run`` gives with the
+    same ``executor`` (``kernels.EXECUTORS``)."""
+    check_executor(executor)
+    the_plan = plan(study, executor=executor)
     base = study.base
     uncertain = study if base.uncertain else None
+    runner = partial(run_chunk, executor=executor)
 
     def call(c: tuple[int, int, int]) -> tuple:
-        return run_chunk, (the_plan.scenes[c[0]], base.ensemble.seed, *c, None, uncertain,
-                           base.ensemble.common_random_numbers)
+        return runner, (the_plan.scenes[c[0]], base.ensemble.seed, *c, None, uncertain,
+                        base.ensemble.common_random_numbers)
 
     done = dict(schedulers.embedded(the_plan.chunks, call, lambda c: False, workers or os.cpu_count() or 1))
     return pd.concat([label_points(done[c][0], study, c[0]) for c in the_plan.chunks], ignore_index=True)
 
 
 def solve(scenario: Study | Mapping[str, Any] | str | os.PathLike, *, point: int = 0, realization: int = 0,
-          points: int | None = None, signals: list[str] | tuple[str, ...] | None = None) -> Solution:
+          points: int | None = None, signals: list[str] | tuple[str, ...] | None = None,
+          executor: str = "lanes") -> Solution:
     """One realisation of a scenario with its time histories (``Solution``: ``ts``, ``ys`` by
     signal name, and its metrics, the same values as realisation ``realization`` of sweep point
-    ``point`` in an ensemble run).  ``points``: rows of the time grid (default: every step);
-    ``signals``: any of ``signals.signal_names`` (default ``x1``, ``e1``)."""
+    ``point`` in an ensemble run with the same ``executor``, ``kernels.EXECUTORS``).  ``points``:
+    rows of the time grid (default: every step); ``signals``: any of ``signals.signal_names``
+    (default ``x1``, ``e1``)."""
+    check_executor(executor)
     study = as_study(scenario)
     check_whole("point", point, 0, len(study.points) - 1, allow_none=False)
     check_whole("realization", realization, 0, 2**63 - 1, allow_none=False)
@@ -418,7 +424,8 @@ def solve(scenario: Study | Mapping[str, Any] | str | os.PathLike, *, point: int
     grid = hist.grid(scene.n_steps, points or scene.n_steps + 1)
     base = study.base
     frame, paths = run_chunk(scene, base.ensemble.seed, point, realization, realization + 1, grid,
-                             study if base.uncertain else None, base.ensemble.common_random_numbers, signals)
+                             study if base.uncertain else None, base.ensemble.common_random_numbers, signals,
+                             executor)
     label_points(frame, study, point)
     ys = {s: paths[i, :, 0] for i, s in enumerate(signals)}
     return Solution(scene.dt * grid[0] * np.arange(grid[1]), ys, frame.iloc[0], point, realization, study)
