@@ -14,9 +14,9 @@ from .physics.absorbers import (
     COLUMNS,
     HERTZ,
     IMPACT,
-    K_GEO,
     LAWS,
     ROW,
+    SHAPED,
 )
 from .physics.loads import (
     BLAST,
@@ -150,9 +150,10 @@ class Scene:
         return bool((self.wall != self.host).any())
 
     @cached_property
-    def has_geometric(self) -> bool:
-        """True when an absorber has the geometric attachment (its spring constant ``K_GEO``)."""
-        return bool((self.rows[:, K_GEO] != 0.0).any())
+    def has_shaped(self) -> bool:
+        """True when an absorber has a shaped spring (``physics.absorbers.SHAPED``: a geometric
+        attachment, a gap spring)."""
+        return bool((self.rows[:, SHAPED] != 0.0).any())
 
     @property
     def window(self) -> float:

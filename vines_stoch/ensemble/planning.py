@@ -114,7 +114,7 @@ def structure(scene: Scene) -> str:
                                            ("white noise", scene.has_white_noise),
                                            ("filtered loads", scene.has_filters),
                                            ("ground motion", scene.has_ground),
-                                           ("geometric absorber", scene.has_geometric)) if present]
+                                           ("shaped springs", scene.has_shaped)) if present]
     return (f"{scene.scheme} loop, {scene.mass.shape[0]} bodies, {scene.n_floors} floor(s)"
             + "".join(f", {f}" for f in features))
 

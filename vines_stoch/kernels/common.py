@@ -34,20 +34,17 @@ from ..outputs import (
 from ..physics.absorbers import (
     CLEARANCE,
     DAMPING,
-    FREE_LENGTH,
     HERTZ,
     IMPACT,
     K_CUBIC,
-    K_GEO,
     K_LEFT,
     K_LIN,
     K_RIGHT,
-    LENGTH,
     REST,
     WALL_HI,
     WALL_LO,
     coupling_energy,
-    geometric_force,
+    shaped_force,
     spring_damper_force,
 )
 from ..physics.hertz import CONTACT_STEPS, contact_energy, contact_force_law, contact_substep, hertz_force
@@ -92,7 +89,7 @@ DIVERGED = 1e100
 def attachment_forces(x, v, nf: int, storey_k, storey_c, floor_c, host, rows, force):
     """``force[b]``: force on body ``b`` from the structure and every absorber attachment
     (MODEL.md sections 1, 1a, 2; ``physics.absorbers.spring_damper_force``); loads, contact
-    forces and geometric springs (``geometric_forces``) are added by the caller."""
+    forces and shaped springs (``shaped_forces``) are added by the caller."""
     structure_forces(x, v, nf, storey_k, storey_c, floor_c, force)
     for a in range(x.shape[0] - nf):
         h = host_of(host, a, nf)
@@ -129,19 +126,17 @@ def contact_forces(x, nf: int, kind, host, rows, force, active=True):
 
 
 @njit(**INLINE)
-def geometric_forces(x, nf: int, host, rows, force, active=True):
-    """Add the geometric attachment's spring force (``physics.absorbers.geometric_force``) on each
-    absorber row that has one (``K_GEO`` not zero), the opposite on its host floor; nothing
-    unless ``active`` (a compile-time flag: the scene holds such a row.  Tested at run time on
-    every row, it halved the smooth scene's speed)."""
+def shaped_forces(x, nf: int, host, rows, force, active=True):
+    """Add the force of each absorber's shaped springs (``physics.absorbers.shaped_force``: the
+    geometric attachment, the gap spring) on the absorber, the opposite on its host floor;
+    nothing unless ``active`` (a compile-time flag: the scene holds a row with such a spring,
+    ``Scene.has_shaped``.  Tested at run time on every row, it halved the smooth scene's speed)."""
     for a in range(x.shape[0] - nf if active else 0):
-        if rows[a, K_GEO] != 0.0:
-            h = host_of(host, a, nf)
-            j = nf + a
-            f = geometric_force(x[j] - x[h] - rows[a, REST], rows[a, K_GEO], rows[a, FREE_LENGTH],
-                                rows[a, LENGTH])
-            force[j] += f
-            force[h] -= f
+        h = host_of(host, a, nf)
+        j = nf + a
+        f = shaped_force(rows, a, x[j] - x[h] - rows[a, REST])
+        force[j] += f
+        force[h] -= f
 
 
 @njit(**INLINE)

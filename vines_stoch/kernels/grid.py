@@ -14,7 +14,7 @@ from ..jit.flags import INLINE, KERNEL
 from ..jit.intrinsics import plain, runtime_value
 from ..streams.rng import normal
 from .carry import GROUND_NEXT, restore_loads, restore_rows, save_loads, save_rows
-from .common import attachment_forces, geometric_forces
+from .common import attachment_forces, shaped_forces
 from .loads import advance_filters, copy_into, excitation, phasors, rotations, turn
 
 
@@ -198,12 +198,12 @@ def step_normals(i: int, parts: int, noise_scale, slot, noisy: int, normals, ref
 
 
 @njit(**INLINE)
-def opening_forces(force, load, x, v, acc, bodies, absorbers, nf: int, geometric: bool) -> None:
+def opening_forces(force, load, x, v, acc, bodies, absorbers, nf: int, shaped: bool) -> None:
     """Each floor's force at the metrics window's opening (the structure's, the attachments' and
     the load at the step's start, ``load``) into ``acc``, for the peaks; ``force``: scratch."""
     attachment_forces(x, v, nf, bodies.storey_k, bodies.storey_c, bodies.floor_c, absorbers.host,
                       absorbers.rows, force)
-    geometric_forces(x, nf, absorbers.host, absorbers.rows, force, geometric)
+    shaped_forces(x, nf, absorbers.host, absorbers.rows, force, shaped)
     for k in range(nf):
         acc[k] = force[k] + load[k]
 

@@ -63,11 +63,11 @@ from .common import (
     contact_force,
     contact_forces,
     contact_step,
-    geometric_forces,
     keep_in_cavities,
     log_event,
     pin_to_walls,
     resolve_impact,
+    shaped_forces,
     stick_together,
 )
 from .energy import absorber_dissipation, impulse_work, momentum, structure_dissipation
@@ -339,7 +339,7 @@ def kdk_step(spec) -> Step:
     """
     # passes of a step's event loop: one without impact or Hertz absorbers (nothing to split at)
     has_noise, has_impact, has_hertz = spec.has_noise, spec.has_impact, spec.has_hertz
-    filtered, ground, geometric = spec.filtered, spec.ground, spec.geometric
+    filtered, ground, shaped = spec.filtered, spec.ground, spec.shaped
     EVENTS = MAX_SUBSTEPS if has_hertz else (MAX_EVENTS + 1 if has_impact else 1)
     TREE = has_noise and (has_impact or has_hertz)  # sub-steps take increments from the Brownian tree
     MEMO_SIZE = spec.n_floors * MEMO if TREE else 0
@@ -392,7 +392,7 @@ def kdk_step(spec) -> Step:
     @njit(**INLINE)
     def opening(own, x, v, inv_mass, acc, bodies, absorbers):
         # (the floors' forces: the driver's ``force_peaks``)
-        opening_forces(own.force, own.gl.load_next, x, v, acc, bodies, absorbers, NF, geometric)
+        opening_forces(own.force, own.gl.load_next, x, v, acc, bodies, absorbers, NF, shaped)
 
     @njit(**INLINE)
     def check(own, i, dt, ex):
@@ -463,7 +463,7 @@ def kdk_step(spec) -> Step:
                 break
             attachment_forces(x, v, nf, storey_k, storey_c, floor_c, host, rows, force)
             contact_forces(x, nf, kind, host, rows, force, has_hertz)
-            geometric_forces(x, nf, host, rows, force, geometric)
+            shaped_forces(x, nf, host, rows, force, shaped)
             # the sub-step: the rest of the step, or a Hertz contact's share of it; the
             # last pass a step allows takes the rest at once, with no events
             search = event < EVENTS - 1
@@ -534,7 +534,7 @@ def kdk_step(spec) -> Step:
                     load_end[k] = load_next[k]
             attachment_forces(x, v, nf, storey_k, storey_c, floor_c, host, rows, force)
             contact_forces(x, nf, kind, host, rows, force, has_hertz)
-            geometric_forces(x, nf, host, rows, force, geometric)
+            shaped_forces(x, nf, host, rows, force, shaped)
             kick(v, 0.5 * s, dwh, load_end, ag_end, force, inv_mass, vn, ground)
             if has_hertz:
                 contact_closing(x, v, vn, s, nf, inv_mass, host, rows, touching, held, owed)

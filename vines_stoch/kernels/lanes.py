@@ -76,8 +76,8 @@ from .common import (
     contact_forces,
     diverged,
     floor_peaks,
-    geometric_forces,
     keep_in_cavities,
+    shaped_forces,
     stored_energy,
     write_floor_metrics,
 )
@@ -170,7 +170,7 @@ def lane_loop(spec: Spec):
     NR = spec.n_rows
     NW = NB if spec.partners else NF  # (the bodies that may hold an impact absorber's walls)
     GROUND = spec.ground
-    GEOMETRIC = spec.geometric
+    SHAPED = spec.shaped
     NOISE = spec.has_noise
     PASSAGES = spec.passages
     IMPACT, CONTACT = spec.has_impact, spec.has_hertz
@@ -262,7 +262,7 @@ def lane_loop(spec: Spec):
             s[ESUM * W + lane] = 0.5 * e1
             s[E1 * W + lane] = e1
             opening_forces(force, own_load if FILTERED else gl.load_next, x, v, acc, bodies, absorbers, NF,
-                           GEOMETRIC)
+                           SHAPED)
             for k in range(NF):
                 s[(X2 + k) * W + lane] = 0.5 * x[k] * x[k]
                 x_max[k], drift_max[k], acc_max[k] = 0.0, 0.0, 0.0
@@ -298,7 +298,7 @@ def lane_loop(spec: Spec):
         the ``accounts``."""
         attachment_forces(x, v, NF, storey_k, storey_c, floor_c, host, rows, force)
         contact_forces(x, NF, kind, host, rows, force, CONTACT)
-        geometric_forces(x, NF, host, rows, force, GEOMETRIC)
+        shaped_forces(x, NF, host, rows, force, SHAPED)
         kick(v, 0.5 * dt, dwh, load, ag, force, inv_mass, vn, GROUND)
         work, d_primary, d_absorber = accounts
         if inside:

@@ -63,7 +63,7 @@ def spec_of(scene, gpu: bool = False, record: Record = Record()) -> Spec:
                 has_noise=scene.has_white_noise and grid, has_impact=scene.has_impact,
                 has_hertz=scene.has_hertz, partners=scene.has_partners,
                 filtered=scene.has_filters and grid, ground=scene.has_ground and grid,
-                geometric=scene.has_geometric, gpu=gpu, passages=record.passages, history=record.history,
+                shaped=scene.has_shaped, gpu=gpu, passages=record.passages, history=record.history,
                 events=record.events, declared=record.declared, share=record.share, contact=record.contact)
 
 

@@ -48,10 +48,11 @@ class Spec(NamedTuple):
     closed-form load rows and filter states (the sizes of its arrays on the stack), white
     noise, impact and Hertz absorbers, impacts between absorbers (an impact absorber in
     another's cavity: ``physics.structure.wall_of``), filtered loads, ground acceleration,
-    geometric attachments, the cuda backend's loop (per-absorber flags on the stack), and what the run
-    records beyond the built-in metrics (``outputs.Record``: first passages, history rows, the
-    event log, declared metrics, the absorbers' energy share among them, the impacts' impulses
-    for the signal ``contact_j``), whose code the loop holds only where asked."""
+    shaped springs (geometric attachments, gap springs), the cuda backend's loop (per-absorber
+    flags on the stack), and what the run records beyond the built-in metrics
+    (``outputs.Record``: first passages, history rows, the event log, declared metrics, the
+    absorbers' energy share among them, the impacts' impulses for the signal ``contact_j``),
+    whose code the loop holds only where asked."""
 
     n_bodies: int
     n_floors: int
@@ -63,7 +64,7 @@ class Spec(NamedTuple):
     partners: bool
     filtered: bool
     ground: bool
-    geometric: bool
+    shaped: bool
     gpu: bool
     passages: bool
     history: bool

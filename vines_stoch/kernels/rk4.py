@@ -39,11 +39,11 @@ from .common import (
     contact_step,
     first_passages,
     floor_peaks,
-    geometric_forces,
     keep_in_cavities,
     log_event,
     pin_to_walls,
     resolve_impact,
+    shaped_forces,
     stick_together,
 )
 from .events import EXIT, IMPACT_EVENT, NONE, ONSET, event_ahead, gap_sign
@@ -52,10 +52,10 @@ from .protocol import Step
 
 NEWTON_ITERATIONS = 12
 #: Bits of the ``contact`` argument of ``accelerations``: Hertz contact forces (at run time:
-#: absorbers in contact), geometric attachments (a compile-time constant of the loop:
-#: ``common.geometric_forces``), the contact constraint of stuck impact absorbers (at run
+#: absorbers in contact), shaped springs (geometric, gap; a compile-time constant of the loop:
+#: ``common.shaped_forces``), the contact constraint of stuck impact absorbers (at run
 #: time: absorbers stuck).  One argument for all: ``rk4_update`` has numba's 30.
-HERTZ_FORCES, GEOMETRIC_FORCES, STICKING = 1, 2, 4
+HERTZ_FORCES, SHAPED_FORCES, STICKING = 1, 2, 4
 
 
 @njit(**INLINE)
@@ -69,14 +69,14 @@ def accelerations(x, v, t, tm, nf, mass, inv_mass, storey_k, storey_c, floor_c, 
     The scene's arrays come one by one (``forces .. series_target``: the loads of
     kernels/loads.py, piecewise loads on the piece of ``tm``): unpacking a tuple of arrays
     costs reference counting at every call.  ``contact`` (bits ``HERTZ_FORCES``,
-    ``GEOMETRIC_FORCES``, ``STICKING``) adds the Hertz contact forces and the geometric
+    ``SHAPED_FORCES``, ``STICKING``) adds the Hertz contact forces and the shaped
     attachments' and applies the contact constraint of stuck impact absorbers on the bodies
     that hold their walls (``wall``: ``physics.structure.wall_of``) (flags, not branches around
     the calls: see ``jit.flags.INLINE``).
     """
     attachment_forces(x, v, nf, storey_k, storey_c, floor_c, host, rows, acc)
     contact_forces(x, nf, kind, host, rows, acc, (contact & HERTZ_FORCES) != 0)
-    geometric_forces(x, nf, host, rows, acc, (contact & GEOMETRIC_FORCES) != 0)
+    shaped_forces(x, nf, host, rows, acc, (contact & SHAPED_FORCES) != 0)
     ag = applied(t, tm, forces, series_t, series_v, series_ptr, series_target, series_t, False, load)
     accelerate(acc, load, ag, inv_mass, acc)
     power = 0.0
@@ -232,7 +232,7 @@ class Rk4State(NamedTuple):
 @cache
 def rk4_step(spec) -> Step:
     """The RK4 step with located events for a loop specialised to ``spec`` (``protocol.Spec``:
-    the bodies and floors, impact and Hertz absorbers, geometric attachments; no noise), as the
+    the bodies and floors, impact and Hertz absorbers, shaped springs; no noise), as the
     driver's ``Step``.  It integrates the energy accounts with its stages and observes the peaks
     and first passages at each sub-step's end (``integrates``); loads with kinks or jumps
     (``loads.has_breaks``) end its sub-steps (a run-time value).  ``spec.gpu``: per-absorber flags
@@ -242,7 +242,7 @@ def rk4_step(spec) -> Step:
     NA = spec.n_bodies - spec.n_floors
     NW = NB if spec.partners else NF  # the bodies that may hold an impact absorber's walls
     GPU = spec.gpu
-    GEO = GEOMETRIC_FORCES if spec.geometric else 0
+    GEO = SHAPED_FORCES if spec.shaped else 0
     has_impact, has_hertz = spec.has_impact, spec.has_hertz
     PASSAGES = spec.passages  # (what the run records: ``outputs.Record``)
     LOG = spec.events and (has_impact or has_hertz)

@@ -24,7 +24,7 @@ from ..jit.intrinsics import scratch
 from ..physics.absorbers import DAMPING
 from ..physics.structure import host_of
 from .carry import REPLAYED
-from .common import accelerate, attachment_forces, geometric_forces
+from .common import accelerate, attachment_forces, shaped_forces
 from .energy import momentum
 from .grid import (
     GridLoads,
@@ -45,7 +45,7 @@ from .protocol import Step
 
 @njit(**INLINE)
 def sra3_update(x, v, vn, force, a1, a2, a3, xs, v2, v3, load, load_next, load3, ag, ag_next, ag3, dw, dz, dt,
-              mass, inv_mass, storey_k, storey_c, floor_c, host, rows, inside, ground, geometric):
+              mass, inv_mass, storey_k, storey_c, floor_c, host, rows, inside, ground, shaped):
     """One SRA3 step of length ``dt`` from ``(x, v)``, in place.
 
     ``load``, ``load_next``, ``load3`` (and ``ag``, ``ag_next``, ``ag3``): the floors' loads
@@ -55,19 +55,19 @@ def sra3_update(x, v, vn, force, a1, a2, a3, xs, v2, v3, load, load_next, load3,
     increments of the input work, the structure's and the absorbers' dissipation (zero unless
     ``inside`` the metrics window), with the mean of the step's end velocities, for which the
     kinetic energy change equals the work of the step's impulses exactly.  ``ground``: the
-    scene has a ground acceleration, ``geometric``: geometric attachments
-    (``common.geometric_forces``; compile-time flags).
+    scene has a ground acceleration, ``shaped``: shaped springs
+    (``common.shaped_forces``; compile-time flags).
     """
     nb = x.shape[0]
     nf = load.shape[0]
     attachment_forces(x, v, nf, storey_k, storey_c, floor_c, host, rows, force)
-    geometric_forces(x, nf, host, rows, force, geometric)
+    shaped_forces(x, nf, host, rows, force, shaped)
     accelerate(force, load, ag, inv_mass, a1)
     for b in range(nb):
         xs[b] = x[b] + dt * v[b]
         v2[b] = v[b] + dt * a1[b]
     attachment_forces(xs, v2, nf, storey_k, storey_c, floor_c, host, rows, force)
-    geometric_forces(xs, nf, host, rows, force, geometric)
+    shaped_forces(xs, nf, host, rows, force, shaped)
     accelerate(force, load_next, ag_next, inv_mass, a2)
     for b in range(nb):
         xs[b] = x[b] + 0.25 * dt * (v[b] + v2[b])
@@ -75,7 +75,7 @@ def sra3_update(x, v, vn, force, a1, a2, a3, xs, v2, v3, load, load_next, load3,
     for k in range(nf):
         v3[k] += 1.5 * dz[k] / mass[k]
     attachment_forces(xs, v3, nf, storey_k, storey_c, floor_c, host, rows, force)
-    geometric_forces(xs, nf, host, rows, force, geometric)
+    shaped_forces(xs, nf, host, rows, force, shaped)
     accelerate(force, load3, ag3, inv_mass, a3)
     for b in range(nb):
         vn[b] = v[b] + dt * (a1[b] / 6.0 + a2[b] / 6.0 + 2.0 / 3.0 * a3[b])
@@ -142,7 +142,7 @@ def sra3_step(spec) -> Step:
     NF = spec.n_floors
     NR = spec.n_rows
     NZ = spec.n_states
-    has_noise, filtered, ground, geometric = spec.has_noise, spec.filtered, spec.ground, spec.geometric
+    has_noise, filtered, ground, shaped = spec.has_noise, spec.filtered, spec.ground, spec.shaped
     ROOT3 = math.sqrt(3.0)
 
     @njit(**INLINE)
@@ -162,7 +162,7 @@ def sra3_step(spec) -> Step:
 
     @njit(**INLINE)
     def opening(own, x, v, inv_mass, acc, bodies, absorbers):
-        opening_forces(own.force, own.gl.load_next, x, v, acc, bodies, absorbers, NF, geometric)
+        opening_forces(own.force, own.gl.load_next, x, v, acc, bodies, absorbers, NF, shaped)
         for k in range(NF):  # (accelerations)
             acc[k] *= inv_mass[k]
 
@@ -203,7 +203,7 @@ def sra3_step(spec) -> Step:
         dwork, dprimary, dabsorber = sra3_update(x, v, own.vn, own.force, own.a1, own.a2, own.a3, own.xs,
                                                  own.v2, own.v3, gl.load, gl.load_next, gl.load3, ag, ag_next,
                                                  ag3, dw, dz, dt, mass, inv_mass, storey_k, storey_c, floor_c,
-                                                 absorbers.host, absorbers.rows, inside, ground, geometric)
+                                                 absorbers.host, absorbers.rows, inside, ground, shaped)
         work += dwork
         d_primary += dprimary
         d_absorber += dabsorber

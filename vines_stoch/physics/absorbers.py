@@ -5,20 +5,22 @@ Bodies are numbered ``0 .. n_floors - 1`` (the primary's floors, lowest first; t
 roof) and then one per absorber.  Absorber ``a`` hangs on its host floor ``h``: its relative
 motion is ``u = x_a - x_h``, ``w = v_a - v_h``; ``f`` is the force the host exerts on it.
 
-Absorbers reach the kernels as kind-coded rows (``LAWS``, the columns ``K_LIN .. LENGTH``).
+Absorbers reach the kernels as kind-coded rows (``LAWS``, the columns ``K_LIN .. GAP``).
 The attachment force of every law is one sum: the polynomial spring-damper of
 ``spring_damper_force`` (linear, cubic, bistable; its coefficients zero where a law has none)
-plus the geometric term of ``geometric_force`` (two inclined springs, on rows whose spring
-constant ``K_GEO`` is not zero; the step loops of scenes without such a row leave it out at
-compile time: ``kernels.common.geometric_forces``); ``coupling_energy`` is its potential.  An
+plus the shaped springs of ``shaped_force``, the terms that are not a polynomial of ``u`` (the
+geometric attachment's two inclined springs, the gap spring), each on the rows whose constant
+(``SHAPED``) is not zero; the step loops of scenes without such a row leave them out at
+compile time (``kernels.common.shaped_forces``); ``coupling_energy`` is the potential.  An
 ``IMPACT`` row adds rigid walls at ``+-CLEARANCE`` (Newton restitution,
 ``impact.restitution_impact``), a ``HERTZ`` row finite-duration contact forces
 (``hertz.contact_force_law``).
 
 A new law is its code in ``LAWS`` and its schema class in ``scenario/bodies.py``, which gives its
 row (``parameters``) and linearised stiffness (``spring``); where it is not a polynomial, also
-its formula here, its term in ``coupling_energy`` and its force in the loops' force assembly
-(``kernels.common.geometric_forces`` is the model).
+its columns, its formula and energy here and their terms in ``shaped_force`` and
+``shaped_energy`` (the gap spring is the model): the step loops, the energy accounts and the
+statistical linearisation take it from there.
 """
 
 from __future__ import annotations
@@ -30,20 +32,25 @@ from numba import njit
 from ..jit.flags import INLINE
 
 #: Kind codes of absorber rows (MODEL.md section 2), by the ``type`` of a scenario's absorber.
-LINEAR, CUBIC, IMPACT, HERTZ, BISTABLE, GEOMETRIC = 0, 1, 2, 3, 4, 5
+LINEAR, CUBIC, IMPACT, HERTZ, BISTABLE, GEOMETRIC, GAP_SPRING = 0, 1, 2, 3, 4, 5, 6
 LAWS = {"linear": LINEAR, "cubic": CUBIC, "impact": IMPACT, "hertz": HERTZ, "bistable": BISTABLE,
-        "geometric": GEOMETRIC}
+        "geometric": GEOMETRIC, "gap": GAP_SPRING}
 #: Columns of an absorber row: attachment (linear and cubic stiffness, damping, spring rest
 #: offset), impact walls (clearance, restitution), Hertz contact (constants ``K`` and contact
 #: surfaces ``z_L = WALL_LO - u``, ``z_R = u - WALL_HI``), geometric attachment (each inclined
-#: spring's stiffness, its free length and its installed length).
+#: spring's stiffness, its free length and its installed length), gap spring (its stiffness and
+#: the gap beyond which it engages).
 (K_LIN, K_CUBIC, DAMPING, REST, CLEARANCE, RESTITUTION, K_LEFT, K_RIGHT, WALL_LO, WALL_HI, K_GEO, FREE_LENGTH,
- LENGTH) = range(13)
-ROW = 13
+ LENGTH, K_GAP, GAP) = range(15)
+ROW = 15
 #: The columns by name (the schema classes name the values of their rows: ``parameters``).
 COLUMNS = {"k_lin": K_LIN, "k_cubic": K_CUBIC, "damping": DAMPING, "rest": REST, "clearance": CLEARANCE,
            "restitution": RESTITUTION, "k_left": K_LEFT, "k_right": K_RIGHT, "wall_lo": WALL_LO,
-           "wall_hi": WALL_HI, "k_geo": K_GEO, "free_length": FREE_LENGTH, "length": LENGTH}
+           "wall_hi": WALL_HI, "k_geo": K_GEO, "free_length": FREE_LENGTH, "length": LENGTH,
+           "k_gap": K_GAP, "gap": GAP}
+#: The constants of the shaped springs (``shaped_force``): a row with one of them not zero has
+#: that term.
+SHAPED = (K_GEO, K_GAP)
 
 @njit(**INLINE)
 def spring_damper_force(u: float, w: float, k_lin: float, k_cubic: float, c: float) -> float:
@@ -94,10 +101,52 @@ def geometric_energy(u: float, k: float, free: float, length: float) -> float:
 
 
 @njit(**INLINE)
-def coupling_energy(rows, a: int, u: float) -> float:
-    """Potential energy of absorber row ``a``'s attachment at ``u`` (spring rest offset taken off):
-    the polynomial spring's and, on rows that have one, the geometric term's."""
-    e = spring_damper_energy(u, rows[a, K_LIN], rows[a, K_CUBIC])
+def gap_force(u: float, k: float, gap: float) -> float:
+    """Force of a linear spring of stiffness ``k`` engaged beyond a gap ``g`` on either side:
+    ``-k (u - g)`` for ``u > g``, ``-k (u + g)`` for ``u < -g``, zero between (MODEL.md section 2;
+    the piecewise-linear non-smooth NES of Lamarque, Gendelman, Ture Savadkoohi and Etcheverria,
+    Acta Mech. 221 (2011) 175; a linear spring with a clearance, Shaw and Holmes, J. Sound Vib.
+    90 (1983) 129).  With ``k_lin = 0`` beside it the absorber has no linear stiffness at rest:
+    a nonlinear energy sink."""
+    if u > gap:
+        return -k * (u - gap)
+    if u < -gap:
+        return -k * (u + gap)
+    return 0.0
+
+
+@njit(**INLINE)
+def gap_energy(u: float, k: float, gap: float) -> float:
+    """Potential energy of the gap spring: ``k (|u| - g)^2 / 2`` beyond the gap, zero within."""
+    d = abs(u) - gap
+    return 0.5 * k * d * d if d > 0.0 else 0.0
+
+
+@njit(**INLINE)
+def shaped_force(rows, a: int, u: float) -> float:
+    """The force of absorber row ``a``'s shaped springs at ``u`` (spring rest offset taken off):
+    the terms that are not a polynomial of ``u``, each where the row has it (``SHAPED``)."""
+    f = 0.0
+    if rows[a, K_GEO] != 0.0:
+        f += geometric_force(u, rows[a, K_GEO], rows[a, FREE_LENGTH], rows[a, LENGTH])
+    if rows[a, K_GAP] != 0.0:
+        f += gap_force(u, rows[a, K_GAP], rows[a, GAP])
+    return f
+
+
+@njit(**INLINE)
+def shaped_energy(rows, a: int, u: float) -> float:
+    """Potential energy of absorber row ``a``'s shaped springs at ``u`` (``shaped_force``'s)."""
+    e = 0.0
     if rows[a, K_GEO] != 0.0:
         e += geometric_energy(u, rows[a, K_GEO], rows[a, FREE_LENGTH], rows[a, LENGTH])
+    if rows[a, K_GAP] != 0.0:
+        e += gap_energy(u, rows[a, K_GAP], rows[a, GAP])
     return e
+
+
+@njit(**INLINE)
+def coupling_energy(rows, a: int, u: float) -> float:
+    """Potential energy of absorber row ``a``'s attachment at ``u`` (spring rest offset taken off):
+    the polynomial spring's and its shaped springs' (``shaped_energy``)."""
+    return spring_damper_energy(u, rows[a, K_LIN], rows[a, K_CUBIC]) + shaped_energy(rows, a, u)

@@ -11,7 +11,9 @@ import numpy as np
 from ..physics.absorbers import (
     DAMPING,
     FREE_LENGTH,
+    GAP,
     K_CUBIC,
+    K_GAP,
     K_GEO,
     K_LEFT,
     K_LIN,
@@ -35,8 +37,8 @@ def _second(path: Trajectory, i: int) -> np.ndarray:
 def coupling_energy(row: np.ndarray, mu: float, s: float) -> float:
     """``E[V(u)]`` of an absorber's attachment and contacts (``physics.absorbers.coupling_energy``,
     ``physics.hertz.contact_energy``) for ``u ~ N(mu, s^2)``: the polynomial's moments
-    (``E[y^4] = mu^4 + 6 mu^2 s^2 + 3 s^4``), Gauss-Hermite for the geometric term, ``0.4 K E[z_+^2.5]``
-    for a contact."""
+    (``E[y^4] = mu^4 + 6 mu^2 s^2 + 3 s^4``), Gauss-Hermite for the geometric term,
+    ``k / 2 E[(|y| - g)_+^2]`` for a gap spring, ``0.4 K E[z_+^2.5]`` for a contact."""
     y = mu - row[REST]
     y2, y4 = y * y + s * s, y**4 + 6 * y * y * s * s + 3 * s**4
     e = 0.5 * row[K_LIN] * y2 + 0.25 * row[K_CUBIC] * y4
@@ -44,6 +46,9 @@ def coupling_energy(row: np.ndarray, mu: float, s: float) -> float:
         f = geometric_energy.py_func
         values = [f(y + s * n, row[K_GEO], row[FREE_LENGTH], row[LENGTH]) for n in NODES]
         e += float(WEIGHTS @ np.array(values))
+    if row[K_GAP] != 0.0:
+        g = row[GAP]
+        e += 0.5 * row[K_GAP] * (positive_moment(y - g, s, 2.0) + positive_moment(-y - g, s, 2.0))
     for k, m in ((row[K_LEFT], row[WALL_LO] - mu), (row[K_RIGHT], mu - row[WALL_HI])):
         if k > 0.0:
             e += 0.4 * k * positive_moment(m, s, 2.5)

@@ -5,8 +5,9 @@ Absorber ``a``'s elastic force ``g(u)`` (its damping is linear) is replaced, und
 law ``u ~ N(mu, s^2)`` of its motion relative to its host floor, by ``E[g] + k (u - mu)`` with the
 slope ``k = E[g'(u)]``: closed forms for the polynomial laws (linear, cubic, bistable:
 ``E[y^3] = mu^3 + 3 mu s^2``) and Hertz contact (``E[z_+^p]`` of a Gaussian ``z`` by the parabolic
-cylinder function ``D``: ``s^p Gamma(p + 1) exp(-m^2 / 4 s^2) D_{-p-1}(-m / s) / sqrt(2 pi)``),
-Gauss-Hermite quadrature for the geometric law.  The moments depend on the slopes, so the pair is
+cylinder function ``D``: ``s^p Gamma(p + 1) exp(-m^2 / 4 s^2) D_{-p-1}(-m / s) / sqrt(2 pi)``) and the
+gap spring (``-k (E[(y - g)_+] - E[(-y - g)_+])``, slope ``-k P(|y| > g)``), Gauss-Hermite
+quadrature for the geometric law.  The moments depend on the slopes, so the pair is
 iterated to a fixed point (``stationary``).
 """
 
@@ -19,8 +20,10 @@ from scipy.special import gamma, pbdv
 
 from ..physics.absorbers import (
     FREE_LENGTH,
+    GAP,
     HERTZ,
     K_CUBIC,
+    K_GAP,
     K_GEO,
     K_LEFT,
     K_LIN,
@@ -40,9 +43,10 @@ WEIGHTS = WEIGHTS / math.sqrt(2.0 * math.pi)
 
 
 def positive_moment(m: float, s: float, p: float) -> float:
-    """``E[max(z, 0)^p]`` for ``z ~ N(m, s^2)`` (closed form: module docstring)."""
+    """``E[max(z, 0)^p]`` for ``z ~ N(m, s^2)`` (closed form: module docstring); for ``p = 0``
+    the probability ``P(z > 0)``."""
     if s <= 0.0:
-        return max(m, 0.0) ** p
+        return float(m > 0.0) if p == 0.0 else max(m, 0.0) ** p
     x = -m / s
     if x > 37.0:  # (no mass beyond zero left to double precision)
         return 0.0
@@ -68,6 +72,10 @@ def law(row: np.ndarray, mu: float, s: float) -> tuple[float, float]:
             e = 1e-7 * max(abs(y), row[LENGTH])
             slope += (force(y + e, row[K_GEO], row[FREE_LENGTH], row[LENGTH])
                       - force(y - e, row[K_GEO], row[FREE_LENGTH], row[LENGTH])) / (2.0 * e)
+    if row[K_GAP] != 0.0:
+        g = row[GAP]
+        mean -= row[K_GAP] * (positive_moment(y - g, s, 1.0) - positive_moment(-y - g, s, 1.0))
+        slope -= row[K_GAP] * (positive_moment(y - g, s, 0.0) + positive_moment(-y - g, s, 0.0))
     for k, sign, m in ((row[K_LEFT], 1.0, row[WALL_LO] - mu), (row[K_RIGHT], -1.0, mu - row[WALL_HI])):
         if k > 0.0:  # left: +K z_L^1.5, z_L = WALL_LO - u; right: -K z_R^1.5, z_R = u - WALL_HI
             mean += sign * k * positive_moment(m, s, 1.5)

@@ -12,7 +12,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from ..physics.absorbers import BISTABLE, HERTZ, K_CUBIC, K_GEO
+from ..physics.absorbers import BISTABLE, HERTZ, K_CUBIC, SHAPED
 from . import energy, linearization, moments, passage
 from .system import Model, NotApplicable, bare, build, check_laws
 
@@ -74,9 +74,10 @@ def _forcing(path: moments.Trajectory) -> tuple[np.ndarray, np.ndarray, np.ndarr
 
 
 def _nonlinear(scene) -> np.ndarray:
-    """The absorbers whose law is not linear: a cubic or geometric term, or Hertz contact (a
-    ``cubic`` absorber of zero cubic stiffness is a linear one)."""
-    return (scene.rows[:, K_CUBIC] != 0.0) | (scene.rows[:, K_GEO] != 0.0) | (scene.kind == HERTZ)
+    """The absorbers whose law is not linear: a cubic term, a shaped spring (geometric, gap) or
+    Hertz contact (a ``cubic`` absorber of zero cubic stiffness is a linear one)."""
+    return ((scene.rows[:, K_CUBIC] != 0.0) | (scene.rows[:, SHAPED] != 0.0).any(axis=1)
+            | (scene.kind == HERTZ))
 
 
 def _statistics(path: moments.Trajectory, out: _Output, b: np.ndarray, feed: np.ndarray,

@@ -15,6 +15,7 @@ from .bodies import (
     BistableAbsorber,
     Contact,
     CubicAbsorber,
+    GapAbsorber,
     GeometricAbsorber,
     HertzAbsorber,
     ImpactAbsorber,
@@ -71,7 +72,7 @@ from .sweeps import get_path, set_path
 __all__ = [
     "OBJECTIVES", "Absorber", "BaseHarmonicLoad", "BistableAbsorber", "BlastLoad", "Bound", "ChirpLoad",
     "Contact", "CubicAbsorber", "Distribution", "Ensemble", "FilteredNoiseLoad", "ForceRecordLoad",
-    "GeometricAbsorber", "GroundMotionLoad", "HalfSineLoad", "HarmonicLoad",
+    "GapAbsorber", "GeometricAbsorber", "GroundMotionLoad", "HalfSineLoad", "HarmonicLoad",
     "HertzAbsorber", "History", "ImpactAbsorber", "IntensityMeasures", "ImpulseLoad", "InitialLoad",
     "JenningsEnvelope", "Limit", "LinearAbsorber", "Load", "LognormalDistribution", "NormalDistribution",
     "Optimize", "Output", "Paths", "Primary", "PulseTrainLoad", "Rayleigh", "RecordLoad",

@@ -252,6 +252,31 @@ class GeometricAbsorber(_Absorber):
         return 2.0 * self.stiffness * (1.0 - self.free_length / self.length)
 
 
+class GapAbsorber(_Absorber):
+    """Piecewise-linear NES: a linear spring of stiffness ``stiffness`` engaged beyond a gap
+    ``gap`` on either side, beside an optional linear spring ``linear_stiffness`` and a dashpot,
+    ``f = -k_lin u - k (|u| - g)_+ sign(u) - c w`` (MODEL.md section 2; the non-smooth NES of
+    Lamarque, Gendelman, Ture Savadkoohi and Etcheverria, Acta Mech. 221 (2011) 175): without the
+    linear spring it has no stiffness at rest, an essentially nonlinear energy sink."""
+
+    type: Literal["gap"]
+    floor: Floor | None = None
+    mass: Mass
+    stiffness: Positive
+    gap: NonNegative
+    linear_stiffness: NonNegative = 0.0
+    damping: NonNegative = 0.0
+
+    columns: ClassVar[dict[str, str]] = {"stiffness": "k_gap", "gap": "gap", "linear_stiffness": "k_lin",
+                                         "damping": "damping"}
+
+    @property
+    def spring(self) -> float:
+        """Stiffness of the attachment with its gap spring engaged, ``k_lin + k`` (its stiffest
+        branch: the frequency the ``dt`` checks must resolve)."""
+        return self.linear_stiffness + self.stiffness
+
+
 class ImpactAbsorber(_Absorber):
     """Vibro-impact NES in a symmetric cavity with Newton restitution (MODEL.md section 2).
 
@@ -383,8 +408,10 @@ class HertzAbsorber(_Absorber):
 
 #: Every absorber type, by its ``type``.
 ABSORBERS = {"linear": LinearAbsorber, "cubic": CubicAbsorber, "impact": ImpactAbsorber,
-             "hertz": HertzAbsorber, "bistable": BistableAbsorber, "geometric": GeometricAbsorber}
+             "hertz": HertzAbsorber, "bistable": BistableAbsorber, "geometric": GeometricAbsorber,
+             "gap": GapAbsorber}
 Absorber = Annotated[
-    LinearAbsorber | CubicAbsorber | ImpactAbsorber | HertzAbsorber | BistableAbsorber | GeometricAbsorber,
+    LinearAbsorber | CubicAbsorber | ImpactAbsorber | HertzAbsorber | BistableAbsorber | GeometricAbsorber
+    | GapAbsorber,
     Field(discriminator="type"),
 ]

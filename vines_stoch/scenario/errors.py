@@ -168,14 +168,16 @@ def _dotted(loc: tuple[Any, ...], data: Any) -> tuple[str, Any, tuple[Any, ...]]
     """Dotted key, the user's value at it, and the location without union tags."""
     parts: list[str] = []
     clean: list[Any] = []
-    node = data
+    node, tagged = data, None
     for part in loc:
+        if isinstance(part, str) and isinstance(node, dict) and node is not tagged and part in (
+                node.get(t) for t in TAGS):
+            tagged = node  # the tag of a tagged union, not a key of the file (once: a gap
+            continue  # absorber's tag is "gap", its field too)
         if isinstance(node, dict) and part in node:
             node = node[part]
         elif isinstance(node, list) and isinstance(part, int) and part < len(node):
             node = node[part]
-        elif isinstance(part, str) and isinstance(node, dict) and part in (node.get(t) for t in TAGS):
-            continue  # the tag of a tagged union, not a key of the file
         else:
             node = MISSING
         parts.append(str(part))

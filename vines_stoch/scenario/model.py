@@ -11,6 +11,7 @@ from pydantic import Field, model_validator
 from .. import schemes
 from ..signals import declare_metrics, floor_name, sensitivity_metrics, signal_names
 from .bodies import (
+    ABSORBERS,
     Absorber,
     HertzAbsorber,
     ImpactAbsorber,
@@ -218,8 +219,9 @@ class Scenario(_Model):
                 raise FieldError(key, j, f"must name another absorber: j in [1, {na}] (file order), not "
                                  f"{i + 1}, this one")
             if isinstance(self.absorbers[j - 1], ImpactAbsorber):
+                others = ", ".join(t for t in ABSORBERS if t != "impact")
                 raise FieldError(key, j, f"absorber {j} is an impact absorber: the cavity must be in an "
-                                 "absorber of another type (linear, cubic, bistable, geometric, hertz)")
+                                 f"absorber of another type ({others})")
 
     def _check_signals(self, key: str, signals: list[str]) -> None:
         """A ``FieldError`` for ``key`` where a name of ``signals`` is not a signal of the scene."""
