@@ -5,8 +5,10 @@ from __future__ import annotations
 
 import math
 import tomllib
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any, NamedTuple
 
 import numpy as np
 import pandas as pd
@@ -238,20 +240,43 @@ def phase_pairs(signals: list[str]) -> list[tuple[str, str]]:
     pairs += [(f"xa_{name[3:]}", name) for name in signals if name.startswith("va_")]
     return [(x, v) for x, v in pairs if x in signals]
 
-
 def _plots(runs: list[Run], out: Path, point: int | None) -> list[str]:
     """Write the plots, PNG and SVG (where matplotlib is installed); returns the PNG files' names."""
     plt = pyplot(f"the plots of {out / 'report.md'}")
     if plt is None:
         return []
     files = []
-    tables = runs[0].scenario  # (the units of swept keys that depend on a load's or absorber's type)
 
     def save(fig, name: str) -> None:
         legend(fig.axes[0])
         save_figure(fig, out / name)
         files.append(name)
 
+    canvas = _Canvas(plt, runs, runs[0].scenario, point, save)
+    for draw in PLOTS:
+        draw(canvas)
+    return files
+
+
+class _Canvas(NamedTuple):
+    """What every plot of a report draws with: pyplot, the runs, the first run's scenario tables
+    (the units of its swept keys), the sweep point of the one-point plots, and ``save``."""
+
+    plt: Any
+    runs: list[Run]
+    tables: dict
+    point: int | None
+    save: Callable[[Any, str], None]
+
+
+def _keyed(runs: list[Run]) -> list[Run]:
+    """The runs swept over one key (the plots against the swept value)."""
+    return [run for run in runs if len(run.swept) == 1 and run.axes]
+
+
+def _edm_against_input(canvas: _Canvas) -> None:
+    """The EDM against the input energy, one line a run, with its 95 % interval."""
+    plt, runs, save = canvas.plt, canvas.runs, canvas.save
     fig, ax = plt.subplots()
     for run in runs:
         s = run.summary.sort_values("input_energy_mean")
@@ -262,7 +287,11 @@ def _plots(runs: list[Run], out: Path, point: int | None) -> list[str]:
            title="Energy dissipation measure against input energy")
     save(fig, "edm_vs_input_energy.png")
 
-    keyed = [run for run in runs if len(run.swept) == 1 and run.axes]
+
+def _sweep_plots(canvas: _Canvas) -> None:
+    """Against a run's one swept key: the energy integral, and the maximum energy over the regimes."""
+    plt, runs, tables, save = canvas.plt, canvas.runs, canvas.tables, canvas.save
+    keyed = _keyed(runs)
     if keyed:
         key = keyed[0].axes[0]
         fig, ax = plt.subplots()
@@ -299,6 +328,10 @@ def _plots(runs: list[Run], out: Path, point: int | None) -> list[str]:
                    title="Maximum primary energy with regimes")
             save(fig, "e1_max_regimes.png")
 
+
+def _estimates_plot(canvas: _Canvas) -> None:
+    """The Monte Carlo means beside their estimates without an ensemble, a metric a panel."""
+    plt, runs, tables, save = canvas.plt, canvas.runs, canvas.tables, canvas.save
     estimated = [run for run in runs if _estimated(run)]
     if estimated:  # the Monte Carlo means and their estimates on the same axes, a metric a panel
         run = estimated[0]
@@ -319,6 +352,11 @@ def _plots(runs: list[Run], out: Path, point: int | None) -> list[str]:
         fig.suptitle("Estimates without an ensemble beside the Monte Carlo means")
         save(fig, "estimates.png")
 
+
+def _zones_plot(canvas: _Canvas) -> None:
+    """Where the absorbers meet both walls, one or none, against the swept value."""
+    plt, runs, tables, save = canvas.plt, canvas.runs, canvas.tables, canvas.save
+    keyed = _keyed(runs)
     walls = [run for run in keyed if (run.realizations["impacts"] > 0).any()]
     if walls:  # where the absorbers meet both walls, one or none, against the swept value
         key = walls[0].axes[0]
@@ -339,6 +377,10 @@ def _plots(runs: list[Run], out: Path, point: int | None) -> list[str]:
                ylim=(-0.8, len(walls) - 0.2), title="Impact zones: walls met against the swept value")
         save(fig, "impact_zones.png")
 
+
+def _path_plots(canvas: _Canvas) -> None:
+    """One realisation's time histories, a signal an axis, and its phase portraits."""
+    plt, runs, point, save = canvas.plt, canvas.runs, canvas.point, canvas.save
     traced = [run for run in runs if run.paths is not None and len(run.paths)]
     if traced:  # one realisation's time histories, a signal an axis, and its phase portraits
         chosen, portraits = [], []
@@ -375,6 +417,10 @@ def _plots(runs: list[Run], out: Path, point: int | None) -> list[str]:
                    ylabel=f"velocity: {', '.join(label(v) for *_, v in portraits)}", title="Phase portraits")
             save(fig, "phase_portrait.png")
 
+
+def _section_plots(canvas: _Canvas) -> None:
+    """The roof's Poincare samples: against the swept value, and in its phase plane."""
+    plt, runs, tables, point, save = canvas
     sections = [run for run in runs if run.poincare is not None and len(run.poincare)]
     if sections:  # the roof's Poincare samples: against the swept value, and in its phase plane
         roof = max(int(c[2:]) for c in sections[0].poincare.columns if c.startswith("x_") and c[2:].isdigit())
@@ -398,6 +444,10 @@ def _plots(runs: list[Run], out: Path, point: int | None) -> list[str]:
         ax.set(xlabel=label(x), ylabel=label(v), title="Poincare section of the roof (t = n T)")
         save(fig, "poincare_section.png")
 
+
+def _spectra_plot(canvas: _Canvas) -> None:
+    """Each signal's power spectral density at one point, with its band."""
+    plt, runs, point, save = canvas.plt, canvas.runs, canvas.point, canvas.save
     spectral = [run for run in runs if run.spectra is not None and len(run.spectra)]
     if spectral:  # each signal's density at one point, with its band
         fig, ax = plt.subplots()
@@ -413,6 +463,10 @@ def _plots(runs: list[Run], out: Path, point: int | None) -> list[str]:
                title="Power spectral densities (Welch), 95 % bands")
         save(fig, "spectra.png")
 
+
+def _rare_plot(canvas: _Canvas) -> None:
+    """Rare-event estimates: the running estimate against the paths spent; the levels."""
+    plt, runs, save = canvas.plt, canvas.runs, canvas.save
     estimated = [run for run in runs if run.rare is not None and len(run.rare)]
     if estimated:  # each point's replicas: the running estimate against the paths spent; the levels
         fig, (conv, lev) = plt.subplots(1, 2, figsize=(11, 4.2))
@@ -437,6 +491,10 @@ def _plots(runs: list[Run], out: Path, point: int | None) -> list[str]:
                 title="Levels of a replica (splitting: z_j; subset: thresholds)")
         save(fig, "rare_events.png")
 
+
+def _sensitivity_plot(canvas: _Canvas) -> None:
+    """First-order and total Sobol indices at one point, with their intervals."""
+    plt, runs, point, save = canvas.plt, canvas.runs, canvas.point, canvas.save
     indexed = [run for run in runs if run.sensitivity is not None and len(run.sensitivity)]
     if indexed:  # first-order and total indices at one point, with their intervals
         fig, ax = plt.subplots()
@@ -453,6 +511,10 @@ def _plots(runs: list[Run], out: Path, point: int | None) -> list[str]:
                title=f"Sensitivity of {metric} to the uncertain parameters")
         save(fig, "sensitivity.png")
 
+
+def _edm_histogram(canvas: _Canvas) -> None:
+    """The EDM's distribution at one sweep point."""
+    plt, runs, point, save = canvas.plt, canvas.runs, canvas.point, canvas.save
     fig, ax = plt.subplots()
     samples = {}
     for run in runs:
@@ -468,6 +530,10 @@ def _plots(runs: list[Run], out: Path, point: int | None) -> list[str]:
     counts(ax.yaxis)
     save(fig, "edm_histogram.png")
 
+
+def _exceedance_plot(canvas: _Canvas) -> None:
+    """Exceedance against intensity, with the fragility curves fitted."""
+    plt, runs, tables, save = canvas.plt, canvas.runs, canvas.tables, canvas.save
     shown = [(run, limit, run.intensity(limit)) for run in runs for limit in run.limits]
     shown = [(run, limit, key, stripes(run.realizations, limit, key)) for run, limit, key in shown
              if key is not None]
@@ -492,6 +558,10 @@ def _plots(runs: list[Run], out: Path, point: int | None) -> list[str]:
                title="Exceedance probability against intensity")
         save(fig, "exceedance.png")
 
+
+def _history_plot(canvas: _Canvas) -> None:
+    """The primary's energy over time: mean and quantile band."""
+    plt, runs, point, save = canvas.plt, canvas.runs, canvas.point, canvas.save
     histories = [run for run in runs if run.history is not None and "e1_mean" in run.history.columns]
     if histories:
         fig, ax = plt.subplots()
@@ -514,7 +584,11 @@ def _plots(runs: list[Run], out: Path, point: int | None) -> list[str]:
             ax.set(ylabel=label("e1"), title="Primary energy over time")
         ax.set(xlabel=label("t"))
         save(fig, "primary_energy_history.png")
-    return files
+
+
+#: The report's plots, in the order they are drawn.
+PLOTS = (_edm_against_input, _sweep_plots, _estimates_plot, _zones_plot, _path_plots, _section_plots,
+         _spectra_plot, _rare_plot, _sensitivity_plot, _edm_histogram, _exceedance_plot, _history_plot)
 
 
 #: The metrics drawn beside their estimates (``_plots``), where a run has them.

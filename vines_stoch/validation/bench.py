@@ -680,7 +680,29 @@ def main(out: Path = Path("reports/benchmarks.md"), n_paths: int = 200) -> str:
                  f"{ssvi['scipy_error']:.1e} | {ssvi['scipy_s'] / ssvi['ours_s']:.0f}x slower |"
                  if "scipy_s" in ssvi
                  else "| scipy DOP853 + events | - | no tolerance down to 1e-10 matched | - |")
-    text = f"""# Benchmarks
+    measured = dict(cores=cores, n_paths=n_paths, loop=loop, rec=rec, loop_metrics=loop_metrics,
+                    rec_metrics=rec_metrics, euler_loop=euler_loop, kernel=kernel, api1=api1, near=near,
+                    near_rec=near_rec, res1=res1, api2=api2, res2=res2, lanes=lanes, budget=budget,
+                    quiet_ns=quiet_ns, step_ns=step_ns, eight_ns=eight_ns, impact1=impact1,
+                    res_impact=res_impact, short=short, outputs=outputs, contact=contact,
+                    same_path=same_path, ssvi=ssvi, scipy_row=scipy_row, work_precision=work_precision,
+                    stability_suite=stability_suite, rare_events=rare_events, estimates=estimates,
+                    startup=startup, seismic=seismic, floors=floors, overhead=overhead, memory=memory)
+    text = "".join(section(measured) for section in SECTIONS)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    gpu_section = section_of(out.read_text()) if out.exists() else None  # (make bench-gpu's: kept)
+    out.write_text(text if gpu_section is None else replace_section(text, gpu_section))
+    print(text)
+    return text
+
+
+def _smooth_section(m: dict[str, Any]) -> str:
+    """The report's title and its section "Smooth scene" from the measurements ``m``."""
+    (cores, n_paths, loop, rec, loop_metrics, rec_metrics, euler_loop, kernel, api1, near, near_rec, res1,
+     api2, res2) = (
+        m["cores"], m["n_paths"], m["loop"], m["rec"], m["loop_metrics"], m["rec_metrics"],
+        m["euler_loop"], m["kernel"], m["api1"], m["near"], m["near_rec"], m["res1"], m["api2"], m["res2"])
+    return f"""# Benchmarks
 
 Machine: {cores} cores. All figures from one run of `make bench`; ratios are within that run.
 
@@ -714,7 +736,14 @@ path of each in turn ({n_paths // 2} paths each), so they see the same machine. 
 drifts by up to 1.5x between minutes, so the `run` rows' ratios are to the mean of short roofline
 batches timed just before and just after them ({near / 1e6:.1f} and {near_rec / 1e6:.1f} M path-steps/s;
 three rounds, the better 1-thread ratio kept).
+"""
 
+
+def _lanes_section(m: dict[str, Any]) -> str:
+    """The report's section "Paths in SIMD lanes" from the measurements ``m``."""
+    (lanes, budget, quiet_ns, step_ns, eight_ns) = (
+        m["lanes"], m["budget"], m["quiet_ns"], m["step_ns"], m["eight_ns"])
+    return f"""
 ## Paths in SIMD lanes
 
 `vines_stoch.run` with T = 20 (20,000 steps) with its paths in SIMD lanes (`kernels/lanes.py`, the
@@ -753,7 +782,13 @@ draws, 1,024 lanes): {lanes["normals"] / 1e6:.0f} M normals/s; a normal drawn in
 ziggurat), so a scene that runs in lanes but records what the lanes do not (history rows, event
 logs, declared metrics: the scalar loop on its Philox streams) pays that difference a draw.
 The SRA and Runge-Kutta schemes do not run in lanes (the scalar loop: a ratio of 1).
+"""
 
+
+def _impact_section(m: dict[str, Any]) -> str:
+    """The report's section "Impact-rich stochastic scene" from the measurements ``m``."""
+    impact1, api1, res_impact = m["impact1"], m["api1"], m["res_impact"]
+    return f"""
 ## Impact-rich stochastic scene
 
 The smooth scene plus an impact NES (m = 0.05, clearance 0.2, r = 0.6): the parallel NES of
@@ -762,7 +797,13 @@ seed 000 under harmonic + white noise, impacts split on the Brownian tree of the
 | runner | threads | M path-steps/s | ratio to the smooth scene (1 thread) | max abs energy residual |
 | --- | ---: | ---: | ---: | ---: |
 | `vines_stoch.run` | 1 | {impact1 / 1e6:.1f} | {impact1 / api1:.2f} | {res_impact:.1e} |
+"""
 
+
+def _short_section(m: dict[str, Any]) -> str:
+    """The report's section "Short paths and worker scaling" from the measurements ``m``."""
+    short = m["short"]
+    return f"""
 ## Short paths and worker scaling
 
 `vines_stoch.run` in memory on a linear oscillator under white noise (`scenes/linear.toml`,
@@ -787,7 +828,13 @@ Fixed cost of a realisation (the 10-step paths' time per realisation less their 
 The host column is the machine's own scaling: two independent processes of one worker each
 against one alone (shared caches, memory bandwidth and turbo clocks), the ceiling of the
 program's.
+"""
 
+
+def _outputs_section(m: dict[str, Any]) -> str:
+    """The report's section "Dynamics outputs: what asking costs" from the measurements ``m``."""
+    outputs = m["outputs"]
+    return f"""
 ## Dynamics outputs: what asking costs
 
 `vines_stoch.run` in memory, one worker, the best of three runs after a warm-up: a linear
@@ -800,7 +847,13 @@ at every step end).
 | --- | ---: | ---: |
 {chr(10).join(f"| {name} | {sec:.3f} | {sec / outputs[name.split(':')[0] + ': nothing asked']:.2f} |"
               for name, sec in outputs.items())}
+"""
 
+
+def _contact_section(m: dict[str, Any]) -> str:
+    """The report's section "Contact under noise" from the measurements ``m``."""
+    n_paths, api1, contact, same_path = m["n_paths"], m["api1"], m["contact"], m["same_path"]
+    return f"""
 ## Contact under noise
 
 `vines_stoch.run` with one thread on the example scenarios (one sweep point, {n_paths} paths;
@@ -828,7 +881,14 @@ run replays the same fine normals and tree seed); time per path of the kernel.
 Measured strong order: Hertz contact {precision.strong_order(SAME_PATH_LEVELS, same_path['hertz'][0]):.2f},
 impacts {precision.strong_order(SAME_PATH_LEVELS, same_path['impact'][0]):.2f} \
 (docs/numerics.md, "Schemes": 1 and 1/2 expected).
+"""
 
+
+def _ssvi_section(m: dict[str, Any]) -> str:
+    """The report's section "SSVI design SS-1(60) of seed 003" from the measurements ``m``."""
+    (ssvi, scipy_row, work_precision, stability_suite, rare_events) = (
+        m["ssvi"], m["scipy_row"], m["work_precision"], m["stability_suite"], m["rare_events"])
+    return f"""
 ## SSVI design SS-1(60) of seed 003
 
 12 s from rest (the first contacts), error of `e1_max` against DOP853 at rtol 1e-11 with
@@ -841,7 +901,13 @@ contact onsets and ends located as events.
 
 {work_precision}
 {stability_suite}
-{rare_events}
+{rare_events}"""
+
+
+def _estimates_section(m: dict[str, Any]) -> str:
+    """The report's section "Estimates without an ensemble" from the measurements ``m``."""
+    estimates = m["estimates"]
+    return f"""
 ## Estimates without an ensemble
 
 `vines_stoch.estimate` of every shipped scenario it can estimate (MODEL.md section 6; the others
@@ -850,7 +916,13 @@ say why not in a few milliseconds), all sweep points, best of 3, in this process
 | scenario | points | methods | time (s) |
 | --- | ---: | --- | ---: |
 {chr(10).join(f"| {name} | {n} | {methods} | {sec:.2f} |" for name, n, methods, sec in estimates)}
+"""
 
+
+def _startup_section(m: dict[str, Any]) -> str:
+    """The report's section "Compile time and start-up" from the measurements ``m``."""
+    startup = m["startup"]
+    return f"""
 ## Compile time and start-up
 
 `vines-stoch run FILE --quiet` in a fresh process: first on an empty numba cache (every kernel
@@ -859,7 +931,13 @@ the scene needs is compiled), then again with the cache written by the first run
 | scenario | first run, cold cache (s) | cached start-up and run (s) |
 | --- | ---: | ---: |
 {chr(10).join(f"| {name} | {cold:.1f} | {warm:.2f} |" for name, cold, warm in startup)}
+"""
 
+
+def _seismic_section(m: dict[str, Any]) -> str:
+    """The report's section "Record-driven scene" from the measurements ``m``."""
+    seismic = m["seismic"]
+    return f"""
 ## Record-driven scene
 
 1 Hz primary (1000 kg, 2 % damping) with a cubic NES (50 kg, k3 = 2e6, c = 20), 40 s at
@@ -874,7 +952,13 @@ samples) and under a harmonic force of the same peak (`m1 * 0.3 g * cos 6t`).
 | record (base excitation) | {seismic['record'][0] / 1e6:.2f} | \
 {seismic['record'][0] / seismic['harmonic'][0]:.2f} | {seismic['record'][1]:.1e} | \
 {seismic['record'][2]:.1e} |
+"""
 
+
+def _floors_section(m: dict[str, Any]) -> str:
+    """The report's section "Floors" from the measurements ``m``."""
+    floors = m["floors"]
+    return f"""
 ## Floors
 
 Cost against size (one thread, one path at a time; the first call includes compilation when
@@ -883,7 +967,13 @@ the kernel is not cached yet):
 | scene | M path-steps/s | ns a step | first call (s) |
 | --- | ---: | ---: | ---: |
 {chr(10).join(f"| {name} | {rate:.2f} | {ns:.0f} | {first:.1f} |" for name, rate, ns, first in floors)}
+"""
 
+
+def _scale_section(m: dict[str, Any]) -> str:
+    """The report's section "Scale" from the measurements ``m``."""
+    overhead, cores, memory = m["overhead"], m["cores"], m["memory"]
+    return f"""
 ## Scale
 
 Scheduler overhead: 10^4 realisations of the smooth scene with T = 20 (2 x 10^8 path-steps).
@@ -904,8 +994,9 @@ of x1 and E1 on a 1001-point grid, mean, std and 3 quantiles, in a fresh process
 | ---: | ---: | ---: |
 {chr(10).join(f"| {n:,} | {rss:.0f} | {sec:.1f} |" for n, (rss, sec) in memory.items())}
 """
-    out.parent.mkdir(parents=True, exist_ok=True)
-    gpu_section = section_of(out.read_text()) if out.exists() else None  # (make bench-gpu's: kept)
-    out.write_text(text if gpu_section is None else replace_section(text, gpu_section))
-    print(text)
-    return text
+
+
+#: The report's sections, in order.
+SECTIONS = (_smooth_section, _lanes_section, _impact_section, _short_section, _outputs_section,
+            _contact_section, _ssvi_section, _estimates_section, _startup_section, _seismic_section,
+            _floors_section, _scale_section)
