@@ -206,6 +206,27 @@ def headline(study: Study, summary: pd.DataFrame) -> list[str]:
     return [c for c in dict.fromkeys(columns) if c in summary]
 
 
+@app.command(name="compile")
+def compile_(
+    scenarios: list[Path] = typer.Argument(..., help="Scenario TOML files."),
+    executor: str = typer.Option("lanes", "--executor",
+                                 help="The executor the runs will use: lanes or scalar."),
+    paths: bool = typer.Option(False, "--paths", help="Also the loops of runs that keep their paths."),
+) -> None:
+    """Compile the step loops the scenarios' runs need, and run nothing (a cluster image, a
+    notebook server): later runs load them from the cache on disk."""
+    from .ensemble import compile_loops
+
+    for scenario in scenarios:
+        try:
+            study = load_scenario(scenario)
+            compile_loops(study, executor=executor, paths=paths)
+        except ScenarioError as exc:
+            _fail(str(exc))
+        except ValueError as exc:
+            _fail(f"{scenario}: {exc}")
+
+
 @app.command()
 def validate(scenario: Path = typer.Argument(..., help="Scenario TOML file.")) -> None:
     """Check a scenario file without running it."""

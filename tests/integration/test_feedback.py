@@ -3,6 +3,7 @@ speed, the total time, and the end-of-run table of the metrics the scenario is a
 
 from __future__ import annotations
 
+import os
 import re
 import subprocess
 import sys
@@ -57,3 +58,26 @@ def test_run_names_the_loop_it_compiles_and_shows_the_scenarios_metrics(tmp_path
     header = done.stdout.splitlines()[1].split()
     assert header == ["loads.0.intensity", "n_ok", "n_failed", "edm_mean", "e1_max_mean", "p_roof",
                       "p_roof_lo", "p_roof_hi", "energy_residual_mean"]
+
+
+def test_compile_puts_the_loops_a_run_needs_in_the_cache(tmp_path):
+    """``vines-stoch compile FILE`` in a fresh process compiles the loop a run of the file needs
+    into the cache on disk (an empty one here, ``NUMBA_CACHE_DIR``) and runs nothing; the run in
+    the next process loads it.  (The smallest scene: a primary alone after an impulse.)"""
+    path = tmp_path / "small.toml"
+    path.write_text(toml_text({"name": "small", "primary": {"mass": 1.0, "stiffness": 1.0, "damping": 0.1},
+                               "loads": [{"type": "impulse", "velocity": 1.0}],
+                               "simulation": {"duration": 2.0, "dt": 1e-2}}))
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "cache")}
+
+    def cli_run(*args: str) -> subprocess.CompletedProcess:
+        return subprocess.run([sys.executable, "-m", "vines_stoch.cli", *args], capture_output=True,
+                              text=True, timeout=600, env=env)
+
+    first = cli_run("compile", str(path))
+    assert first.returncode == 0 and "compiled (cached on disk for later runs)" in first.stderr, first.stderr
+    assert not (tmp_path / "results").exists() and first.stdout == ""
+    second = cli_run("run", str(path), "--out", str(tmp_path / "o"))
+    assert second.returncode == 0 and "loaded from the cache" in second.stderr, second.stderr
+    wrong = cli_run("compile", str(path), "--executor", "simd")
+    assert wrong.returncode != 0 and "executor = 'simd'" in wrong.stderr

@@ -401,6 +401,24 @@ def sample(study: Study, workers: int | None = None, executor: str = "lanes") ->
     return pd.concat([label_points(done[c][0], study, c[0]) for c in the_plan.chunks], ignore_index=True)
 
 
+def compile_loops(scenario: Study | Mapping[str, Any] | str | os.PathLike, *, executor: str = "lanes",
+                  paths: bool = False, show: bool = True) -> None:
+    """Compile, or load from the cache on disk, the step loops that ``run`` of ``scenario`` with
+    ``executor`` (and ``paths``) needs, and run nothing: ahead of the runs, for a cluster image
+    or a notebook server (``vines-stoch compile``).  A loop depends on the structure (bodies,
+    floors, absorber laws, loads, what the run records), not on the parameters' values, so one
+    scenario covers its whole sweep and its uncertain parameters; ``show``: a line a loop on
+    standard error (``prepare_loops``)."""
+    check_executor(executor)
+    study = as_study(scenario)
+    base = study.base
+    grid_spec = base.simulation.history or (History() if paths else None)
+    scenes = [build_scene(point) for point in study.points]
+    signals, grid = recording(scenes[0], grid_spec, base.output.spectra)
+    prepare_loops(scenes, base.ensemble.seed, base.ensemble.common_random_numbers, grid,
+                  signals or DEFAULT_SIGNALS, show=show, executor=executor)
+
+
 def solve(scenario: Study | Mapping[str, Any] | str | os.PathLike, *, point: int = 0, realization: int = 0,
           points: int | None = None, signals: list[str] | tuple[str, ...] | None = None,
           executor: str = "lanes") -> Solution:

@@ -19,6 +19,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+import pandas as pd
 
 from .. import history as hist
 from ..ensemble import run_chunk
@@ -159,20 +160,41 @@ def zone(left: int, right: int) -> str:
     return "bilateral" if left and right else "left" if left else "right" if right else "none"
 
 
-def zone_sweep(scenarios: Path, mass: int) -> dict[str, list[str]]:
+def class_sweep(scenarios: Path, mass: int) -> dict[str, pd.DataFrame]:
     """Each design of one seed 003 mass class (``_class_designs``: the 60, 20 or 10 kg designs)
-    with its impact zone at each of ``E1MAX_FREQUENCIES``: the zones of the report's Figs. 3-4, 8
-    and 11, from ``vines_stoch.run`` sweeps (the lanes)."""
+    run at each of ``E1MAX_FREQUENCIES`` by a ``vines_stoch.run`` sweep (the lanes): its
+    realisations' rows, one a frequency (``e1_max``, ``impacts_left``, ``impacts_right``, ...)."""
     from ..ensemble import run
 
-    zones = {}
+    found = {}
     for label, name, (m2, k2, c2, offset, gap), _ in _class_designs(scenarios, mass):
         data = tomllib.loads((scenarios / f"{name}.toml").read_text())
         data["absorbers"][0].update(mass=m2, stiffness=k2, damping=c2, offset=offset, gap=gap)
         data["sweep"] = {"loads.0.frequency": list(E1MAX_FREQUENCIES)}
-        rows = run(data).realizations
-        zones[label] = [zone(left, right) for left, right in zip(rows["impacts_left"], rows["impacts_right"])]
-    return zones
+        found[label] = run(data).realizations
+    return found
+
+
+def primary_sweep(scenarios: Path) -> np.ndarray:
+    """``e1_max`` of seed 003's primary alone (``seed003_primary``) at each of
+    ``E1MAX_FREQUENCIES``, by a ``vines_stoch.run`` sweep as ``class_sweep``'s."""
+    from ..ensemble import run
+
+    data = tomllib.loads((scenarios / "seed003_primary.toml").read_text())
+    data["sweep"] = {"loads.0.frequency": list(E1MAX_FREQUENCIES)}
+    return run(data).realizations["e1_max"].to_numpy(dtype=float)
+
+
+def zone_sweep(scenarios: Path, mass: int) -> dict[str, list[str]]:
+    """Each design of one seed 003 mass class with its impact zone at each of
+    ``E1MAX_FREQUENCIES`` (``zones_of`` its ``class_sweep`` rows): the zones of the report's
+    Figs. 3-4, 8 and 11."""
+    return {label: zones_of(rows) for label, rows in class_sweep(scenarios, mass).items()}
+
+
+def zones_of(rows: pd.DataFrame) -> list[str]:
+    """The impact zone of each row of a run's realisations (``zone``)."""
+    return [zone(left, right) for left, right in zip(rows["impacts_left"], rows["impacts_right"])]
 
 
 def _points(scenarios: Path, name: str, changes: Mapping[str, Any] | None = None,
@@ -833,5 +855,5 @@ def reproduce(scenarios: Path = Path("scenarios"), out: Path = Path("reports/see
 
 __all__ = ["FIG4_FREQUENCIES", "FRAME_DEVICES", "FRAME_STIFFNESSES", "PRIMARY_E1MAX", "REGIMES_MISSED",
            "REGIMES_PRINTED", "SECTIONS", "SEED002_FREQUENCIES", "SS_4_60", "TABLES", "TABLE_1", "TABLE_5",
-           "TABLE_6", "WANE", "WEAK", "ZERO_CLEARANCE", "design", "fig4_sweep", "frame_devices", "paired_cut",
-           "reproduce", "zone", "zone_sweep"]
+           "TABLE_6", "WANE", "WEAK", "ZERO_CLEARANCE", "class_sweep", "design", "fig4_sweep",
+           "frame_devices", "paired_cut", "primary_sweep", "reproduce", "zone", "zone_sweep", "zones_of"]
