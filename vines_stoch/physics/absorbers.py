@@ -19,8 +19,9 @@ compile time (``kernels.common.shaped_forces``); ``coupling_energy`` is the pote
 A new law is its code in ``LAWS`` and its schema class in ``scenario/bodies.py``, which gives its
 row (``parameters``) and linearised stiffness (``spring``); where it is not a polynomial, also
 its columns, its formula and energy here and their terms in ``shaped_force`` and
-``shaped_energy`` (the gap spring is the model): the step loops, the energy accounts and the
-statistical linearisation take it from there.
+``shaped_energy`` (the gap spring is the model): the step loops and the energy accounts take it
+from there; the estimates without an ensemble need its Gaussian expectations
+(``rvt.linearization.law``, ``rvt.energy.coupling_energy``).
 """
 
 from __future__ import annotations
