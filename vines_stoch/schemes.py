@@ -82,7 +82,8 @@ def in_lanes(scheme: str) -> bool:
     an event finish it in the scalar step; filtered loads included: each lane advances its own
     filters).  Such a scene's CPU ensembles draw from counter-based Philox streams (those of
     the cuda backend, ``streams/rng.py``), in lanes or, for what the lanes do not record
-    (history rows, event logs, declared metrics), in the scalar loop on the same streams."""
+    (event logs, declared metrics, a history of impulses: ``kernels.chunk.lane_record``), in the
+    scalar loop on the same streams."""
     return SCHEMES[scheme].lanes
 
 

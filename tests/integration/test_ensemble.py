@@ -111,11 +111,11 @@ def test_automatic_chunks_of_lane_scenes_are_batches_of_lanes_and_contact_counts
     assert [(c[1], c[2]) for c in plan(one).chunks] == [(0, LANES), (LANES, 256)]
 
 
-def test_automatic_chunks_that_keep_history_rows_count_at_the_scalar_cost():
-    """A lane scene whose run keeps history rows runs its chunks in the scalar loop (the lanes
-    record none), so ``ensemble.plan`` sizes them at the scalar loop's cost: 200 paths of 200,000
-    steps make chunks of 200 / CHUNKS_PER_POINT paths (rounded up) with history statistics, two
-    of a batch of lanes each without."""
+def test_automatic_chunks_count_at_the_cost_of_the_loop_that_runs_them():
+    """A lane scene keeps its history rows in the lanes, so ``ensemble.plan`` sizes its chunks at
+    the lanes' cost (200 paths of 200,000 steps: two chunks of 100, the history's buffer within
+    ``HISTORY_CHUNK_BYTES``), as without them; an event log is the scalar loop's, whose cost
+    makes chunks of 200 / CHUNKS_PER_POINT paths (rounded up)."""
     import math
 
     from vines_stoch.ensemble import CHUNKS_PER_POINT, plan
@@ -126,9 +126,10 @@ def test_automatic_chunks_that_keep_history_rows_count_at_the_scalar_cost():
     changes = {"ensemble.realizations": 200, "simulation.duration": 200.0}
     lanes = scenes.study("smooth", changes)
     kept = scenes.study("smooth", {**changes, "simulation.history": True})
-    assert lane_scene(build_scene(kept.points[0]))
-    assert len(plan(lanes).chunks) == 2
-    assert {c[2] - c[1] for c in plan(kept).chunks[:-1]} == {math.ceil(200 / CHUNKS_PER_POINT)}
+    logged = scenes.study("smooth_impact", {**changes, "output.events": 100})
+    assert lane_scene(build_scene(kept.points[0])) and lane_scene(build_scene(logged.points[0]))
+    assert len(plan(lanes).chunks) == 2 and len(plan(kept).chunks) == 2
+    assert {c[2] - c[1] for c in plan(logged).chunks[:-1]} == {math.ceil(200 / CHUNKS_PER_POINT)}
 
 
 def test_the_executor_is_an_argument_of_the_run():

@@ -183,8 +183,8 @@ def simulate_chunk(scene, seed: int, point: int, start: int, stop: int, common: 
     history_rows = np.full((n, size, columns.shape[0]), np.nan)
     events = np.full((n, event_rows, len(EVENT_COLUMNS)), np.nan)
     record = Record.of(scene, size, event_rows, columns)
-    if philox and not (record.history or record.events or record.declared):
-        simulate_lanes(scene, seed, point, start, common, raw)
+    if lane_record(scene, record, executor):
+        simulate_lanes(scene, seed, point, start, common, raw, history_rows, stride, columns)
         return Chunk(raw, samples, history_rows, events)
     # (the bundles of one path: the state and filter buffers the loop reuses; the outputs'
     # buffers stand for their types, each realisation writing into its rows of the arrays above)
@@ -222,6 +222,27 @@ def lane_scene(scene, executor: str = "lanes") -> bool:
     return executor == "lanes" and in_lanes(scene.scheme)
 
 
+def chunk_runner(scene, record: Record, executor: str = "lanes"):
+    """The compiled loop a chunk of ``scene`` recording ``record`` runs under ``executor``
+    (``simulate_chunk``'s choice): the lane loop or the scalar loop's chunk."""
+    if lane_record(scene, record, executor):
+        return _lanes_of(scene, record.history)
+    return chunk_loop(kernel_for(scene, record=record))
+
+
+def _lanes_of(scene, history: bool):
+    """The lane loop of ``scene``, keeping history rows or not."""
+    return lane_loop(spec_of(scene, record=Record.of(scene)._replace(history=history)))
+
+
+def lane_record(scene, record: Record, executor: str = "lanes") -> bool:
+    """Whether a chunk of ``scene`` that records ``record`` (``outputs.Record``) runs in SIMD
+    lanes: a lane scene (``lane_scene``) whose run keeps no event log, no declared metrics and no
+    history of the impacts' impulses (``contact_j``), which the scalar loop records on the same
+    streams."""
+    return lane_scene(scene, executor) and not (record.events or record.declared or record.contact)
+
+
 def realization_streams(scene, seed: int, point: int, realization: int, common: bool = True,
                         executor: str = "lanes") -> Streams:
     """The streams realisation ``realization`` of ``scene`` draws from in a CPU ensemble run by
@@ -236,23 +257,29 @@ def realization_streams(scene, seed: int, point: int, realization: int, common: 
                      for purpose, wanted in ((INCREMENTS, increments), (BRIDGE, bridge), (FILTER, filters))))
 
 
-def lane_call(scene, seed: int, point: int, start: int, common: bool, raw: np.ndarray) -> tuple:
+def lane_call(scene, seed: int, point: int, start: int, common: bool, raw: np.ndarray,
+              history: np.ndarray | None = None, stride: int = 1, signals: np.ndarray = _NO_SIGNALS) -> tuple:
     """The arguments of ``scene``'s lane loop (``lanes.lane_loop``) for realisations ``start ..
-    start + len(raw) - 1`` on the Philox streams of ``seed``, their metric vectors into ``raw``."""
+    start + len(raw) - 1`` on the Philox streams of ``seed``, their metric vectors into ``raw``
+    and, with ``history`` (``(n, rows, len(signals))``, preset to NaN), their history rows of the
+    ``signals`` (``signals.declare``'s rows) every ``stride`` steps."""
     places = stream_place(np.arange(start, start + raw.shape[0], dtype=np.uint64), np.uint64(point), common)
     args = bundles(scene, scene.x0.copy(), scene.v0.copy(), filter_tuple(scene, None), np.zeros(0), raw[:0],
                    sample_buffer(scene), _NO_HISTORY, 1, (_UNUSED,) * 3)
     keys = philox_keys(seed)
+    history = np.zeros((raw.shape[0], 0, 0)) if history is None else history
     return (*args[:6], scene.limits, np.uint64(keys[INCREMENTS]), np.uint64(keys[BRIDGE]),
-            np.uint64(keys[FILTER]), scene.filters["p0"], places, raw)
+            np.uint64(keys[FILTER]), scene.filters["p0"], places, raw, history, stride, signals)
 
 
-def simulate_lanes(scene, seed: int, point: int, start: int, common: bool, raw: np.ndarray) -> None:
+def simulate_lanes(scene, seed: int, point: int, start: int, common: bool, raw: np.ndarray,
+                   history: np.ndarray | None = None, stride: int = 1,
+                   signals: np.ndarray = _NO_SIGNALS) -> None:
     """Realisations ``start .. start + len(raw) - 1`` in SIMD lanes (``lanes.lane_loop``), their
-    metric vectors into ``raw`` (preset to the vector's start): what the scalar loop gives on
-    their Philox streams."""
-    run = lane_loop(spec_of(scene, record=Record.of(scene)))
-    call = lane_call(scene, seed, point, start, common, raw)
+    metric vectors into ``raw`` (preset to the vector's start) and, with ``history``, their
+    history rows (``lane_call``): what the scalar loop gives on their Philox streams."""
+    run = _lanes_of(scene, history is not None and history.shape[1] > 0)
+    call = lane_call(scene, seed, point, start, common, raw, history, stride, signals)
     compile_first(run, call, ())
     run(*call)
 
@@ -272,5 +299,6 @@ def parameter_draws(keys, point: int, start: int, common: bool, normal, out) -> 
             out[j, k] = pcg_normal(stream) if normal[k] else pcg_uniform(stream)
 
 
-__all__ = ["Chunk", "chunk_loop", "ground_paths", "lane_call", "lane_scene", "parameter_draws", "philox_keys",
-           "realization_streams", "reseed", "seed_keys", "simulate_chunk", "simulate_lanes"]
+__all__ = ["Chunk", "chunk_loop", "chunk_runner", "ground_paths", "lane_call", "lane_record", "lane_scene",
+           "parameter_draws", "philox_keys", "realization_streams", "reseed", "seed_keys",
+           "simulate_chunk", "simulate_lanes"]

@@ -28,9 +28,10 @@ Filtered loads are the lanes' own: each lane advances its filters on its Philox 
 the batch's closed-form loads plus its filters' read-outs.
 
 Which scenes run here is the scheme registry's (``schemes.in_lanes``): the kick-drift-kick
-scheme, recording the built-in metrics and the limits' first passages.  The rest (history rows,
-event logs, declared metrics) runs in the scalar loop on the same streams
-(``chunk.simulate_chunk``).
+scheme, recording the built-in metrics, the limits' first passages and history rows (each lane's
+rows written by the scalar loop's ``common.history_row`` from its state at the row's step end).
+The rest (event logs, declared metrics, a history of the impacts' impulses, ``contact_j``) runs
+in the scalar loop on the same streams (``chunk.simulate_chunk``).
 """
 
 from __future__ import annotations
@@ -76,6 +77,7 @@ from .common import (
     contact_forces,
     diverged,
     floor_peaks,
+    history_row,
     keep_in_cavities,
     shaped_forces,
     stored_energy,
@@ -173,6 +175,7 @@ def lane_loop(spec: Spec):
     SHAPED = spec.shaped
     NOISE = spec.has_noise
     PASSAGES = spec.passages
+    HISTORY = spec.history
     IMPACT, CONTACT = spec.has_impact, spec.has_hertz
     EVENTS = IMPACT or CONTACT
     TREE = NOISE and EVENTS  # (the lanes' Brownian trees: a seed each)
@@ -270,6 +273,18 @@ def lane_loop(spec: Spec):
             store_peaks(s, lane, x_max, drift_max, acc_max)
         if PASSAGES:
             pass_lanes(s, nl, t, limits, inv_mass, passages)
+
+    @njit(**INLINE)
+    def record_lanes(s, nl, j, history, first, signals, mass, storey_k, kind, host, rows, impulses, dt):
+        """History row ``j`` of every lane whose path has not ended (``common.history_row``, the
+        scalar loop's, from the lane's state and its primary energy)."""
+        x, v = scratch(NB), scratch(NB)
+        for lane in range(nl):
+            if s[DONE * W + lane] == 0.0:
+                load_lane(s, lane, x, v)
+                e1 = primary_energy(mass, storey_k, x, v, NF)
+                history_row(history[first + lane], j, signals, x, v, NF, e1, mass, kind, host, rows, impulses,
+                            dt)
 
     @njit(**INLINE)
     def pass_lanes(s, nl, t, limits, inv_mass, passages):
@@ -503,14 +518,14 @@ def lane_loop(spec: Spec):
     @njit(**INLINE)
     def batch(s_, z_, spare_, nl, bodies_, absorbers_, ex_, fl_, noise_, grid_, limits_, key, places_,
               passages_, raw_, first, own_, seeds_, bridge_key, events_, impulses_, fz_, fspare_, filter_key,
-              p0_):
+              p0_, history_, stride, signals_):
         # every array as a borrowed view (``jit.intrinsics.borrowed``): no reference counting in
         # the lane loops, whose calls would keep the compiler from vectorising them
         bodies, absorbers, ex, fl, noise, grid = borrowed((bodies_, absorbers_, ex_, fl_, noise_, grid_))
         s, z, spare, limits, places, passages, raw = borrowed((s_, z_, spare_, limits_, places_, passages_,
                                                                raw_))
         own, seeds, events, impulses = borrowed((own_, seeds_, events_, impulses_))
-        fz, fspare, p0 = borrowed((fz_, fspare_, p0_))
+        fz, fspare, p0, history, signals = borrowed((fz_, fspare_, p0_, history_, signals_))
         mass, storey_k, kind, host, rows, walls = (bodies.mass, bodies.storey_k, absorbers.kind,
                                                    absorbers.host, absorbers.rows, absorbers.wall)
         dt, n_steps, i0 = grid.dt, grid.n_steps, grid.i0
@@ -561,6 +576,10 @@ def lane_loop(spec: Spec):
                               ag_next) if FILTERED else 0
         inside = i0 == 0
         x, v = scratch(NB), scratch(NB)
+        h_next = -1  # (the step after which the next history row is due; -1: none)
+        if HISTORY and history.shape[1] > 0:
+            record_lanes(s, nl, 0, history, first, signals, m, sk, kind, host, rows, impulses, dt)
+            h_next = stride if history.shape[1] > 1 else -1
         for i in range(n_steps):
             if i == i0:
                 inside = True
@@ -600,13 +619,18 @@ def lane_loop(spec: Spec):
                               bodies, absorbers, ex, fl, noise, seeds, raw, first, events, impulses)
             if PASSAGES and inside:
                 pass_lanes(s, nl, i * dt + dt, limits, inv_mass, passages)
+            if HISTORY and i + 1 == h_next:  # (``common.record_history``'s schedule)
+                j = h_next // stride
+                record_lanes(s, nl, j, history, first, signals, m, sk, kind, host, rows, impulses, dt)
+                h_next = h_next + stride if j + 1 < history.shape[1] else -1
         for lane in range(nl):
             if s[DONE * W + lane] == 0.0:
                 finish_lane(s, lane, raw[first + lane], inside, i0, n_steps, dt, m, sk, NF, kind, host, rows,
                             inv_mass, passages, limits)
 
     @njit(**KERNEL)
-    def run(bodies, absorbers, ex, fl, noise, grid, limits, key, bridge_key, filter_key, p0, places, raw):
+    def run(bodies, absorbers, ex, fl, noise, grid, limits, key, bridge_key, filter_key, p0, places, raw,
+            history, stride, signals):
         prefer_vectors()
         n = raw.shape[0]
         s, z, spare = aligned_rows(ROWS), aligned_rows(NF), aligned_rows(1)
@@ -622,7 +646,8 @@ def lane_loop(spec: Spec):
         for first in range(0, n, W):
             nl = min(W, n - first)
             batch(s, z, spare, nl, bodies, absorbers, ex, fl, noise, grid, limits, key, places,
-                  passages, raw, first, own, seeds, bridge_key, events, impulses, fz, fspare, filter_key, p0)
+                  passages, raw, first, own, seeds, bridge_key, events, impulses, fz, fspare, filter_key, p0,
+                  history, stride, signals)
 
     stable_cache(run)  # (its closure holds the lane step's functions: see ``jit.cache.stable_cache``)
     return run

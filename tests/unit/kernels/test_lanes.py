@@ -25,6 +25,7 @@ from vines_stoch.physics.absorbers import HERTZ as HERTZ_LAW
 from vines_stoch.physics.absorbers import IMPACT as IMPACT_LAW
 from vines_stoch.physics.absorbers import LAWS
 from vines_stoch.schemes import in_lanes
+from vines_stoch.signals import signal_names
 from vines_stoch.streams import BRIDGE, FILTER, INCREMENTS, Streams
 from vines_stoch.streams.rng import philox_stream
 
@@ -182,15 +183,50 @@ def test_the_registry_says_which_scenes_run_in_lanes():
     assert not lane_scene(scene_from(changed(SMOOTH, {"simulation.scheme": "sra"})))
 
 
-def test_what_lanes_do_not_record_runs_in_the_scalar_loop_on_the_same_streams():
-    """History rows are the scalar loop's: a chunk that keeps them gives the metric rows of the
-    lanes, bitwise, and the history of the realisation's Philox path."""
-    scene = scene_from(SMOOTH)
+@pytest.mark.parametrize("data", [SMOOTH, FILTERED, contact_noise_parallel()],
+                         ids=["smooth", "filtered", "contact-noise"])
+def test_lanes_keep_the_scalar_loop_s_history_rows(data):
+    """History rows are recorded in the lanes, each lane's by the scalar loop's ``history_row``
+    at the same step ends: a chunk that keeps them gives the metric rows of a chunk that keeps
+    none, bitwise, and each realisation's rows are ``simulate``'s on its Philox streams, bitwise
+    (every signal a floor and an absorber have, the absorbers' energy share among them)."""
+    scene = scene_from(data)
+    names = signal_names(scene.n_floors, scene.kind.shape[0])
+    signals = tuple(name for name in names if not name.startswith("contact"))
+    size = min(40, scene.n_steps // 50 + 1)  # (rows up to the path's end)
     plain = simulate_chunk(scene, SEED, 0, 0, 3).raw
-    kept = simulate_chunk(scene, SEED, 0, 0, 3, history=(50, 40), signals=("x1", "e1"))
+    kept = simulate_chunk(scene, SEED, 0, 0, 3, history=(50, size), signals=signals)
+    assert same(kept.raw, plain)
+    for r in range(3):
+        history = np.full((size, len(signals)), np.nan)
+        simulate(scene, philox_streams(r), history=history, stride=50, signals=signals)
+        assert same(kept.history[r], history), r
+        assert not np.isnan(history).any()
+
+
+def test_a_lane_that_diverges_keeps_no_history_rows_after_it():
+    """A path that blows up ends at the divergence check that sees it: its history rows from there
+    on stay NaN, in the lanes as in the scalar loop."""
+    base = scene_from({**SMOOTH, "simulation": {**SMOOTH["simulation"], "duration": 3.0}})
+    scene = dataclasses.replace(base, storey_k=base.storey_k * 4.05e6)  # omega dt = 2.01
+    kept = simulate_chunk(scene, SEED, 0, 0, 2, history=(100, 31), signals=("x1", "e1"))
+    for r in range(2):
+        history = np.full((31, 2), np.nan)
+        simulate(scene, philox_streams(r), history=history, stride=100, signals=("x1", "e1"))
+        assert same(kept.history[r], history)
+        assert np.isnan(history[-1]).all() and not np.isnan(history[0]).any()
+
+
+def test_what_lanes_do_not_record_runs_in_the_scalar_loop_on_the_same_streams():
+    """Event logs, declared metrics and a history of the impacts' impulses (``contact_j``) are the
+    scalar loop's: a chunk that keeps them gives the lanes' metric rows, bitwise, and the history
+    of the realisation's Philox path."""
+    scene = scene_from(IMPACT)
+    plain = simulate_chunk(scene, SEED, 0, 0, 3).raw
+    kept = simulate_chunk(scene, SEED, 0, 0, 3, history=(50, 40), signals=("x1", "contact_1"))
     assert same(kept.raw, plain)
     history = np.full((40, 2), np.nan)
-    simulate(scene, philox_streams(2), history=history, stride=50, signals=("x1", "e1"))
+    simulate(scene, philox_streams(2), history=history, stride=50, signals=("x1", "contact_1"))
     assert same(kept.history[2], history)
 
 
