@@ -157,6 +157,45 @@ def lane_normals(z, spare, nl: int, draw: int, key, places, first: int) -> None:
             z[lane] = spare[lane]
 
 
+@njit(**INLINE)
+def pass_rows(s, nl, t, limits, inv_mass, passages, peaks) -> None:
+    """``t`` as the first passage of each limit whose peak exceeds its value for the first time
+    (``common.first_passages``, lane by lane: a select, no branch); ``peaks``: the batch's rows
+    of ``E1``'s peak and of the floors' ``x``, drift and force peaks (``lane_rows``)."""
+    e1max, xmax, drift, accmax = peaks
+    for j in range(limits.shape[0]):
+        code, k, value = limits[j, 0], int(limits[j, 1]), limits[j, 2]
+        row, scale = e1max, 1.0
+        if code == X_MAX_K or (code == DRIFT_MAX_K and k == 0):
+            row = xmax + k
+        elif code == DRIFT_MAX_K:
+            row = drift + k
+        elif code == ACC_MAX_K:
+            row, scale = accmax + k, inv_mass[k]
+        for lane in range(nl):
+            peak = s[row * LANES + lane] * scale if code == ACC_MAX_K else s[row * LANES + lane]
+            before = passages[j * LANES + lane]
+            passages[j * LANES + lane] = t if (before != before and peak > value) else before
+
+
+@njit(**INLINE)
+def record_rows(s, nl, j, stride, history, first, signals, x, v, state, nf, mass, storey_k, kind, host, rows,
+                impulses, dt) -> int:
+    """History row ``j`` (``t = j stride dt``) of every lane of a batch whose path has not ended,
+    by the scalar loop's ``common.history_row`` from the lane's state and primary energy
+    (``state``: the batch's rows of the ended flag, ``x`` and ``v``; ``x, v``: scratch); returns
+    the step after which the next row is due, -1 for none (``common.record_history``'s)."""
+    done, xs, vs = state
+    for lane in range(nl):
+        if s[done * LANES + lane] == 0.0:
+            for b in range(x.shape[0]):
+                x[b] = s[(xs + b) * LANES + lane]
+                v[b] = s[(vs + b) * LANES + lane]
+            history_row(history[first + lane], j, signals, x, v, nf, primary_energy(mass, storey_k, x, v, nf),
+                        mass, kind, host, rows, impulses, dt)
+    return (j + 1) * stride if j + 1 < history.shape[1] else -1
+
+
 @cache
 def lane_loop(spec: Spec):
     """The lane loop of kick-drift-kick scenes specialised to ``spec`` (``protocol.Spec``).  It
@@ -191,6 +230,7 @@ def lane_loop(spec: Spec):
     LOSS, LEFT, RIGHT, CTIME, PEAK = R["loss"], R["n_left"], R["n_right"], R["contact_time"], R["peak_force"]
     STUCK, TOUCHING, OWED, FLAG = R["stuck"], R["touching"], R["owed"], R["flag"]
     Z, ZN, LOAD, LOAD_NEXT, AG, AG_NEXT = R["z"], R["zn"], R["load"], R["load_next"], R["ag"], R["ag_next"]
+    PEAKS, STATE = (E1MAX, XMAX, DRIFT, ACCMAX), (DONE, X, V)  # (rows of ``pass_rows``, ``record_rows``)
 
     @njit(**INLINE)
     def load_lane(s, lane, x, v):
@@ -272,37 +312,7 @@ def lane_loop(spec: Spec):
             floor_peaks(x, NF, acc, x_max, drift_max, acc_max)
             store_peaks(s, lane, x_max, drift_max, acc_max)
         if PASSAGES:
-            pass_lanes(s, nl, t, limits, inv_mass, passages)
-
-    @njit(**INLINE)
-    def record_lanes(s, nl, j, history, first, signals, mass, storey_k, kind, host, rows, impulses, dt):
-        """History row ``j`` of every lane whose path has not ended (``common.history_row``, the
-        scalar loop's, from the lane's state and its primary energy)."""
-        x, v = scratch(NB), scratch(NB)
-        for lane in range(nl):
-            if s[DONE * W + lane] == 0.0:
-                load_lane(s, lane, x, v)
-                e1 = primary_energy(mass, storey_k, x, v, NF)
-                history_row(history[first + lane], j, signals, x, v, NF, e1, mass, kind, host, rows, impulses,
-                            dt)
-
-    @njit(**INLINE)
-    def pass_lanes(s, nl, t, limits, inv_mass, passages):
-        """``t`` as the first passage of each limit whose peak exceeds its value for the first
-        time (``common.first_passages``, lane by lane: a select, no branch)."""
-        for j in range(limits.shape[0]):
-            code, k, value = limits[j, 0], int(limits[j, 1]), limits[j, 2]
-            row, scale = E1MAX, 1.0
-            if code == X_MAX_K or (code == DRIFT_MAX_K and k == 0):
-                row = XMAX + k
-            elif code == DRIFT_MAX_K:
-                row = DRIFT + k
-            elif code == ACC_MAX_K:
-                row, scale = ACCMAX + k, inv_mass[k]
-            for lane in range(nl):
-                peak = s[row * W + lane] * scale if code == ACC_MAX_K else s[row * W + lane]
-                before = passages[j * W + lane]
-                passages[j * W + lane] = t if (before != before and peak > value) else before
+            pass_rows(s, nl, t, limits, inv_mass, passages, PEAKS)
 
     @njit(**INLINE)
     def half_kick(x, v, vn, force, dwh, dws, load, ag, dt, inside, accounts, mass, inv_mass, storey_k,
@@ -578,8 +588,8 @@ def lane_loop(spec: Spec):
         x, v = scratch(NB), scratch(NB)
         h_next = -1  # (the step after which the next history row is due; -1: none)
         if HISTORY and history.shape[1] > 0:
-            record_lanes(s, nl, 0, history, first, signals, m, sk, kind, host, rows, impulses, dt)
-            h_next = stride if history.shape[1] > 1 else -1
+            h_next = record_rows(s, nl, 0, stride, history, first, signals, x, v, STATE, NF, m, sk, kind,
+                                 host, rows, impulses, dt)
         for i in range(n_steps):
             if i == i0:
                 inside = True
@@ -618,11 +628,10 @@ def lane_loop(spec: Spec):
                     fix_lanes(s, z, nl, i, inside, dt, ag, ag_next, gl, own, noise_scale, m, inv_mass, sk,
                               bodies, absorbers, ex, fl, noise, seeds, raw, first, events, impulses)
             if PASSAGES and inside:
-                pass_lanes(s, nl, i * dt + dt, limits, inv_mass, passages)
+                pass_rows(s, nl, i * dt + dt, limits, inv_mass, passages, PEAKS)
             if HISTORY and i + 1 == h_next:  # (``common.record_history``'s schedule)
-                j = h_next // stride
-                record_lanes(s, nl, j, history, first, signals, m, sk, kind, host, rows, impulses, dt)
-                h_next = h_next + stride if j + 1 < history.shape[1] else -1
+                h_next = record_rows(s, nl, h_next // stride, stride, history, first, signals, x, v, STATE,
+                                     NF, m, sk, kind, host, rows, impulses, dt)
         for lane in range(nl):
             if s[DONE * W + lane] == 0.0:
                 finish_lane(s, lane, raw[first + lane], inside, i0, n_steps, dt, m, sk, NF, kind, host, rows,
