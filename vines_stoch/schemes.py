@@ -81,9 +81,7 @@ def in_lanes(scheme: str) -> bool:
     a scheme with a lane step (impact and Hertz absorbers included: the lanes whose step holds
     an event finish it in the scalar step; filtered loads included: each lane advances its own
     filters).  Such a scene's CPU ensembles draw from counter-based Philox streams (those of
-    the cuda backend, ``streams/rng.py``), in lanes or, for what the lanes do not record
-    (event logs, declared metrics, a history of impulses: ``kernels.chunk.lane_record``), in the
-    scalar loop on the same streams."""
+    the cuda backend, ``streams/rng.py``), whatever the run records."""
     return SCHEMES[scheme].lanes
 
 

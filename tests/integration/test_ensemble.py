@@ -114,8 +114,8 @@ def test_automatic_chunks_of_lane_scenes_are_batches_of_lanes_and_contact_counts
 def test_automatic_chunks_count_at_the_cost_of_the_loop_that_runs_them():
     """A lane scene keeps its history rows in the lanes, so ``ensemble.plan`` sizes its chunks at
     the lanes' cost (200 paths of 200,000 steps: two chunks of 100, the history's buffer within
-    ``HISTORY_CHUNK_BYTES``), as without them; an event log is the scalar loop's, whose cost
-    makes chunks of 200 / CHUNKS_PER_POINT paths (rounded up)."""
+    ``HISTORY_CHUNK_BYTES``), as without them, and so do an event log and declared metrics; the
+    scalar executor's chunks count its cost (200 / CHUNKS_PER_POINT paths, rounded up)."""
     import math
 
     from vines_stoch.ensemble import CHUNKS_PER_POINT, plan
@@ -126,10 +126,11 @@ def test_automatic_chunks_count_at_the_cost_of_the_loop_that_runs_them():
     changes = {"ensemble.realizations": 200, "simulation.duration": 200.0}
     lanes = scenes.study("smooth", changes)
     kept = scenes.study("smooth", {**changes, "simulation.history": True})
-    logged = scenes.study("smooth_impact", {**changes, "output.events": 100})
+    logged = scenes.study("smooth_impact", {**changes, "output.events": 100, "output.metrics": ["x_1_rms"]})
     assert lane_scene(build_scene(kept.points[0])) and lane_scene(build_scene(logged.points[0]))
-    assert len(plan(lanes).chunks) == 2 and len(plan(kept).chunks) == 2
-    assert {c[2] - c[1] for c in plan(logged).chunks[:-1]} == {math.ceil(200 / CHUNKS_PER_POINT)}
+    assert len(plan(lanes).chunks) == 2 and len(plan(kept).chunks) == 2 and len(plan(logged).chunks) == 2
+    scalar = plan(logged, executor="scalar").chunks
+    assert {c[2] - c[1] for c in scalar[:-1]} == {math.ceil(200 / CHUNKS_PER_POINT)}
 
 
 def test_the_executor_is_an_argument_of_the_run():

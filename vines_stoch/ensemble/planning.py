@@ -8,13 +8,13 @@ import sys
 import time
 from dataclasses import dataclass
 
-from ..kernels import DEFAULT_SIGNALS, LANES, chunk_runner, lane_record, simulate_chunk
+from ..kernels import DEFAULT_SIGNALS, LANES, chunk_runner, lane_scene, simulate_chunk
 from ..notices import LOG
 from ..outputs import Record
 from ..scenario import History, Study
 from ..scene import Scene, build_scene
 from ..signals import declare
-from .chunks import recorded_bytes, recording
+from .chunks import recorded_bytes
 
 #: Target work of one chunk, in path-steps (about 0.1-0.3 s of compute).
 CHUNK_STEPS = 5_000_000
@@ -77,8 +77,8 @@ def plan(study: Study, chunk: int | None = None, realizations: int | None = None
             if scene.period > 0:
                 row_bytes += 8 * scene.n_samples * (2 * scene.mass.shape[0] + 2)
             size = min(size, max(1, GPU_CHUNK_BYTES // max(row_bytes, 1)))
-        else:  # (a chunk that keeps an event log or declared metrics: the scalar loop)
-            size = chunk or _auto_chunk(scene, n, lane_record(scene, _record(scene, spec, spectra), executor))
+        else:
+            size = chunk or _auto_chunk(scene, n, lane_scene(scene, executor))
         if (spec or spectra) and backend != "cuda":
             row_bytes = recorded_bytes(scene, spec, spectra)
             size = min(size, max(1, HISTORY_CHUNK_BYTES // row_bytes))
@@ -86,18 +86,10 @@ def plan(study: Study, chunk: int | None = None, realizations: int | None = None
     return Plan(scenes, chunks)
 
 
-def _record(scene: Scene, history: History | None, spectra) -> Record:
-    """What a chunk of ``scene`` records (``outputs.Record``) with ``history`` and ``spectra``."""
-    signals, grid = recording(scene, history, spectra)
-    columns = declare(signals, scene.n_floors, scene.kind.shape[0]) if grid else None
-    return Record.of(scene, grid[1] if grid else 0, scene.event_rows, columns)
-
-
 def _auto_chunk(scene: Scene, n: int, lanes: bool) -> int:
     """Realisations of an automatic CPU chunk: ``CHUNK_STEPS`` of work at most, ``n /
     CHUNKS_PER_POINT`` where that leaves a chunk ``MIN_CHUNK_STEPS`` of work.  A chunk that runs
-    in SIMD lanes (``lanes``: ``kernels.chunk.lane_record``, a lane scene whose run keeps no event
-    log, declared metrics or history of impulses, which the scalar loop records) counts its path-steps
+    in SIMD lanes (``lanes``: ``kernels.lane_scene``) counts its path-steps
     ``LANE_WORK`` times cheaper and takes at least a batch of lanes (``lanes.LANES`` paths, or
     ``n``), its chunks then evened out (200 paths: two of 100, not 128 and 72); one with Hertz
     contact counts its path-steps at their scalar cost."""

@@ -26,7 +26,6 @@ from .chunk import (
     chunk_loop,
     chunk_runner,
     ground_paths,
-    lane_record,
     lane_scene,
     parameter_draws,
     realization_streams,
@@ -71,7 +70,7 @@ def stretcher(*args: Any, **kwargs: Any):
 
 __all__ = ["DEFAULT_SIGNALS", "EXECUTORS", "LANES", "SLOTS", "Path", "advance", "bundles",
            "check_executor", "chunk_loop", "chunk_runner", "compile_first", "filter_draws", "ground_paths",
-           "history_columns", "kernel_for", "lane_normals", "lane_record", "lane_scene", "launcher",
+           "history_columns", "kernel_for", "lane_normals", "lane_scene", "launcher",
            "load_history", "needed_streams", "parameter_draws", "realization_streams", "sample_buffer",
            "seed_keys", "simulate", "simulate_chunk", "spec_of", "start_path", "step_of", "stretch_to",
            "stretcher"]

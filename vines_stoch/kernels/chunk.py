@@ -169,10 +169,6 @@ def simulate_chunk(scene, seed: int, point: int, start: int, stop: int, common: 
     (stride, size)`` keeps ``size`` history rows of ``signals`` (``signals.declare``) every
     ``stride`` steps; ``event_rows`` rows of event log."""
     n = stop - start
-    wanted = np.array(needed_streams(scene), np.bool_)
-    philox = lane_scene(scene, executor)
-    gens = tuple((np.zeros(STREAM_WORDS, np.uint64) if philox else new_stream()) if w else _UNUSED
-                 for w in wanted)
     stride, size = history or (1, 0)
     template = _NO_HISTORY if size == 0 else np.zeros((1, len(signals)))
     columns = _NO_SIGNALS if size == 0 else history_columns(scene, template, signals)
@@ -182,19 +178,19 @@ def simulate_chunk(scene, seed: int, point: int, start: int, stop: int, common: 
     samples = np.full((n, *buffer.shape), np.nan)
     history_rows = np.full((n, size, columns.shape[0]), np.nan)
     events = np.full((n, event_rows, len(EVENT_COLUMNS)), np.nan)
-    record = Record.of(scene, size, event_rows, columns)
-    if lane_record(scene, record, executor):
-        simulate_lanes(scene, seed, point, start, common, raw, history_rows, stride, columns)
+    if lane_scene(scene, executor):  # (on the Philox streams)
+        simulate_lanes(scene, seed, point, start, common, raw, history_rows, stride, columns, events)
         return Chunk(raw, samples, history_rows, events)
     # (the bundles of one path: the state and filter buffers the loop reuses; the outputs'
     # buffers stand for their types, each realisation writing into its rows of the arrays above)
+    wanted = np.array(needed_streams(scene), np.bool_)
+    gens = tuple(new_stream() if w else _UNUSED for w in wanted)
     args = bundles(scene, scene.x0.copy(), scene.v0.copy(), filter_tuple(scene, None), np.zeros(0), out0,
                    buffer, template, stride, gens, 1, _NO_CARRY, columns,
                    np.zeros((0, len(EVENT_COLUMNS))))
-    kernel = kernel_for(scene, record=record)
+    kernel = kernel_for(scene, record=Record.of(scene, size, event_rows, columns))
     run = chunk_loop(kernel)
-    keys = philox_keys(seed) if philox else seed_keys(seed)
-    call = (*args, keys, point, start, common, wanted, scene.x0, scene.v0, scene.filters["p0"],
+    call = (*args, seed_keys(seed), point, start, common, wanted, scene.x0, scene.v0, scene.filters["p0"],
             raw, samples, history_rows, events)
     compile_first(run, call, gens)
     run(*call)
@@ -225,22 +221,9 @@ def lane_scene(scene, executor: str = "lanes") -> bool:
 def chunk_runner(scene, record: Record, executor: str = "lanes"):
     """The compiled loop a chunk of ``scene`` recording ``record`` runs under ``executor``
     (``simulate_chunk``'s choice): the lane loop or the scalar loop's chunk."""
-    if lane_record(scene, record, executor):
-        return _lanes_of(scene, record.history)
+    if lane_scene(scene, executor):
+        return lane_loop(spec_of(scene, record=record))
     return chunk_loop(kernel_for(scene, record=record))
-
-
-def _lanes_of(scene, history: bool):
-    """The lane loop of ``scene``, keeping history rows or not."""
-    return lane_loop(spec_of(scene, record=Record.of(scene)._replace(history=history)))
-
-
-def lane_record(scene, record: Record, executor: str = "lanes") -> bool:
-    """Whether a chunk of ``scene`` that records ``record`` (``outputs.Record``) runs in SIMD
-    lanes: a lane scene (``lane_scene``) whose run keeps no event log, no declared metrics and no
-    history of the impacts' impulses (``contact_j``), which the scalar loop records on the same
-    streams."""
-    return lane_scene(scene, executor) and not (record.events or record.declared or record.contact)
 
 
 def realization_streams(scene, seed: int, point: int, realization: int, common: bool = True,
@@ -258,28 +241,34 @@ def realization_streams(scene, seed: int, point: int, realization: int, common: 
 
 
 def lane_call(scene, seed: int, point: int, start: int, common: bool, raw: np.ndarray,
-              history: np.ndarray | None = None, stride: int = 1, signals: np.ndarray = _NO_SIGNALS) -> tuple:
+              history: np.ndarray | None = None, stride: int = 1, signals: np.ndarray = _NO_SIGNALS,
+              events: np.ndarray | None = None) -> tuple:
     """The arguments of ``scene``'s lane loop (``lanes.lane_loop``) for realisations ``start ..
     start + len(raw) - 1`` on the Philox streams of ``seed``, their metric vectors into ``raw``
-    and, with ``history`` (``(n, rows, len(signals))``, preset to NaN), their history rows of the
-    ``signals`` (``signals.declare``'s rows) every ``stride`` steps."""
+    (the declared metrics among them) and, with ``history`` (``(n, rows, len(signals))``, preset
+    to NaN), their history rows of the ``signals`` (``signals.declare``'s rows) every ``stride``
+    steps; with ``events`` (``(n, rows, len(EVENT_COLUMNS))``, preset to NaN), their event logs."""
     places = stream_place(np.arange(start, start + raw.shape[0], dtype=np.uint64), np.uint64(point), common)
     args = bundles(scene, scene.x0.copy(), scene.v0.copy(), filter_tuple(scene, None), np.zeros(0), raw[:0],
                    sample_buffer(scene), _NO_HISTORY, 1, (_UNUSED,) * 3)
     keys = philox_keys(seed)
     history = np.zeros((raw.shape[0], 0, 0)) if history is None else history
+    events = np.zeros((raw.shape[0], 0, len(EVENT_COLUMNS))) if events is None else events
     return (*args[:6], scene.limits, np.uint64(keys[INCREMENTS]), np.uint64(keys[BRIDGE]),
-            np.uint64(keys[FILTER]), scene.filters["p0"], places, raw, history, stride, signals)
+            np.uint64(keys[FILTER]), scene.filters["p0"], places, raw, history, stride, signals,
+            scene.reductions, events)
 
 
 def simulate_lanes(scene, seed: int, point: int, start: int, common: bool, raw: np.ndarray,
                    history: np.ndarray | None = None, stride: int = 1,
-                   signals: np.ndarray = _NO_SIGNALS) -> None:
+                   signals: np.ndarray = _NO_SIGNALS, events: np.ndarray | None = None) -> None:
     """Realisations ``start .. start + len(raw) - 1`` in SIMD lanes (``lanes.lane_loop``), their
-    metric vectors into ``raw`` (preset to the vector's start) and, with ``history``, their
-    history rows (``lane_call``): what the scalar loop gives on their Philox streams."""
-    run = _lanes_of(scene, history is not None and history.shape[1] > 0)
-    call = lane_call(scene, seed, point, start, common, raw, history, stride, signals)
+    metric vectors into ``raw`` (preset to the vector's start) and, with ``history`` and
+    ``events``, their history rows and event logs (``lane_call``): what the scalar loop gives on
+    their Philox streams."""
+    kept, logged = (0 if history is None else history.shape[1]), (0 if events is None else events.shape[1])
+    run = lane_loop(spec_of(scene, record=Record.of(scene, kept, logged, signals)))
+    call = lane_call(scene, seed, point, start, common, raw, history, stride, signals, events)
     compile_first(run, call, ())
     run(*call)
 
@@ -299,6 +288,6 @@ def parameter_draws(keys, point: int, start: int, common: bool, normal, out) -> 
             out[j, k] = pcg_normal(stream) if normal[k] else pcg_uniform(stream)
 
 
-__all__ = ["Chunk", "chunk_loop", "chunk_runner", "ground_paths", "lane_call", "lane_record", "lane_scene",
+__all__ = ["Chunk", "chunk_loop", "chunk_runner", "ground_paths", "lane_call", "lane_scene",
            "parameter_draws", "philox_keys", "realization_streams", "reseed", "seed_keys",
            "simulate_chunk", "simulate_lanes"]

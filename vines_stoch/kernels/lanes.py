@@ -28,10 +28,11 @@ Filtered loads are the lanes' own: each lane advances its filters on its Philox 
 the batch's closed-form loads plus its filters' read-outs.
 
 Which scenes run here is the scheme registry's (``schemes.in_lanes``): the kick-drift-kick
-scheme, recording the built-in metrics, the limits' first passages and history rows (each lane's
-rows written by the scalar loop's ``common.history_row`` from its state at the row's step end).
-The rest (event logs, declared metrics, a history of the impacts' impulses, ``contact_j``) runs
-in the scalar loop on the same streams (``chunk.simulate_chunk``).
+scheme, recording all the scalar loop records: the built-in metrics, the limits' first passages,
+history rows and declared metrics (each lane's written by the scalar loop's
+``common.history_row`` and ``common.fold_declared`` from its state at the step's end), and the
+event log and the impacts' impulses over a step (the signal ``contact_j``), which the scalar step
+writes for the lanes it finishes (a log and a row of impulses a lane).
 """
 
 from __future__ import annotations
@@ -57,12 +58,12 @@ from ..outputs import (
     ACC_MAX_K,
     CONTACT_TIME,
     DRIFT_MAX_K,
-    EVENT_COLUMNS,
     FINAL_ENERGY,
     PEAK_FORCE,
     STATUS,
     STATUS_DIVERGED,
     X_MAX_K,
+    declared_slots,
     passage_slots,
 )
 from ..physics.absorbers import CLEARANCE, WALL_HI, WALL_LO
@@ -72,11 +73,13 @@ from ..streams.rng import STREAM_WORDS, block_uniforms, packed_block, packed_pai
 from .brownian import forget, tree_seed
 from .common import (
     CHECK_EVERY,
+    absorber_energy,
     attachment_forces,
     contact_force,
     contact_forces,
     diverged,
     floor_peaks,
+    fold_declared,
     history_row,
     keep_in_cavities,
     shaped_forces,
@@ -179,21 +182,44 @@ def pass_rows(s, nl, t, limits, inv_mass, passages, peaks) -> None:
 
 
 @njit(**INLINE)
+def lane_state(s, lane, state, x, v) -> bool:
+    """Whether lane ``lane``'s path goes on (it has not ended), its state then in ``x, v``
+    (``state``: the batch's rows of the ended flag, ``x`` and ``v``)."""
+    done, xs, vs = state
+    if s[done * LANES + lane] != 0.0:
+        return False
+    for b in range(x.shape[0]):
+        x[b] = s[(xs + b) * LANES + lane]
+        v[b] = s[(vs + b) * LANES + lane]
+    return True
+
+
+@njit(**INLINE)
 def record_rows(s, nl, j, stride, history, first, signals, x, v, state, nf, mass, storey_k, kind, host, rows,
                 impulses, dt) -> int:
     """History row ``j`` (``t = j stride dt``) of every lane of a batch whose path has not ended,
     by the scalar loop's ``common.history_row`` from the lane's state and primary energy
-    (``state``: the batch's rows of the ended flag, ``x`` and ``v``; ``x, v``: scratch); returns
+    (``state``: ``lane_state``'s rows; ``x, v``: scratch; ``impulses``: a row a lane); returns
     the step after which the next row is due, -1 for none (``common.record_history``'s)."""
-    done, xs, vs = state
     for lane in range(nl):
-        if s[done * LANES + lane] == 0.0:
-            for b in range(x.shape[0]):
-                x[b] = s[(xs + b) * LANES + lane]
-                v[b] = s[(vs + b) * LANES + lane]
+        if lane_state(s, lane, state, x, v):
             history_row(history[first + lane], j, signals, x, v, nf, primary_energy(mass, storey_k, x, v, nf),
-                        mass, kind, host, rows, impulses, dt)
+                        mass, kind, host, rows, impulses[lane], dt)
     return (j + 1) * stride if j + 1 < history.shape[1] else -1
+
+
+@njit(**INLINE)
+def fold_rows(s, nl, raw, first, reductions, at, x, v, state, e1_row, nf, mass, kind, host, rows, impulses,
+              dt, opening, share) -> None:
+    """The declared metrics (``common.fold_declared``, the scalar loop's, slots from ``at``) of
+    every lane of a batch whose path has not ended folded into its metric vector ``raw[first +
+    lane]``, from the lane's state and ``E1`` at the step's end (row ``e1_row``), at the metrics
+    window's ``opening`` or after a step; ``share``: a metric folds the absorbers' energy share."""
+    for lane in range(nl):
+        if lane_state(s, lane, state, x, v):
+            e_abs = absorber_energy(x, v, mass, nf, kind, host, rows) if share else 0.0
+            fold_declared(reductions, raw[first + lane], at, x, v, nf, s[e1_row * LANES + lane], e_abs, host,
+                          kind, rows, impulses[lane], dt, opening)
 
 
 @cache
@@ -203,7 +229,8 @@ def lane_loop(spec: Spec):
     the increments', the bridges' and the filters' Philox streams, the root of the filters'
     stationary covariance (``p0``: zero for a start from rest) and each realisation's stream
     place (``rng.stream_place``), and writes realisation ``j``'s metric vector into ``raw[j]``
-    (preset to the vector's start)."""
+    (preset to the vector's start), its history rows into ``history[j]`` and its event log into
+    ``events[j]`` (both preset to NaN; ``spec`` says which it keeps)."""
     NB = spec.n_bodies
     NF = spec.n_floors
     NA = NB - NF
@@ -215,8 +242,10 @@ def lane_loop(spec: Spec):
     NOISE = spec.has_noise
     PASSAGES = spec.passages
     HISTORY = spec.history
+    DECLARED, SHARE = spec.declared, spec.share  # (the declared metrics; one folds the energy share)
     IMPACT, CONTACT = spec.has_impact, spec.has_hertz
     EVENTS = IMPACT or CONTACT
+    IMPULSES = spec.contact and IMPACT  # (a signal reads the impacts' impulses over a step: a row a lane)
     TREE = NOISE and EVENTS  # (the lanes' Brownian trees: a seed each)
     FILTERED = spec.filtered
     NZ = spec.n_states if FILTERED else 0
@@ -461,7 +490,7 @@ def lane_loop(spec: Spec):
             g_end = s[AG_NEXT * W + lane] if FILTERED and GROUND else ag_next
             work, d_primary, d_absorber, _, _, loss, n_left, n_right, contact_time, peak, _ = advance(
                 i, x, v, inv_mass, acc, own, seeds[lane], g_start, g_end, acct, inside, bodies, absorbers, ex,
-                fl, noise, dt, raw[first + lane], events, impulses)
+                fl, noise, dt, raw[first + lane], events[first + lane], impulses[lane])
             for b in range(NB):
                 s[(X + b) * W + lane] = x[b]
                 s[(V + b) * W + lane] = v[b]
@@ -528,14 +557,15 @@ def lane_loop(spec: Spec):
     @njit(**INLINE)
     def batch(s_, z_, spare_, nl, bodies_, absorbers_, ex_, fl_, noise_, grid_, limits_, key, places_,
               passages_, raw_, first, own_, seeds_, bridge_key, events_, impulses_, fz_, fspare_, filter_key,
-              p0_, history_, stride, signals_):
+              p0_, history_, stride, signals_, reductions_):
         # every array as a borrowed view (``jit.intrinsics.borrowed``): no reference counting in
         # the lane loops, whose calls would keep the compiler from vectorising them
         bodies, absorbers, ex, fl, noise, grid = borrowed((bodies_, absorbers_, ex_, fl_, noise_, grid_))
         s, z, spare, limits, places, passages, raw = borrowed((s_, z_, spare_, limits_, places_, passages_,
                                                                raw_))
         own, seeds, events, impulses = borrowed((own_, seeds_, events_, impulses_))
-        fz, fspare, p0, history, signals = borrowed((fz_, fspare_, p0_, history_, signals_))
+        fz, fspare, p0, history, signals, reductions = borrowed((fz_, fspare_, p0_, history_, signals_,
+                                                                 reductions_))
         mass, storey_k, kind, host, rows, walls = (bodies.mass, bodies.storey_k, absorbers.kind,
                                                    absorbers.host, absorbers.rows, absorbers.wall)
         dt, n_steps, i0 = grid.dt, grid.n_steps, grid.i0
@@ -586,6 +616,10 @@ def lane_loop(spec: Spec):
                               ag_next) if FILTERED else 0
         inside = i0 == 0
         x, v = scratch(NB), scratch(NB)
+        declared_at = declared_slots(NF, limits.shape[0])
+        for lane in range(nl if IMPULSES else 0):  # (the impacts' impulses over a step: none yet)
+            for a in range(NA):
+                impulses[lane, a] = 0.0
         h_next = -1  # (the step after which the next history row is due; -1: none)
         if HISTORY and history.shape[1] > 0:
             h_next = record_rows(s, nl, 0, stride, history, first, signals, x, v, STATE, NF, m, sk, kind,
@@ -594,6 +628,9 @@ def lane_loop(spec: Spec):
             if i == i0:
                 inside = True
                 open_lanes(s, nl, i * dt, gl, bodies, absorbers, inv_mass, limits, passages)
+                if DECLARED:
+                    fold_rows(s, nl, raw, first, reductions, declared_at, x, v, STATE, E1, NF, m, kind, host,
+                              rows, impulses, dt, True, SHARE)
             if i % CHECK_EVERY == 0:
                 for lane in range(nl):  # a path that diverged ends here, as the scalar loop's
                     load_lane(s, lane, x, v)
@@ -623,10 +660,16 @@ def lane_loop(spec: Spec):
             else:
                 flagged = update(s, z, nl, False, dt, ag, ag_next, gl.load, gl.load_next, noise_scale, m,
                                  inv_mass, sk, sc, fc, laws, host, rows, wall_at, band)
+            for lane in range(nl if IMPULSES else 0):  # (this step's impacts' impulses, from none)
+                for a in range(NA):
+                    impulses[lane, a] = 0.0
             if EVENTS:  # (a compile-time flag alone: a scene without events compiles none of it)
                 if flagged > 0:
                     fix_lanes(s, z, nl, i, inside, dt, ag, ag_next, gl, own, noise_scale, m, inv_mass, sk,
                               bodies, absorbers, ex, fl, noise, seeds, raw, first, events, impulses)
+            if DECLARED and inside:
+                fold_rows(s, nl, raw, first, reductions, declared_at, x, v, STATE, E1, NF, m, kind, host,
+                          rows, impulses, dt, False, SHARE)
             if PASSAGES and inside:
                 pass_rows(s, nl, i * dt + dt, limits, inv_mass, passages, PEAKS)
             if HISTORY and i + 1 == h_next:  # (``common.record_history``'s schedule)
@@ -639,7 +682,7 @@ def lane_loop(spec: Spec):
 
     @njit(**KERNEL)
     def run(bodies, absorbers, ex, fl, noise, grid, limits, key, bridge_key, filter_key, p0, places, raw,
-            history, stride, signals):
+            history, stride, signals, reductions, events):
         prefer_vectors()
         n = raw.shape[0]
         s, z, spare = aligned_rows(ROWS), aligned_rows(NF), aligned_rows(1)
@@ -651,12 +694,12 @@ def lane_loop(spec: Spec):
         own, _ = start(bodies, absorbers, ex, fl, noise, grid, np.zeros(0), False, x, bodies.v.copy(),
                        np.zeros(STREAM_WORDS, np.uint64))
         seeds = np.zeros(W, np.uint64)
-        events, impulses = np.zeros((0, len(EVENT_COLUMNS))), np.zeros(0)
+        impulses = np.zeros((W, NA if IMPULSES else 0))  # (a lane's impacts' impulses over a step)
         for first in range(0, n, W):
             nl = min(W, n - first)
             batch(s, z, spare, nl, bodies, absorbers, ex, fl, noise, grid, limits, key, places,
                   passages, raw, first, own, seeds, bridge_key, events, impulses, fz, fspare, filter_key, p0,
-                  history, stride, signals)
+                  history, stride, signals, reductions)
 
     stable_cache(run)  # (its closure holds the lane step's functions: see ``jit.cache.stable_cache``)
     return run

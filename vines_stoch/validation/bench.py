@@ -779,8 +779,7 @@ leaves its normal {eight_ns - quiet_ns:.2f} ns.
 The lanes' normals alone (a block of Philox4x32-10 and a branch-free Box-Muller pair every two
 draws, 1,024 lanes): {lanes["normals"] / 1e6:.0f} M normals/s; a normal drawn in the scalar loop costs
 {lanes["philox ns"]:.1f} ns from a Philox stream and {lanes["pcg ns"]:.1f} ns from a PCG64 stream (the
-ziggurat), so a scene that runs in lanes but records what the lanes do not (event logs,
-declared metrics: the scalar loop on its Philox streams) pays that difference a draw.
+ziggurat).
 The SRA and Runge-Kutta schemes do not run in lanes (the scalar loop: a ratio of 1).
 """
 

@@ -20,7 +20,7 @@ from vines_stoch.kernels import SLOTS, simulate, spec_of
 from vines_stoch.kernels.chunk import lane_call, lane_scene, simulate_chunk
 from vines_stoch.kernels.events import NONE, event_ahead, quiet_band
 from vines_stoch.kernels.lanes import ALIGN, LANES, aligned_rows, lane_loop, lane_normals
-from vines_stoch.outputs import STATUS, STATUS_DIVERGED, Record, new_metrics
+from vines_stoch.outputs import STATUS, STATUS_DIVERGED, Record, new_events, new_metrics
 from vines_stoch.physics.absorbers import HERTZ as HERTZ_LAW
 from vines_stoch.physics.absorbers import IMPACT as IMPACT_LAW
 from vines_stoch.physics.absorbers import LAWS
@@ -217,17 +217,34 @@ def test_a_lane_that_diverges_keeps_no_history_rows_after_it():
         assert np.isnan(history[-1]).all() and not np.isnan(history[0]).any()
 
 
-def test_what_lanes_do_not_record_runs_in_the_scalar_loop_on_the_same_streams():
-    """Event logs, declared metrics and a history of the impacts' impulses (``contact_j``) are the
-    scalar loop's: a chunk that keeps them gives the lanes' metric rows, bitwise, and the history
-    of the realisation's Philox path."""
-    scene = scene_from(IMPACT)
-    plain = simulate_chunk(scene, SEED, 0, 0, 3).raw
-    kept = simulate_chunk(scene, SEED, 0, 0, 3, history=(50, 40), signals=("x1", "contact_1"))
-    assert same(kept.raw, plain)
-    history = np.full((40, 2), np.nan)
-    simulate(scene, philox_streams(2), history=history, stride=50, signals=("x1", "contact_1"))
-    assert same(kept.history[2], history)
+#: What a run may record beyond the built-in metrics: declared metrics (the impact absorber's
+#: force on its host, ``contact_2``, and the absorbers' energy share among them) and an event log.
+RECORDED = {"output.metrics": ["x_1_rms", "e1_mean", "stroke_2_peak", "contact_2_max", "contact_2_peak",
+                               "share_peak", "energy_share_mean", "va_1_min"],
+            "output.events": 40, "simulation.metrics_from": 0.4}
+
+
+@pytest.mark.parametrize("data", [changed(IMPACT, RECORDED), changed(HERTZ, {**RECORDED, "output.metrics": [
+    "contact_1_peak", "stroke_1_rms"]}), changed(contact_noise_parallel(1.0), RECORDED)],
+    ids=["impact", "hertz", "contact-noise (a plastic impact absorber)"])
+def test_lanes_keep_the_scalar_loop_s_event_logs_and_declared_metrics(data):
+    """Event logs, declared metrics and a history of the impacts' impulses (``contact_j``) are
+    recorded in the lanes: each realisation's metric vector (its declared metrics in it), event
+    log and history rows are ``simulate``'s on its Philox streams, bitwise; the events and the
+    impacts' forces are there to record."""
+    scene = scene_from(data)
+    assert scene.reductions.shape[0] > 0 and scene.event_rows == 40
+    signals = ("x1", "share", *(f"contact_{a + 1}" for a in range(scene.kind.shape[0])))
+    size = scene.n_steps + 1  # (every step's end: the impulses of each step)
+    kept = simulate_chunk(scene, SEED, 0, 0, 3, history=(1, size), signals=signals, event_rows=40)
+    for r in range(3):
+        history, events = np.full((size, len(signals)), np.nan), new_events(40)
+        raw = simulate(scene, philox_streams(r), history=history, stride=1, signals=signals, events=events)
+        assert same(kept.raw[r], raw), (r, np.flatnonzero(kept.raw[r] != raw))
+        assert same(kept.events[r], events), r
+        assert same(kept.history[r], history), r
+    assert not np.isnan(kept.events[:, 0]).any()  # (each realisation logged an event)
+    assert np.abs(kept.history[:, :, 2:]).max() > 0  # (and an absorber pushed its host)
 
 
 def _packed(asm: str, width: str) -> int:
