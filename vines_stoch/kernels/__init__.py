@@ -11,8 +11,9 @@ noise, grid, outputs and the three streams.
 The package's one front: nothing outside ``kernels/`` imports one of its modules
 (``tests/integration/test_layout.py``).  ``paths.py``: one realisation's loop, arguments and
 streams; ``chunk.py``: a chunk of realisations in one compiled call (``simulate_chunk``);
-``protocol.py``: what a loop and a scheme's step pass each other; ``driver.py``, ``lanes.py`` and
-``launch.py`` the executors (the scalar loop, the SIMD lanes, the cuda kernel); ``kdk.py``,
+``protocol.py``: what a loop and a scheme's step pass each other; ``driver.py``, ``lanes.py``,
+``passes.py`` and ``launch.py`` the executors (the scalar loop, the SIMD lanes specialised to a
+structure, the SIMD lanes' pass loop for structures of any size, the cuda kernel); ``kdk.py``,
 ``sra3.py`` and ``rk4.py`` the schemes' steps.
 """
 
@@ -33,6 +34,7 @@ from .chunk import (
     simulate_chunk,
 )
 from .lanes import LANES, lane_normals
+from .passes import pass_loop, pass_scene
 from .paths import (
     DEFAULT_SIGNALS,
     SLOTS,
@@ -70,7 +72,7 @@ def stretcher(*args: Any, **kwargs: Any):
 
 __all__ = ["DEFAULT_SIGNALS", "EXECUTORS", "LANES", "SLOTS", "Path", "advance", "bundles",
            "check_executor", "chunk_loop", "chunk_runner", "compile_first", "filter_draws", "ground_paths",
-           "history_columns", "kernel_for", "lane_normals", "lane_scene", "launcher",
-           "load_history", "needed_streams", "parameter_draws", "realization_streams", "sample_buffer",
-           "seed_keys", "simulate", "simulate_chunk", "spec_of", "start_path", "step_of", "stretch_to",
-           "stretcher"]
+           "history_columns", "kernel_for", "lane_normals", "lane_scene", "launcher", "load_history",
+           "needed_streams", "parameter_draws", "pass_loop", "pass_scene", "realization_streams",
+           "sample_buffer", "seed_keys", "simulate", "simulate_chunk", "spec_of", "start_path", "step_of",
+           "stretch_to", "stretcher"]

@@ -33,6 +33,7 @@ from ..streams.rng import STREAM_WORDS, open_stream, philox_stream, stream_key, 
 from .bundles import Outputs
 from .lanes import lane_loop
 from .loads import load_path, stationary_start
+from .passes import pass_layout, pass_loop, pass_scene
 from .paths import (
     _NO_CARRY,
     _NO_HISTORY,
@@ -222,8 +223,15 @@ def chunk_runner(scene, record: Record, executor: str = "lanes"):
     """The compiled loop a chunk of ``scene`` recording ``record`` runs under ``executor``
     (``simulate_chunk``'s choice): the lane loop or the scalar loop's chunk."""
     if lane_scene(scene, executor):
-        return lane_loop(spec_of(scene, record=record))
+        return lane_runner(scene, record)
     return chunk_loop(kernel_for(scene, record=record))
+
+
+def lane_runner(scene, record: Record):
+    """The compiled loop of ``scene``'s realisations in SIMD lanes: the pass loop, one for every
+    structure it takes (``passes.pass_scene``), or the lane loop specialised to ``scene``'s
+    structure and to what it records (``record``)."""
+    return pass_loop if pass_scene(scene) else lane_loop(spec_of(scene, record=record))
 
 
 def realization_streams(scene, seed: int, point: int, realization: int, common: bool = True,
@@ -254,9 +262,13 @@ def lane_call(scene, seed: int, point: int, start: int, common: bool, raw: np.nd
     keys = philox_keys(seed)
     history = np.zeros((raw.shape[0], 0, 0)) if history is None else history
     events = np.zeros((raw.shape[0], 0, len(EVENT_COLUMNS))) if events is None else events
-    return (*args[:6], scene.limits, np.uint64(keys[INCREMENTS]), np.uint64(keys[BRIDGE]),
+    call = (*args[:6], scene.limits, np.uint64(keys[INCREMENTS]), np.uint64(keys[BRIDGE]),
             np.uint64(keys[FILTER]), scene.filters["p0"], places, raw, history, stride, signals,
             scene.reductions, events)
+    if pass_scene(scene):  # (the pass loop's sizes and kinds: run-time data)
+        kinds = (scene.has_white_noise, scene.has_ground, scene.has_shaped)
+        return (*call, pass_layout(scene.mass.shape[0], scene.n_floors), kinds)
+    return call
 
 
 def simulate_lanes(scene, seed: int, point: int, start: int, common: bool, raw: np.ndarray,
@@ -267,7 +279,7 @@ def simulate_lanes(scene, seed: int, point: int, start: int, common: bool, raw: 
     ``events``, their history rows and event logs (``lane_call``): what the scalar loop gives on
     their Philox streams."""
     kept, logged = (0 if history is None else history.shape[1]), (0 if events is None else events.shape[1])
-    run = lane_loop(spec_of(scene, record=Record.of(scene, kept, logged, signals)))
+    run = lane_runner(scene, Record.of(scene, kept, logged, signals))
     call = lane_call(scene, seed, point, start, common, raw, history, stride, signals, events)
     compile_first(run, call, ())
     run(*call)
