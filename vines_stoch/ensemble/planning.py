@@ -8,7 +8,7 @@ import sys
 import time
 from dataclasses import dataclass
 
-from ..kernels import DEFAULT_SIGNALS, LANES, chunk_runner, lane_scene, simulate_chunk
+from ..kernels import DEFAULT_SIGNALS, LANES, chunk_runner, lane_scene, pass_loop, simulate_chunk
 from ..notices import LOG
 from ..outputs import Record
 from ..scenario import History, Study
@@ -132,14 +132,15 @@ def prepare_loops(scenes: list[Scene], seed: int, common: bool, grid: tuple[int,
         if run in seen or run.overloads:
             continue
         seen.add(run)
+        what = ("the pass loop (every smooth kick-drift-kick structure of three bodies or more)"
+                if run is pass_loop else structure(scene))
         if show:
-            print(f"step loop: {structure(scene)}: compiling or loading ...", end="", file=sys.stderr,
-                  flush=True)
+            print(f"step loop: {what}: compiling or loading ...", end="", file=sys.stderr, flush=True)
         hits, start = sum(run.stats.cache_hits.values()), time.monotonic()
         simulate_chunk(scene, seed, point, 0, 0, common, grid, signals, scene.event_rows, executor)
         loaded = sum(run.stats.cache_hits.values()) > hits
         outcome = (f"{'loaded from the cache' if loaded else 'compiled (cached on disk for later runs)'} "
                    f"in {time.monotonic() - start:.1f} s")
-        LOG.info("step loop: %s: %s", structure(scene), outcome)
+        LOG.info("step loop: %s: %s", what, outcome)
         if show:
             print(f" {outcome}", file=sys.stderr, flush=True)

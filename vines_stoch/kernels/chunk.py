@@ -163,12 +163,14 @@ class Chunk(NamedTuple):
 
 def simulate_chunk(scene, seed: int, point: int, start: int, stop: int, common: bool = True,
                    history: tuple[int, int] | None = None, signals: tuple[str, ...] | None = None,
-                   event_rows: int = 0, executor: str = "lanes") -> Chunk:
+                   event_rows: int = 0, executor: str = "lanes", specialised: bool = False) -> Chunk:
     """Realisations ``start .. stop - 1`` of ``scene`` at sweep point ``point`` on the streams of
     ``seed`` (``realization_streams``; ``common``: common random numbers), in one compiled call
     of ``executor`` (``EXECUTORS``): what ``simulate`` gives for each, bitwise.  ``history =
     (stride, size)`` keeps ``size`` history rows of ``signals`` (``signals.declare``) every
-    ``stride`` steps; ``event_rows`` rows of event log."""
+    ``stride`` steps; ``event_rows`` rows of event log.  ``specialised``: the lane loop specialised
+    to the structure even where the pass loop would run it (``passes.pass_scene``; the
+    benchmark's comparison: the same numbers)."""
     n = stop - start
     stride, size = history or (1, 0)
     template = _NO_HISTORY if size == 0 else np.zeros((1, len(signals)))
@@ -180,7 +182,8 @@ def simulate_chunk(scene, seed: int, point: int, start: int, stop: int, common: 
     history_rows = np.full((n, size, columns.shape[0]), np.nan)
     events = np.full((n, event_rows, len(EVENT_COLUMNS)), np.nan)
     if lane_scene(scene, executor):  # (on the Philox streams)
-        simulate_lanes(scene, seed, point, start, common, raw, history_rows, stride, columns, events)
+        simulate_lanes(scene, seed, point, start, common, raw, history_rows, stride, columns, events,
+                       specialised)
         return Chunk(raw, samples, history_rows, events)
     # (the bundles of one path: the state and filter buffers the loop reuses; the outputs'
     # buffers stand for their types, each realisation writing into its rows of the arrays above)
@@ -227,11 +230,13 @@ def chunk_runner(scene, record: Record, executor: str = "lanes"):
     return chunk_loop(kernel_for(scene, record=record))
 
 
-def lane_runner(scene, record: Record):
+def lane_runner(scene, record: Record, specialised: bool = False):
     """The compiled loop of ``scene``'s realisations in SIMD lanes: the pass loop, one for every
-    structure it takes (``passes.pass_scene``), or the lane loop specialised to ``scene``'s
-    structure and to what it records (``record``)."""
-    return pass_loop if pass_scene(scene) else lane_loop(spec_of(scene, record=record))
+    structure it takes (``passes.pass_scene``; unless ``specialised``), or the lane loop
+    specialised to ``scene``'s structure and to what it records (``record``)."""
+    if pass_scene(scene) and not specialised:
+        return pass_loop
+    return lane_loop(spec_of(scene, record=record))
 
 
 def realization_streams(scene, seed: int, point: int, realization: int, common: bool = True,
@@ -250,12 +255,13 @@ def realization_streams(scene, seed: int, point: int, realization: int, common: 
 
 def lane_call(scene, seed: int, point: int, start: int, common: bool, raw: np.ndarray,
               history: np.ndarray | None = None, stride: int = 1, signals: np.ndarray = _NO_SIGNALS,
-              events: np.ndarray | None = None) -> tuple:
+              events: np.ndarray | None = None, specialised: bool = False) -> tuple:
     """The arguments of ``scene``'s lane loop (``lanes.lane_loop``) for realisations ``start ..
     start + len(raw) - 1`` on the Philox streams of ``seed``, their metric vectors into ``raw``
     (the declared metrics among them) and, with ``history`` (``(n, rows, len(signals))``, preset
     to NaN), their history rows of the ``signals`` (``signals.declare``'s rows) every ``stride``
-    steps; with ``events`` (``(n, rows, len(EVENT_COLUMNS))``, preset to NaN), their event logs."""
+    steps; with ``events`` (``(n, rows, len(EVENT_COLUMNS))``, preset to NaN), their event logs;
+    for the pass loop unless ``specialised`` (``lane_runner``)."""
     places = stream_place(np.arange(start, start + raw.shape[0], dtype=np.uint64), np.uint64(point), common)
     args = bundles(scene, scene.x0.copy(), scene.v0.copy(), filter_tuple(scene, None), np.zeros(0), raw[:0],
                    sample_buffer(scene), _NO_HISTORY, 1, (_UNUSED,) * 3)
@@ -265,7 +271,7 @@ def lane_call(scene, seed: int, point: int, start: int, common: bool, raw: np.nd
     call = (*args[:6], scene.limits, np.uint64(keys[INCREMENTS]), np.uint64(keys[BRIDGE]),
             np.uint64(keys[FILTER]), scene.filters["p0"], places, raw, history, stride, signals,
             scene.reductions, events)
-    if pass_scene(scene):  # (the pass loop's sizes and kinds: run-time data)
+    if pass_scene(scene) and not specialised:  # (the pass loop's sizes and kinds: run-time data)
         kinds = (scene.has_white_noise, scene.has_ground, scene.has_shaped)
         return (*call, pass_layout(scene.mass.shape[0], scene.n_floors), kinds)
     return call
@@ -273,14 +279,15 @@ def lane_call(scene, seed: int, point: int, start: int, common: bool, raw: np.nd
 
 def simulate_lanes(scene, seed: int, point: int, start: int, common: bool, raw: np.ndarray,
                    history: np.ndarray | None = None, stride: int = 1,
-                   signals: np.ndarray = _NO_SIGNALS, events: np.ndarray | None = None) -> None:
+                   signals: np.ndarray = _NO_SIGNALS, events: np.ndarray | None = None,
+                   specialised: bool = False) -> None:
     """Realisations ``start .. start + len(raw) - 1`` in SIMD lanes (``lanes.lane_loop``), their
     metric vectors into ``raw`` (preset to the vector's start) and, with ``history`` and
     ``events``, their history rows and event logs (``lane_call``): what the scalar loop gives on
-    their Philox streams."""
+    their Philox streams (``specialised``: ``lane_runner``'s)."""
     kept, logged = (0 if history is None else history.shape[1]), (0 if events is None else events.shape[1])
-    run = lane_runner(scene, Record.of(scene, kept, logged, signals))
-    call = lane_call(scene, seed, point, start, common, raw, history, stride, signals, events)
+    run = lane_runner(scene, Record.of(scene, kept, logged, signals), specialised)
+    call = lane_call(scene, seed, point, start, common, raw, history, stride, signals, events, specialised)
     compile_first(run, call, ())
     run(*call)
 

@@ -40,7 +40,7 @@ from numba import njit
 
 from ..ensemble import run
 from ..jit.flags import KERNEL, VECTOR_BITS
-from ..kernels import load_history, needed_streams, simulate
+from ..kernels import load_history, needed_streams, simulate, simulate_chunk
 from ..outputs import ABSORBER_DISS, E1_MAX, FINAL_ENERGY, IMPACT_LOSS, INPUT, PRIMARY_DISS
 from ..physics.hertz import hertz_constant
 from ..records import G, write_at2
@@ -440,6 +440,40 @@ def _floors(counts: tuple[int, ...] = (1, 3, 9, 20),
     return rows
 
 
+def _frames(counts: tuple[int, ...] = (2, 3, 5, 9), paths: int = 256,
+            rounds: int = 3) -> list[tuple[str, float, float, float, float, float]]:
+    """Frames in SIMD lanes: rows ``(frame, first call s, pass loop, specialised lane loop, scalar
+    loop M path-steps/s, specialised first call s)`` of ``n``-storey frames (unit masses,
+    storey stiffness ``4 n^2``) with a cubic NES on the roof (six on the top three floors of
+    nine storeys) under white noise and a harmonic force, 20 s: the first call of a structure
+    the process has not run (the pass loop compiled before, on a bare four-storey frame), and the
+    best of ``rounds`` chunks of ``paths`` paths of each loop (the scalar loop a quarter of them)."""
+    rows = []
+    cubic = {"type": "cubic", "mass": 0.05, "stiffness": 100.0, "damping": 0.02}
+    bare = {"primary": {"masses": [1.0] * 4, "stiffnesses": [64.0] * 4, "dampings": [0.05] * 4},
+            "absorbers": []}
+    simulate_chunk(scenes.scene("smooth", bare), 1, 0, 0, 2)  # (the pass loop, on a frame not timed)
+    for n in counts:
+        roof = [{**cubic, "floor": f} for f in ((9, 9, 8, 8, 7, 7) if n == 9 else (n,))]
+        scene = scenes.scene("smooth", {"primary": {"masses": [1.0] * n, "stiffnesses": [4.0 * n * n] * n,
+                                                    "dampings": [0.05] * n},
+                                        "absorbers": roof, "simulation.duration": 20.0})
+        timed = {}
+        for name, options, count in (("pass", {}, paths), ("specialised", {"specialised": True}, paths),
+                                     ("scalar", {"executor": "scalar"}, paths // 4)):
+            start = time.perf_counter()
+            simulate_chunk(scene, 1, 0, 0, 2, **options)
+            timed[name + " first"] = time.perf_counter() - start
+            for _ in range(rounds):
+                start = time.perf_counter()
+                simulate_chunk(scene, 1, 0, 0, count, **options)
+                rate = count * scene.n_steps / (time.perf_counter() - start)
+                timed[name] = max(timed.get(name, 0.0), rate / 1e6)
+        rows.append((f"{n} storeys, {len(roof)} NES", timed["pass first"], timed["pass"],
+                     timed["specialised"], timed["scalar"], timed["specialised first"]))
+    return rows
+
+
 def _path_rate(scene, repeats: int) -> tuple[float, float, float]:
     """``(M steps/s, ns a step, s of the first call)`` of single paths of ``scene``."""
     from ..streams import streams
@@ -664,6 +698,7 @@ def main(out: Path = Path("reports/benchmarks.md"), n_paths: int = 200) -> str:
     short = _short_paths()
     outputs = _output_costs()
     floors = _floors()
+    frames = _frames()
     estimates = _estimate_times()
     ssvi = _ssvi()
     same_path = {kind: precision.same_path_errors(kind, SAME_PATH_LEVELS, paths=20)
@@ -687,7 +722,8 @@ def main(out: Path = Path("reports/benchmarks.md"), n_paths: int = 200) -> str:
                     res_impact=res_impact, short=short, outputs=outputs, contact=contact,
                     same_path=same_path, ssvi=ssvi, scipy_row=scipy_row, work_precision=work_precision,
                     stability_suite=stability_suite, rare_events=rare_events, estimates=estimates,
-                    startup=startup, seismic=seismic, floors=floors, overhead=overhead, memory=memory)
+                    startup=startup, seismic=seismic, floors=floors, frames=frames, overhead=overhead,
+                    memory=memory)
     text = "".join(section(measured) for section in SECTIONS)
     out.parent.mkdir(parents=True, exist_ok=True)
     gpu_section = section_of(out.read_text()) if out.exists() else None  # (make bench-gpu's: kept)
@@ -969,6 +1005,28 @@ the kernel is not cached yet):
 """
 
 
+def _frames_section(m: dict[str, Any]) -> str:
+    """The report's section "Frames in lanes: the pass loop" from the measurements ``m``."""
+    rows = "\n".join(f"| {name} | {first:.2f} | {rate:.1f} | {special:.1f} | {rate / special:.2f} | "
+                     f"{scalar:.1f} | {rate / scalar:.1f} | {special_first:.1f} |"
+                     for name, first, rate, special, scalar, special_first in m["frames"])
+    return f"""
+## Frames in lanes: the pass loop
+
+Every noisy kick-drift-kick structure of three bodies or more without impact or Hertz absorbers
+or filtered loads runs the pass loop, compiled once for all of them (`kernels/passes.py`); the
+lane loop specialised to the structure (the executor before it, compiled for each structure)
+and the scalar loop in the same run. Frames with cubic NES on the roof under white noise and a
+harmonic force, 20 s; the first call is the first chunk of a structure this process has not run
+(the pass loop loaded or compiled before, on a bare four-storey frame).
+
+| frame | first call (s) | pass loop (M path-steps/s) | specialised lanes | pass / specialised \
+| scalar loop | pass / scalar | specialised first call (s) |
+| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |
+{rows}
+"""
+
+
 def _scale_section(m: dict[str, Any]) -> str:
     """The report's section "Scale" from the measurements ``m``."""
     overhead, cores, memory = m["overhead"], m["cores"], m["memory"]
@@ -998,4 +1056,4 @@ of x1 and E1 on a 1001-point grid, mean, std and 3 quantiles, in a fresh process
 #: The report's sections, in order.
 SECTIONS = (_smooth_section, _lanes_section, _impact_section, _short_section, _outputs_section,
             _contact_section, _ssvi_section, _estimates_section, _startup_section, _seismic_section,
-            _floors_section, _scale_section)
+            _floors_section, _frames_section, _scale_section)
