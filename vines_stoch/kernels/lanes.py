@@ -222,6 +222,65 @@ def fold_rows(s, nl, raw, first, reductions, at, x, v, state, e1_row, nf, mass, 
                           kind, rows, impulses[lane], dt, opening)
 
 
+@njit(**INLINE)
+def filter_rows(s, fz, nl, load, load_next, ag, ag_next, piecewise, fl, scales, rows, ground, z, zn,
+                draws) -> None:
+    """Every lane's filters advanced over the step (``loads.advance_filters``: the lane's
+    normals in rows ``fz``, the envelopes in ``scales``), then its loads at the step's start
+    and end, as ``grid.step_loads`` and ``grid.end_loads`` give them: the loads the lanes
+    share (``load``, ``load_next``, the ground acceleration ``ag``, ``ag_next``: without the
+    filters) plus the filters' read-outs (``loads.excitation``'s).  Without a break in the
+    loads (``piecewise``) a step starts with the last step's end loads.  ``rows``: the batch's
+    rows of the filter states at the step's start and end, the lane's floor loads at the step's
+    start and end and its ground acceleration there (``lane_rows``); ``ground``: the scene has
+    a ground acceleration; ``z, zn, draws``: scratch of the filter states' size."""
+    Z, ZN, LOAD, LOAD_NEXT, AG, AG_NEXT = rows
+    for lane in range(nl):
+        for r in range(z.shape[0]):
+            z[r] = s[(ZN + r) * LANES + lane]
+            draws[r] = fz[r * LANES + lane]
+        for r in range(z.shape[0]):
+            zn[r] = filter_row(z, r, fl.phi, fl.chol, draws, scales[r])
+            s[(Z + r) * LANES + lane] = z[r]
+            s[(ZN + r) * LANES + lane] = zn[r]
+        for k in range(load.shape[0]):
+            at_start = load[k] + readout(fl.c_force, k, z, zn, 0.0)
+            carried = s[(LOAD_NEXT + k) * LANES + lane]
+            s[(LOAD + k) * LANES + lane] = at_start if piecewise else carried
+            s[(LOAD_NEXT + k) * LANES + lane] = load_next[k] + readout(fl.c_force, k, z, zn, 1.0)
+        if ground:
+            at_start = ag + readout(fl.c_ground, 0, z, zn, 0.0)
+            carried = s[AG_NEXT * LANES + lane]
+            s[AG * LANES + lane] = at_start if piecewise else carried
+            s[AG_NEXT * LANES + lane] = ag_next + readout(fl.c_ground, 0, z, zn, 1.0)
+
+
+@njit(**INLINE)
+def start_filter_rows(s, fz, fspare, nl, fl, p0, filter_key, places, first, load_next, ag_next, rows, ground,
+                      z, draws) -> int:
+    """Every lane's filters at the path's start (``loads.stationary_start``: from their
+    stationary law, the first normals of the lane's filter stream, or from rest) and its loads
+    at the first step's start (``grid.start_loads``'s, the lanes' shared ``load_next`` and
+    ``ag_next`` plus the read-outs); returns the draws the start took (``filter_rows``' ``rows``,
+    ``ground``; ``z, draws``: scratch)."""
+    Z, ZN, LOAD, LOAD_NEXT, AG, AG_NEXT = rows
+    nz = z.shape[0]
+    drawn = nz if stationary(p0) else 0
+    for c in range(drawn):
+        lane_normals(*plain((fz[c * LANES:(c + 1) * LANES], fspare, nl, c, filter_key, places, first)))
+    for lane in range(nl):
+        for r in range(nz):
+            draws[r] = fz[r * LANES + lane]
+        stationary_state(p0, draws, z, drawn > 0)
+        for r in range(nz):
+            s[(ZN + r) * LANES + lane] = z[r]
+        for k in range(load_next.shape[0]):
+            s[(LOAD_NEXT + k) * LANES + lane] = load_next[k] + readout(fl.c_force, k, z, z, 0.0)
+        if ground:
+            s[AG_NEXT * LANES + lane] = ag_next + readout(fl.c_ground, 0, z, z, 0.0)
+    return drawn
+
+
 @cache
 def lane_loop(spec: Spec):
     """The lane loop of kick-drift-kick scenes specialised to ``spec`` (``protocol.Spec``).  It
@@ -260,6 +319,7 @@ def lane_loop(spec: Spec):
     STUCK, TOUCHING, OWED, FLAG = R["stuck"], R["touching"], R["owed"], R["flag"]
     Z, ZN, LOAD, LOAD_NEXT, AG, AG_NEXT = R["z"], R["zn"], R["load"], R["load_next"], R["ag"], R["ag_next"]
     PEAKS, STATE = (E1MAX, XMAX, DRIFT, ACCMAX), (DONE, X, V)  # (rows of ``pass_rows``, ``record_rows``)
+    FILTER_ROWS = (Z, ZN, LOAD, LOAD_NEXT, AG, AG_NEXT)  # (``filter_rows``')
 
     @njit(**INLINE)
     def load_lane(s, lane, x, v):
@@ -505,56 +565,6 @@ def lane_loop(spec: Spec):
                 observe(s, lane, x, v, acc, mass, storey_k, x_max, drift_max, acc_max)
 
     @njit(**INLINE)
-    def filter_lanes(s, fz, nl, load, load_next, ag, ag_next, piecewise, fl, scales):
-        """Every lane's filters advanced over the step (``loads.advance_filters``: the lane's
-        normals in rows ``fz``, the envelopes in ``scales``), then its loads at the step's start
-        and end, as ``grid.step_loads`` and ``grid.end_loads`` give them: the loads the lanes
-        share (``load``, ``load_next``, the ground acceleration ``ag``, ``ag_next``: without the
-        filters) plus the filters' read-outs (``loads.excitation``'s).  Without a break in the
-        loads (``piecewise``) a step starts with the last step's end loads."""
-        z, zn, draws = scratch(NZ), scratch(NZ), scratch(NZ)
-        for lane in range(nl):
-            for r in range(NZ):
-                z[r] = s[(ZN + r) * W + lane]
-                draws[r] = fz[r * W + lane]
-            for r in range(NZ):
-                zn[r] = filter_row(z, r, fl.phi, fl.chol, draws, scales[r])
-                s[(Z + r) * W + lane] = z[r]
-                s[(ZN + r) * W + lane] = zn[r]
-            for k in range(NF):
-                at_start = load[k] + readout(fl.c_force, k, z, zn, 0.0)
-                carried = s[(LOAD_NEXT + k) * W + lane]
-                s[(LOAD + k) * W + lane] = at_start if piecewise else carried
-                s[(LOAD_NEXT + k) * W + lane] = load_next[k] + readout(fl.c_force, k, z, zn, 1.0)
-            if GROUND:
-                at_start = ag + readout(fl.c_ground, 0, z, zn, 0.0)
-                carried = s[AG_NEXT * W + lane]
-                s[AG * W + lane] = at_start if piecewise else carried
-                s[AG_NEXT * W + lane] = ag_next + readout(fl.c_ground, 0, z, zn, 1.0)
-
-    @njit(**INLINE)
-    def start_filters(s, fz, fspare, nl, fl, p0, filter_key, places, first, load_next, ag_next):
-        """Every lane's filters at the path's start (``loads.stationary_start``: from their
-        stationary law, the first normals of the lane's filter stream, or from rest) and its loads
-        at the first step's start (``grid.start_loads``'s, the lanes' shared ``load_next`` and
-        ``ag_next`` plus the read-outs); returns the draws the start took."""
-        drawn = NZ if stationary(p0) else 0
-        for c in range(drawn):
-            lane_normals(*plain((fz[c * W:(c + 1) * W], fspare, nl, c, filter_key, places, first)))
-        z, draws = scratch(NZ), scratch(NZ)
-        for lane in range(nl):
-            for r in range(NZ):
-                draws[r] = fz[r * W + lane]
-            stationary_state(p0, draws, z, drawn > 0)
-            for r in range(NZ):
-                s[(ZN + r) * W + lane] = z[r]
-            for k in range(NF):
-                s[(LOAD_NEXT + k) * W + lane] = load_next[k] + readout(fl.c_force, k, z, z, 0.0)
-            if GROUND:
-                s[AG_NEXT * W + lane] = ag_next + readout(fl.c_ground, 0, z, z, 0.0)
-        return drawn
-
-    @njit(**INLINE)
     def batch(s_, z_, spare_, nl, bodies_, absorbers_, ex_, fl_, noise_, grid_, limits_, key, places_,
               passages_, raw_, first, own_, seeds_, bridge_key, events_, impulses_, fz_, fspare_, filter_key,
               p0_, history_, stride, signals_, reductions_):
@@ -611,9 +621,9 @@ def lane_loop(spec: Spec):
                 high, low = block_uniforms(bridge_key, places[first + lane], np.uint64(0))
                 seeds[lane] = tree_seed(high, low)
         # the filters' start, and the draw of their first step's normals
-        scales = scratch(NZ)
-        drawn = start_filters(s, fz, fspare, nl, fl, p0, filter_key, places, first, gl.load_next,
-                              ag_next) if FILTERED else 0
+        scales, z_, zn_, draws_ = scratch(NZ), scratch(NZ), scratch(NZ), scratch(NZ)
+        drawn = start_filter_rows(s, fz, fspare, nl, fl, p0, filter_key, places, first, gl.load_next, ag_next,
+                                  FILTER_ROWS, GROUND, z_, draws_) if FILTERED else 0
         inside = i0 == 0
         x, v = scratch(NB), scratch(NB)
         declared_at = declared_slots(NF, limits.shape[0])
@@ -648,7 +658,8 @@ def lane_loop(spec: Spec):
                 for c in range(NZ):
                     lane_normals(*plain((fz[c * W:(c + 1) * W], fspare, nl, drawn + i * NZ + c, filter_key,
                                          places, first)))
-                filter_lanes(s, fz, nl, gl.load, gl.load_next, ag, ag_next, piecewise, fl, scales)
+                filter_rows(s, fz, nl, gl.load, gl.load_next, ag, ag_next, piecewise, fl, scales, FILTER_ROWS,
+                            GROUND, z_, zn_, draws_)
             if NOISE:
                 for q in range(noisy):
                     k = floor_of[q] * W

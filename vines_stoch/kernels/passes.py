@@ -4,9 +4,9 @@ kick-drift-kick scene of three bodies or more.
 ``lanes.lane_loop`` is specialised to a scene's sizes and laws: each lane's state sits in
 registers, LLVM unrolls the loops over the bodies, and the lane loop around them becomes vector
 code.  That is the fastest loop for one floor with one absorber, and a compile (10-30 s) for
-each new structure.  Here the sizes (bodies, floors, absorbers, load rows, noisy floors, limits,
-declared signals and history columns) and what the scene holds (white noise, ground
-acceleration, shaped springs) are run-time data: a step runs as passes over the batch, one
+each new structure.  Here the sizes (bodies, floors, absorbers, load rows, filter states, noisy
+floors, limits, declared signals and history columns) and what the scene holds (white noise,
+filters, ground acceleration, shaped springs) are run-time data: a step runs as passes over the batch, one
 floor, body or absorber at a time, each pass a loop over the lanes that LLVM turns into vector
 code, so that a pass's overhead is shared by the lanes and its trip count costs nothing for
 being known at run time only.  A deeper structure is more passes, not a new loop.
@@ -16,13 +16,16 @@ Each pass computes, lane by lane, the terms of the scalar step in the scalar ste
 ``shaped_force``, ``kdk.kick``, the accounts of ``energy``, ``physics.structure.primary_energy``,
 ``common.floor_peaks``), the per-lane formulas being the same functions: a lane's numbers are
 the scalar loop's on its Philox streams, bitwise (``tests/unit/kernels/test_passes.py``), as the
-lanes' are.  The rare work (the window's opening, the divergence checks, the history rows, the
-declared metrics, the first passages, a lane's end) runs the lanes' and the scalar loop's
-functions lane by lane.
+lanes' are.  Where the scalar step rounds a product once and uses it several times (a ground
+acceleration's impulse), the pass rounds it in a pass of its own: computed where it is used,
+the compiler would fuse it into each use.  The rare work (the window's opening, the divergence
+checks, the history rows, the declared metrics, the first passages, a lane's end) and the
+filters (``lanes.filter_rows``: each lane's, on its Philox filter stream) run the lanes' and
+the scalar loop's functions lane by lane.
 
-Which scenes run here is ``pass_scene``'s: scenes without impacts, Hertz contact or filtered
-loads (whose lanes leave the vector pass for the scalar step, ``lanes.py``), of three bodies or
-more (below that the specialised lane loop is faster: ``make bench``).
+Which scenes run here is ``pass_scene``'s: scenes without impacts or Hertz contact (whose lanes
+leave the vector pass for the scalar step, ``lanes.py``), of three bodies or more (below that
+the specialised lane loop is faster: ``make bench``).
 """
 
 from __future__ import annotations
@@ -39,8 +42,19 @@ from ..signals import SIGNAL_SHARE
 from .common import CHECK_EVERY, diverged, floor_peaks, stored_energy, write_floor_metrics
 from .energy import write_accounts
 from .grid import GridLoads, end_loads, noise_scales, opening_forces, reset_phasors, start_loads, step_loads
-from .lanes import LANES, aligned_rows, fold_rows, lane_normals, lane_rows, lane_state, pass_rows, record_rows
-from .loads import has_breaks
+from .lanes import (
+    LANES,
+    aligned_rows,
+    filter_rows,
+    fold_rows,
+    lane_normals,
+    lane_rows,
+    lane_state,
+    pass_rows,
+    record_rows,
+    start_filter_rows,
+)
+from .loads import filter_scales, has_breaks
 
 W = LANES
 
@@ -51,8 +65,8 @@ ROW_NAMES = ("x", "v", "work", "d_primary", "d_absorber", "e_sum", "e1_max", "e1
 
 def pass_scene(scene) -> bool:
     """Whether ``scene``'s lane realisations run in the pass loop (``pass_loop``): three bodies or
-    more, no impact or Hertz absorber, no filtered load."""
-    return scene.mass.shape[0] >= 3 and not (scene.has_impact or scene.has_hertz or scene.has_filters)
+    more, no impact or Hertz absorber."""
+    return scene.mass.shape[0] >= 3 and not (scene.has_impact or scene.has_hertz)
 
 
 def pass_layout(n_bodies: int, n_floors: int) -> np.ndarray:
@@ -101,60 +115,72 @@ def forces_pass(s, X, V, f, nl, nf, nb, storey_k, storey_c, floor_c, host, rows,
 
 
 @njit(**INLINE)
-def kick_pass(s, V, vn, f, dwh, load, ag, half, inv_mass, nl, nf, nb, ground) -> None:
+def kick_pass(s, V, vn, f, dwh, loads, at_load, at_ag, half, inv_mass, nl, nf, nb, ground, base) -> None:
     """Every lane's half kick of length ``half`` (``kdk.kick``) from rows ``V`` of ``s`` into
-    ``vn``: forces ``f``, the loads ``load``, the half increments ``dwh``, the ground
-    acceleration ``ag`` where ``ground``."""
-    base = ag * half if ground else 0.0
+    ``vn``: forces ``f``, the half increments ``dwh``, the lane's loads in rows ``at_load`` of
+    ``loads`` and, where ``ground``, its ground acceleration in row ``at_ag``, its impulse a
+    unit mass into the scratch row ``base`` first: one product, rounded once, as the scalar
+    step's, which all its bodies share (computed where it is used, the compiler would fuse it
+    into each use).  Without one, the scalar step's ``- 0.0``, which the compiler folds (an
+    impulse joins its velocity in one rounding), is written out as it is."""
+    if ground:
+        for lane in range(nl):
+            base[lane] = loads[at_ag, lane] * half
     for k in range(nf):
-        ld, im = load[k], inv_mass[k]
+        im = inv_mass[k]
         step = half * im
         if ground:
             for lane in range(nl):
-                impulse = fused(ld, half, dwh[k, lane])
-                vn[k, lane] = (s[V + k, lane] + (impulse * im - base)) + f[k, lane] * step
-        else:  # (the scalar step's ``- 0.0``, which the compiler folds: its impulse joins v in one rounding)
+                impulse = fused(loads[at_load + k, lane], half, dwh[k, lane])
+                vn[k, lane] = (s[V + k, lane] + (impulse * im - base[lane])) + f[k, lane] * step
+        else:
             for lane in range(nl):
-                impulse = fused(ld, half, dwh[k, lane])
+                impulse = fused(loads[at_load + k, lane], half, dwh[k, lane])
                 vn[k, lane] = (s[V + k, lane] + (impulse * im - 0.0)) + f[k, lane] * step
     for b in range(nf, nb):
         step = half * inv_mass[b]
-        for lane in range(nl):
-            vn[b, lane] = (s[V + b, lane] - base) + f[b, lane] * step
+        if ground:
+            for lane in range(nl):
+                vn[b, lane] = (s[V + b, lane] - base[lane]) + f[b, lane] * step
+        else:
+            for lane in range(nl):
+                vn[b, lane] = (s[V + b, lane] - 0.0) + f[b, lane] * step
 
 
 @njit(**INLINE)
-def impulse_term(load, dt, dws, s, V, vn, k, lane) -> float:
-    """Floor ``k``'s term of a lane's ``energy.impulse_work``."""
-    return fused(load[k], dt, dws[k, lane]) * (0.5 * (s[V + k, lane] + vn[k, lane]))
+def impulse_term(loads, at_load, dt, dws, s, V, vn, k, lane) -> float:
+    """Floor ``k``'s term of a lane's ``energy.impulse_work`` (its loads in rows ``at_load``)."""
+    return fused(loads[at_load + k, lane], dt, dws[k, lane]) * (0.5 * (s[V + k, lane] + vn[k, lane]))
 
 
 @njit(**INLINE)
-def work_pass(s, V, WORK, vn, dws, load, ag, dt, nl, nf, nb, mass, ground, w, p) -> None:
+def work_pass(s, V, WORK, vn, dws, loads, at_load, at_ag, dt, nl, nf, nb, mass, ground, w, p) -> None:
     """Every lane's input work over a half kick (``lanes``' ``half_kick``: ``energy.impulse_work``
     and, with a ground acceleration, ``energy.momentum``) added to its row ``WORK``; ``w``, ``p``:
-    scratch rows.  The first two floors' terms are one sum, as in the scalar step, where the
+    scratch rows; the lane's loads in rows ``at_load``, ``at_ag`` of ``loads``.  The first two
+    floors' terms are one sum, as in the scalar step, where the
     compiler fuses one of the two products into it: the same one here."""
     if nf == 1:
         for lane in range(nl):
-            w[lane] = impulse_term(load, dt, dws, s, V, vn, 0, lane)
+            w[lane] = impulse_term(loads, at_load, dt, dws, s, V, vn, 0, lane)
     else:
         for lane in range(nl):
-            first = impulse_term(load, dt, dws, s, V, vn, 0, lane)
-            w[lane] = first + impulse_term(load, dt, dws, s, V, vn, 1, lane)
+            first = impulse_term(loads, at_load, dt, dws, s, V, vn, 0, lane)
+            w[lane] = first + impulse_term(loads, at_load, dt, dws, s, V, vn, 1, lane)
     for k in range(2, nf):
         for lane in range(nl):
-            w[lane] = w[lane] + impulse_term(load, dt, dws, s, V, vn, k, lane)
-    if ground and ag != 0.0:
+            w[lane] = w[lane] + impulse_term(loads, at_load, dt, dws, s, V, vn, k, lane)
+    if ground:  # (the momentum's work where the lane's ground acceleration is not zero)
         for lane in range(nl):
             p[lane] = 0.0
         for b in range(nb):
             mb = mass[b]
             for lane in range(nl):
                 p[lane] += mb * 0.5 * (s[V + b, lane] + vn[b, lane])
-        c = 0.5 * ag * dt
+        for lane in range(nl):  # (its product rounded apart, as in the scalar step: see ``kick_pass``)
+            p[lane] = 0.5 * loads[at_ag, lane] * dt * p[lane]
         for lane in range(nl):
-            s[WORK, lane] += 0.5 * w[lane] - c * p[lane]
+            s[WORK, lane] += 0.5 * w[lane] - (p[lane] if loads[at_ag, lane] != 0.0 else 0.0)
     else:
         for lane in range(nl):
             s[WORK, lane] += 0.5 * w[lane] - 0.0
@@ -183,15 +209,16 @@ def dissipation_pass(s, V, DP, DA, vn, dt, nl, nf, nb, storey_c, floor_c, host, 
 
 
 @njit(**INLINE)
-def observe_pass(s, at, f, load, e1, nl, nf, mass, storey_k) -> None:
+def observe_pass(s, at, f, loads, at_load, e1, nl, nf, mass, storey_k) -> None:
     """Every lane's accounts at its step end inside the metrics window (``lanes``' ``observe``):
     ``E1`` (``physics.structure.primary_energy``) into its trapezoid sum and peak, the ``x_k^2``
-    sums, the floors' peaks (``common.floor_peaks``; the floor forces ``f`` plus ``load``);
+    sums, the floors' peaks (``common.floor_peaks``; the floor forces ``f`` plus the loads in rows
+    ``at_load`` of ``loads``);
     ``at``: ``pass_layout``'s rows; ``e1``: a scratch row."""
     X, V, ESUM, E1MAX, E1 = at[0], at[1], at[5], at[6], at[7]
     XMAX, DRIFT, ACCMAX, X2 = at[8], at[9], at[10], at[11]
     for k in range(nf):
-        hk, hm, ld = 0.5 * storey_k[k], 0.5 * mass[k], load[k]
+        hk, hm = 0.5 * storey_k[k], 0.5 * mass[k]
         if k == 0:
             for lane in range(nl):
                 xk, vk = s[X, lane], s[V, lane]
@@ -206,7 +233,7 @@ def observe_pass(s, at, f, load, e1, nl, nf, mass, storey_k) -> None:
             xk = s[X + k, lane]
             s[X2 + k, lane] = s[X2 + k, lane] + xk * xk
             s[XMAX + k, lane] = larger(s[XMAX + k, lane], abs(xk))
-            s[ACCMAX + k, lane] = larger(s[ACCMAX + k, lane], abs(f[k, lane] + ld))
+            s[ACCMAX + k, lane] = larger(s[ACCMAX + k, lane], abs(f[k, lane] + loads[at_load + k, lane]))
     for lane in range(nl):
         s[ESUM, lane] = s[ESUM, lane] + e1[lane]
         s[E1MAX, lane] = larger(s[E1MAX, lane], e1[lane])
@@ -214,13 +241,14 @@ def observe_pass(s, at, f, load, e1, nl, nf, mass, storey_k) -> None:
 
 
 @njit(**INLINE)
-def step_pass(s, at, scratch_rows, z, nl, inside, dt, ag, ag_next, load, load_next, noise_scale, noise,
-              bodies, absorbers, inv_mass, ground, shaped) -> None:
+def step_pass(s, at, scratch_rows, z, nl, inside, dt, loads, at_loads, noise_scale, noise, bodies, absorbers,
+              inv_mass, ground, shaped) -> None:
     """One kick-drift-kick step of every lane (``lanes``' ``update`` for a scene without events):
     two half kicks around the drift, each with its accounts inside the metrics window, then the
-    accounts at the step's end (``observe_pass``)."""
+    accounts at the step's end (``observe_pass``); each lane's loads at the step's start and end
+    in ``loads`` (``at_loads``: the rows of the floors' and of the ground acceleration, ``load_rows``)."""
     X, V, WORK, DP, DA = at[0], at[1], at[2], at[3], at[4]
-    f, vn, dws, dwh, w, p = scratch_rows
+    f, vn, dws, dwh, w, p, base = scratch_rows
     mass, storey_k, storey_c, floor_c = bodies.mass, bodies.storey_k, bodies.storey_c, bodies.floor_c
     host, rows = absorbers.host, absorbers.rows
     nb, nf = mass.shape[0], storey_k.shape[0]
@@ -235,17 +263,17 @@ def step_pass(s, at, scratch_rows, z, nl, inside, dt, ag, ag_next, load, load_ne
                 for lane in range(nl):
                     s[X + b, lane] += dt * vn[b, lane]
                     s[V + b, lane] = vn[b, lane]
-        at_load, at_ag = (load, ag) if half == 0 else (load_next, ag_next)
+        at_load, at_ag = (at_loads[0], at_loads[2]) if half == 0 else (at_loads[1], at_loads[3])
         forces_pass(s, X, V, f, nl, nf, nb, storey_k, storey_c, floor_c, host, rows, shaped)
-        kick_pass(s, V, vn, f, dwh, at_load, at_ag, 0.5 * dt, inv_mass, nl, nf, nb, ground)
+        kick_pass(s, V, vn, f, dwh, loads, at_load, at_ag, 0.5 * dt, inv_mass, nl, nf, nb, ground, base)
         if inside:
-            work_pass(s, V, WORK, vn, dws, at_load, at_ag, dt, nl, nf, nb, mass, ground, w, p)
+            work_pass(s, V, WORK, vn, dws, loads, at_load, at_ag, dt, nl, nf, nb, mass, ground, w, p)
             dissipation_pass(s, V, DP, DA, vn, dt, nl, nf, nb, storey_c, floor_c, host, rows)
     for b in range(nb):
         for lane in range(nl):
             s[V + b, lane] = vn[b, lane]
     if inside:
-        observe_pass(s, at, f, load_next, w, nl, nf, mass, storey_k)
+        observe_pass(s, at, f, loads, at_loads[1], w, nl, nf, mass, storey_k)
 
 
 @njit(**INLINE)
@@ -256,12 +284,14 @@ def laws(bodies, absorbers) -> tuple:
 
 
 @njit(**INLINE)
-def open_pass(s, at, nl, t, load_next, bodies, absorbers, inv_mass, limits, passages, shaped, lane) -> None:
+def open_pass(s, at, nl, t, loads, at_load, bodies, absorbers, inv_mass, limits, passages, shaped,
+              lane) -> None:
     """The metrics window's opening (``lanes``' ``open_lanes``), lane by lane: the stored energy
-    as the input work's start, the accounts' and peaks' first values; ``lane``: a lane's scratch
-    (``x, v``, the bodies' forces, the floors' forces)."""
+    as the input work's start, the accounts' and peaks' first values (each lane's loads at the
+    step's start in rows ``at_load`` of ``loads``); ``lane``: a lane's scratch (``x, v``, the
+    bodies' forces, the floors' forces and loads)."""
     X, V, WORK, E1MAX, XMAX, DRIFT, ACCMAX, X2 = at[0], at[1], at[2], at[6], at[8], at[9], at[10], at[11]
-    x, v, force, acc = lane
+    x, v, force, acc, load = lane
     mass, storey_k, kind, host, rows = laws(bodies, absorbers)
     nf = storey_k.shape[0]
     for j in range(nl):
@@ -270,7 +300,9 @@ def open_pass(s, at, nl, t, load_next, bodies, absorbers, inv_mass, limits, pass
         e1 = primary_energy(mass, storey_k, x, v, nf)
         s[WORK * W + j] = stored_energy(*plain((x, v, mass, nf, storey_k, kind, host, rows)))
         s[E1MAX * W + j], s[at[5] * W + j], s[at[7] * W + j] = e1, 0.5 * e1, e1
-        opening_forces(force, load_next, x, v, acc, bodies, absorbers, nf, shaped)
+        for k in range(nf):
+            load[k] = loads[at_load + k, j]
+        opening_forces(force, load, x, v, acc, bodies, absorbers, nf, shaped)
         x_max, drift_max, acc_max = np.zeros(nf), np.zeros(nf), np.zeros(nf)
         floor_peaks(x, nf, acc, x_max, drift_max, acc_max)
         for k in range(nf):
@@ -348,20 +380,47 @@ def end_diverged(s, at, nl, raw, first, inside, grid, bodies, absorbers, inv_mas
 
 
 @njit(**INLINE)
-def batch(s_, rows_, scratch_, z_, spare_, passages_, lane_, first, nl, bodies_, absorbers_, ex_, fl_, noise_,
-          grid_, limits_, key, places_, raw_, history_, stride, signals_, reductions_, at_, kinds):
+def shared_loads(loads, at_loads, nl, load, load_next, ag, ag_next) -> None:
+    """Every lane's loads at the step's start and end, the batch's (a scene without filters)."""
+    for k in range(load.shape[0]):
+        for lane in range(nl):
+            loads[at_loads[0] + k, lane] = load[k]
+            loads[at_loads[1] + k, lane] = load_next[k]
+    for lane in range(nl):
+        loads[at_loads[2], lane] = ag
+        loads[at_loads[3], lane] = ag_next
+
+
+@njit(**INLINE)
+def load_rows(nf: int, nz: int) -> tuple:
+    """The rows of a batch's filters and loads (``lanes.filter_rows``'): the filter states at the
+    step's start and end, each lane's floor loads at the step's start and end and its ground
+    acceleration there, and the rows in all."""
+    rows = (0, nz, 2 * nz, 2 * nz + nf, 2 * nz + 2 * nf, 2 * nz + 2 * nf + 1)
+    return rows, 2 * nz + 2 * nf + 2
+
+
+@njit(**INLINE)
+def batch(s_, rows_, scratch_, z_, spare_, passages_, lane_, filters_, first, nl, bodies_, absorbers_, ex_,
+          fl_, noise_, grid_, limits_, key, filter_key, p0_, places_, raw_, history_, stride, signals_,
+          reductions_, at_, kinds):
     """Realisations ``first .. first + nl - 1`` in the lanes of a batch: ``s_`` its state
-    (``rows_``: the same, a row a line), ``scratch_`` the step's rows, ``z_`` the normals, and
-    ``lane_`` a lane's scratch (``x, v``, forces), the rest ``pass_loop``'s."""
+    (``rows_``: the same, a row a line), ``scratch_`` the step's rows, ``z_`` the normals,
+    ``lane_`` a lane's scratch (``x, v``, forces, loads), ``filters_`` the filters' rows, normals
+    and scratch; the rest ``pass_loop``'s."""
     # every array as a borrowed view (``jit.intrinsics.borrowed``): no reference counting in the
     # passes, which calls in branches would cost at every step
     s, rows2, scratch_rows, z, spare, passages = borrowed((s_, rows_, scratch_, z_, spare_, passages_))
     bodies, absorbers, ex, fl, noise, grid = borrowed((bodies_, absorbers_, ex_, fl_, noise_, grid_))
     limits, places, raw, history, signals, reductions, at = borrowed((limits_, places_, raw_, history_,
                                                                         signals_, reductions_, at_))
-    x, v, force, acc = borrowed(lane_)
+    x, v, force, acc, own_load = borrowed(lane_)
+    fs, loads, fz, fspare, scales, fzs, fzn, draws = borrowed(filters_)
+    p0 = borrowed(p0_)
     noisy_scene, ground, shaped = kinds
-    nf = bodies.storey_k.shape[0]
+    nf, nz = bodies.storey_k.shape[0], fl.phi.shape[0]
+    frows = load_rows(nf, nz)[0]
+    at_loads = frows[2:]
     state, e1_row, peaks = (at[12], at[0], at[1]), at[7], (at[6], at[8], at[9], at[10])  # (``lanes``' rows)
     dt, n_steps, i0 = grid.dt, grid.n_steps, grid.i0
     mass, storey_k, kind, host, rows = laws(bodies, absorbers)
@@ -379,6 +438,12 @@ def batch(s_, rows_, scratch_, z_, spare_, passages_, lane_, first, nl, bodies_,
     piecewise = has_breaks(ex)
     gl = grid_loads(nf, ex.forces.shape[0])
     ag_next = start_loads(gl, ex, fl, dt, gl.z, False, nf, 0, False, ground)
+    drawn = 0  # (the filter streams' draws at the paths' start)
+    if nz > 0:
+        drawn = start_filter_rows(fs, fz, fspare, nl, fl, p0, filter_key, places, first, gl.load_next,
+                                  ag_next, frows, ground, fzs, draws)
+    else:
+        shared_loads(loads, at_loads, nl, gl.load_next, gl.load_next, ag_next, ag_next)
     start_batch(s, at, nl, bodies, limits, passages)
     inside = i0 == 0
     h_next = -1  # (the step after which the next history row is due; -1: none)
@@ -388,8 +453,8 @@ def batch(s_, rows_, scratch_, z_, spare_, passages_, lane_, first, nl, bodies_,
     for i in range(n_steps):
         if i == i0:
             inside = True
-            open_pass(s, at, nl, i * dt, gl.load_next, bodies, absorbers, inv_mass, limits, passages, shaped,
-                      (x, v, force, acc))
+            open_pass(s, at, nl, i * dt, loads, at_loads[1], bodies, absorbers, inv_mass, limits, passages,
+                      shaped, (x, v, force, acc, own_load))
             if reductions.shape[0] > 0:
                 fold_rows(s, nl, raw, first, reductions, at_declared, x, v, state, e1_row, nf, mass, kind,
                           host, rows, impulses, dt, True, share)
@@ -399,11 +464,20 @@ def batch(s_, rows_, scratch_, z_, spare_, passages_, lane_, first, nl, bodies_,
             reset_phasors(gl, i, dt, ex)
         ag = step_loads(i, dt, gl, ex, fl, ag_next, piecewise, False, ground, fl.z)
         ag_next = end_loads(i, dt, gl, ex, fl, False, ground)
+        if nz > 0:  # (the loads above without the filters: each lane adds its own)
+            filter_scales(i * dt, dt, fl.envelope, scales)
+            for c in range(nz):
+                draw = drawn + i * nz + c
+                lane_normals(*plain((fz[c * W:(c + 1) * W], fspare, nl, draw, filter_key, places, first)))
+            filter_rows(fs, fz, nl, gl.load, gl.load_next, ag, ag_next, piecewise, fl, scales, frows, ground,
+                        fzs, fzn, draws)
+        else:
+            shared_loads(loads, at_loads, nl, gl.load, gl.load_next, ag, ag_next)
         for q in range(noisy):
             k = floor_of[q]
             lane_normals(*plain((z[k], spare, nl, i * noisy + q, key, places, first)))
-        step_pass(rows2, at, scratch_rows, z, nl, inside, dt, ag, ag_next, gl.load, gl.load_next, noise_scale,
-                  noisy_scene, bodies, absorbers, inv_mass, ground, shaped)
+        step_pass(rows2, at, scratch_rows, z, nl, inside, dt, loads, at_loads, noise_scale, noisy_scene,
+                  bodies, absorbers, inv_mass, ground, shaped)
         if reductions.shape[0] > 0 and inside:
             fold_rows(s, nl, raw, first, reductions, at_declared, x, v, state, e1_row, nf, mass, kind, host,
                       rows, impulses, dt, False, share)
@@ -431,11 +505,17 @@ def pass_loop(bodies, absorbers, ex, fl, noise, grid, limits, key, bridge_key, f
     rows = s.reshape((at[13], W))
     scratch_rows = (aligned_rows(nb).reshape((nb, W)), aligned_rows(nb).reshape((nb, W)),
                     aligned_rows(nf).reshape((nf, W)), aligned_rows(nf).reshape((nf, W)), aligned_rows(1),
-                    aligned_rows(1))
+                    aligned_rows(1), aligned_rows(1))
     z, spare = aligned_rows(nf).reshape((nf, W)), aligned_rows(1)
     passages = aligned_rows(limits.shape[0])
-    lane = (np.zeros(nb), np.zeros(nb), np.zeros(nb), np.zeros(nf))
+    lane = (np.zeros(nb), np.zeros(nb), np.zeros(nb), np.zeros(nf), np.zeros(nf))
+    nz = fl.phi.shape[0]
+    n_rows = load_rows(nf, nz)[1]
+    fs = aligned_rows(n_rows)
+    filters = (fs, fs.reshape((n_rows, W)), aligned_rows(nz), aligned_rows(1), np.zeros(nz), np.zeros(nz),
+               np.zeros(nz), np.zeros(nz))
     for first in range(0, raw.shape[0], W):
         nl = min(W, raw.shape[0] - first)
-        batch(s, rows, scratch_rows, z, spare, passages, lane, first, nl, bodies, absorbers, ex, fl, noise,
-              grid, limits, key, places, raw, history, stride, signals, reductions, at, kinds)
+        batch(s, rows, scratch_rows, z, spare, passages, lane, filters, first, nl, bodies, absorbers, ex, fl,
+              noise, grid, limits, key, filter_key, p0, places, raw, history, stride, signals, reductions, at,
+              kinds)

@@ -1014,7 +1014,7 @@ def _frames_section(m: dict[str, Any]) -> str:
 ## Frames in lanes: the pass loop
 
 Every noisy kick-drift-kick structure of three bodies or more without impact or Hertz absorbers
-or filtered loads runs the pass loop, compiled once for all of them (`kernels/passes.py`); the
+runs the pass loop, compiled once for all of them (`kernels/passes.py`); the
 lane loop specialised to the structure (the executor before it, compiled for each structure)
 and the scalar loop in the same run. Frames with cubic NES on the roof under white noise and a
 harmonic force, 20 s; the first call is the first chunk of a structure this process has not run
