@@ -182,6 +182,19 @@ def pass_rows(s, nl, t, limits, inv_mass, passages, peaks) -> None:
 
 
 @njit(**INLINE)
+def end_metrics(out, lane, x, v, mass, nf, storey_k, kind, host, rows, floors, passages, n_limits) -> None:
+    """The end of lane ``lane``'s metric vector ``out`` (``driver.step_loop``'s): the energy stored
+    in its state ``x, v``, the floors' metrics (``floors``: the peaks and ``x_k^2`` integrals) and
+    the first passages of its ``n_limits`` limits (``passages``: the batch's rows)."""
+    out[FINAL_ENERGY] = stored_energy(*plain((x, v, mass, nf, storey_k, kind, host, rows)))
+    x_max, drift_max, acc_max, x2 = floors
+    write_floor_metrics(out, nf, x_max, drift_max, acc_max, x2)
+    base = passage_slots(nf)
+    for j in range(n_limits):
+        out[base + j] = passages[j * LANES + lane]
+
+
+@njit(**INLINE)
 def lane_state(s, lane, state, x, v) -> bool:
     """Whether lane ``lane``'s path goes on (it has not ended), its state then in ``x, v``
     (``state``: the batch's rows of the ended flag, ``x`` and ``v``)."""
@@ -370,11 +383,8 @@ def lane_loop(spec: Spec):
         if CONTACT:
             out[CONTACT_TIME] = s[CTIME * W + lane]
             out[PEAK_FORCE] = s[PEAK * W + lane]
-        out[FINAL_ENERGY] = stored_energy(*plain((x, v, mass, nf, storey_k, kind, host, rows)))
-        write_floor_metrics(out, NF, x_max, drift_max, acc_max, x2)
-        base = passage_slots(NF)
-        for j in range(limits.shape[0]):
-            out[base + j] = passages[j * W + lane]
+        end_metrics(out, lane, x, v, mass, NF, storey_k, kind, host, rows, (x_max, drift_max, acc_max, x2),
+                    passages, limits.shape[0])
 
     @njit(**INLINE)
     def open_lanes(s, nl, t, gl, bodies, absorbers, inv_mass, limits, passages):

@@ -35,16 +35,17 @@ from numba import njit
 
 from ..jit.flags import INLINE, KERNEL
 from ..jit.intrinsics import borrowed, fused, larger, plain, prefer_vectors
-from ..outputs import FINAL_ENERGY, STATUS, STATUS_DIVERGED, declared_slots, passage_slots
+from ..outputs import STATUS, STATUS_DIVERGED, declared_slots
 from ..physics.absorbers import DAMPING, K_CUBIC, K_LIN, REST, shaped_force, spring_damper_force
 from ..physics.structure import host_of, primary_energy
 from ..signals import SIGNAL_SHARE
-from .common import CHECK_EVERY, diverged, floor_peaks, stored_energy, write_floor_metrics
+from .common import CHECK_EVERY, diverged, floor_peaks, stored_energy
 from .energy import write_accounts
 from .grid import GridLoads, end_loads, noise_scales, opening_forces, reset_phasors, start_loads, step_loads
 from .lanes import (
     LANES,
     aligned_rows,
+    end_metrics,
     filter_rows,
     fold_rows,
     lane_normals,
@@ -336,11 +337,8 @@ def finish_pass(s, at, lane, out, inside, i0, n_steps, dt, bodies, absorbers, in
             acc_max[k] *= inv_mass[k]
     work, d_primary, d_absorber = s[at[2] * W + lane], s[at[3] * W + lane], s[at[4] * W + lane]
     write_accounts(out, work, d_primary, d_absorber, e_integral, s[at[6] * W + lane], 0.0, 0.0, 0.0)
-    out[FINAL_ENERGY] = stored_energy(*plain((x, v, mass, nf, storey_k, kind, host, rows)))
-    write_floor_metrics(out, nf, x_max, drift_max, acc_max, x2)
-    base = passage_slots(nf)
-    for j in range(limits.shape[0]):
-        out[base + j] = passages[j * W + lane]
+    floors = (x_max, drift_max, acc_max, x2)
+    end_metrics(out, lane, x, v, mass, nf, storey_k, kind, host, rows, floors, passages, limits.shape[0])
 
 
 @njit(**INLINE)
