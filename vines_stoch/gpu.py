@@ -28,7 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .kernels import DEFAULT_SIGNALS, kernel_for, simulate
-from .outputs import EVENT_COLUMNS, Record, new_events, new_metrics
+from .outputs import EVENT_COLUMNS, new_metrics
 from .scene import Scene
 from .signals import declare
 from .streams import BRIDGE, FILTER, INCREMENTS, Streams
@@ -184,11 +184,6 @@ class Inputs:
     def n_bodies(self) -> int:
         return self.scene.mass.shape[0]
 
-    @property
-    def record(self) -> Record:
-        """What the launches record beyond the metrics (``outputs.Record``)."""
-        return Record.of(self.scene, self.size, self.n_events, self.signals)
-
     def outputs(self, m: int, empty) -> tuple:
         """``m`` realisations' output arrays from ``empty(shape)``: metric rows, Poincare
         samples, history rows, event logs, filter scratch (state, next state, normals)."""
@@ -222,16 +217,13 @@ def launch_types(scene: Scene, grid: tuple[int, int] | None = None,
     return tuple(numba.typeof(a) for a in args)
 
 
-def _compile_here(scene: Scene, seed: int, point: int, realization: int, common: bool,
-                  record: Record) -> None:
+def _compile_here(scene: Scene, seed: int, point: int, realization: int, common: bool) -> None:
     """Compile the step loop that the simulator's threads call in this thread, by running
     ``realization`` on the CPU with its Philox streams: the simulator's block manager polls its
     threads in a busy loop, and a loop compiled inside a simulated thread shares the GIL with
     that poller (the contact-noise scene's loop: 106 s there, 24 s here)."""
     simulate(scene, Streams(*(philox_stream(seed, p, realization, point, common)
-                              for p in (INCREMENTS, BRIDGE, FILTER))),
-             history=np.full((2, 2), np.nan) if record.history else None,
-             events=new_events(1) if record.events else None)
+                              for p in (INCREMENTS, BRIDGE, FILTER))))
 
 
 def simulate_many(scenes: Scene | list[Scene], seed: int, point: int, start: int, stop: int,
@@ -253,10 +245,9 @@ def simulate_many(scenes: Scene | list[Scene], seed: int, point: int, start: int
         raise ValueError(f"simulate_many: {len(scenes)} scenes for {n} realisations")
     inputs = Inputs.of(scenes, seed, point, common, grid, signals, events)
     # (the simulator runs the CPU loop: the same arithmetic, its flags on the heap)
-    launch = launcher(kernel_for(inputs.scene, gpu=not simulating(), record=inputs.record), inputs.n_bodies,
-                      simulating())
+    launch = launcher(kernel_for(inputs.scene, gpu=not simulating()), inputs.n_bodies, simulating())
     if simulating():
-        _compile_here(scenes[0], seed, point, start, common, inputs.record)
+        _compile_here(scenes[0], seed, point, start, common)
     raw, samples, history, logs, _ = inputs.outputs(n, np.empty)
     shared = {k: cuda.to_device(a) for k, a in inputs.shared.items()}
     device = None if inputs.per_path else {k: cuda.to_device(a) for k, a in inputs.stacked.items()}
@@ -336,7 +327,7 @@ def advance_many(paths: list, stops: list[int]) -> None:
         compile_first(first.kernel, (*first.args[:5], grid, *first.args[6:]), first.args[7:])
         launch = stretcher(first.kernel, True)
     else:
-        launch = stretcher(kernel_for(first.scene, gpu=True, record=first.record), False)
+        launch = stretcher(kernel_for(first.scene, gpu=True), False)
     done = 0
     while done < len(todo):
         m = _batch_size(sum(a.nbytes for a in _path_arrays(first).values()) + 64, len(todo) - done)

@@ -1,19 +1,16 @@
 """What a run records of each realisation, declared in one place: the raw metric vector's slots
 (filled by the step loops, turned into columns by ``metrics.finish_table``), the per-floor
 blocks, the codes of limits and status, the Poincare samples kept for the regime, the event
-log's columns (the signals of its history rows: ``signals.py``), and ``Record``, what a run asks
-its loop to record beyond the metrics: its loop compiles only that (a scene pays only for
-what it asks)."""
+log's columns (the signals of its history rows: ``signals.py``).  What a run asks beyond the
+metrics its loop reads from these arrays at run time (``kernels.common.recording``)."""
 
 from __future__ import annotations
-
-from typing import NamedTuple
 
 import numpy as np
 from numba import njit
 
 from .jit.flags import INLINE
-from .signals import REDUCTION_SLOTS, SIGNAL_CONTACT, SIGNAL_SHARE
+from .signals import REDUCTION_SLOTS
 
 #: Slots of the raw metric vector a kernel fills; ``metrics.finish_table`` turns it into columns.
 SLOTS = (
@@ -73,37 +70,6 @@ def new_metrics(n_floors: int = 1, n_limits: int = 0, n_declared: int = 0) -> np
 #: counts, so rows past the log's length are counted but not logged.
 EVENT_COLUMNS = ("t", "absorber", "side", "speed", "loss")
 EVENT_T, EVENT_ABSORBER, EVENT_SIDE, EVENT_SPEED, EVENT_LOSS = range(len(EVENT_COLUMNS))
-
-
-class Record(NamedTuple):
-    """What a run records beyond the built-in metrics, the step loop's compile-time flags: the
-    first passages of limits (the scene has limits), history rows (of declared signals,
-    ``signals.declare``), the event log, the declared metrics (``signals.declare_metrics``) and
-    whether one of them folds the absorbers' energy share (the signal ``share``), and whether a
-    history column or a declared metric reads a contact force (``contact_j``: the loop then keeps
-    each step's impact impulses).
-    The Poincare samples are the scheme's (``protocol.Step``).
-    A loop compiles the code of a record only when it is asked for."""
-
-    passages: bool = False
-    history: bool = False
-    events: bool = False
-    declared: bool = False
-    share: bool = False
-    contact: bool = False
-
-    @classmethod
-    def of(cls, scene, history_rows: int = 0, event_rows: int = 0,
-           signals: np.ndarray | None = None) -> Record:
-        """What a run of ``scene`` keeping ``history_rows`` history rows of the ``signals``
-        (``signals.declare``'s rows) and ``event_rows`` rows of event log records."""
-        codes = scene.reductions[:, 0]
-        if history_rows > 0 and signals is not None:
-            codes = np.concatenate([codes, np.asarray(signals).reshape(-1, 2)[:, 0]])
-        return cls(passages=scene.limits.shape[0] > 0, history=history_rows > 0, events=event_rows > 0,
-                   declared=scene.reductions.shape[0] > 0,
-                   share=bool((scene.reductions[:, 0] == SIGNAL_SHARE).any()),
-                   contact=bool((codes == SIGNAL_CONTACT).any()))
 
 
 def new_events(capacity: int) -> np.ndarray:

@@ -22,7 +22,7 @@ from tests.helpers import ROOT, changed, cli, example_data, scene_from, study_fr
 from tests.integration.test_ensemble import DATA
 from vines_stoch import gpu, kernels, run
 from vines_stoch.kernels import SLOTS, kernel_for, sample_buffer, simulate
-from vines_stoch.outputs import Record, new_events
+from vines_stoch.outputs import new_events
 from vines_stoch.store import read_metadata
 from vines_stoch.streams import BRIDGE, FILTER, INCREMENTS, Streams, streams
 from vines_stoch.streams.rng import keyed_stream, philox_stream
@@ -174,8 +174,8 @@ def test_the_simulated_threads_find_the_loop_compiled(monkeypatch):
             calls.append((threading.current_thread() is threading.main_thread(),
                           len(self.loop.overloads) - before))
 
-    def recording(scene, gpu=False, record=Record()):
-        return Recording(kernel_for(scene, gpu, record))
+    def recording(scene, gpu=False):
+        return Recording(kernel_for(scene, gpu))
 
     monkeypatch.setattr(gpu, "kernel_for", recording)
     monkeypatch.setattr(kernels.paths, "kernel_for", recording)

@@ -60,7 +60,7 @@ if name == "stretcher":  # (a rare-event path: impacts under white noise, on Phi
                         "loads": [{"type": "white-noise", "intensity": 5.0}],
                         "simulation": {"duration": 1.0, "dt": 0.01}})
     path = start_path(scene, Streams(*(philox_stream(1, p, 0) for p in range(3))))
-    launch, types = stretcher(kernel_for(scene, gpu=True, record=path.record), False), stretch_types(path)
+    launch, types = stretcher(kernel_for(scene, gpu=True), False), stretch_types(path)
 else:
     grid = {"contact_noise_parallel": (10, 5), "seed003_ds20": None}[name]
     data = example_data(name)

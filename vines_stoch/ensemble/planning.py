@@ -10,10 +10,8 @@ from dataclasses import dataclass
 
 from ..kernels import DEFAULT_SIGNALS, LANES, chunk_runner, lane_scene, pass_loop, simulate_chunk
 from ..notices import LOG
-from ..outputs import Record
 from ..scenario import History, Study
 from ..scene import Scene, build_scene
-from ..signals import declare
 from .chunks import recorded_bytes
 
 #: Target work of one chunk, in path-steps (about 0.1-0.3 s of compute).
@@ -126,9 +124,7 @@ def prepare_loops(scenes: list[Scene], seed: int, common: bool, grid: tuple[int,
     realisations runs each loop with the argument types of ``run_chunk`` under ``executor``."""
     seen = set()
     for point, scene in enumerate(scenes):
-        columns = declare(signals, scene.n_floors, scene.kind.shape[0]) if grid else None
-        record = Record.of(scene, grid[1] if grid else 0, scene.event_rows, columns)
-        run = chunk_runner(scene, record, executor)  # (the lane loop or the scalar loop's chunk)
+        run = chunk_runner(scene, executor)  # (the lane loop or the scalar loop's chunk)
         if run in seen or run.overloads:
             continue
         seen.add(run)

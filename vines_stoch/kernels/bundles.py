@@ -93,9 +93,8 @@ class Outputs(NamedTuple):
     (``kernels/carry.py``; empty: none kept), the event log (``outputs.EVENT_COLUMNS``;
     empty: none kept), the declared metrics the metric vector records after the first
     passages (``signals.declare_metrics``) and, one an absorber, the impulses of the impacts on
-    its host in the step that ended (the signal ``contact_j``; written where the loop keeps
-    them, ``outputs.Record``).  What of these a loop writes is compiled in only
-    where the run asks for it (``outputs.Record``)."""
+    its host in the step that ended (the signal ``contact_j``).  Which of these a run keeps the
+    loop reads from their sizes at run time (``common.recording``): asking compiles nothing."""
 
     out: Any
     samples: Any

@@ -25,7 +25,7 @@ from numba.extending import overload
 
 from ..jit.cache import stable_cache
 from ..jit.flags import INLINE, KERNEL
-from ..outputs import EVENT_COLUMNS, Record, new_metrics
+from ..outputs import EVENT_COLUMNS, new_metrics
 from ..schemes import in_lanes
 from ..streams import BRIDGE, FILTER, INCREMENTS, PARAMETERS, Streams, streams
 from ..streams.pcg import PCG_DTYPE, POOL_SIZE, new_stream, pcg_normal, pcg_uniform, seed_pool, seed_stream
@@ -192,7 +192,7 @@ def simulate_chunk(scene, seed: int, point: int, start: int, stop: int, common: 
     args = bundles(scene, scene.x0.copy(), scene.v0.copy(), filter_tuple(scene, None), np.zeros(0), out0,
                    buffer, template, stride, gens, 1, _NO_CARRY, columns,
                    np.zeros((0, len(EVENT_COLUMNS))))
-    kernel = kernel_for(scene, record=Record.of(scene, size, event_rows, columns))
+    kernel = kernel_for(scene)
     run = chunk_loop(kernel)
     call = (*args, seed_keys(seed), point, start, common, wanted, scene.x0, scene.v0, scene.filters["p0"],
             raw, samples, history_rows, events)
@@ -222,21 +222,21 @@ def lane_scene(scene, executor: str = "lanes") -> bool:
     return executor == "lanes" and in_lanes(scene.scheme)
 
 
-def chunk_runner(scene, record: Record, executor: str = "lanes"):
-    """The compiled loop a chunk of ``scene`` recording ``record`` runs under ``executor``
-    (``simulate_chunk``'s choice): the lane loop or the scalar loop's chunk."""
+def chunk_runner(scene, executor: str = "lanes"):
+    """The compiled loop a chunk of ``scene`` runs under ``executor`` (``simulate_chunk``'s
+    choice), whatever it records: the lane loop or the scalar loop's chunk."""
     if lane_scene(scene, executor):
-        return lane_runner(scene, record)
-    return chunk_loop(kernel_for(scene, record=record))
+        return lane_runner(scene)
+    return chunk_loop(kernel_for(scene))
 
 
-def lane_runner(scene, record: Record, specialised: bool = False):
+def lane_runner(scene, specialised: bool = False):
     """The compiled loop of ``scene``'s realisations in SIMD lanes: the pass loop, one for every
     structure it takes (``passes.pass_scene``; unless ``specialised``), or the lane loop
-    specialised to ``scene``'s structure and to what it records (``record``)."""
+    specialised to ``scene``'s structure."""
     if pass_scene(scene) and not specialised:
         return pass_loop
-    return lane_loop(spec_of(scene, record=record))
+    return lane_loop(spec_of(scene))
 
 
 def realization_streams(scene, seed: int, point: int, realization: int, common: bool = True,
@@ -285,8 +285,7 @@ def simulate_lanes(scene, seed: int, point: int, start: int, common: bool, raw: 
     metric vectors into ``raw`` (preset to the vector's start) and, with ``history`` and
     ``events``, their history rows and event logs (``lane_call``): what the scalar loop gives on
     their Philox streams (``specialised``: ``lane_runner``'s)."""
-    kept, logged = (0 if history is None else history.shape[1]), (0 if events is None else events.shape[1])
-    run = lane_runner(scene, Record.of(scene, kept, logged, signals), specialised)
+    run = lane_runner(scene, specialised)
     call = lane_call(scene, seed, point, start, common, raw, history, stride, signals, events, specialised)
     compile_first(run, call, ())
     run(*call)

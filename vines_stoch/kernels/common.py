@@ -485,13 +485,49 @@ def record_history(history, stride, step, signals, x, v, nf, e1, mass, kind, hos
 
 
 @njit(**INLINE)
-def fold_declared(reductions, out, at: int, x, v, nf: int, e1: float, e_abs: float, host, kind, rows,
-                  impulses, dt: float, opening: bool) -> None:
+def reads_signal(codes, code: int) -> bool:
+    """Whether a row of ``codes`` (rows ``(code, ...)``: declared metrics, history columns) reads
+    the signal ``code`` (``signals.SIGNAL_*``)."""
+    found = False
+    for r in range(codes.shape[0]):
+        found = found or codes[r, 0] == code
+    return found
+
+
+@njit(**INLINE)
+def recording(history_rows: int, signals, reductions, impacts: bool) -> tuple:
+    """What a run records beyond the built-in metrics and the first passages (its limits') and
+    event log (its rows), read from its output arrays once (a branch the same for every step,
+    not a loop of its own): whether it folds declared metrics, and whether a signal reads the
+    impacts' impulses over a step (``contact_j``, of a history column where ``history_rows``
+    are kept; ``impacts``: the scene has impacts)."""
+    contact = impacts and (reads_signal(reductions, SIGNAL_CONTACT) or
+                           (history_rows > 0 and reads_signal(signals, SIGNAL_CONTACT)))
+    return reductions.shape[0] > 0, contact
+
+
+@njit(**INLINE)
+def fold_declared(reductions, out, at: int, x, v, nf: int, e1: float, mass, host, kind, rows, impulses,
+                  dt: float, opening: bool) -> None:
     """Fold a step end's state into the declared metrics (rows ``(code, index, reduction)``,
     ``signals.declare_metrics``; slots from ``at``, ``signals.REDUCTION_SLOTS`` each): peaks,
     extremes, sums of the signal or its square; at the metrics window's ``opening``, each
     signal's first value (a sum's at half weight: the trapezoid rule).  The last slot keeps the
-    signal, whose half weight ``metrics.finish_table`` takes off the sums at the window's end."""
+    signal, whose half weight ``metrics.finish_table`` takes off the sums at the window's end.
+    Out of line (``_fold_declared``, compiled once for every loop: inlined, its copies of
+    ``signal_value`` and of the absorbers' energy cost each loop compile time), so callers pass
+    copies of a state kept in registers (see ``stored_energy``)."""
+    _fold_declared(*plain((reductions, out, runtime_value(at), x, v, runtime_value(nf), e1, mass, host, kind,
+                           rows, impulses, dt, runtime_value(opening))))
+
+
+@njit(**KERNEL)
+def _fold_declared(reductions, out, at: int, x, v, nf: int, e1: float, mass, host, kind, rows, impulses,
+                   dt: float, opening: bool) -> None:
+    """``fold_declared``'s body (the absorbers' energy computed where a metric folds their
+    share)."""
+    share = reads_signal(reductions, SIGNAL_SHARE)
+    e_abs = absorber_energy(x, v, mass, nf, kind, host, rows) if share else 0.0
     for r in range(reductions.shape[0]):
         q = signal_value(reductions[r, 0], reductions[r, 1], x, v, nf, e1, e_abs, host, kind, rows, impulses,
                          dt)

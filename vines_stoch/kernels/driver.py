@@ -34,7 +34,6 @@ from .carry import (
 )
 from .common import (
     CHECK_EVERY,
-    absorber_energy,
     block_end,
     diverged,
     first_passages,
@@ -42,6 +41,7 @@ from .common import (
     fold_declared,
     record_history,
     record_sample,
+    recording,
     start_history,
     stored_energy,
     write_floor_metrics,
@@ -76,11 +76,7 @@ def step_loop(plug: Step, spec: Spec):
     NF = spec.n_floors
     GPU = spec.gpu
     HERTZ = spec.has_hertz
-    PASSAGES = spec.passages  # (what the run records: ``outputs.Record``)
-    HISTORY = spec.history
-    DECLARED = spec.declared
-    SHARE = spec.share  # (a declared metric folds the absorbers' energy share)
-    CONTACT = spec.contact and spec.has_impact  # (a signal reads the impacts' impulses over a step)
+    IMPACT = spec.has_impact
 
     @njit(**KERNEL)
     def kernel(bodies_, absorbers_, ex_, fl_, noise_, grid_, outputs_, gen_, gen_bridge_, gen_filter_):
@@ -100,6 +96,8 @@ def step_loop(plug: Step, spec: Spec):
                                                          outputs.signals, outputs.limits, outputs.carry)
         reductions, impulses = outputs.reductions, outputs.impulses
         declared_at = declared_slots(NF, limits.shape[0])
+        # what the run records (run-time data, the same for every step: ``common.recording``)
+        declared, contact = recording(history.shape[0], signals, reductions, IMPACT)
         resume = first > 0  # a later stretch of the path: its state from ``carry``
         # the state (copied back at the end) on the stack (see ``jit.intrinsics.scratch``); copies
         # of it for the out-of-line calls and for the Poincare samples' interpolation
@@ -129,11 +127,11 @@ def step_loop(plug: Step, spec: Spec):
         else:
             e1_prev = primary_energy(mass, storey_k, x, v, nf)
             h_next = -1
-            if HISTORY:
+            if history.shape[0] > 0:
                 copy_state(x, v, xc, vc)
                 h_next = start_history(history, stride, signals, xc, vc, nf, e1_prev, mass, kind, host, rows,
                                        impulses, dt)
-            pending = limits.shape[0] if PASSAGES else 0  # limits not passed yet
+            pending = limits.shape[0]  # limits not passed yet
             next_sample = 0
         sampling = SAMPLES and samples.shape[0] > 0
         i = first
@@ -154,11 +152,10 @@ def step_loop(plug: Step, spec: Spec):
                         x2_integral[k] = 0.5 * x[k] * x[k]
                 opening(own, x, v, inv_mass, acc, bodies, absorbers)
                 floor_peaks(x, nf, acc, x_max, drift_max, acc_max)
-                if DECLARED:
-                    e_abs = absorber_energy(x, v, mass, nf, kind, host, rows) if SHARE else 0.0
-                    fold_declared(reductions, out, declared_at, x, v, nf, e1_max, e_abs, host, kind, rows,
+                if declared:  # (``xc, vc``: the state's copies, above)
+                    fold_declared(reductions, out, declared_at, xc, vc, nf, e1_max, mass, host, kind, rows,
                                   impulses, dt, True)
-                if PASSAGES and pending > 0:
+                if pending > 0:
                     pending = first_passages(limits, i * dt, nf, x_max, drift_max, acc_max, inv_mass,
                                              FORCE_PEAKS,
                                              e1_max, out)
@@ -178,7 +175,7 @@ def step_loop(plug: Step, spec: Spec):
                     else:
                         copy_into(xp, x)
                         copy_into(vp, v)
-                if CONTACT:  # (the impulses of this step's impacts, from none)
+                if contact:  # (the impulses of this step's impacts, from none)
                     for a in range(impulses.shape[0]):
                         impulses[a] = 0.0
                 acct = (work, d_primary, d_absorber, e_sum, e1_max, loss, n_left, n_right, contact_time,
@@ -195,22 +192,22 @@ def step_loop(plug: Step, spec: Spec):
                         for k in range(nf):
                             x2_integral[k] += x[k] * x[k]
                         floor_peaks(x, nf, acc, x_max, drift_max, acc_max)
-                        if PASSAGES and pending > 0:
+                        if pending > 0:
                             pending = first_passages(limits, i * dt + dt, nf, x_max, drift_max, acc_max,
                                                      inv_mass,
                                                      FORCE_PEAKS, e1_max, out)
                     e1_prev = e1
-                if DECLARED and inside:
-                    e_abs = absorber_energy(x, v, mass, nf, kind, host, rows) if SHARE else 0.0
-                    fold_declared(reductions, out, declared_at, x, v, nf,
-                                  primary_energy(mass, storey_k, x, v, nf) if INTEGRATES else e1_prev, e_abs,
+                if declared and inside:
+                    copy_state(x, v, xc, vc)
+                    fold_declared(reductions, out, declared_at, xc, vc, nf,
+                                  primary_energy(mass, storey_k, x, v, nf) if INTEGRATES else e1_prev, mass,
                                   host, kind, rows, impulses, dt, False)
                 if SAMPLES and sampling:
                     next_sample = record_sample(samples, next_sample, sample_from, period, i * dt, dt, xp,
                                                 vp, x,
                                                 v, n_left, n_right)
             i = end
-            if HISTORY and i == h_next:
+            if i == h_next:
                 copy_state(x, v, xc, vc)
                 h_next = record_history(history, stride, h_next, signals, xc, vc, nf,
                                         primary_energy(mass, storey_k, x, v, nf) if INTEGRATES else e1_prev,

@@ -350,7 +350,6 @@ def kdk_step(spec) -> Step:
     NR = spec.n_rows
     NZ = spec.n_states
     GPU = spec.gpu
-    LOG = spec.events and (has_impact or has_hertz)  # the event log (``outputs.Record``)
 
     @njit(**INLINE)
     def start(bodies, absorbers, ex, fl, noise, grid, carry, resume, x, v, gen_bridge):
@@ -574,7 +573,7 @@ def kdk_step(spec) -> Step:
             if has_hertz and hit >= 0 and kind[hit] == HERTZ:  # onto or off the contact surface
                 h = host_of(host, hit, nf)
                 j = nf + hit
-                if LOG and inside and hit_event != EXIT:
+                if inside and hit_event != EXIT:  # (the event log: as many rows as it has)
                     log_event(events, n_left + n_right - 1.0, t, hit, side, v[j] - v[h], 0.0)
                 x[j] = x[h] + hit_wall
                 touching[hit] = 0 if hit_event == EXIT else side
@@ -589,8 +588,7 @@ def kdk_step(spec) -> Step:
                 n_impacts += 1
                 if inside:
                     loss_sum += loss
-                    if LOG:
-                        log_event(events, n_left + n_right - 1.0, t, hit, side, speed, loss)
+                    log_event(events, n_left + n_right - 1.0, t, hit, side, speed, loss)
                 capped = capped or last
         if (has_impact or has_hertz) and capped:
             out[CAPPED] += 1

@@ -73,7 +73,6 @@ from ..streams.rng import STREAM_WORDS, block_uniforms, packed_block, packed_pai
 from .brownian import forget, tree_seed
 from .common import (
     CHECK_EVERY,
-    absorber_energy,
     attachment_forces,
     contact_force,
     contact_forces,
@@ -82,6 +81,7 @@ from .common import (
     fold_declared,
     history_row,
     keep_in_cavities,
+    recording,
     shaped_forces,
     stored_energy,
     write_floor_metrics,
@@ -223,15 +223,14 @@ def record_rows(s, nl, j, stride, history, first, signals, x, v, state, nf, mass
 
 @njit(**INLINE)
 def fold_rows(s, nl, raw, first, reductions, at, x, v, state, e1_row, nf, mass, kind, host, rows, impulses,
-              dt, opening, share) -> None:
+              dt, opening) -> None:
     """The declared metrics (``common.fold_declared``, the scalar loop's, slots from ``at``) of
     every lane of a batch whose path has not ended folded into its metric vector ``raw[first +
     lane]``, from the lane's state and ``E1`` at the step's end (row ``e1_row``), at the metrics
-    window's ``opening`` or after a step; ``share``: a metric folds the absorbers' energy share."""
+    window's ``opening`` or after a step."""
     for lane in range(nl):
         if lane_state(s, lane, state, x, v):
-            e_abs = absorber_energy(x, v, mass, nf, kind, host, rows) if share else 0.0
-            fold_declared(reductions, raw[first + lane], at, x, v, nf, s[e1_row * LANES + lane], e_abs, host,
+            fold_declared(reductions, raw[first + lane], at, x, v, nf, s[e1_row * LANES + lane], mass, host,
                           kind, rows, impulses[lane], dt, opening)
 
 
@@ -312,12 +311,8 @@ def lane_loop(spec: Spec):
     GROUND = spec.ground
     SHAPED = spec.shaped
     NOISE = spec.has_noise
-    PASSAGES = spec.passages
-    HISTORY = spec.history
-    DECLARED, SHARE = spec.declared, spec.share  # (the declared metrics; one folds the energy share)
     IMPACT, CONTACT = spec.has_impact, spec.has_hertz
     EVENTS = IMPACT or CONTACT
-    IMPULSES = spec.contact and IMPACT  # (a signal reads the impacts' impulses over a step: a row a lane)
     TREE = NOISE and EVENTS  # (the lanes' Brownian trees: a seed each)
     FILTERED = spec.filtered
     NZ = spec.n_states if FILTERED else 0
@@ -410,8 +405,7 @@ def lane_loop(spec: Spec):
                 x_max[k], drift_max[k], acc_max[k] = 0.0, 0.0, 0.0
             floor_peaks(x, NF, acc, x_max, drift_max, acc_max)
             store_peaks(s, lane, x_max, drift_max, acc_max)
-        if PASSAGES:
-            pass_rows(s, nl, t, limits, inv_mass, passages, PEAKS)
+        pass_rows(s, nl, t, limits, inv_mass, passages, PEAKS)
 
     @njit(**INLINE)
     def half_kick(x, v, vn, force, dwh, dws, load, ag, dt, inside, accounts, mass, inv_mass, storey_k,
@@ -637,20 +631,23 @@ def lane_loop(spec: Spec):
         inside = i0 == 0
         x, v = scratch(NB), scratch(NB)
         declared_at = declared_slots(NF, limits.shape[0])
-        for lane in range(nl if IMPULSES else 0):  # (the impacts' impulses over a step: none yet)
+        # what the run records (``common.recording``; a signal reading the impacts' impulses over a
+        # step: a row a lane)
+        declared, contact = recording(history.shape[1], signals, reductions, IMPACT)
+        for lane in range(nl if contact else 0):  # (the impacts' impulses over a step: none yet)
             for a in range(NA):
                 impulses[lane, a] = 0.0
         h_next = -1  # (the step after which the next history row is due; -1: none)
-        if HISTORY and history.shape[1] > 0:
+        if history.shape[1] > 0:
             h_next = record_rows(s, nl, 0, stride, history, first, signals, x, v, STATE, NF, m, sk, kind,
                                  host, rows, impulses, dt)
         for i in range(n_steps):
             if i == i0:
                 inside = True
                 open_lanes(s, nl, i * dt, gl, bodies, absorbers, inv_mass, limits, passages)
-                if DECLARED:
+                if declared:
                     fold_rows(s, nl, raw, first, reductions, declared_at, x, v, STATE, E1, NF, m, kind, host,
-                              rows, impulses, dt, True, SHARE)
+                              rows, impulses, dt, True)
             if i % CHECK_EVERY == 0:
                 for lane in range(nl):  # a path that diverged ends here, as the scalar loop's
                     load_lane(s, lane, x, v)
@@ -681,19 +678,19 @@ def lane_loop(spec: Spec):
             else:
                 flagged = update(s, z, nl, False, dt, ag, ag_next, gl.load, gl.load_next, noise_scale, m,
                                  inv_mass, sk, sc, fc, laws, host, rows, wall_at, band)
-            for lane in range(nl if IMPULSES else 0):  # (this step's impacts' impulses, from none)
+            for lane in range(nl if contact else 0):  # (this step's impacts' impulses, from none)
                 for a in range(NA):
                     impulses[lane, a] = 0.0
             if EVENTS:  # (a compile-time flag alone: a scene without events compiles none of it)
                 if flagged > 0:
                     fix_lanes(s, z, nl, i, inside, dt, ag, ag_next, gl, own, noise_scale, m, inv_mass, sk,
                               bodies, absorbers, ex, fl, noise, seeds, raw, first, events, impulses)
-            if DECLARED and inside:
+            if declared and inside:
                 fold_rows(s, nl, raw, first, reductions, declared_at, x, v, STATE, E1, NF, m, kind, host,
-                          rows, impulses, dt, False, SHARE)
-            if PASSAGES and inside:
+                          rows, impulses, dt, False)
+            if inside:
                 pass_rows(s, nl, i * dt + dt, limits, inv_mass, passages, PEAKS)
-            if HISTORY and i + 1 == h_next:  # (``common.record_history``'s schedule)
+            if i + 1 == h_next:  # (``common.record_history``'s schedule)
                 h_next = record_rows(s, nl, h_next // stride, stride, history, first, signals, x, v, STATE,
                                      NF, m, sk, kind, host, rows, impulses, dt)
         for lane in range(nl):
@@ -715,7 +712,7 @@ def lane_loop(spec: Spec):
         own, _ = start(bodies, absorbers, ex, fl, noise, grid, np.zeros(0), False, x, bodies.v.copy(),
                        np.zeros(STREAM_WORDS, np.uint64))
         seeds = np.zeros(W, np.uint64)
-        impulses = np.zeros((W, NA if IMPULSES else 0))  # (a lane's impacts' impulses over a step)
+        impulses = np.zeros((W, NA))  # (a lane's impacts' impulses over a step)
         for first in range(0, n, W):
             nl = min(W, n - first)
             batch(s, z, spare, nl, bodies, absorbers, ex, fl, noise, grid, limits, key, places,

@@ -38,8 +38,7 @@ from ..jit.intrinsics import borrowed, fused, larger, plain, prefer_vectors
 from ..outputs import STATUS, STATUS_DIVERGED, declared_slots
 from ..physics.absorbers import DAMPING, K_CUBIC, K_LIN, REST, shaped_force, spring_damper_force
 from ..physics.structure import host_of, primary_energy
-from ..signals import SIGNAL_SHARE
-from .common import CHECK_EVERY, diverged, floor_peaks, stored_energy
+from .common import CHECK_EVERY, diverged, floor_peaks, recording, stored_energy
 from .energy import write_accounts
 from .grid import GridLoads, end_loads, noise_scales, opening_forces, reset_phasors, start_loads, step_loads
 from .lanes import (
@@ -424,9 +423,7 @@ def batch(s_, rows_, scratch_, z_, spare_, passages_, lane_, filters_, first, nl
     mass, storey_k, kind, host, rows = laws(bodies, absorbers)
     inv_mass = 1.0 / mass
     impulses = np.zeros((W, 0))  # (no impacts: ``lanes.record_rows`` reads a row a lane)
-    share = False  # (a declared metric folds the absorbers' energy share)
-    for r in range(reductions.shape[0]):
-        share = share or reductions[r, 0] == SIGNAL_SHARE
+    declared, _ = recording(history.shape[1], signals, reductions, False)  # (``common.recording``)
     at_declared = declared_slots(nf, limits.shape[0])
     noise_scale, slot, floor_of = np.zeros(nf), np.zeros(nf), np.zeros(nf, np.int64)
     noisy = noise_scales(noise.sigma, dt, noise_scale, slot) if noisy_scene else 0
@@ -455,7 +452,7 @@ def batch(s_, rows_, scratch_, z_, spare_, passages_, lane_, filters_, first, nl
                       shaped, (x, v, force, acc, own_load))
             if reductions.shape[0] > 0:
                 fold_rows(s, nl, raw, first, reductions, at_declared, x, v, state, e1_row, nf, mass, kind,
-                          host, rows, impulses, dt, True, share)
+                          host, rows, impulses, dt, True)
         if i % CHECK_EVERY == 0:
             end_diverged(s, at, nl, raw, first, inside, grid, bodies, absorbers, inv_mass, passages, limits,
                          x, v)
@@ -476,9 +473,9 @@ def batch(s_, rows_, scratch_, z_, spare_, passages_, lane_, filters_, first, nl
             lane_normals(*plain((z[k], spare, nl, i * noisy + q, key, places, first)))
         step_pass(rows2, at, scratch_rows, z, nl, inside, dt, loads, at_loads, noise_scale, noisy_scene,
                   bodies, absorbers, inv_mass, ground, shaped)
-        if reductions.shape[0] > 0 and inside:
+        if declared and inside:
             fold_rows(s, nl, raw, first, reductions, at_declared, x, v, state, e1_row, nf, mass, kind, host,
-                      rows, impulses, dt, False, share)
+                      rows, impulses, dt, False)
         if limits.shape[0] > 0 and inside:
             pass_rows(s, nl, i * dt + dt, limits, inv_mass, passages, peaks)
         if i + 1 == h_next:  # (``common.record_history``'s schedule)

@@ -13,7 +13,7 @@ from typing import Any
 import numpy as np
 
 from ..jit.cache import compile_once
-from ..outputs import EVENT_COLUMNS, SLOTS, Record, new_events, new_metrics
+from ..outputs import EVENT_COLUMNS, SLOTS, new_events, new_metrics
 from ..schemes import SCHEMES
 from ..signals import declare
 from ..streams import Streams
@@ -50,9 +50,9 @@ def step_of(name: str):
     return getattr(importlib.import_module(f"{__package__}.{name}"), f"{name}_step")
 
 
-def spec_of(scene, gpu: bool = False, record: Record = Record()) -> Spec:
-    """What a scene's loop is specialised to (``protocol.Spec``), recording what ``record`` asks
-    beyond the metrics (``outputs.Record``); what its scheme does not use is left out (white
+def spec_of(scene, gpu: bool = False) -> Spec:
+    """What a scene's loop is specialised to (``protocol.Spec``); what its scheme does not use is
+    left out (white
     noise and filtered loads of the RK4 step, the load rows and filter states of steps that read
     neither from the grid), so that one loop serves the scenes that differ only there."""
     step = SCHEMES[scene.scheme].step
@@ -63,16 +63,14 @@ def spec_of(scene, gpu: bool = False, record: Record = Record()) -> Spec:
                 has_noise=scene.has_white_noise and grid, has_impact=scene.has_impact,
                 has_hertz=scene.has_hertz, partners=scene.has_partners,
                 filtered=scene.has_filters and grid, ground=scene.has_ground and grid,
-                shaped=scene.has_shaped, gpu=gpu, passages=record.passages, history=record.history,
-                events=record.events, declared=record.declared, share=record.share, contact=record.contact)
+                shaped=scene.has_shaped, gpu=gpu)
 
 
-def kernel_for(scene, gpu: bool = False, record: Record | None = None):
+def kernel_for(scene, gpu: bool = False):
     """The compiled loop for a scene's scheme and structure: the loop driver around the
-    scheme's step (``driver.step_loop``; ``gpu``: the loop the cuda backend compiles), recording
-    what ``record`` asks (``outputs.Record``; default: what a run of the scene without history
-    rows or event log records, ``Record.of(scene)``)."""
-    spec = spec_of(scene, gpu, Record.of(scene) if record is None else record)
+    scheme's step (``driver.step_loop``; ``gpu``: the loop the cuda backend compiles).  It records
+    what its output arrays ask (``common.recording``)."""
+    spec = spec_of(scene, gpu)
     return step_loop(step_of(SCHEMES[scene.scheme].step)(spec), spec)
 
 
@@ -227,10 +225,8 @@ class Path:
     step: int = 0
     #: The numpy generators the path's streams stand for, with the streams (``_as_streams``).
     sources: tuple = ()
-    #: The scene and what the loop records (``outputs.Record``): what another backend compiles
-    #: the path's loop from (``gpu.advance_many``).
+    #: The scene: what another backend compiles the path's loop from (``gpu.advance_many``).
     scene: Any = None
-    record: Record | None = None
 
     @property
     def x(self) -> np.ndarray:
@@ -284,7 +280,7 @@ class Path:
         fl = fl._replace(z=fl.z.copy(), zn=fl.zn.copy(), draws=fl.draws.copy())
         args = (bodies._replace(x=bodies.x.copy(), v=bodies.v.copy()), absorbers, loads, fl, noise, grid,
                 outputs, *gens)
-        return Path(self.kernel, args, self.step, sources, self.scene, self.record)
+        return Path(self.kernel, args, self.step, sources, self.scene)
 
 
 #: The signals of a history given without names: the roof's displacement and ``E1``, then with
@@ -337,8 +333,7 @@ def start_path(scene, streams: Streams | np.random.Generator | None = None, *,
                          f"not {events.shape}")
     args = bundles(scene, x, v, fl, normals if replay else _NO_NORMALS, out, samples, history, stride, gens,
                    refine, carry, columns, events)
-    record = Record.of(scene, history.shape[0], events.shape[0], columns)
-    return Path(kernel_for(scene, record=record), args, sources=sources, scene=scene, record=record)
+    return Path(kernel_for(scene), args, sources=sources, scene=scene)
 
 
 def compile_first(dispatcher, args: tuple, gens: Sequence) -> None:
@@ -407,7 +402,7 @@ def simulate(scene, streams: Streams | np.random.Generator | None = None, *,
     ``t = j stride dt``, ``j < G`` (rows after a divergence keep their previous content);
     ``events`` (from ``outputs.new_events``) receives the event log, the impacts and Hertz
     contacts' onsets in the metrics window (``outputs.EVENT_COLUMNS``), as many as it has rows.
-    Each of these is compiled into the loop only when asked for (``outputs.Record``).  (A path
+    Asking for one of these compiles nothing: the loop reads it from its arrays.  (A path
     run in stretches: ``start_path``, ``advance``.)
     """
     path = start_path(scene, streams, normals=normals, samples=samples, history=history, stride=stride,

@@ -48,11 +48,11 @@ class Spec(NamedTuple):
     closed-form load rows and filter states (the sizes of its arrays on the stack), white
     noise, impact and Hertz absorbers, impacts between absorbers (an impact absorber in
     another's cavity: ``physics.structure.wall_of``), filtered loads, ground acceleration,
-    shaped springs (geometric attachments, gap springs), the cuda backend's loop (per-absorber
-    flags on the stack), and what the run records beyond the built-in metrics
-    (``outputs.Record``: first passages, history rows, the event log, declared metrics, the
-    absorbers' energy share among them, the impacts' impulses for the signal ``contact_j``),
-    whose code the loop holds only where asked."""
+    shaped springs (geometric attachments, gap springs) and the cuda backend's loop
+    (per-absorber flags on the stack).  What a run records beyond the built-in metrics (first
+    passages, history rows, the event log, declared metrics) is not among them: the loop reads
+    it from its output arrays at run time (``common.recording``), so that asking for it
+    compiles nothing."""
 
     n_bodies: int
     n_floors: int
@@ -66,12 +66,6 @@ class Spec(NamedTuple):
     ground: bool
     shaped: bool
     gpu: bool
-    passages: bool
-    history: bool
-    events: bool
-    declared: bool
-    share: bool
-    contact: bool
 
 
 class Step(NamedTuple):

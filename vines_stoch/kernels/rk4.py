@@ -244,8 +244,6 @@ def rk4_step(spec) -> Step:
     GPU = spec.gpu
     GEO = SHAPED_FORCES if spec.shaped else 0
     has_impact, has_hertz = spec.has_impact, spec.has_hertz
-    PASSAGES = spec.passages  # (what the run records: ``outputs.Record``)
-    LOG = spec.events and (has_impact or has_hertz)
 
     @njit(**INLINE)
     def start(bodies, absorbers, ex, fl, noise, grid, carry, resume, x, v, gen_bridge):
@@ -359,7 +357,7 @@ def rk4_step(spec) -> Step:
                 # peaks: the state at the sub-step's end, the accelerations at its start
                 floor_peaks(xn, nf, a0, x_max, drift_max, acc_max)
                 e1_max = max(e1_max, primary_energy(mass, storey_k, xn, vn, nf))
-                if PASSAGES and pending > 0:
+                if pending > 0:
                     pending = first_passages(limits, t + h, nf, x_max, drift_max, acc_max, inv_mass, False,
                                              e1_max, out)
             for b in range(nb):
@@ -391,11 +389,10 @@ def rk4_step(spec) -> Step:
                 if inside:
                     loss_sum += loss
                     e1_max = max(e1_max, primary_energy(mass, storey_k, x, v, nf))
-                    if LOG:
-                        log_event(outputs.events, n_left + n_right, t, q, side, speed, loss)
+                    log_event(outputs.events, n_left + n_right, t, q, side, speed, loss)  # (as it has rows)
             elif has_hertz and event_kind == ONSET:
                 touching[q] = side
-                if LOG and inside:
+                if inside:
                     log_event(outputs.events, n_left + n_right, t, q, side, pick(v, j) - v[hf], 0.0)
             elif has_hertz and event_kind == EXIT:
                 touching[q] = 0

@@ -20,7 +20,7 @@ from vines_stoch.kernels import SLOTS, simulate, spec_of
 from vines_stoch.kernels.chunk import lane_call, lane_scene, simulate_chunk
 from vines_stoch.kernels.events import NONE, event_ahead, quiet_band
 from vines_stoch.kernels.lanes import ALIGN, LANES, aligned_rows, lane_loop, lane_normals
-from vines_stoch.outputs import STATUS, STATUS_DIVERGED, Record, new_events, new_metrics
+from vines_stoch.outputs import STATUS, STATUS_DIVERGED, new_events, new_metrics
 from vines_stoch.physics.absorbers import HERTZ as HERTZ_LAW
 from vines_stoch.physics.absorbers import IMPACT as IMPACT_LAW
 from vines_stoch.physics.absorbers import LAWS
@@ -264,7 +264,7 @@ def test_the_lane_loops_are_vector_code_on_this_host(data):
     if not llvm.get_host_cpu_features().get("avx2"):
         pytest.skip("no AVX2 on this host")
     scene = scene_from(data)
-    run = lane_loop.__wrapped__(spec_of(scene, record=Record.of(scene)))  # (not the memoised one)
+    run = lane_loop.__wrapped__(spec_of(scene))  # (not the memoised one)
     run._cache = NullCache()
     with frontend.compiling():  # (the package's faster front end, as its own compiles)
         run(*lane_call(scene, SEED, 0, 0, True, new_metrics_rows(scene, 2)))

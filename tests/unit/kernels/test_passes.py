@@ -18,7 +18,7 @@ from vines_stoch.kernels.chunk import simulate_chunk
 from vines_stoch.kernels.driver import step_loop
 from vines_stoch.kernels.lanes import lane_loop
 from vines_stoch.kernels.passes import pass_loop, pass_scene
-from vines_stoch.outputs import STATUS, STATUS_DIVERGED, Record
+from vines_stoch.outputs import STATUS, STATUS_DIVERGED
 
 
 def frame(storeys: int, absorbers: list[dict], loads: list[dict], **changes) -> dict:
@@ -76,7 +76,7 @@ SCENES = {
 @pytest.mark.parametrize("name", list(SCENES))
 def test_a_pass_lane_is_the_scalar_loop_on_its_philox_streams(name):
     scene = scene_from(SCENES[name])
-    assert pass_scene(scene) and chunk_runner(scene, Record.of(scene)) is pass_loop
+    assert pass_scene(scene) and chunk_runner(scene) is pass_loop
     rows = simulate_chunk(scene, SEED, 0, 0, 4).raw
     for r in range(4):
         scalar = simulate(scene, philox_streams(r))

@@ -1,21 +1,20 @@
-"""What a run records beyond the metrics (``outputs.Record``): the event log against the metrics
-it details and the Newton impact's closed-form loss, the same numbers whatever a run asks to
-record, and a loop that holds the code of only what its run records."""
+"""What a run records beyond the metrics: the event log against the metrics it details and the
+Newton impact's closed-form loss, the same numbers whatever a run asks to record, and one loop
+whatever it asks."""
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
-from numba.core.caching import NullCache
 
 from tests.helpers import example_scene
 from vines_stoch import outputs
-from vines_stoch.jit.cache import compile_once
-from vines_stoch.kernels import simulate, spec_of, start_path, step_of
-from vines_stoch.kernels.driver import step_loop
-from vines_stoch.outputs import SLOTS, Record, new_events
+from vines_stoch.kernels import chunk_runner, kernel_for, simulate, simulate_chunk
+from vines_stoch.outputs import SLOTS, new_events
 from vines_stoch.physics.absorbers import HERTZ, IMPACT, RESTITUTION
-from vines_stoch.schemes import SCHEMES
+from vines_stoch.scene import limit_row
 
 _S = {name: i for i, name in enumerate(SLOTS)}
 
@@ -79,10 +78,7 @@ def test_the_event_log_details_the_impacts_the_metrics_count(case):
 def test_what_a_run_records_changes_no_number(case):
     """The records write into their own arrays, never into the state or the accounts: a run
     that keeps an event log and history rows ends with the metrics and state of one that keeps
-    none.  The two are different loops, whose compiler may fuse different multiply-adds (the
-    kernels allow contraction: ``jit.flags.KERNEL``), so they agree to the last bits, within
-    1e-9 relative as the shipped numbers do (``test_numbers_hold``): on
-    this scene, whose paths are not chaotic."""
+    none, bitwise: both run the same compiled loop (``common.recording``)."""
     if case == "kdk harmonic and white noise":
         scene = _scene("seed000_harmonic_noise_none", None, 10.0)
     else:
@@ -91,26 +87,27 @@ def test_what_a_run_records_changes_no_number(case):
     bare = simulate(scene, np.random.default_rng(5), final=bare_final)
     kept = simulate(scene, np.random.default_rng(5), final=kept_final, events=new_events(7),
                     history=np.zeros((5, 2)), stride=scene.n_steps // 4)
-    scale = np.abs(bare[np.isfinite(bare)]).max()
-    np.testing.assert_allclose(kept, bare, rtol=1e-9, atol=1e-12 * scale)
-    np.testing.assert_allclose(kept_final, bare_final, rtol=1e-9, atol=1e-12 * np.abs(bare_final).max())
+    np.testing.assert_array_equal(kept, bare)
+    np.testing.assert_array_equal(kept_final, bare_final)
 
 
-def _fresh_ir(scene, history: np.ndarray | None) -> str:
-    """The IR of the loop of a path of ``scene`` (with ``history`` rows, or none) compiled afresh:
-    a copy of its loop kept out of numba's cache (code loaded from a cache shows no IR)."""
-    path = start_path(scene, history=history, stride=10, stretches=False)
-    spec = spec_of(scene, record=Record.of(scene, 0 if history is None else history.shape[0]))
-    fresh = step_loop.__wrapped__(step_of(SCHEMES[scene.scheme].step)(spec), spec)
-    fresh._cache = NullCache()
-    compile_once(fresh, path.args)
-    return next(iter(fresh.inspect_llvm().values()))
-
-
-def test_a_loop_holds_only_what_its_run_records():
-    """A scene pays only for what it asks: the loop of a run that keeps no history rows holds
-    none of their code (it never calls the out-of-line history row), and is the smaller."""
-    scene = example_scene("cubic_nes_impulse", {"simulation.duration": 0.1})
-    bare, kept = _fresh_ir(scene, None), _fresh_ir(scene, np.zeros((3, 2)))
-    assert "_history_row" not in bare and "_history_row" in kept
-    assert len(bare) < len(kept)
+@pytest.mark.parametrize("case", ["rk4 impacts", "kdk Hertz contact and impacts under noise"])
+def test_asking_for_a_record_compiles_nothing(case):
+    """What a run records is run-time data of its loop (``common.recording``): a path that keeps
+    history rows (a contact force among them), an event log and first passages runs the same
+    loop as one that keeps none, on the signature the first compiled, and so does a chunk of
+    the scalar loop that keeps them."""
+    scene = _scene(*CASES[case])
+    kernel = kernel_for(scene)
+    simulate(scene, np.random.default_rng(5))
+    signatures = len(kernel.overloads)
+    limited = replace(scene, limits=np.array([limit_row("e1_max", 1e-9, scene.n_floors)]))
+    simulate(limited, np.random.default_rng(5), events=new_events(7), history=np.zeros((5, 2)),
+             signals=("x1", "contact_1"), stride=scene.n_steps // 4)
+    assert kernel_for(limited) is kernel and len(kernel.overloads) == signatures
+    run = chunk_runner(scene, "scalar")
+    simulate_chunk(scene, 5, 0, 0, 1, executor="scalar")
+    chunks = len(run.overloads)
+    simulate_chunk(limited, 5, 0, 0, 2, history=(10, 3), signals=("x1", "contact_1"), event_rows=4,
+                   executor="scalar")
+    assert chunk_runner(limited, "scalar") is run and len(run.overloads) == chunks
