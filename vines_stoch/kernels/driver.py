@@ -157,8 +157,7 @@ def step_loop(plug: Step, spec: Spec):
                                   impulses, dt, True)
                 if pending > 0:
                     pending = first_passages(limits, i * dt, nf, x_max, drift_max, acc_max, inv_mass,
-                                             FORCE_PEAKS,
-                                             e1_max, out)
+                                             FORCE_PEAKS, e1_max, out)
             if i % CHECK_EVERY == 0:
                 if diverged(x):
                     out[STATUS] = STATUS_DIVERGED
@@ -194,8 +193,7 @@ def step_loop(plug: Step, spec: Spec):
                         floor_peaks(x, nf, acc, x_max, drift_max, acc_max)
                         if pending > 0:
                             pending = first_passages(limits, i * dt + dt, nf, x_max, drift_max, acc_max,
-                                                     inv_mass,
-                                                     FORCE_PEAKS, e1_max, out)
+                                                     inv_mass, FORCE_PEAKS, e1_max, out)
                     e1_prev = e1
                 if declared and inside:
                     copy_state(x, v, xc, vc)
