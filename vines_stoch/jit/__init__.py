@@ -12,9 +12,9 @@ from __future__ import annotations
 
 from .cache import compile_once, key_by_sources
 from .flags import INLINE, KERNEL
-from .intrinsics import any_set, copy_into, int_scratch, pick, put, runtime_value, scratch
+from .intrinsics import any_set, copy_into, int_scratch, pick, put, runtime_value, scratch, scratch_within
 
 key_by_sources()  # an edited formula never runs from a stale cache (see ``cache``)
 
 __all__ = ["INLINE", "KERNEL", "any_set", "compile_once", "copy_into", "int_scratch",
-           "key_by_sources", "pick", "put", "runtime_value", "scratch"]
+           "key_by_sources", "pick", "put", "runtime_value", "scratch", "scratch_within"]

@@ -108,22 +108,35 @@ def plain(typingctx, value):
     return target(value), codegen
 
 
-def _stack_array(dtype, size):
-    """Typing and code of a zeroed 1-D ``dtype`` array of ``size`` (a literal) on the stack."""
-    if not isinstance(size, types.IntegerLiteral):
+def _stack_array(dtype, size, room=None):
+    """Typing and code of a zeroed 1-D ``dtype`` array of ``size`` on the stack: a literal (a
+    kernel factory's count), or a run-time integer within ``room`` (a literal: the room the
+    frame reserves; a size the loop reads from its arguments).  The room is reserved with the
+    function's frame either way, where LLVM may keep the array in registers (a room taken at
+    run time, ``alloca`` of a run-time count, cost the scalar impact scene a fifth of its
+    speed)."""
+    if not isinstance(size, types.Integer) or not (room is None or isinstance(room, types.IntegerLiteral)):
         return None
-    n = size.literal_value
+    literal = isinstance(size, types.IntegerLiteral)
+    if room is None and not literal:
+        return None
     array_type = StackArray(dtype, 1, "C")
+    reserved = max(size.literal_value if literal else room.literal_value, 1)
 
     def codegen(context, builder, signature, args):
-        data = cgutils.alloca_once(builder, context.get_data_type(dtype), size=max(n, 1))
-        cgutils.memset(builder, data, ir.Constant(cgutils.intp_t, 8 * max(n, 1)), 0)
-        array = make_array(array_type)(context, builder)
-        populate_array(array, data=data, shape=[cgutils.intp_t(n)], strides=[cgutils.intp_t(8)],
-                       itemsize=8, meminfo=None)
-        return array._getvalue()
+        data = cgutils.alloca_once(builder, context.get_data_type(dtype), size=reserved)
+        cgutils.memset(builder, data, ir.Constant(cgutils.intp_t, 8 * reserved), 0)
+        n = context.cast(builder, args[0], signature.args[0], types.intp)
+        return _stack_view(context, builder, array_type, data, n)
 
-    return array_type(size), codegen
+    return (array_type(size) if room is None else array_type(size, room)), codegen
+
+
+def _stack_view(context, builder, array_type, data, n):
+    """The array of ``n`` items at ``data`` (no memory info)."""
+    array = make_array(array_type)(context, builder)
+    populate_array(array, data=data, shape=[n], strides=[cgutils.intp_t(8)], itemsize=8, meminfo=None)
+    return array._getvalue()
 
 
 @intrinsic
@@ -133,6 +146,13 @@ def scratch(typingctx, size):
     the loops over bodies unrolled, keeps the state in registers across steps.  (The same loop
     on heap arrays ran at 0.65-0.7x.)  The array must not outlive the kernel that makes it."""
     return _stack_array(types.float64, size)
+
+
+@intrinsic
+def scratch_within(typingctx, size, room):
+    """``scratch`` of a run-time ``size`` (a count the loop reads from its arguments) of at most
+    ``room`` (a literal), the room the kernel's frame reserves."""
+    return _stack_array(types.float64, size, room)
 
 
 @intrinsic

@@ -236,7 +236,7 @@ def lane_runner(scene, specialised: bool = False):
     specialised to ``scene``'s structure."""
     if pass_scene(scene) and not specialised:
         return pass_loop
-    return lane_loop(spec_of(scene))
+    return lane_loop(spec_of(scene, lanes=True))
 
 
 def realization_streams(scene, seed: int, point: int, realization: int, common: bool = True,

@@ -11,11 +11,12 @@ from typing import Any, NamedTuple
 from numba import njit
 
 from ..jit.flags import INLINE, KERNEL
-from ..jit.intrinsics import plain, runtime_value
+from ..jit.intrinsics import plain, runtime_value, scratch_within
 from ..streams.rng import normal
 from .carry import GROUND_NEXT, restore_loads, restore_rows, save_loads, save_rows
 from .common import attachment_forces, shaped_forces
 from .loads import advance_filters, copy_into, excitation, phasors, rotations, turn
+from .protocol import ROOM
 
 
 class GridLoads(NamedTuple):
@@ -43,6 +44,22 @@ class GridLoads(NamedTuple):
     z_copy: Any
     zn_copy: Any
     load_copy: Any
+
+
+@njit(**INLINE)
+def grid_room(nf: int, nr: int, nz: int, load3: int, mid: int, copies: int, load_copy: int) -> GridLoads:
+    """A step's ``GridLoads`` on the loop's stack: ``nf`` floors, ``nr`` load rows, ``nz``
+    filter states; ``load3``, ``mid`` (the midpoint's and half-step phasors), ``copies`` (of
+    the filter states) and ``load_copy``: the sizes of what a step keeps of its own.  Each size
+    a constant, or a run-time count within ``protocol.ROOM`` (``jit.intrinsics.scratch_within``:
+    the CPU loop's load rows and filter states, ``paths.spec_of``)."""
+    return GridLoads(scratch_within(nf, ROOM), scratch_within(nf, ROOM), scratch_within(nf, ROOM),
+                     scratch_within(load3, ROOM), scratch_within(nr, ROOM), scratch_within(nr, ROOM),
+                     scratch_within(mid, ROOM), scratch_within(mid, ROOM), scratch_within(nr, ROOM),
+                     scratch_within(nr, ROOM), scratch_within(mid, ROOM), scratch_within(mid, ROOM),
+                     scratch_within(nz, ROOM), scratch_within(nz, ROOM), scratch_within(nz, ROOM),
+                     scratch_within(copies, ROOM), scratch_within(copies, ROOM),
+                     scratch_within(load_copy, ROOM))
 
 
 @njit(**INLINE)

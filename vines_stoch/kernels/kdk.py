@@ -73,10 +73,10 @@ from .common import (
 from .energy import absorber_dissipation, impulse_work, momentum, structure_dissipation
 from .events import EXIT, NONE, event_ahead, gap_sign
 from .grid import (
-    GridLoads,
     end_loads,
     event_loads,
     finish_loads,
+    grid_room,
     noise_scales,
     opening_forces,
     reset_phasors,
@@ -355,10 +355,9 @@ def kdk_step(spec) -> Step:
     def start(bodies, absorbers, ex, fl, noise, grid, carry, resume, x, v, gen_bridge):
         nf = NF
         na = absorbers.kind.shape[0]
-        gl = GridLoads(scratch(NF), scratch(NF), scratch(NF), scratch(0), scratch(NR), scratch(NR),
-                       scratch(0),
-                       scratch(0), scratch(NR), scratch(NR), scratch(0), scratch(0), scratch(NZ), scratch(NZ),
-                       scratch(NZ), scratch(NZ), scratch(NZ), scratch(NF))
+        # the load rows and filter states: run-time sizes on the CPU (``paths.spec_of``)
+        nr, nz = NR if NR >= 0 else ex.forces.shape[0], NZ if NZ >= 0 else fl.phi.shape[0]
+        gl = grid_room(NF, nr, nz, 0, 0, nz, NF)
         noise_scale, slot = scratch(NF), scratch(NF)
         noisy = noise_scales(noise.sigma, grid.dt, noise_scale, slot)
         # the seed of the Brownian trees inside the steps (``brownian``)

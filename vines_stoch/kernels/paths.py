@@ -23,7 +23,7 @@ from .bundles import Absorbers, Bodies, Filters, Grid, Loads, Noise, Outputs
 from .carry import SEED_HIGH, SEED_LOW, new_carry
 from .driver import step_loop
 from .loads import load_path, stationary_start
-from .protocol import Spec
+from .protocol import ROOM, RUN_TIME, Spec
 
 _NO_NORMALS = np.zeros(0)
 #: The stream in the increments' place of a replayed path: never drawn from.
@@ -50,16 +50,21 @@ def step_of(name: str):
     return getattr(importlib.import_module(f"{__package__}.{name}"), f"{name}_step")
 
 
-def spec_of(scene, gpu: bool = False) -> Spec:
+def spec_of(scene, gpu: bool = False, lanes: bool = False) -> Spec:
     """What a scene's loop is specialised to (``protocol.Spec``); what its scheme does not use is
-    left out (white
-    noise and filtered loads of the RK4 step, the load rows and filter states of steps that read
-    neither from the grid), so that one loop serves the scenes that differ only there."""
+    left out (white noise and filtered loads of the RK4 step, the load rows and filter states of
+    steps that read neither from the grid), so that one loop serves the scenes that differ only
+    there.  The load rows and filter states, up to ``protocol.ROOM`` of each, are sizes the
+    scalar loop reads at run time (``protocol.RUN_TIME``: a new force or filter compiles
+    nothing); the cuda loop (``gpu``: a thread's arrays on its stack, of sizes known when it
+    compiles) and the lanes' row layout (``lanes``) take them as constants."""
     step = SCHEMES[scene.scheme].step
     grid = step != "rk4"
+    rows, states = scene.forces.shape[0], scene.filters["phi"].shape[0]
+    constant = gpu or lanes
     return Spec(n_bodies=scene.mass.shape[0], n_floors=scene.n_floors,
-                n_rows=scene.forces.shape[0] if grid else 0,
-                n_states=scene.filters["phi"].shape[0] if grid else 0,
+                n_rows=(rows if constant or rows > ROOM else RUN_TIME) if grid else 0,
+                n_states=(states if constant or states > ROOM else RUN_TIME) if grid else 0,
                 has_noise=scene.has_white_noise and grid, has_impact=scene.has_impact,
                 has_hertz=scene.has_hertz, partners=scene.has_partners,
                 filtered=scene.has_filters and grid, ground=scene.has_ground and grid,

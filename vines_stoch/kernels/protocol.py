@@ -36,6 +36,10 @@ from __future__ import annotations
 
 from typing import Any, NamedTuple
 
+#: A size a loop reads from its arguments at run time (``Spec``), and the most items of it
+#: that the loop's frame holds (a larger count is a constant of its own loop: ``paths.spec_of``).
+RUN_TIME, ROOM = -1, 16
+
 #: The accounts a step takes and returns, in this order (``energy``): input work, structure
 #: and absorber dissipation, the sum (or integral) of ``E1``, its peak, the impacts' loss and
 #: counts, contact time, peak contact force, limits not passed yet.
@@ -45,7 +49,8 @@ ACCOUNTS = ("work", "d_primary", "d_absorber", "e_sum", "e1_max", "loss", "n_lef
 
 class Spec(NamedTuple):
     """What a loop is specialised to (compile-time constants): the numbers of bodies, floors,
-    closed-form load rows and filter states (the sizes of its arrays on the stack), white
+    closed-form load rows and filter states (the sizes of its arrays on the stack; the last two
+    ``RUN_TIME`` where the loop reads them from its arguments), white
     noise, impact and Hertz absorbers, impacts between absorbers (an impact absorber in
     another's cavity: ``physics.structure.wall_of``), filtered loads, ground acceleration,
     shaped springs (geometric attachments, gap springs) and the cuda backend's loop

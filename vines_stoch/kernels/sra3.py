@@ -27,9 +27,9 @@ from .carry import REPLAYED
 from .common import accelerate, attachment_forces, shaped_forces
 from .energy import momentum
 from .grid import (
-    GridLoads,
     end_loads,
     finish_loads,
+    grid_room,
     mid_loads,
     noise_scales,
     opening_forces,
@@ -147,9 +147,9 @@ def sra3_step(spec) -> Step:
 
     @njit(**INLINE)
     def start(bodies, absorbers, ex, fl, noise, grid, carry, resume, x, v, gen_bridge):
-        gl = GridLoads(scratch(NF), scratch(NF), scratch(NF), scratch(NF), scratch(NR), scratch(NR),
-                       scratch(NR), scratch(NR), scratch(NR), scratch(NR), scratch(NR), scratch(NR),
-                       scratch(NZ), scratch(NZ), scratch(NZ), scratch(0), scratch(0), scratch(0))
+        # the load rows and filter states: run-time sizes on the CPU (``paths.spec_of``)
+        nr, nz = NR if NR >= 0 else ex.forces.shape[0], NZ if NZ >= 0 else fl.phi.shape[0]
+        gl = grid_room(NF, nr, nz, NF, nr, 0, 0)
         noise_scale, slot = scratch(NF), scratch(NF)
         noisy = noise_scales(noise.sigma, grid.dt, noise_scale, slot)
         replayed = int(carry[REPLAYED]) if resume else 0

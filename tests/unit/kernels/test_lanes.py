@@ -264,7 +264,7 @@ def test_the_lane_loops_are_vector_code_on_this_host(data):
     if not llvm.get_host_cpu_features().get("avx2"):
         pytest.skip("no AVX2 on this host")
     scene = scene_from(data)
-    run = lane_loop.__wrapped__(spec_of(scene))  # (not the memoised one)
+    run = lane_loop.__wrapped__(spec_of(scene, lanes=True))  # (not the memoised one)
     run._cache = NullCache()
     with frontend.compiling():  # (the package's faster front end, as its own compiles)
         run(*lane_call(scene, SEED, 0, 0, True, new_metrics_rows(scene, 2)))
