@@ -50,7 +50,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
-from .kernels import Path, advance, filter_draws, needed_streams, start_path
+from .kernels import Path, advance, filter_draws, general_run, needed_streams, start_path
 from .outputs import DRIFT_MAX_K, E1_MAX, LIMIT_E1, SLOTS, X_MAX_K, passage_slots
 from .schemes import SCHEMES
 from .streams import RARE, Streams
@@ -277,7 +277,8 @@ class _Splitting:
 
     def start(self) -> list[_Particle]:
         """The initial paths, each on its own streams, run to the end."""
-        paths = [start_path(scene, self._fresh()) for scene in self.scenes]
+        general = general_run(len(self.scenes) * self.n_steps)  # (the initial paths' work, at least)
+        paths = [start_path(scene, self._fresh(), general=general) for scene in self.scenes]
         return self._run([_Particle(path, [path.branch()], [self._peak(path)]) for path in paths])
 
     def branch(self, survivors: list[_Particle], level: float) -> list[_Particle]:
@@ -363,6 +364,7 @@ def subset(scene, limit: int, n: int, seed: int, point: int, replica: int,
                          "this scene has none")
     dim = noise + filtered + (len(parameters.laws) if parameters is not None else 0)
     rng = _chooser(seed, point, replica, INPUTS)
+    general = general_run(n * scene.n_steps)  # (a level's work, at least)
     row = scene.limits[limit]
     value = float(row[2])
     seeded = needed_streams(scene)[1]
@@ -378,7 +380,8 @@ def subset(scene, limit: int, n: int, seed: int, point: int, replica: int,
             own = scene if parameters is None else parameters.at(u[noise + filtered:])
             bridge = rare_streams(seed, point, replica, int(draw), scene, cuda).bridge if seeded else None
             streams = Streams(unused, bridge, tape(u[noise:noise + filtered]) if filtered else None)
-            paths.append(start_path(own, streams, normals=u[:noise] if noise else None, stretches=False))
+            paths.append(start_path(own, streams, normals=u[:noise] if noise else None, stretches=False,
+                                    general=general))
         run_paths(paths, [scene.n_steps] * len(paths), backend)
         return np.array([peak(path.out, row, scene.n_floors) for path in paths])
 

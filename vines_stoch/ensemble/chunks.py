@@ -43,25 +43,26 @@ def draw_parameters(study: Study, seed: int, point: int, realization: int,
 def run_chunk(scene: Scene, seed: int, point: int, start: int, stop: int,
               grid: tuple[int, int] | None = None, study: Study | None = None,
               common: bool = True, signals: tuple[str, ...] = DEFAULT_SIGNALS,
-              executor: str = "lanes") -> tuple[pd.DataFrame, np.ndarray | None]:
+              executor: str = "lanes", general: bool = False) -> tuple[pd.DataFrame, np.ndarray | None]:
     """Realisations ``start..stop-1`` of one sweep point: one metric row each and, when a
     history ``grid = (stride, size)`` is asked for, the paths of the history ``signals``
     ``(len(signals), size, stop - start)``.  The realisations run in one compiled call of
-    ``executor`` (``kernels.EXECUTORS``, ``kernels.simulate_chunk``).  With ``study`` (a study
+    ``executor`` (``kernels.EXECUTORS``, ``kernels.simulate_chunk``; ``general``: in the scheme's
+    general loop, the same numbers, ``kernels.general_run``).  With ``study`` (a study
     with uncertain parameters) each realisation runs its own scene (``binding``: the point's scene
     with the drawn values set), its drawn values in columns named by their keys.
     ``common``: common random numbers across sweep points (see ``generator``)."""
     if study is None:
         drawn, scenes = {}, scene
         parts = [simulate_chunk(scene, seed, point, start, stop, common, grid, signals, scene.event_rows,
-                                executor)]
+                                executor, general=general)]
     else:
         drawn = chunk_parameters(study, seed, point, start, stop, common)
         bound = binding(study, point)
         scenes = [bound.scene({key: float(values[j]) for key, values in drawn.items()})
                   for j in range(stop - start)]
-        parts = [simulate_chunk(s, seed, point, r, r + 1, common, grid, signals, s.event_rows, executor)
-                 for r, s in zip(range(start, stop), scenes)]
+        parts = [simulate_chunk(s, seed, point, r, r + 1, common, grid, signals, s.event_rows, executor,
+                                general=general) for r, s in zip(range(start, stop), scenes)]
     intensities = _intensities(scenes, seed, point, start, stop, common, executor=executor)
     raw, samples, history, events = (getattr(parts[0], name) if len(parts) == 1 else
                                      _stacked([getattr(part, name) for part in parts])

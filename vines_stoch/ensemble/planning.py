@@ -8,7 +8,7 @@ import sys
 import time
 from dataclasses import dataclass
 
-from ..kernels import DEFAULT_SIGNALS, LANES, chunk_runner, lane_scene, pass_loop, simulate_chunk
+from ..kernels import DEFAULT_SIGNALS, LANES, chunk_runner, general_run, lane_scene, pass_loop, simulate_chunk
 from ..notices import LOG
 from ..scenario import History, Study
 from ..scene import Scene, build_scene
@@ -46,10 +46,13 @@ BACKENDS = ("cpu", "cuda")
 
 @dataclass
 class Plan:
-    """Scenes of the sweep points and the chunks ``(point, start, stop)`` covering them."""
+    """Scenes of the sweep points and the chunks ``(point, start, stop)`` covering them, and
+    whether the run is short enough for the general loop of its scheme (``kernels.general_run``:
+    its path-steps, every point's together; the CPU's choice, the same numbers either way)."""
 
     scenes: list[Scene]
     chunks: list[tuple[int, int, int]]
+    general: bool = False
 
 
 def plan(study: Study, chunk: int | None = None, realizations: int | None = None,
@@ -81,7 +84,8 @@ def plan(study: Study, chunk: int | None = None, realizations: int | None = None
             row_bytes = recorded_bytes(scene, spec, spectra)
             size = min(size, max(1, HISTORY_CHUNK_BYTES // row_bytes))
         chunks += [(p, s, min(s + size, n)) for s in range(0, n, size)]
-    return Plan(scenes, chunks)
+    work = sum(n * scene.n_steps for scene, n in zip(scenes, counts))
+    return Plan(scenes, chunks, general=backend == "cpu" and general_run(work))
 
 
 def _auto_chunk(scene: Scene, n: int, lanes: bool) -> int:
@@ -116,24 +120,27 @@ def structure(scene: Scene) -> str:
 
 def prepare_loops(scenes: list[Scene], seed: int, common: bool, grid: tuple[int, int] | None = None,
                   signals: tuple[str, ...] = DEFAULT_SIGNALS, show: bool = True,
-                  executor: str = "lanes") -> None:
+                  executor: str = "lanes", general: bool = False) -> None:
     """Compile (or load from numba's cache on disk) the step loop of each structure among
     ``scenes`` that this process has not run yet, before any chunk starts, with one line each
     (logged at INFO on the ``vines_stoch`` logger, and with ``show`` on standard error): which
     structure, and whether it was compiled (once: later runs load it) or loaded.  A chunk of no
-    realisations runs each loop with the argument types of ``run_chunk`` under ``executor``."""
+    realisations runs each loop with the argument types of ``run_chunk`` under ``executor``
+    (``general``: the scheme's general loop, ``Plan.general``)."""
     seen = set()
     for point, scene in enumerate(scenes):
-        run = chunk_runner(scene, executor)  # (the lane loop or the scalar loop's chunk)
+        run = chunk_runner(scene, executor, general)  # (the lane loop or the scalar loop's chunk)
         if run in seen or run.overloads:
             continue
         seen.add(run)
         what = ("the pass loop (every smooth kick-drift-kick structure of three bodies or more)"
-                if run is pass_loop else structure(scene))
+                if run is pass_loop else f"the general {scene.scheme} loop (every structure)" if general
+                else structure(scene))
         if show:
             print(f"step loop: {what}: compiling or loading ...", end="", file=sys.stderr, flush=True)
         hits, start = sum(run.stats.cache_hits.values()), time.monotonic()
-        simulate_chunk(scene, seed, point, 0, 0, common, grid, signals, scene.event_rows, executor)
+        simulate_chunk(scene, seed, point, 0, 0, common, grid, signals, scene.event_rows, executor,
+                       general=general)
         loaded = sum(run.stats.cache_hits.values()) > hits
         outcome = (f"{'loaded from the cache' if loaded else 'compiled (cached on disk for later runs)'} "
                    f"in {time.monotonic() - start:.1f} s")

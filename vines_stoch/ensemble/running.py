@@ -19,7 +19,7 @@ from .. import history as hist
 from .. import notices, psd, rare, schedulers, sensitivity, store
 from ..binding import binding
 from ..environment import memory_problem, require_cluster
-from ..kernels import DEFAULT_SIGNALS, check_executor
+from ..kernels import DEFAULT_SIGNALS, check_executor, general_run
 from ..metrics import residual_warnings
 from ..progress import Progress
 from ..results import Results, Solution, as_study, check_whole
@@ -261,7 +261,8 @@ def _run(study: Study, directory: Path | None, o: _Options) -> Results | None:
     todo = [c for c in mine if c not in reusable]
     total = sum(c[2] - c[1] for c in mine)
     done = total - sum(c[2] - c[1] for c in todo)
-    chunk_runner = run_chunk_cuda if o.backend == "cuda" else partial(run_chunk, executor=o.executor)
+    chunk_runner = (run_chunk_cuda if o.backend == "cuda"
+                    else partial(run_chunk, executor=o.executor, general=the_plan.general))
 
     def call(c: tuple[int, int, int]) -> tuple:
         signals_c, grid_c = recorded[c[0]]
@@ -282,7 +283,8 @@ def _run(study: Study, directory: Path | None, o: _Options) -> Results | None:
     try:
         if o.backend == "cpu" and not o.scheduler and todo:
             prepare_loops(the_plan.scenes, seed, base.ensemble.common_random_numbers, recorded[0][1],
-                          recorded[0][0] or DEFAULT_SIGNALS, show=o.progress, executor=o.executor)
+                          recorded[0][0] or DEFAULT_SIGNALS, show=o.progress, executor=o.executor,
+                          general=the_plan.general)
         with ExitStack() as stack:
             interrupted = stack.enter_context(noting_interrupts())
             fold_ready()
@@ -391,7 +393,7 @@ def sample(study: Study, workers: int | None = None, executor: str = "lanes") ->
     the_plan = plan(study, executor=executor)
     base = study.base
     uncertain = study if base.uncertain else None
-    runner = partial(run_chunk, executor=executor)
+    runner = partial(run_chunk, executor=executor, general=the_plan.general)
 
     def call(c: tuple[int, int, int]) -> tuple:
         return runner, (the_plan.scenes[c[0]], base.ensemble.seed, *c, None, uncertain,
@@ -413,10 +415,10 @@ def compile_loops(scenario: Study | Mapping[str, Any] | str | os.PathLike, *, ex
     study = as_study(scenario)
     base = study.base
     grid_spec = base.simulation.history or (History() if paths else None)
-    scenes = [build_scene(point) for point in study.points]
-    signals, grid = recording(scenes[0], grid_spec, base.output.spectra)
-    prepare_loops(scenes, base.ensemble.seed, base.ensemble.common_random_numbers, grid,
-                  signals or DEFAULT_SIGNALS, show=show, executor=executor)
+    the_plan = plan(study, executor=executor)
+    signals, grid = recording(the_plan.scenes[0], grid_spec, base.output.spectra)
+    prepare_loops(the_plan.scenes, base.ensemble.seed, base.ensemble.common_random_numbers, grid,
+                  signals or DEFAULT_SIGNALS, show=show, executor=executor, general=the_plan.general)
 
 
 def solve(scenario: Study | Mapping[str, Any] | str | os.PathLike, *, point: int = 0, realization: int = 0,
@@ -443,7 +445,7 @@ def solve(scenario: Study | Mapping[str, Any] | str | os.PathLike, *, point: int
     base = study.base
     frame, paths = run_chunk(scene, base.ensemble.seed, point, realization, realization + 1, grid,
                              study if base.uncertain else None, base.ensemble.common_random_numbers, signals,
-                             executor)
+                             executor, general_run(scene.n_steps))
     label_points(frame, study, point)
     ys = {s: paths[i, :, 0] for i, s in enumerate(signals)}
     return Solution(scene.dt * grid[0] * np.arange(grid[1]), ys, frame.iloc[0], point, realization, study)

@@ -7,10 +7,13 @@ import os
 from ..environment import VECTOR_SWITCH, vector_problem
 
 #: Options of every compiled loop: cached on disk, GIL released, IEEE division (no Python
-#: ZeroDivisionError checks in hot loops), and fused multiply-adds (``contract``: one rounding
-#: instead of two, half the latency on a step's critical path; no other fast-math licence, so
-#: NaN and infinity keep their meaning for the divergence checks).
-KERNEL = dict(cache=True, nogil=True, error_model="numpy", fastmath={"contract"})
+#: ZeroDivisionError checks in hot loops) and no fast-math licence: every operation rounds as
+#: written, so that two loops that write the same arithmetic compute the same bits however the
+#: compiler unrolls or vectorises them (the scalar loop, the SIMD lanes, the pass loop, the
+#: general loop: LLVM's own fused multiply-adds, ``contract``, fused different products where
+#: a loop was unrolled).  The multiply-adds on a step's critical path are fused where written
+#: (``intrinsics.fused``: one rounding, half the latency).
+KERNEL = dict(cache=True, nogil=True, error_model="numpy")
 #: Options of the small formula functions the loops inline.  An inlined function that takes
 #: arrays, called inside a branch the compiler cannot remove, costs atomic reference counting
 #: of those arrays each time the enclosing loop passes it: the step loops call such functions

@@ -155,6 +155,18 @@ def scratch_within(typingctx, size, room):
     return _stack_array(types.float64, size, room)
 
 
+def scratch_of(room: int):
+    """``scratch_within`` with its room fixed to ``room``: an intrinsic of one argument, the size
+    (a literal, or a run-time count of at most ``room``)."""
+    room_type = types.IntegerLiteral(room)
+
+    @intrinsic
+    def scratch_in_room(typingctx, size):
+        return _stack_array(types.float64, size, room_type)
+
+    return scratch_in_room
+
+
 @intrinsic
 def int_scratch(typingctx, size):
     """``np.zeros(size, np.int64)`` on the kernel's stack (as ``scratch``): per-absorber flags."""

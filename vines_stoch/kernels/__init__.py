@@ -43,6 +43,7 @@ from .paths import (
     bundles,
     compile_first,
     filter_draws,
+    general_run,
     history_columns,
     kernel_for,
     load_history,
@@ -71,7 +72,8 @@ def stretcher(*args: Any, **kwargs: Any):
 
 
 __all__ = ["DEFAULT_SIGNALS", "EXECUTORS", "LANES", "SLOTS", "Path", "advance", "bundles",
-           "check_executor", "chunk_loop", "chunk_runner", "compile_first", "filter_draws", "ground_paths",
+           "check_executor", "chunk_loop", "chunk_runner", "compile_first", "filter_draws", "general_run",
+           "ground_paths",
            "history_columns", "kernel_for", "lane_normals", "lane_scene", "launcher", "load_history",
            "needed_streams", "parameter_draws", "pass_loop", "pass_scene", "realization_streams",
            "sample_buffer", "seed_keys", "simulate", "simulate_chunk", "spec_of", "start_path", "step_of",

@@ -75,7 +75,8 @@ class Grid(NamedTuple):
     """Step, the step the run stops at (the scene's step count for a whole path), the metrics
     window's first step, the forcing period and the first Poincare sample's time (none: period
     0), the history rows' stride in steps, and the step the run starts at (0: a path's start;
-    later: a path's next stretch, its state from the outputs' carry)."""
+    later: a path's next stretch, its state from the outputs' carry), and what the scene holds
+    (``protocol.KIND_BITS``: read by a loop that takes it at run time, ``common.kinds_of``)."""
 
     dt: Any
     n_steps: Any
@@ -84,6 +85,7 @@ class Grid(NamedTuple):
     sample_from: Any
     stride: Any
     first: Any
+    kinds: Any
 
 
 class Outputs(NamedTuple):

@@ -163,14 +163,17 @@ class Chunk(NamedTuple):
 
 def simulate_chunk(scene, seed: int, point: int, start: int, stop: int, common: bool = True,
                    history: tuple[int, int] | None = None, signals: tuple[str, ...] | None = None,
-                   event_rows: int = 0, executor: str = "lanes", specialised: bool = False) -> Chunk:
+                   event_rows: int = 0, executor: str = "lanes", specialised: bool = False,
+                   general: bool = False) -> Chunk:
     """Realisations ``start .. stop - 1`` of ``scene`` at sweep point ``point`` on the streams of
     ``seed`` (``realization_streams``; ``common``: common random numbers), in one compiled call
     of ``executor`` (``EXECUTORS``): what ``simulate`` gives for each, bitwise.  ``history =
     (stride, size)`` keeps ``size`` history rows of ``signals`` (``signals.declare``) every
     ``stride`` steps; ``event_rows`` rows of event log.  ``specialised``: the lane loop specialised
     to the structure even where the pass loop would run it (``passes.pass_scene``; the
-    benchmark's comparison: the same numbers)."""
+    benchmark's comparison: the same numbers).  ``general``: the scheme's general scalar loop
+    (``paths.GENERAL_WORK``), on the streams ``executor`` gives (a lane scene's Philox streams:
+    the lanes' numbers, bitwise), compiled once for every structure."""
     n = stop - start
     stride, size = history or (1, 0)
     template = _NO_HISTORY if size == 0 else np.zeros((1, len(signals)))
@@ -181,21 +184,25 @@ def simulate_chunk(scene, seed: int, point: int, start: int, stop: int, common: 
     samples = np.full((n, *buffer.shape), np.nan)
     history_rows = np.full((n, size, columns.shape[0]), np.nan)
     events = np.full((n, event_rows, len(EVENT_COLUMNS)), np.nan)
-    if lane_scene(scene, executor):  # (on the Philox streams)
+    philox = lane_scene(scene, executor)  # (on the Philox streams)
+    if philox and not general:
         simulate_lanes(scene, seed, point, start, common, raw, history_rows, stride, columns, events,
                        specialised)
         return Chunk(raw, samples, history_rows, events)
     # (the bundles of one path: the state and filter buffers the loop reuses; the outputs'
     # buffers stand for their types, each realisation writing into its rows of the arrays above)
     wanted = np.array(needed_streams(scene), np.bool_)
-    gens = tuple(new_stream() if w else _UNUSED for w in wanted)
+    if philox:
+        gens = tuple(np.zeros(STREAM_WORDS, np.uint64) for _ in wanted)
+    else:  # (the general loop: a PCG64 stream in every place, one signature)
+        gens = tuple(new_stream() if w or general else _UNUSED for w in wanted)
     args = bundles(scene, scene.x0.copy(), scene.v0.copy(), filter_tuple(scene, None), np.zeros(0), out0,
                    buffer, template, stride, gens, 1, _NO_CARRY, columns,
                    np.zeros((0, len(EVENT_COLUMNS))))
-    kernel = kernel_for(scene)
-    run = chunk_loop(kernel)
-    call = (*args, seed_keys(seed), point, start, common, wanted, scene.x0, scene.v0, scene.filters["p0"],
-            raw, samples, history_rows, events)
+    run = chunk_loop(kernel_for(scene, general=general))
+    keys = philox_keys(seed) if philox else seed_keys(seed)
+    call = (*args, keys, point, start, common, wanted, scene.x0, scene.v0, scene.filters["p0"], raw, samples,
+            history_rows, events)
     compile_first(run, call, gens)
     run(*call)
     return Chunk(raw, samples, history_rows, events)
@@ -222,12 +229,13 @@ def lane_scene(scene, executor: str = "lanes") -> bool:
     return executor == "lanes" and in_lanes(scene.scheme)
 
 
-def chunk_runner(scene, executor: str = "lanes"):
+def chunk_runner(scene, executor: str = "lanes", general: bool = False):
     """The compiled loop a chunk of ``scene`` runs under ``executor`` (``simulate_chunk``'s
-    choice), whatever it records: the lane loop or the scalar loop's chunk."""
-    if lane_scene(scene, executor):
+    choice), whatever it records: the lane loop or the scalar loop's chunk (``general``: the
+    scheme's general loop's)."""
+    if lane_scene(scene, executor) and not general:
         return lane_runner(scene)
-    return chunk_loop(kernel_for(scene))
+    return chunk_loop(kernel_for(scene, general=general))
 
 
 def lane_runner(scene, specialised: bool = False):

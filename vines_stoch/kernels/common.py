@@ -15,7 +15,7 @@ import numpy as np
 from numba import njit
 
 from ..jit.flags import INLINE, KERNEL
-from ..jit.intrinsics import larger, pick, plain, put, runtime_value, smaller
+from ..jit.intrinsics import larger, pick, plain, put, runtime_value, scratch_of, smaller
 from ..outputs import (
     ACC_MAX_K,
     DRIFT_MAX_K,
@@ -65,6 +65,7 @@ from ..signals import (
     SIGNAL_X,
     SIGNAL_XA,
 )
+from .protocol import BODY_ROOM, KIND_BITS, KINDS, ROOM
 
 #: Impacts resolved inside one outer step before the rest of the step ignores the walls.
 MAX_EVENTS = 64
@@ -79,10 +80,27 @@ CHECK_EVERY = 1024
 #: A displacement beyond this counts as divergence.
 DIVERGED = 1e100
 
+#: Zeroed arrays on a loop's stack, one item a body or a floor: of a size constant in the loop, or
+#: read at run time within ``protocol.BODY_ROOM`` and ``protocol.ROOM`` (``jit.intrinsics.scratch_of``).
+body_scratch, floor_scratch = scratch_of(BODY_ROOM), scratch_of(ROOM)
+
+NOISE_BIT, IMPACT_BIT, HERTZ_BIT, PARTNERS_BIT, FILTERED_BIT, GROUND_BIT, SHAPED_BIT = KIND_BITS.values()
 
 
+@njit(**INLINE)
+def bit_set(bits: int, bit: int) -> bool:
+    """Whether ``bit`` is set in ``bits``: a flag of what a scene holds (``protocol.KIND_BITS``)
+    that a loop reads at run time from the run's ``Grid.kinds``.  A loop's step functions read
+    each flag as ``FLAG if FLAG >= 0 else bit_set(bits, BIT)`` (``FLAG``: the loop's constant
+    of ``kinds_of``, or ``protocol.RUN_TIME``), written out where used: numba's branch pruning
+    then drops what a constant rules out before typing, as it does for any constant of the loop."""
+    return (bits & bit) != 0
 
 
+def kinds_of(spec) -> tuple:
+    """The flags of ``protocol.KINDS`` of a loop specialised to ``spec``, in that order: bools,
+    or ``protocol.RUN_TIME`` (``bit_set``)."""
+    return tuple(getattr(spec, name) for name in KINDS)
 
 
 @njit(**INLINE)

@@ -19,7 +19,7 @@ from numba import njit
 
 from ..jit.cache import stable_cache
 from ..jit.flags import INLINE, KERNEL
-from ..jit.intrinsics import borrowed, copy_into, plain, scratch
+from ..jit.intrinsics import borrowed, copy_into, plain
 from ..outputs import CONTACT_TIME, FINAL_ENERGY, PEAK_FORCE, STATUS, STATUS_DIVERGED, declared_slots
 from ..physics.structure import primary_energy
 from .carry import (
@@ -34,11 +34,17 @@ from .carry import (
 )
 from .common import (
     CHECK_EVERY,
+    HERTZ_BIT,
+    IMPACT_BIT,
+    bit_set,
     block_end,
+    body_scratch,
     diverged,
     first_passages,
     floor_peaks,
+    floor_scratch,
     fold_declared,
+    kinds_of,
     record_history,
     record_sample,
     recording,
@@ -72,11 +78,9 @@ def step_loop(plug: Step, spec: Spec):
     INTEGRATES = plug.integrates
     SAMPLES = plug.samples
     FORCE_PEAKS = plug.force_peaks
-    NB = spec.n_bodies
-    NF = spec.n_floors
+    NB, NF = spec.n_bodies, spec.n_floors
     GPU = spec.gpu
-    HERTZ = spec.has_hertz
-    IMPACT = spec.has_impact
+    _, HAS_IMPACT, HAS_HERTZ, _, _, _, _ = kinds_of(spec)  # (what the scene holds, or ``RUN_TIME``)
 
     @njit(**KERNEL)
     def kernel(bodies_, absorbers_, ex_, fl_, noise_, grid_, outputs_, gen_, gen_bridge_, gen_filter_):
@@ -86,8 +90,8 @@ def step_loop(plug: Step, spec: Spec):
         bodies, absorbers, ex, fl, noise, grid, outputs = borrowed(
             (bodies_, absorbers_, ex_, fl_, noise_, grid_, outputs_))
         gen, gen_bridge, gen_filter = borrowed((gen_, gen_bridge_, gen_filter_))
-        nb = NB
-        nf = NF
+        nb = NB if NB >= 0 else bodies.mass.shape[0]  # (``RUN_TIME``: the counts read at run time)
+        nf = NF if NF >= 0 else bodies.storey_k.shape[0]
         mass, storey_k = bodies.mass, bodies.storey_k
         kind, host, rows = absorbers.kind, absorbers.host, absorbers.rows
         dt, n_steps, i0, period, sample_from, stride, first = (grid.dt, grid.n_steps, grid.i0, grid.period,
@@ -95,21 +99,23 @@ def step_loop(plug: Step, spec: Spec):
         out, samples, history, signals, limits, carry = (outputs.out, outputs.samples, outputs.history,
                                                          outputs.signals, outputs.limits, outputs.carry)
         reductions, impulses = outputs.reductions, outputs.impulses
-        declared_at = declared_slots(NF, limits.shape[0])
+        declared_at = declared_slots(nf, limits.shape[0])
         # what the run records (run-time data, the same for every step: ``common.recording``)
-        declared, contact = recording(history.shape[0], signals, reductions, IMPACT)
+        has_impact = HAS_IMPACT if HAS_IMPACT >= 0 else bit_set(grid.kinds, IMPACT_BIT)
+        has_hertz = HAS_HERTZ if HAS_HERTZ >= 0 else bit_set(grid.kinds, HERTZ_BIT)
+        declared, contact = recording(history.shape[0], signals, reductions, has_impact)
         resume = first > 0  # a later stretch of the path: its state from ``carry``
         # the state (copied back at the end) on the stack (see ``jit.intrinsics.scratch``); copies
         # of it for the out-of-line calls and for the Poincare samples' interpolation
-        x, v, inv_mass = scratch(NB), scratch(NB), scratch(NB)
-        xc, vc, xp, vp = scratch(NB), scratch(NB), scratch(NB), scratch(NB)
+        x, v, inv_mass = body_scratch(nb), body_scratch(nb), body_scratch(nb)
+        xc, vc, xp, vp = body_scratch(nb), body_scratch(nb), body_scratch(nb), body_scratch(nb)
         for b in range(nb):
             x[b] = bodies.x[b]
             v[b] = bodies.v[b]
             inv_mass[b] = 1.0 / mass[b]
         # per floor: the force or acceleration for the peaks, the peaks, the x_k^2 integrals
-        acc, x_max, drift_max = scratch(NF), scratch(NF), scratch(NF)
-        acc_max, x2_integral = scratch(NF), scratch(NF)
+        acc, x_max, drift_max = floor_scratch(nf), floor_scratch(nf), floor_scratch(nf)
+        acc_max, x2_integral = floor_scratch(nf), floor_scratch(nf)
         peaks = (x_max, drift_max, acc_max, x2_integral)
         kept, sc = start(bodies, absorbers, ex, fl, noise, grid, carry, resume, x, v, gen_bridge)
         own = borrowed(kept)  # (the scheme's state: a borrowed view, as the bundles)
@@ -235,7 +241,7 @@ def step_loop(plug: Step, spec: Spec):
                     if FORCE_PEAKS:  # peak absolute acceleration: the peak floor force over the mass
                         acc_max[k] *= inv_mass[k]
         write_accounts(out, work, d_primary, d_absorber, e_integral, e1_max, loss, n_left, n_right)
-        if HERTZ:
+        if has_hertz:
             out[CONTACT_TIME] = contact_time
             out[PEAK_FORCE] = peak_force
         copy_state(x, v, xc, vc)

@@ -48,7 +48,7 @@ import numpy as np
 from numba import njit
 
 from ..jit.flags import INLINE
-from ..jit.intrinsics import any_set, fused, int_scratch, larger, plain, scratch
+from ..jit.intrinsics import any_set, fused, int_scratch, larger, plain, scratch_within
 from ..outputs import CAPPED
 from ..physics.absorbers import CLEARANCE, HERTZ, RESTITUTION, WALL_HI, WALL_LO
 from ..physics.hertz import contact_energy, contact_force_law
@@ -57,13 +57,24 @@ from ..streams.rng import uniform
 from .brownian import MEMO, path_value, tree_seed
 from .carry import REPLAYED, SEED_HIGH, SEED_LOW, restore_absorbers, save_absorbers
 from .common import (
+    FILTERED_BIT,
+    GROUND_BIT,
+    HERTZ_BIT,
+    IMPACT_BIT,
     MAX_EVENTS,
     MAX_SUBSTEPS,
+    NOISE_BIT,
+    PARTNERS_BIT,
+    SHAPED_BIT,
     attachment_forces,
+    bit_set,
+    body_scratch,
     contact_force,
     contact_forces,
     contact_step,
+    floor_scratch,
     keep_in_cavities,
+    kinds_of,
     log_event,
     pin_to_walls,
     resolve_impact,
@@ -86,7 +97,7 @@ from .grid import (
     step_normals,
 )
 from .loads import has_breaks
-from .protocol import Step
+from .protocol import ROOM, RUN_TIME, Step
 
 #: Iterations of the bracketed search for the impact instant (Illinois method).
 ROOT_ITERATIONS = 100
@@ -317,6 +328,7 @@ class KdkState(NamedTuple):
     high: Any
     low: Any
     piecewise: Any
+    kinds: Any
 
 
 @cache
@@ -337,33 +349,39 @@ def kdk_step(spec) -> Step:
     per-absorber flags live on the stack (a GPU thread has no heap); on the CPU they are heap
     arrays (on the stack the impact-rich scene ran 8 % slower).
     """
-    # passes of a step's event loop: one without impact or Hertz absorbers (nothing to split at)
-    has_noise, has_impact, has_hertz = spec.has_noise, spec.has_impact, spec.has_hertz
-    filtered, ground, shaped = spec.filtered, spec.ground, spec.shaped
-    EVENTS = MAX_SUBSTEPS if has_hertz else (MAX_EVENTS + 1 if has_impact else 1)
-    TREE = has_noise and (has_impact or has_hertz)  # sub-steps take increments from the Brownian tree
-    MEMO_SIZE = spec.n_floors * MEMO if TREE else 0
-    NB = spec.n_bodies
-    NF = spec.n_floors
-    NW = NB if spec.partners else NF  # the bodies that may hold an impact absorber's walls
+    HAS_NOISE, HAS_IMPACT, HAS_HERTZ, PARTNERS, FILTERED, GROUND, SHAPED = kinds_of(spec)  # (or ``RUN_TIME``)
+    NB, NF = spec.n_bodies, spec.n_floors
     NA = spec.n_bodies - spec.n_floors
+    # sub-steps take increments from the Brownian trees (white noise, impact or Hertz absorbers):
+    # a constant, or ``RUN_TIME``; room for the trees' descent memo where they may
+    TREE = (RUN_TIME if RUN_TIME in (HAS_NOISE, HAS_IMPACT, HAS_HERTZ)
+            else HAS_NOISE and (HAS_IMPACT or HAS_HERTZ))
+    MEMO_ROOM = MEMO * (NF if NF >= 0 else ROOM) if TREE else 1
     NR = spec.n_rows
     NZ = spec.n_states
     GPU = spec.gpu
 
     @njit(**INLINE)
     def start(bodies, absorbers, ex, fl, noise, grid, carry, resume, x, v, gen_bridge):
-        nf = NF
-        na = absorbers.kind.shape[0]
-        # the load rows and filter states: run-time sizes on the CPU (``paths.spec_of``)
+        # the bodies, floors, load rows and filter states: run-time sizes on the CPU (``paths.spec_of``)
+        nb = NB if NB >= 0 else bodies.mass.shape[0]  # (``RUN_TIME``: the counts read at run time)
+        nf = NF if NF >= 0 else bodies.storey_k.shape[0]
+        has_noise = HAS_NOISE if HAS_NOISE >= 0 else bit_set(grid.kinds, NOISE_BIT)
+        has_impact = HAS_IMPACT if HAS_IMPACT >= 0 else bit_set(grid.kinds, IMPACT_BIT)
+        has_hertz = HAS_HERTZ if HAS_HERTZ >= 0 else bit_set(grid.kinds, HERTZ_BIT)
+        partners = PARTNERS if PARTNERS >= 0 else bit_set(grid.kinds, PARTNERS_BIT)
+        filtered = FILTERED if FILTERED >= 0 else bit_set(grid.kinds, FILTERED_BIT)
+        ground = GROUND if GROUND >= 0 else bit_set(grid.kinds, GROUND_BIT)
+        tree = TREE if TREE >= 0 else has_noise and (has_impact or has_hertz)
         nr, nz = NR if NR >= 0 else ex.forces.shape[0], NZ if NZ >= 0 else fl.phi.shape[0]
-        gl = grid_room(NF, nr, nz, 0, 0, nz, NF)
-        noise_scale, slot = scratch(NF), scratch(NF)
+        na, nw = nb - nf, nb if partners else nf
+        gl = grid_room(nf, nr, nz, 0, 0, nz, nf)
+        noise_scale, slot = floor_scratch(nf), floor_scratch(nf)
         noisy = noise_scales(noise.sigma, grid.dt, noise_scale, slot)
         # the seed of the Brownian trees inside the steps (``brownian``)
         seed = np.uint64(0)
         high = low = 0.0
-        if TREE:
+        if tree:
             if resume:
                 high, low = carry[SEED_HIGH], carry[SEED_LOW]
             else:
@@ -375,22 +393,25 @@ def kdk_step(spec) -> Step:
             stuck, touching = np.zeros(na, np.int64), np.zeros(na, np.int64)
         if has_hertz and not resume:
             contact_sides(x, nf, absorbers.kind, absorbers.host, absorbers.rows, touching)
-        held, owed = scratch(NA), scratch(NA)
+        held, owed = body_scratch(na), body_scratch(na)
         replayed = 0
         if resume:
             replayed = int(carry[REPLAYED])
             restore_absorbers(carry, nf, stuck, touching, owed)
         ag_next = start_loads(gl, ex, fl, grid.dt, carry, resume, nf, na, filtered, ground)
-        own = KdkState(scratch(NB), scratch(NB), scratch(NB), scratch(NB), gl, scratch(NF), scratch(NF),
-                       scratch(NF), scratch(NF), noise_scale, slot, scratch(NF), scratch(NF), scratch(NW),
-                       scratch(NW), scratch(MEMO_SIZE), stuck, touching, held, owed, noisy, seed, high, low,
-                       has_breaks(ex))
+        own = KdkState(body_scratch(nb), body_scratch(nb), body_scratch(nb), body_scratch(nb), gl,
+                       floor_scratch(nf), floor_scratch(nf), floor_scratch(nf), floor_scratch(nf),
+                       noise_scale, slot, floor_scratch(nf), floor_scratch(nf), body_scratch(nw),
+                       body_scratch(nw), scratch_within(nf * MEMO if tree else 0, MEMO_ROOM), stuck, touching,
+                       held, owed, noisy, seed, high, low, has_breaks(ex), grid.kinds)
         return own, (ag_next, replayed)
 
     @njit(**INLINE)
     def opening(own, x, v, inv_mass, acc, bodies, absorbers):
         # (the floors' forces: the driver's ``force_peaks``)
-        opening_forces(own.force, own.gl.load_next, x, v, acc, bodies, absorbers, NF, shaped)
+        nf = NF if NF >= 0 else bodies.storey_k.shape[0]
+        shaped = SHAPED if SHAPED >= 0 else bit_set(own.kinds, SHAPED_BIT)
+        opening_forces(own.force, own.gl.load_next, x, v, acc, bodies, absorbers, nf, shaped)
 
     @njit(**INLINE)
     def check(own, i, dt, ex):
@@ -398,9 +419,9 @@ def kdk_step(spec) -> Step:
 
     @njit(**INLINE)
     def save(carry, own, sc):
-        save_grid_loads(carry, own.gl, sc[0], NF, own.stuck.shape[0])
+        save_grid_loads(carry, own.gl, sc[0], own.gl.load.shape[0], own.stuck.shape[0])
         carry[REPLAYED], carry[SEED_HIGH], carry[SEED_LOW] = sc[1], own.high, own.low
-        save_absorbers(carry, NF, own.stuck, own.touching, own.owed)
+        save_absorbers(carry, own.gl.load.shape[0], own.stuck, own.touching, own.owed)
 
     @njit(**INLINE)
     def finish(own, sc, fl, out):
@@ -410,6 +431,9 @@ def kdk_step(spec) -> Step:
     def step(i, x, v, inv_mass, acc, own, sc, acct, inside, peaks, bodies, absorbers, ex, fl, noise, grid,
              outputs, gen, gen_filter):
         dt = grid.dt
+        has_noise = HAS_NOISE if HAS_NOISE >= 0 else bit_set(grid.kinds, NOISE_BIT)
+        filtered = FILTERED if FILTERED >= 0 else bit_set(grid.kinds, FILTERED_BIT)
+        ground = GROUND if GROUND >= 0 else bit_set(grid.kinds, GROUND_BIT)
         ag_next, replayed = sc
         ag = step_loads(i, dt, own.gl, ex, fl, ag_next, own.piecewise, filtered, ground, gen_filter)
         ag_next = end_loads(i, dt, own.gl, ex, fl, filtered, ground)
@@ -417,7 +441,7 @@ def kdk_step(spec) -> Step:
         if has_noise:
             replayed = step_normals(i, 1, own.noise_scale, own.slot, own.noisy, noise.normals, noise.refine,
                                     replayed, gen, own.u1, own.u1)
-            for k in range(NF):
+            for k in range(own.dw.shape[0]):
                 own.dw[k] = own.noise_scale[k] * own.u1[k]
         acct = advance(i, x, v, inv_mass, acc, own, own.seed, ag, ag_next, acct, inside, bodies, absorbers,
                        ex, fl, noise, dt, outputs.out, outputs.events, outputs.impulses)
@@ -431,9 +455,19 @@ def kdk_step(spec) -> Step:
         ``own.dw``: the sub-steps between its events, each event resolved (``seed``: the step's
         Brownian tree's); returns the accounts.  (``step``'s, and the SIMD lanes' for the lanes
         whose step holds an event, ``lanes.py``.)"""
-        nb = NB
-        nf = NF
-        na = NA
+        nb = NB if NB >= 0 else bodies.mass.shape[0]  # (``RUN_TIME``: the counts read at run time)
+        nf = NF if NF >= 0 else bodies.storey_k.shape[0]
+        has_noise = HAS_NOISE if HAS_NOISE >= 0 else bit_set(own.kinds, NOISE_BIT)
+        has_impact = HAS_IMPACT if HAS_IMPACT >= 0 else bit_set(own.kinds, IMPACT_BIT)
+        has_hertz = HAS_HERTZ if HAS_HERTZ >= 0 else bit_set(own.kinds, HERTZ_BIT)
+        partners = PARTNERS if PARTNERS >= 0 else bit_set(own.kinds, PARTNERS_BIT)
+        filtered = FILTERED if FILTERED >= 0 else bit_set(own.kinds, FILTERED_BIT)
+        ground = GROUND if GROUND >= 0 else bit_set(own.kinds, GROUND_BIT)
+        shaped = SHAPED if SHAPED >= 0 else bit_set(own.kinds, SHAPED_BIT)
+        tree = TREE if TREE >= 0 else has_noise and (has_impact or has_hertz)
+        # passes of a step's event loop: one without impact or Hertz absorbers (nothing to split at)
+        passes = MAX_SUBSTEPS if has_hertz else (MAX_EVENTS + 1 if has_impact else 1)
+        na, nw = nb - nf, nb if partners else nf
         mass, storey_k, storey_c, floor_c = bodies.mass, bodies.storey_k, bodies.storey_c, bodies.floor_c
         kind, host, rows, walls = absorbers.kind, absorbers.host, absorbers.rows, absorbers.wall
         sigma, normals, refine = noise.sigma, noise.normals, noise.refine
@@ -451,12 +485,12 @@ def kdk_step(spec) -> Step:
         t = t_step
         off = 0.0  # the sub-step's start in the step
         path = (seed, i, dt, refine, own.noisy, normals.shape[0] > 0)
-        if TREE:
+        if tree:
             for k in range(nf):
                 w_at[k] = 0.0
         n_impacts = 0
         capped = False
-        for event in range(EVENTS):
+        for event in range(passes):
             if event > 0 and left <= 0.0:
                 break
             attachment_forces(x, v, nf, storey_k, storey_c, floor_c, host, rows, force)
@@ -464,13 +498,13 @@ def kdk_step(spec) -> Step:
             shaped_forces(x, nf, host, rows, force, shaped)
             # the sub-step: the rest of the step, or a Hertz contact's share of it; the
             # last pass a step allows takes the rest at once, with no events
-            search = event < EVENTS - 1
+            search = event < passes - 1
             s = left
             if has_hertz and not search:
                 capped = True
             elif has_hertz and any_set(touching):
                 s = min(left, contact_step(*plain((x, v, nf, mass, host, rows, touching))))
-            if TREE:
+            if tree:
                 increments(path, dw, off, s, left, w_at, sigma, normals, slot, memo, dws)
             else:
                 for k in range(nf):
@@ -484,7 +518,7 @@ def kdk_step(spec) -> Step:
             hit, side, s_hit, hit_event, hit_wall = -1, 0, s, NONE, 0.0
             if search and ((has_impact and n_impacts < MAX_EVENTS) or has_hertz):
                 for a in range(na):
-                    h = wall_of(walls, a, NW)
+                    h = wall_of(walls, a, nw)
                     j = nf + a
                     u_end = x[j] - x[h] + s * (vn[j] - vn[h])
                     event, sa, wall = event_ahead(kind[a], stuck[a], touching[a], rows[a, CLEARANCE],
@@ -494,7 +528,7 @@ def kdk_step(spec) -> Step:
                         sq = gap_sign(event, sa)
                         sc_ = crossing(x, v, s, left, path, dw, off, w_at, sigma, normals, slot, memo,
                                        load, ag, force, mass, inv_mass, stuck, walls, a, sq, sq * wall,
-                                       vt, dwc, group_mass, group_sum, ground, has_impact, TREE)
+                                       vt, dwc, group_mass, group_sum, ground, has_impact, tree)
                         if hit < 0 or sc_ < s_hit:
                             hit, side, s_hit, hit_event, hit_wall = a, sa, sc_, event, wall
                             for b in range(nb):  # the root search's kick to its root
@@ -562,7 +596,7 @@ def kdk_step(spec) -> Step:
                 w_at[k] += dws[k]
                 load[k] = load_end[k]
             if hit >= 0 and hit_event != EXIT:
-                h = wall_of(walls, hit, NW)
+                h = wall_of(walls, hit, nw)
                 j = nf + hit
                 if inside:
                     if side < 0:
@@ -582,7 +616,7 @@ def kdk_step(spec) -> Step:
                 # the last impact a step may resolve ends a chatter sequence: inelastic collapse
                 last = n_impacts == MAX_EVENTS - 1
                 speed = v[j] - v[h]
-                loss = resolve_impact(mass, v, nf, NW, hit, side, gain, rows[hit, RESTITUTION], last,
+                loss = resolve_impact(mass, v, nf, nw, hit, side, gain, rows[hit, RESTITUTION], last,
                                       stuck, walls, impulses)
                 n_impacts += 1
                 if inside:
@@ -594,8 +628,8 @@ def kdk_step(spec) -> Step:
         if has_hertz and capped:  # the last pass took no events: the contacts as they are
             contact_sides(x, nf, kind, host, rows, touching)
         if has_impact:
-            keep_in_cavities(x, nf, NW, kind, walls, rows)
-            pin_to_walls(x, nf, NW, stuck, walls, rows)
+            keep_in_cavities(x, nf, nw, kind, walls, rows)
+            pin_to_walls(x, nf, nw, stuck, walls, rows)
         for k in range(nf):  # the forces on the floor at the step's end, for the peaks
             acc[k] = force[k] + load_end[k]
         return (work, d_primary, d_absorber, e_sum, e1_max, loss_sum, n_left, n_right, contact_time,

@@ -23,7 +23,7 @@ from .bundles import Absorbers, Bodies, Filters, Grid, Loads, Noise, Outputs
 from .carry import SEED_HIGH, SEED_LOW, new_carry
 from .driver import step_loop
 from .loads import load_path, stationary_start
-from .protocol import ROOM, RUN_TIME, Spec
+from .protocol import BODY_ROOM, ROOM, RUN_TIME, Spec
 
 _NO_NORMALS = np.zeros(0)
 #: The stream in the increments' place of a replayed path: never drawn from.
@@ -50,32 +50,53 @@ def step_of(name: str):
     return getattr(importlib.import_module(f"{__package__}.{name}"), f"{name}_step")
 
 
-def spec_of(scene, gpu: bool = False, lanes: bool = False) -> Spec:
+def spec_of(scene, gpu: bool = False, lanes: bool = False, general: bool = False) -> Spec:
     """What a scene's loop is specialised to (``protocol.Spec``); what its scheme does not use is
     left out (white noise and filtered loads of the RK4 step, the load rows and filter states of
     steps that read neither from the grid), so that one loop serves the scenes that differ only
     there.  The load rows and filter states, up to ``protocol.ROOM`` of each, are sizes the
     scalar loop reads at run time (``protocol.RUN_TIME``: a new force or filter compiles
     nothing); the cuda loop (``gpu``: a thread's arrays on its stack, of sizes known when it
-    compiles) and the lanes' row layout (``lanes``) take them as constants."""
+    compiles) and the lanes' row layout (``lanes``) take them as constants.  ``general``: the
+    scheme's general scalar loop, which reads every size and kind at run time (``protocol.KINDS``;
+    the bodies and floors within ``protocol.BODY_ROOM`` and ``protocol.ROOM``, else constants of
+    a loop of their own): one loop serves every structure of the scheme."""
     step = SCHEMES[scene.scheme].step
     grid = step != "rk4"
+    bodies, floors = scene.mass.shape[0], scene.n_floors
     rows, states = scene.forces.shape[0], scene.filters["phi"].shape[0]
     constant = gpu or lanes
-    return Spec(n_bodies=scene.mass.shape[0], n_floors=scene.n_floors,
+    sized = constant or not general or bodies > BODY_ROOM or floors > ROOM
+    kind = (lambda present: present) if constant or not general else (lambda present: RUN_TIME)
+    return Spec(n_bodies=bodies if sized else RUN_TIME, n_floors=floors if sized else RUN_TIME,
                 n_rows=(rows if constant or rows > ROOM else RUN_TIME) if grid else 0,
                 n_states=(states if constant or states > ROOM else RUN_TIME) if grid else 0,
-                has_noise=scene.has_white_noise and grid, has_impact=scene.has_impact,
-                has_hertz=scene.has_hertz, partners=scene.has_partners,
-                filtered=scene.has_filters and grid, ground=scene.has_ground and grid,
-                shaped=scene.has_shaped, gpu=gpu)
+                has_noise=kind(scene.has_white_noise) if grid else False, has_impact=kind(scene.has_impact),
+                has_hertz=kind(scene.has_hertz), partners=kind(scene.has_partners),
+                filtered=kind(scene.has_filters) if grid else False,
+                ground=kind(scene.has_ground) if grid else False, shaped=kind(scene.has_shaped), gpu=gpu)
 
 
-def kernel_for(scene, gpu: bool = False):
+#: Runs of fewer path-steps than this (realisations times steps, all sweep points together) run
+#: the general loop of their scheme (``spec_of``), compiled once for every structure; longer ones
+#: a loop specialised to theirs, compiled for it (and cached): at 10-25 M path-steps/s on one core
+#: the general loop runs them in about the 10-20 s that compiling a specialised loop takes, which
+#: then runs 2-3x faster (and in SIMD lanes, where the scheme has them, 5-10x).  The two give the
+#: same numbers, bitwise (``tests/unit/kernels/test_general_loop.py``).
+GENERAL_WORK = 100_000_000
+
+
+def general_run(path_steps: int) -> bool:
+    """Whether a run of ``path_steps`` path-steps runs the general loop (``GENERAL_WORK``)."""
+    return path_steps < GENERAL_WORK
+
+
+def kernel_for(scene, gpu: bool = False, general: bool = False):
     """The compiled loop for a scene's scheme and structure: the loop driver around the
-    scheme's step (``driver.step_loop``; ``gpu``: the loop the cuda backend compiles).  It records
-    what its output arrays ask (``common.recording``)."""
-    spec = spec_of(scene, gpu)
+    scheme's step (``driver.step_loop``; ``gpu``: the loop the cuda backend compiles; ``general``:
+    the scheme's general loop, ``spec_of``).  It records what its output arrays ask
+    (``common.recording``)."""
+    spec = spec_of(scene, gpu, general=general)
     return step_loop(step_of(SCHEMES[scene.scheme].step)(spec), spec)
 
 
@@ -121,9 +142,10 @@ def filter_draws(scene) -> int:
 
 def _streams_for(scene, replay: bool, streams: Streams | np.random.Generator | None) -> tuple[tuple, tuple]:
     """The kernel's generators (increments, bridge, filter), and the numpy generators they stand
-    for (``_as_streams``).  A generator is passed only where the kernel draws from it, an empty
-    Philox stream elsewhere (``_UNUSED``: an array costs next to nothing to pass); a Philox stream
-    (an array, ``rng.philox_stream``, as on the GPU) is passed all the same, so that the loop is
+    for (``_as_streams``).  A generator is passed only where the kernel draws from it, a stream it
+    never draws from elsewhere (``_UNUSED``, Philox, where a Philox stream is given; ``_UNDRAWN``,
+    PCG64, else: an array costs next to nothing to pass, and the loop sees one kind of stream); a
+    Philox stream (an array, ``rng.philox_stream``, as on the GPU) is passed all the same, so that the loop is
     the one the cuda backend runs.  A replayed path keeps a stream (``_UNDRAWN``, or the Philox
     stream given) in the increments' place, so that it runs the kernel a drawn path runs (the
     same argument types) and not a specialisation of its own."""
@@ -138,7 +160,10 @@ def _streams_for(scene, replay: bool, streams: Streams | np.random.Generator | N
     for name, want, gen in zip(("increments", "bridge", "filter"), wanted, chosen):
         if want and gen is None:
             raise ValueError(f"streams: this scene draws from the {name} stream; it is None")
-    gens = [gen if want or isinstance(gen, np.ndarray) else _UNUSED for want, gen in zip(wanted, chosen)]
+    # (an unused place takes a stream of the kind of those given: one signature of the general loop)
+    philox = any(isinstance(gen, np.ndarray) and gen.dtype == np.uint64 for gen in chosen)
+    unused = _UNUSED if philox else _UNDRAWN
+    gens = [gen if want or isinstance(gen, np.ndarray) else unused for want, gen in zip(wanted, chosen)]
     if replay and scene.has_white_noise and gens[0] is _UNUSED:
         gens[0] = _UNDRAWN
     return _as_streams(gens)
@@ -212,7 +237,7 @@ def bundles(scene, x: np.ndarray, v: np.ndarray, fl: Filters, normals: np.ndarra
         fl,
         Noise(sigma=scene.sigma, normals=normals, refine=refine),
         Grid(dt=scene.dt, n_steps=scene.n_steps, i0=scene.i0, period=scene.period,
-             sample_from=scene.sample_from, stride=stride, first=0),
+             sample_from=scene.sample_from, stride=stride, first=0, kinds=spec_of(scene).kinds),
         Outputs(out=out, samples=samples, history=history, signals=signals, limits=scene.limits, carry=carry,
                 events=events, reductions=scene.reductions, impulses=np.zeros(scene.kind.shape[0])),
         *gens,
@@ -310,10 +335,12 @@ def start_path(scene, streams: Streams | np.random.Generator | None = None, *,
                normals: np.ndarray | None = None, samples: np.ndarray | None = None,
                history: np.ndarray | None = None, stride: int = 1, refine: int = 1,
                stretches: bool = True, signals: Sequence[str] | None = None,
-               events: np.ndarray | None = None) -> Path:
+               events: np.ndarray | None = None, general: bool | None = None) -> Path:
     """A realisation of ``scene`` at its start (step 0, the scene's initial state), to be run
     by ``advance``; the arguments are those of ``simulate``.  With ``stretches`` the loop keeps
-    its carry (``kernels/carry.py``), so that the path may be run in several stretches."""
+    its carry (``kernels/carry.py``), so that the path may be run in several stretches.
+    ``general``: whether it runs the scheme's general loop (None: where its own steps make a
+    short run, ``general_run``; a caller running many paths says from their work)."""
     out = new_metrics(scene.n_floors, scene.limits.shape[0], scene.reductions.shape[0])
     x, v = scene.x0.copy(), scene.v0.copy()
     if samples is None:
@@ -338,7 +365,8 @@ def start_path(scene, streams: Streams | np.random.Generator | None = None, *,
                          f"not {events.shape}")
     args = bundles(scene, x, v, fl, normals if replay else _NO_NORMALS, out, samples, history, stride, gens,
                    refine, carry, columns, events)
-    return Path(kernel_for(scene), args, sources=sources, scene=scene)
+    general = general_run(scene.n_steps) if general is None else general
+    return Path(kernel_for(scene, general=general), args, sources=sources, scene=scene)
 
 
 def compile_first(dispatcher, args: tuple, gens: Sequence) -> None:
@@ -440,5 +468,5 @@ def load_history(
     return scene.dt * np.arange(n + 1), force, ground
 
 
-__all__ = ["SLOTS", "Path", "advance", "bundles", "filter_draws", "kernel_for", "load_history",
-           "sample_buffer", "simulate", "start_path"]
+__all__ = ["GENERAL_WORK", "SLOTS", "Path", "advance", "bundles", "filter_draws", "general_run", "kernel_for",
+           "load_history", "sample_buffer", "simulate", "start_path"]

@@ -37,8 +37,16 @@ from __future__ import annotations
 from typing import Any, NamedTuple
 
 #: A size a loop reads from its arguments at run time (``Spec``), and the most items of it
-#: that the loop's frame holds (a larger count is a constant of its own loop: ``paths.spec_of``).
+#: that the loop's frame holds: floors, load rows, filter states (``ROOM``) and bodies
+#: (``BODY_ROOM``); a larger count is a constant of its own loop (``paths.spec_of``).
 RUN_TIME, ROOM = -1, 16
+BODY_ROOM = 2 * ROOM
+
+#: What a scene holds that a loop may take as constants (``Spec``'s flags, in this order), and
+#: their bits in the run's ``Grid.kinds``, which a loop built with ``RUN_TIME`` in their place
+#: reads at run time (``common.kinds_of``).
+KINDS = ("has_noise", "has_impact", "has_hertz", "partners", "filtered", "ground", "shaped")
+KIND_BITS = {name: 1 << k for k, name in enumerate(KINDS)}
 
 #: The accounts a step takes and returns, in this order (``energy``): input work, structure
 #: and absorber dissipation, the sum (or integral) of ``E1``, its peak, the impacts' loss and
@@ -71,6 +79,11 @@ class Spec(NamedTuple):
     ground: bool
     shaped: bool
     gpu: bool
+
+    @property
+    def kinds(self) -> int:
+        """The bits (``KIND_BITS``) of the flags this spec sets: a run's ``Grid.kinds``."""
+        return sum(bit for name, bit in KIND_BITS.items() if getattr(self, name) == 1)
 
 
 class Step(NamedTuple):

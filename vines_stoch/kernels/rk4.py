@@ -24,22 +24,30 @@ import numpy as np
 from numba import njit
 
 from ..jit.flags import INLINE, KERNEL
-from ..jit.intrinsics import any_set, int_scratch, pick, plain, put, runtime_value, scratch
+from ..jit.intrinsics import any_set, int_scratch, pick, plain, put, runtime_value
 from ..outputs import CAPPED
 from ..physics.absorbers import CLEARANCE, DAMPING, RESTITUTION, WALL_HI, WALL_LO
 from ..physics.structure import host_of, primary_energy, structure_power, wall_of
 from .carry import restore_absorbers, save_absorbers
 from .common import (
+    HERTZ_BIT,
+    IMPACT_BIT,
     MAX_EVENTS,
     MAX_SUBSTEPS,
+    PARTNERS_BIT,
+    SHAPED_BIT,
     accelerate,
     attachment_forces,
+    bit_set,
+    body_scratch,
     contact_force,
     contact_forces,
     contact_step,
     first_passages,
     floor_peaks,
+    floor_scratch,
     keep_in_cavities,
+    kinds_of,
     log_event,
     pin_to_walls,
     resolve_impact,
@@ -237,27 +245,29 @@ def rk4_step(spec) -> Step:
     and first passages at each sub-step's end (``integrates``); loads with kinks or jumps
     (``loads.has_breaks``) end its sub-steps (a run-time value).  ``spec.gpu``: per-absorber flags
     on the stack (as ``kdk.kdk_step``)."""
-    NB = spec.n_bodies
-    NF = spec.n_floors
-    NA = spec.n_bodies - spec.n_floors
-    NW = NB if spec.partners else NF  # the bodies that may hold an impact absorber's walls
+    NB, NF = spec.n_bodies, spec.n_floors  # (``RUN_TIME``: the counts read at run time)
+    NA = NB - NF
     GPU = spec.gpu
-    GEO = SHAPED_FORCES if spec.shaped else 0
-    has_impact, has_hertz = spec.has_impact, spec.has_hertz
+    HAS_NOISE, HAS_IMPACT, HAS_HERTZ, PARTNERS, FILTERED, GROUND, SHAPED = kinds_of(spec)  # (or ``RUN_TIME``)
 
     @njit(**INLINE)
     def start(bodies, absorbers, ex, fl, noise, grid, carry, resume, x, v, gen_bridge):
-        na = absorbers.kind.shape[0]
+        nb = NB if NB >= 0 else bodies.mass.shape[0]  # (``RUN_TIME``: the counts read at run time)
+        nf = NF if NF >= 0 else bodies.storey_k.shape[0]
+        partners = PARTNERS if PARTNERS >= 0 else bit_set(grid.kinds, PARTNERS_BIT)
+        na, nw = nb - nf, nb if partners else nf
         if GPU:
             stuck, touching = int_scratch(NA), int_scratch(NA)
         else:
             stuck, touching = np.zeros(na, np.int64), np.zeros(na, np.int64)
-        owed = scratch(NA)
+        owed = body_scratch(na)
         if resume:
-            restore_absorbers(carry, NF, stuck, touching, owed)
-        own = Rk4State(scratch(NB), scratch(NB), scratch(NB), scratch(NB), scratch(NB), scratch(NB),
-                       scratch(NB), scratch(NF), scratch(NW), scratch(NW), scratch(NF), scratch(NF),
-                       scratch(NF), scratch(NW), scratch(NW), stuck, touching, owed, has_breaks(ex))
+            restore_absorbers(carry, nf, stuck, touching, owed)
+        own = Rk4State(body_scratch(nb), body_scratch(nb), body_scratch(nb), body_scratch(nb),
+                       body_scratch(nb), body_scratch(nb), body_scratch(nb), floor_scratch(nf),
+                       body_scratch(nw), body_scratch(nw), floor_scratch(nf), floor_scratch(nf),
+                       floor_scratch(nf), body_scratch(nw), body_scratch(nw), stuck, touching, owed,
+                       has_breaks(ex))
         return own, 0
 
     @njit(**INLINE)
@@ -270,7 +280,7 @@ def rk4_step(spec) -> Step:
 
     @njit(**INLINE)
     def save(carry, own, sc):
-        save_absorbers(carry, NF, own.stuck, own.touching, own.owed)
+        save_absorbers(carry, own.load.shape[0], own.stuck, own.touching, own.owed)
 
     @njit(**INLINE)
     def finish(own, sc, fl, out):
@@ -280,9 +290,14 @@ def rk4_step(spec) -> Step:
     def step(i, x, v, inv_mass, floor_acc, own, sc, acct, inside, peaks, bodies, absorbers, ex, fl, noise,
              grid,
              outputs, gen, gen_filter):
-        nb = NB
-        nf = NF
-        na = NA
+        nb = NB if NB >= 0 else bodies.mass.shape[0]  # (``RUN_TIME``: the counts read at run time)
+        nf = NF if NF >= 0 else bodies.storey_k.shape[0]
+        has_impact = HAS_IMPACT if HAS_IMPACT >= 0 else bit_set(grid.kinds, IMPACT_BIT)
+        has_hertz = HAS_HERTZ if HAS_HERTZ >= 0 else bit_set(grid.kinds, HERTZ_BIT)
+        partners = PARTNERS if PARTNERS >= 0 else bit_set(grid.kinds, PARTNERS_BIT)
+        shaped = SHAPED if SHAPED >= 0 else bit_set(grid.kinds, SHAPED_BIT)
+        na, nw = nb - nf, nb if partners else nf
+        geo = SHAPED_FORCES if shaped else 0
         mass, storey_k, storey_c, floor_c = bodies.mass, bodies.storey_k, bodies.storey_c, bodies.floor_c
         kind, host, rows, walls = absorbers.kind, absorbers.host, absorbers.rows, absorbers.wall
         forces, series_t, series_v, series_ptr, series_target = (ex.forces, ex.series_t, ex.series_v,
@@ -325,16 +340,16 @@ def rk4_step(spec) -> Step:
             inc = rk4_update(x, v, t, tau, xn, vn, acc, xs, vs, x2, a0, mass, inv_mass, storey_k, storey_c,
                              floor_c, kind, host, walls, rows, forces, series_t, series_v, series_ptr,
                              series_target, stuck, load, group_mass, group_sum,
-                             (STICKING if sticking else 0) | (HERTZ_FORCES if contact else 0) | GEO)
+                             (STICKING if sticking else 0) | (HERTZ_FORCES if contact else 0) | geo)
             if phase == 0:
                 event_kind, q, side, j, hf, sign, wall = NONE, -1, 0, 0, 0, 0, 0.0
                 if (has_impact or has_hertz) and not capped:
                     for b in range(nb):
                         x_event[b] = xn[b]
-                    event_kind, q, side, tau, wall = next_event(*plain((x, x_event, h, nf, NW, kind, walls,
+                    event_kind, q, side, tau, wall = next_event(*plain((x, x_event, h, nf, nw, kind, walls,
                                                                         rows, stuck, touching)))
                 if event_kind != NONE:
-                    j, hf, sign = nf + q, wall_of(walls, q, NW), gap_sign(event_kind, side)
+                    j, hf, sign = nf + q, wall_of(walls, q, nw), gap_sign(event_kind, side)
                     phase = 1
                     continue
             elif (has_impact or has_hertz) and phase > 0:
@@ -372,7 +387,7 @@ def rk4_step(spec) -> Step:
             left -= h
             if done:
                 if capped:
-                    keep_in_cavities(x, nf, NW, kind, walls, rows)
+                    keep_in_cavities(x, nf, nw, kind, walls, rows)
                 break
             if has_impact and event_kind == IMPACT_EVENT:
                 n_impacts += 1
@@ -380,11 +395,11 @@ def rk4_step(spec) -> Step:
                 wall_accelerations(x, v, t, nf, mass, inv_mass, storey_k, storey_c, floor_c, kind, host,
                                    walls, rows, forces, series_t, series_v, series_ptr, series_target, stuck,
                                    False, acc_wall, load_wall, gm_wall, gs_wall,
-                                   STICKING | (HERTZ_FORCES if contact else 0) | GEO)
+                                   STICKING | (HERTZ_FORCES if contact else 0) | geo)
                 # the last impact a step may resolve ends a chatter sequence: inelastic collapse
                 gain = (pick(acc_wall, j) - acc_wall[hf]) * dt
                 speed = pick(v, j) - v[hf]
-                loss = resolve_impact(mass, v, nf, NW, q, side, gain, rows[q, RESTITUTION],
+                loss = resolve_impact(mass, v, nf, nw, q, side, gain, rows[q, RESTITUTION],
                                       n_impacts >= MAX_EVENTS, stuck, walls, outputs.impulses)
                 if inside:
                     loss_sum += loss
@@ -403,11 +418,11 @@ def rk4_step(spec) -> Step:
                     n_right += 1.0
             sub += 1
         if has_impact and any_set(stuck):
-            pin_to_walls(x, nf, NW, stuck, walls, rows)
+            pin_to_walls(x, nf, nw, stuck, walls, rows)
             # release contacts the wall would have to pull (checked at step ends)
             wall_accelerations(x, v, t, nf, mass, inv_mass, storey_k, storey_c, floor_c, kind, host, walls,
                                rows, forces, series_t, series_v, series_ptr, series_target, stuck, True,
-                               acc_wall, load_wall, gm_wall, gs_wall, STICKING | GEO)
+                               acc_wall, load_wall, gm_wall, gs_wall, STICKING | geo)
         return sc, (work, d_primary, d_absorber, e_integral, e1_max, loss_sum, n_left, n_right, contact_time,
                     peak_force, pending)
 

@@ -20,11 +20,22 @@ from typing import Any, NamedTuple
 from numba import njit
 
 from ..jit.flags import INLINE
-from ..jit.intrinsics import scratch
 from ..physics.absorbers import DAMPING
 from ..physics.structure import host_of
 from .carry import REPLAYED
-from .common import accelerate, attachment_forces, shaped_forces
+from .common import (
+    FILTERED_BIT,
+    GROUND_BIT,
+    NOISE_BIT,
+    SHAPED_BIT,
+    accelerate,
+    attachment_forces,
+    bit_set,
+    body_scratch,
+    floor_scratch,
+    kinds_of,
+    shaped_forces,
+)
 from .energy import momentum
 from .grid import (
     end_loads,
@@ -131,6 +142,7 @@ class SraState(NamedTuple):
     slot: Any
     noisy: Any
     piecewise: Any
+    kinds: Any
 
 
 @cache
@@ -138,32 +150,37 @@ def sra3_step(spec) -> Step:
     """The SRA3 step for a loop specialised to ``spec`` (``protocol.Spec``), as the driver's
     ``Step``: two normals a step and noisy floor (replayed: all floors' first normals, then
     their second)."""
-    NB = spec.n_bodies
-    NF = spec.n_floors
+    NB, NF = spec.n_bodies, spec.n_floors
     NR = spec.n_rows
     NZ = spec.n_states
-    has_noise, filtered, ground, shaped = spec.has_noise, spec.filtered, spec.ground, spec.shaped
+    HAS_NOISE, HAS_IMPACT, HAS_HERTZ, PARTNERS, FILTERED, GROUND, SHAPED = kinds_of(spec)  # (or ``RUN_TIME``)
     ROOT3 = math.sqrt(3.0)
 
     @njit(**INLINE)
     def start(bodies, absorbers, ex, fl, noise, grid, carry, resume, x, v, gen_bridge):
-        # the load rows and filter states: run-time sizes on the CPU (``paths.spec_of``)
+        # the bodies, floors, load rows and filter states: run-time sizes on the CPU (``paths.spec_of``)
+        nb = NB if NB >= 0 else bodies.mass.shape[0]  # (``RUN_TIME``: the counts read at run time)
+        nf = NF if NF >= 0 else bodies.storey_k.shape[0]
+        filtered = FILTERED if FILTERED >= 0 else bit_set(grid.kinds, FILTERED_BIT)
+        ground = GROUND if GROUND >= 0 else bit_set(grid.kinds, GROUND_BIT)
         nr, nz = NR if NR >= 0 else ex.forces.shape[0], NZ if NZ >= 0 else fl.phi.shape[0]
-        gl = grid_room(NF, nr, nz, NF, nr, 0, 0)
-        noise_scale, slot = scratch(NF), scratch(NF)
+        gl = grid_room(nf, nr, nz, nf, nr, 0, 0)
+        noise_scale, slot = floor_scratch(nf), floor_scratch(nf)
         noisy = noise_scales(noise.sigma, grid.dt, noise_scale, slot)
         replayed = int(carry[REPLAYED]) if resume else 0
-        ag_next = start_loads(gl, ex, fl, grid.dt, carry, resume, NF, absorbers.kind.shape[0], filtered,
-                              ground)
-        own = SraState(scratch(NB), scratch(NB), scratch(NB), scratch(NB), scratch(NB), scratch(NB),
-                       scratch(NB), scratch(NB), gl, scratch(NF), scratch(NF), scratch(NF), scratch(NF),
-                       noise_scale, slot, noisy, has_breaks(ex))
+        ag_next = start_loads(gl, ex, fl, grid.dt, carry, resume, nf, nb - nf, filtered, ground)
+        own = SraState(body_scratch(nb), body_scratch(nb), body_scratch(nb), body_scratch(nb),
+                       body_scratch(nb), body_scratch(nb), body_scratch(nb), body_scratch(nb), gl,
+                       floor_scratch(nf), floor_scratch(nf), floor_scratch(nf), floor_scratch(nf),
+                       noise_scale, slot, noisy, has_breaks(ex), grid.kinds)
         return own, (ag_next, replayed)
 
     @njit(**INLINE)
     def opening(own, x, v, inv_mass, acc, bodies, absorbers):
-        opening_forces(own.force, own.gl.load_next, x, v, acc, bodies, absorbers, NF, shaped)
-        for k in range(NF):  # (accelerations)
+        nf = NF if NF >= 0 else bodies.storey_k.shape[0]
+        opening_forces(own.force, own.gl.load_next, x, v, acc, bodies, absorbers, nf,
+                       SHAPED if SHAPED >= 0 else bit_set(own.kinds, SHAPED_BIT))
+        for k in range(nf):  # (accelerations)
             acc[k] *= inv_mass[k]
 
     @njit(**INLINE)
@@ -172,7 +189,7 @@ def sra3_step(spec) -> Step:
 
     @njit(**INLINE)
     def save(carry, own, sc):
-        save_grid_loads(carry, own.gl, sc[0], NF, NB - NF)
+        save_grid_loads(carry, own.gl, sc[0], own.dw.shape[0], own.force.shape[0] - own.dw.shape[0])
         carry[REPLAYED] = sc[1]
 
     @njit(**INLINE)
@@ -182,7 +199,11 @@ def sra3_step(spec) -> Step:
     @njit(**INLINE)
     def step(i, x, v, inv_mass, acc, own, sc, acct, inside, peaks, bodies, absorbers, ex, fl, noise, grid,
              outputs, gen, gen_filter):
-        nf = NF
+        nf = NF if NF >= 0 else bodies.storey_k.shape[0]
+        has_noise = HAS_NOISE if HAS_NOISE >= 0 else bit_set(grid.kinds, NOISE_BIT)
+        filtered = FILTERED if FILTERED >= 0 else bit_set(grid.kinds, FILTERED_BIT)
+        ground = GROUND if GROUND >= 0 else bit_set(grid.kinds, GROUND_BIT)
+        shaped = SHAPED if SHAPED >= 0 else bit_set(grid.kinds, SHAPED_BIT)
         dt = grid.dt
         gl = own.gl
         dw, dz, u1, u2, noise_scale = own.dw, own.dz, own.u1, own.u2, own.noise_scale

@@ -100,7 +100,7 @@ def test_what_a_launcher_closes_over_is_described_by_value_and_name():
     # (its name tagged by a hash of its closure's descriptions: ``cache.stable_cache``)
     assert re.match(r"vines_stoch\.kernels\.driver\.step_loop\.<locals>\.kernel_[0-9a-f]{16}: tuple\(",
                     described)
-    assert "('fastmath', ['contract'])" in described  # (its options)
+    assert "('error_model', 'numpy')" in described  # (its options)
     assert "vines_stoch.kernels.kdk.kdk_step.<locals>.step" in described  # (the step it closes over)
     assert cache.described(second).startswith("vines_stoch.kernels.driver.step_loop.<locals>.kernel_")
     assert "vines_stoch.kernels.rk4.rk4_step.<locals>.step" in cache.described(second)

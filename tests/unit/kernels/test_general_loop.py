@@ -1,0 +1,140 @@
+"""The general loop of each scheme (``paths.spec_of(general=True)``): every size (bodies, floors,
+load rows, filter states) and every kind a scene holds (white noise, impact and Hertz absorbers,
+impacts between absorbers, filtered loads, ground acceleration, shaped springs) read at run
+time.  It gives, bitwise, the numbers of the loop specialised to the scene (and, on the Philox
+streams, of the SIMD lanes); and scenes never run before, of any structure, run it without
+compiling anything."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from tests.helpers import example_scene, scene_from
+from tests.unit.kernels.test_lanes import FILTERED, SEED, same
+from tests.unit.kernels.test_passes import (
+    BISTABLE,
+    BLAST,
+    CLOUGH_PENZIEN,
+    CUBIC,
+    GAP,
+    GEOMETRIC,
+    GROUND,
+    HARMONIC,
+    NOISE,
+    RECORDED,
+    frame,
+)
+from vines_stoch.kernels import kernel_for, simulate, simulate_chunk, start_path
+from vines_stoch.kernels.chunk import chunk_loop
+from vines_stoch.kernels.driver import step_loop
+from vines_stoch.kernels.lanes import lane_loop
+from vines_stoch.kernels.paths import GENERAL_WORK, general_run, spec_of
+from vines_stoch.kernels.protocol import KINDS, RUN_TIME
+
+IMPACT = {"type": "impact", "mass": 0.05, "clearance": 0.01, "restitution": 0.6}
+STEEL = {"young": [2.1e11, 2.1e11], "poisson": [0.3, 0.3], "radius": 0.01}
+HERTZ = {"type": "hertz", "geometry": "double-sided", "mass": 0.05, "stiffness": 2.0, "damping": 0.05,
+         "offset": 0.005, "gap": 0.01, "contact_left": STEEL, "contact_right": STEEL}
+
+#: Scenes of every scheme and kind: the kick-drift-kick step with impacts, Hertz contact and
+#: plastic impacts under noise (on the Brownian trees), filtered loads from their stationary law,
+#: stochastic ground motion, shaped springs and a harmonic ground acceleration, a nine-storey
+#: frame, an impact absorber in another's cavity; the RK4 step with impacts and with Hertz
+#: contact; the SRA3 step.
+CASES = {
+    "kdk, impacts under noise": lambda: example_scene("parallel_nes_noise", {"simulation.duration": 4.0}),
+    "kdk, Hertz contact and plastic impacts under noise": lambda: example_scene(
+        "contact_noise_parallel", {"simulation.duration": 1.5}),
+    "kdk, filtered noise from its stationary law": lambda: scene_from(FILTERED),
+    "kdk, Clough-Penzien ground motion, recorded": lambda: scene_from(
+        frame(3, [CUBIC], [CLOUGH_PENZIEN, {**NOISE, "floor": 1}], **RECORDED)),
+    "kdk, shaped springs under a ground acceleration": lambda: scene_from(
+        frame(2, [GEOMETRIC, {**GAP, "floor": 1}], [GROUND, NOISE])),
+    "kdk, an impact absorber in another's cavity": lambda: example_scene(
+        "seed001_frame_vidm", {"simulation.duration": 3.0}),
+    "rk4, impacts": lambda: example_scene("parallel_nes_impulse", {"simulation.duration": 10.0}, "rk4"),
+    "rk4, Hertz contact": lambda: example_scene("seed003_ds20", {"simulation.duration": 10.0,
+                                                                  "simulation.metrics_from": 2.5}, "rk4"),
+    "sra3": lambda: scene_from(frame(4, [BISTABLE], [HARMONIC, NOISE], **{"simulation.scheme": "sra"})),
+}
+
+
+def test_the_general_spec_reads_every_size_and_kind_at_run_time():
+    spec = spec_of(scene_from(frame(5, [CUBIC], [NOISE])), general=True)
+    assert spec.n_bodies == spec.n_floors == spec.n_rows == spec.n_states == RUN_TIME
+    assert all(getattr(spec, name) == RUN_TIME for name in KINDS)
+    assert spec_of(scene_from(frame(5, [CUBIC], [NOISE])), general=True) == spec_of(
+        scene_from(frame(2, [HERTZ, {**IMPACT, "floor": 1}], [CLOUGH_PENZIEN])), general=True)
+
+
+@pytest.mark.parametrize("case", list(CASES))
+def test_the_general_loop_gives_the_specialised_loop_s_numbers_bitwise(case):
+    """The scalar loop on the PCG64 streams, and where the scheme runs in lanes the lanes' Philox
+    streams: the metric vectors, history rows and event logs of the general loop are those of
+    the loops specialised to the scene, bit for bit."""
+    scene = CASES[case]()
+    records = {"history": (max(scene.n_steps // 6, 1), 6), "signals": ("x1", "e1", "v_1"),
+               "event_rows": 16}
+    for executor in ("scalar", "lanes"):
+        general = simulate_chunk(scene, SEED, 0, 0, 3, executor=executor, general=True, **records)
+        special = simulate_chunk(scene, SEED, 0, 0, 3, executor=executor, **records)
+        for name in ("raw", "history", "events", "samples"):
+            assert same(getattr(general, name), getattr(special, name)), (executor, name)
+    assert np.isfinite(general.raw[:, 0]).all()
+
+
+def _structures():
+    """Scenes never run before: 1, 2, 5 and 9 storeys; no absorber, a cubic, a bistable, a
+    geometric, an impact and a Hertz absorber, two at once; harmonic, blast, white noise,
+    ground motion; declared metrics and limits."""
+    return [
+        frame(1, [], [HARMONIC]),
+        frame(1, [{**IMPACT, "clearance": 0.02}], [NOISE]),
+        frame(2, [BISTABLE, {**GEOMETRIC, "floor": 1}], [GROUND, BLAST]),
+        frame(5, [{**HERTZ, "floor": 5}], [{**NOISE, "floor": 3}, HARMONIC], **RECORDED),
+        frame(9, [CUBIC, {**IMPACT, "floor": 8}], [CLOUGH_PENZIEN]),
+        frame(9, [], [NOISE], **{"simulation.scheme": "sra"}),
+        frame(5, [{**IMPACT, "floor": 3}, {**HERTZ, "floor": 5}], [BLAST], **{"simulation.scheme": "rk4"}),
+    ]
+
+
+def test_new_structures_run_the_general_loop_and_compile_nothing():
+    """After one run of each scheme's general loop, scenes of other storeys, absorbers, loads and
+    outputs run it as paths and as chunks of either executor: no loop is made, none compiles a
+    new signature (numba's dispatcher statistics), and none is loaded from the cache."""
+    first = [scene_from(frame(3, [CUBIC], [HARMONIC] if s == "rk4" else [NOISE], **{"simulation.scheme": s}))
+             for s in ("euler-maruyama", "sra", "rk4")]
+    for scene in first:
+        simulate(scene, np.random.default_rng(1))
+        for executor in ("scalar", "lanes"):
+            simulate_chunk(scene, SEED, 0, 0, 2, executor=executor, general=True)
+    loops = {id(kernel_for(s, general=True)): kernel_for(s, general=True) for s in first}
+    chunks = [chunk_loop(k) for k in loops.values()]
+    made = _made()
+    compiled = _compiled((*loops.values(), *chunks))
+    for data in _structures():
+        scene = scene_from(data)
+        simulate(scene, np.random.default_rng(2), history=np.zeros((4, 2)), stride=10)
+        for executor in ("scalar", "lanes"):
+            simulate_chunk(scene, SEED, 0, 0, 2, executor=executor, general=True, history=(10, 4),
+                           signals=("x1", "e1"), event_rows=4)
+    assert len(loops) == 3
+    assert _made() == made and _compiled((*loops.values(), *chunks)) == compiled
+
+
+def _made() -> tuple[int, int, int]:
+    """The step loops, lane loops and chunk loops this process has made."""
+    return step_loop.cache_info().currsize, lane_loop.cache_info().currsize, chunk_loop.cache_info().currsize
+
+
+def _compiled(dispatchers) -> list[tuple[int, int, int]]:
+    """Each dispatcher's signatures, compilations and loads from the cache (numba's statistics)."""
+    return [(len(d.overloads), sum(d.stats.cache_misses.values()), sum(d.stats.cache_hits.values()))
+            for d in dispatchers]
+
+
+def test_short_runs_take_the_general_loop_and_long_runs_a_specialised_one():
+    scene = scene_from(frame(2, [CUBIC], [NOISE]))
+    assert general_run(scene.n_steps) and general_run(GENERAL_WORK - 1) and not general_run(GENERAL_WORK)
+    assert start_path(scene, np.random.default_rng(0)).kernel is kernel_for(scene, general=True)
