@@ -27,7 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .kernels import DEFAULT_SIGNALS, kernel_for, simulate
+from .kernels import DEFAULT_SIGNALS, general_run, kernel_for, simulate, spec_of
 from .outputs import EVENT_COLUMNS, new_metrics
 from .scene import Scene
 from .signals import declare
@@ -202,7 +202,7 @@ class Inputs:
         scene = self.scene
         return (first, m, self.per_path, self.place, keys, *(params[k] for k in PER_PATH),
                 *(shared[k] for k in SHARED), normals, scene.dt, scene.n_steps, scene.i0, scene.period,
-                scene.sample_from, self.stride, template, signals, *outputs)
+                scene.sample_from, self.stride, spec_of(scene).kinds, template, signals, *outputs)
 
 
 def launch_types(scene: Scene, grid: tuple[int, int] | None = None,
@@ -244,8 +244,12 @@ def simulate_many(scenes: Scene | list[Scene], seed: int, point: int, start: int
     if len(scenes) > 1 and len(scenes) != n:
         raise ValueError(f"simulate_many: {len(scenes)} scenes for {n} realisations")
     inputs = Inputs.of(scenes, seed, point, common, grid, signals, events)
-    # (the simulator runs the CPU loop: the same arithmetic, its flags on the heap)
-    launch = launcher(kernel_for(inputs.scene, gpu=not simulating()), inputs.n_bodies, simulating())
+    # (the simulator runs the CPU loop a path of the scene runs, ``kernels.start_path``: the same
+    # arithmetic, its flags on the heap)
+    simulated = simulating()
+    general = simulated and general_run(inputs.scene.n_steps)
+    loop = kernel_for(inputs.scene, gpu=not simulated, general=general)
+    launch = launcher(loop, inputs.n_bodies, simulated)
     if simulating():
         _compile_here(scenes[0], seed, point, start, common)
     raw, samples, history, logs, _ = inputs.outputs(n, np.empty)
@@ -359,7 +363,7 @@ def _stretch_arguments(first, m: int, arrays: dict, firsts, stops) -> tuple:
     their first steps and stops."""
     grid = first.args[5]
     return (m, *(arrays[name] for _, names in _STRETCH_FIELDS for name in names), first.args[4].refine,
-            grid.dt, grid.i0, grid.period, grid.sample_from, grid.stride, firsts, stops,
+            grid.dt, grid.i0, grid.period, grid.sample_from, grid.stride, grid.kinds, firsts, stops,
             *(arrays[name] for name in _STRETCH_OUTPUTS), arrays["inc"], arrays["bri"], arrays["fil"])
 
 

@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from .jit.flags import ROUNDED
+from .jit.flags import KERNEL
 
 #: Buckets of one counting pass.
 BUCKETS = 4096
@@ -24,7 +24,7 @@ SMALL = 256
 MAX_LEVELS = 6
 
 
-@njit(**ROUNDED)
+@njit(**KERNEL)
 def _counts(a, lo, scale):
     """How many of ``a`` fall in each bucket ``int((x - lo) * scale)`` (the last one holding
     the maximum too): the bucket of ``x`` never decreases as ``x`` grows."""
@@ -34,7 +34,7 @@ def _counts(a, lo, scale):
     return counts
 
 
-@njit(**ROUNDED)
+@njit(**KERNEL)
 def _select(a, k):
     """The ``k``-th smallest of ``a`` (from 0; no NaN)."""
     for _ in range(MAX_LEVELS):
@@ -61,7 +61,7 @@ def _select(a, k):
     return np.sort(a)[k]
 
 
-@njit(**ROUNDED)
+@njit(**KERNEL)
 def _order_statistics(values, ranks, out):
     """``out[i]``: the ``ranks[i]``-th smallest of ``values`` (from 0; no NaN): one pass
     for the extremes, one counting the buckets, one gathering the buckets that hold a rank."""
@@ -100,7 +100,7 @@ def _order_statistics(values, ranks, out):
         out[i] = _select(gathered[offset[s]:offset[s + 1]], ranks[i] - first[held[i]])
 
 
-@njit(**ROUNDED)
+@njit(**KERNEL)
 def _quantiles(values, q, out):
     """``out[i] = np.quantile(values, q[i])`` for ``values`` without NaN (two or more): numpy's
     virtual index ``(n - 1) q``, its neighbouring order statistics (both the last where it is

@@ -42,15 +42,17 @@ def test_progress_ends_with_the_total_time(capsys):
 
 
 def test_run_names_the_loop_it_compiles_and_shows_the_scenarios_metrics(tmp_path):
-    """A fresh process: the step loop's line (compiled, or loaded from numba's cache on disk),
-    the total, and a table with the limit's p_roof."""
+    """A fresh process: the step loop's line (a short run's: the general loop of its scheme,
+    compiled, or loaded from numba's cache on disk), the total, and a table with the limit's
+    p_roof."""
     path = tmp_path / "feedback.toml"
     path.write_text(toml_text(DATA))
     command = ["run", str(path), "--out", str(tmp_path / "o"), "--workers", "1"]
     done = subprocess.run([sys.executable, "-m", "vines_stoch.cli", *command], capture_output=True, text=True,
                           timeout=600)
     assert done.returncode == 0, done.stderr
-    assert re.search(r"step loop: \S+ loop, 2 bodies, 1 floor\(s\), white noise: compiling or loading \.\.\. "
+    assert re.search(r"step loop: the general euler-maruyama loop \(every structure\): "
+                     r"compiling or loading \.\.\. "
                      r"(loaded from the cache|compiled \(cached on disk for later runs\)) in \d+\.\d s",
                      done.stderr), done.stderr
     assert re.search(r"done: 20 realisation\(s\) in \d+\.\d s", done.stderr)

@@ -21,7 +21,7 @@ import pytest
 from tests.helpers import ROOT, changed, cli, example_data, scene_from, study_from
 from tests.integration.test_ensemble import DATA
 from vines_stoch import gpu, kernels, run
-from vines_stoch.kernels import SLOTS, kernel_for, sample_buffer, simulate
+from vines_stoch.kernels import SLOTS, general_run, kernel_for, sample_buffer, simulate
 from vines_stoch.outputs import new_events
 from vines_stoch.store import read_metadata
 from vines_stoch.streams import BRIDGE, FILTER, INCREMENTS, Streams, streams
@@ -126,9 +126,10 @@ def test_deterministic_scenes_give_the_cpu_metrics(name, changes):
     scene = scene_from(example_data(name, "sweep"), changes=changes)
     samples = sample_buffer(scene)
     cpu = simulate(scene, samples=samples)
-    compiled = set(kernel_for(scene).overloads)
+    loop = kernel_for(scene, general=general_run(scene.n_steps))  # (the path's loop, ``start_path``)
+    compiled = set(loop.overloads)
     batch = gpu.simulate_many(scene, seed=1, point=0, start=0, stop=3)
-    assert set(kernel_for(scene).overloads) == compiled  # one loop for both (``kernels._UNUSED``)
+    assert compiled and set(loop.overloads) == compiled  # one loop for both (``kernels._UNUSED``)
     for raw, own in zip(batch.raw, batch.samples):
         np.testing.assert_allclose(own, samples, rtol=1e-9, atol=1e-12)  # Poincare samples (NaN where none)
         assert raw[_S["impacts"]] == cpu[_S["impacts"]]
@@ -174,8 +175,8 @@ def test_the_simulated_threads_find_the_loop_compiled(monkeypatch):
             calls.append((threading.current_thread() is threading.main_thread(),
                           len(self.loop.overloads) - before))
 
-    def recording(scene, gpu=False):
-        return Recording(kernel_for(scene, gpu))
+    def recording(scene, gpu=False, general=False):
+        return Recording(kernel_for(scene, gpu, general))
 
     monkeypatch.setattr(gpu, "kernel_for", recording)
     monkeypatch.setattr(kernels.paths, "kernel_for", recording)

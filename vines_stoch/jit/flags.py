@@ -21,9 +21,6 @@ KERNEL = dict(cache=True, nogil=True, error_model="numpy")
 #: inlined copy also costs compile time: a large inlined function gets one call site, and rare
 #: work calls it through an out-of-line wrapper (``rk4.rk4_step``, ``rk4.wall_accelerations``).
 INLINE = dict(KERNEL, inline="always")
-#: Options of compiled functions that must round as numpy does, operation by operation (no
-#: fused multiply-adds): ``pcg``'s ziggurat, ``order``'s quantiles.
-ROUNDED = dict(cache=True, nogil=True, error_model="numpy")
 
 
 

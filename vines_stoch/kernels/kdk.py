@@ -116,9 +116,9 @@ def kick(v, s, dws, load, ag, force, inv_mass, vn, ground):
     base = ag * s if ground else 0.0
     nf = load.shape[0]
     for k in range(nf):
-        vn[k] = (v[k] + (fused(load[k], s, dws[k]) * inv_mass[k] - base)) + force[k] * (s * inv_mass[k])
+        vn[k] = fused(force[k], s * inv_mass[k], v[k] + (fused(load[k], s, dws[k]) * inv_mass[k] - base))
     for b in range(nf, vn.shape[0]):
-        vn[b] = (v[b] - base) + force[b] * (s * inv_mass[b])
+        vn[b] = fused(force[b], s * inv_mass[b], v[b] - base)
 
 
 @njit(**INLINE)
@@ -354,6 +354,7 @@ def kdk_step(spec) -> Step:
     NA = spec.n_bodies - spec.n_floors
     # sub-steps take increments from the Brownian trees (white noise, impact or Hertz absorbers):
     # a constant, or ``RUN_TIME``; room for the trees' descent memo where they may
+    EVENT_BITS = IMPACT_BIT | HERTZ_BIT
     TREE = (RUN_TIME if RUN_TIME in (HAS_NOISE, HAS_IMPACT, HAS_HERTZ)
             else HAS_NOISE and (HAS_IMPACT or HAS_HERTZ))
     MEMO_ROOM = MEMO * (NF if NF >= 0 else ROOM) if TREE else 1
@@ -366,13 +367,11 @@ def kdk_step(spec) -> Step:
         # the bodies, floors, load rows and filter states: run-time sizes on the CPU (``paths.spec_of``)
         nb = NB if NB >= 0 else bodies.mass.shape[0]  # (``RUN_TIME``: the counts read at run time)
         nf = NF if NF >= 0 else bodies.storey_k.shape[0]
-        has_noise = HAS_NOISE if HAS_NOISE >= 0 else bit_set(grid.kinds, NOISE_BIT)
-        has_impact = HAS_IMPACT if HAS_IMPACT >= 0 else bit_set(grid.kinds, IMPACT_BIT)
         has_hertz = HAS_HERTZ if HAS_HERTZ >= 0 else bit_set(grid.kinds, HERTZ_BIT)
         partners = PARTNERS if PARTNERS >= 0 else bit_set(grid.kinds, PARTNERS_BIT)
         filtered = FILTERED if FILTERED >= 0 else bit_set(grid.kinds, FILTERED_BIT)
         ground = GROUND if GROUND >= 0 else bit_set(grid.kinds, GROUND_BIT)
-        tree = TREE if TREE >= 0 else has_noise and (has_impact or has_hertz)
+        tree = TREE if TREE >= 0 else bit_set(grid.kinds, NOISE_BIT) and bit_set(grid.kinds, EVENT_BITS)
         nr, nz = NR if NR >= 0 else ex.forces.shape[0], NZ if NZ >= 0 else fl.phi.shape[0]
         na, nw = nb - nf, nb if partners else nf
         gl = grid_room(nf, nr, nz, 0, 0, nz, nf)
@@ -457,14 +456,13 @@ def kdk_step(spec) -> Step:
         whose step holds an event, ``lanes.py``.)"""
         nb = NB if NB >= 0 else bodies.mass.shape[0]  # (``RUN_TIME``: the counts read at run time)
         nf = NF if NF >= 0 else bodies.storey_k.shape[0]
-        has_noise = HAS_NOISE if HAS_NOISE >= 0 else bit_set(own.kinds, NOISE_BIT)
         has_impact = HAS_IMPACT if HAS_IMPACT >= 0 else bit_set(own.kinds, IMPACT_BIT)
         has_hertz = HAS_HERTZ if HAS_HERTZ >= 0 else bit_set(own.kinds, HERTZ_BIT)
         partners = PARTNERS if PARTNERS >= 0 else bit_set(own.kinds, PARTNERS_BIT)
         filtered = FILTERED if FILTERED >= 0 else bit_set(own.kinds, FILTERED_BIT)
         ground = GROUND if GROUND >= 0 else bit_set(own.kinds, GROUND_BIT)
         shaped = SHAPED if SHAPED >= 0 else bit_set(own.kinds, SHAPED_BIT)
-        tree = TREE if TREE >= 0 else has_noise and (has_impact or has_hertz)
+        tree = TREE if TREE >= 0 else bit_set(own.kinds, NOISE_BIT) and bit_set(own.kinds, EVENT_BITS)
         # passes of a step's event loop: one without impact or Hertz absorbers (nothing to split at)
         passes = MAX_SUBSTEPS if has_hertz else (MAX_EVENTS + 1 if has_impact else 1)
         na, nw = nb - nf, nb if partners else nf
@@ -553,7 +551,7 @@ def kdk_step(spec) -> Step:
             if has_hertz:
                 contact_start(x, v, vn, s, nf, host, rows, touching, held)
             for b in range(nb):
-                x[b] += s * vn[b]
+                x[b] = fused(s, vn[b], x[b])
                 v[b] = vn[b]
             # closing half kick with the forces at the new positions (its bookkeeping is
             # written out like the first kick's: an inlined helper for both measured 40 %

@@ -48,6 +48,7 @@ from ..jit.intrinsics import (
     bits_float,
     borrowed,
     float_bits,
+    fused,
     int_scratch,
     larger,
     plain,
@@ -485,7 +486,7 @@ def lane_loop(spec: Spec):
                 held += (1.0 if ahead else 0.0) + abs(s[(STUCK + a) * W + lane]) + abs(
                     s[(TOUCHING + a) * W + lane])
             for b in range(NB):
-                x[b] += dt * vn[b]
+                x[b] = fused(dt, vn[b], x[b])
                 v[b] = vn[b]
             work, d_primary, d_absorber = half_kick(x, v, vn, force, dwh, dws, f_end, g_end, dt, inside,
                                                     accounts, mass, inv_mass, storey_k, storey_c, floor_c,

@@ -44,7 +44,7 @@ def launcher(kernel, n_bodies: int, simulated: bool):
     def launch(first, n, per_path, place, keys, mass, storey_k, storey_c, floor_c, x0, v0, rows, forces,
                sigma, limits, phi, chol, envelope, c_force, c_ground, p0, kind, host, wall, series_t,
                series_v, series_ptr, series_target, reductions, normals, dt, n_steps, i0, period, sample_from,
-               stride, template, signals, out, samples, history, events, work):
+               stride, kinds, template, signals, out, samples, history, events, work):
         t = cuda.grid(1)
         if t >= n:
             return
@@ -90,7 +90,7 @@ def launcher(kernel, n_bodies: int, simulated: bool):
                        c_force=plain(c_force[p]), c_ground=plain(c_ground[p]), z=z, zn=zn, draws=draws),
                Noise(sigma=plain(sigma[p]), normals=plain(normals), refine=1),
                Grid(dt=dt, n_steps=n_steps, i0=i0, period=period, sample_from=sample_from, stride=stride,
-                    first=0, kinds=0),
+                    first=0, kinds=kinds),
                Outputs(out=row, samples=own_samples, history=own_history, signals=plain(signals),
                        limits=plain(limits[p]), carry=row[:0], events=own_events,
                        reductions=plain(reductions), impulses=impulses),
@@ -113,8 +113,8 @@ def stretcher(kernel, simulated: bool):
     @cuda.jit
     def stretch(n, mass, storey_k, storey_c, floor_c, x, v, kind, host, rows, wall, forces, series_t,
                 series_v, series_ptr, series_target, phi, chol, envelope, c_force, c_ground, z, zn, draws,
-                sigma, normals, refine, dt, i0, period, sample_from, stride, firsts, stops, out, samples,
-                history, signals, limits, carry, events, reductions, impulses, inc, bri, fil):
+                sigma, normals, refine, dt, i0, period, sample_from, stride, kinds, firsts, stops, out,
+                samples, history, signals, limits, carry, events, reductions, impulses, inc, bri, fil):
         t = cuda.grid(1)
         if t >= n:
             return
@@ -128,7 +128,7 @@ def stretcher(kernel, simulated: bool):
                        draws=plain(draws[t])),
                Noise(sigma=plain(sigma[t]), normals=plain(normals[t]), refine=refine),
                Grid(dt=dt, n_steps=stops[t], i0=i0, period=period, sample_from=sample_from, stride=stride,
-                    first=firsts[t], kinds=0),
+                    first=firsts[t], kinds=kinds),
                Outputs(out=plain(out[t]), samples=plain(samples[t]), history=plain(history[t]),
                        signals=plain(signals[t]), limits=plain(limits[t]), carry=plain(carry[t]),
                        events=plain(events[t]), reductions=plain(reductions[t]), impulses=plain(impulses[t])),

@@ -241,10 +241,10 @@ def filter_row(z, r: int, phi, chol, draws, scale: float) -> float:
     """Row ``r`` of ``advance_filters``' step: ``(Phi z)_r + scale (L n)_r`` (``draws``: ``n``)."""
     acc = 0.0
     noise = 0.0
-    for c in range(z.shape[0]):
-        acc += phi[r, c] * z[c]
-        noise += chol[r, c] * draws[c]
-    return acc + scale * noise
+    for c in range(z.shape[0]):  # (each term fused into its sum: one rounding a term)
+        acc = fused(phi[r, c], z[c], acc)
+        noise = fused(chol[r, c], draws[c], noise)
+    return fused(scale, noise, acc)
 
 
 @njit(**INLINE)
@@ -264,7 +264,7 @@ def readout(c, row: int, z, zn, theta: float) -> float:
     """``c[row] . ((1 - theta) z + theta zn)``: a filtered load between two grid states."""
     f = 0.0
     for r in range(z.shape[0]):
-        f += c[row, r] * (z[r] + theta * (zn[r] - z[r]))
+        f = fused(c[row, r], fused(theta, zn[r] - z[r], z[r]), f)
     return f
 
 

@@ -85,18 +85,18 @@ def forces_pass(s, X, V, f, nl, nf, nb, storey_k, storey_c, floor_c, host, rows,
             for lane in range(nl):
                 d = s[X, lane]
                 dv = s[V, lane]
-                f[0, lane] = -kk * d - cc * dv
+                f[0, lane] = fused(-kk, d, -cc * dv)
         else:
             for lane in range(nl):
                 d = s[X + k, lane] - s[X + k - 1, lane]
                 dv = s[V + k, lane] - s[V + k - 1, lane]
-                f[k, lane] = -kk * d - cc * dv
-                f[k - 1, lane] += kk * d + cc * dv
+                f[k, lane] = fused(-kk, d, -cc * dv)
+                f[k - 1, lane] += fused(kk, d, cc * dv)
     if nf > 1:
         for k in range(nf):
             fc = floor_c[k]
             for lane in range(nl):
-                f[k, lane] -= fc * s[V + k, lane]
+                f[k, lane] = fused(-fc, s[V + k, lane], f[k, lane])
     for a in range(nb - nf):
         h, j = host_of(host, a, nf), nf + a
         rest, k_lin, k_cubic, c = rows[a, REST], rows[a, K_LIN], rows[a, K_CUBIC], rows[a, DAMPING]
@@ -132,19 +132,19 @@ def kick_pass(s, V, vn, f, dwh, loads, at_load, at_ag, half, inv_mass, nl, nf, n
         if ground:
             for lane in range(nl):
                 impulse = fused(loads[at_load + k, lane], half, dwh[k, lane])
-                vn[k, lane] = (s[V + k, lane] + (impulse * im - base[lane])) + f[k, lane] * step
+                vn[k, lane] = fused(f[k, lane], step, s[V + k, lane] + (impulse * im - base[lane]))
         else:
             for lane in range(nl):
                 impulse = fused(loads[at_load + k, lane], half, dwh[k, lane])
-                vn[k, lane] = (s[V + k, lane] + (impulse * im - 0.0)) + f[k, lane] * step
+                vn[k, lane] = fused(f[k, lane], step, s[V + k, lane] + (impulse * im - 0.0))
     for b in range(nf, nb):
         step = half * inv_mass[b]
         if ground:
             for lane in range(nl):
-                vn[b, lane] = (s[V + b, lane] - base[lane]) + f[b, lane] * step
+                vn[b, lane] = fused(f[b, lane], step, s[V + b, lane] - base[lane])
         else:
             for lane in range(nl):
-                vn[b, lane] = (s[V + b, lane] - 0.0) + f[b, lane] * step
+                vn[b, lane] = fused(f[b, lane], step, s[V + b, lane] - 0.0)
 
 
 @njit(**INLINE)
@@ -261,7 +261,7 @@ def step_pass(s, at, scratch_rows, z, nl, inside, dt, loads, at_loads, noise_sca
         if half == 1:  # the drift
             for b in range(nb):
                 for lane in range(nl):
-                    s[X + b, lane] += dt * vn[b, lane]
+                    s[X + b, lane] = fused(dt, vn[b, lane], s[X + b, lane])
                     s[V + b, lane] = vn[b, lane]
         at_load, at_ag = (at_loads[0], at_loads[2]) if half == 0 else (at_loads[1], at_loads[3])
         forces_pass(s, X, V, f, nl, nf, nb, storey_k, storey_c, floor_c, host, rows, shaped)

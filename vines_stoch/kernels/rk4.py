@@ -24,7 +24,7 @@ import numpy as np
 from numba import njit
 
 from ..jit.flags import INLINE, KERNEL
-from ..jit.intrinsics import any_set, int_scratch, pick, plain, put, runtime_value
+from ..jit.intrinsics import any_set, fused, int_scratch, pick, plain, put, runtime_value
 from ..outputs import CAPPED
 from ..physics.absorbers import CLEARANCE, DAMPING, RESTITUTION, WALL_HI, WALL_LO
 from ..physics.structure import host_of, primary_energy, structure_power, wall_of
@@ -164,10 +164,10 @@ def rk4_update(x, v, t, h, xo, vo, acc, xs, vs, x2, a0, mass, inv_mass, storey_k
                 xo[b] = vs[b]
                 vo[b] = acc[b]
             else:
-                xo[b] += weight * vs[b]
-                vo[b] += weight * acc[b]
-            xs[b] = x[b] + c * vs[b]
-            vs[b] = v[b] + c * acc[b]
+                xo[b] = fused(weight, vs[b], xo[b])
+                vo[b] = fused(weight, acc[b], vo[b])
+            xs[b] = fused(c, vs[b], x[b])
+            vs[b] = fused(c, acc[b], v[b])
         if stage == 0:
             q0, q1, q2, q3 = r[0], r[1], r[2], r[3]
         else:
@@ -176,8 +176,8 @@ def rk4_update(x, v, t, h, xo, vo, acc, xs, vs, x2, a0, mass, inv_mass, storey_k
             q2 += weight * r[2]
             q3 += weight * r[3]
     for b in range(nb):
-        xo[b] = x[b] + h / 6.0 * xo[b]
-        vo[b] = v[b] + h / 6.0 * vo[b]
+        xo[b] = fused(h / 6.0, xo[b], x[b])
+        vo[b] = fused(h / 6.0, vo[b], v[b])
     for k in range(nf):
         x2[k] = h / 6.0 * x2[k]
     return h / 6.0 * q0, h / 6.0 * q1, h / 6.0 * q2, h / 6.0 * q3

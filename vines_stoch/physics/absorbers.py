@@ -31,6 +31,7 @@ import math
 from numba import njit
 
 from ..jit.flags import INLINE
+from ..jit.intrinsics import fused
 
 #: Kind codes of absorber rows (MODEL.md section 2), by the ``type`` of a scenario's absorber.
 LINEAR, CUBIC, IMPACT, HERTZ, BISTABLE, GEOMETRIC, GAP_SPRING = 0, 1, 2, 3, 4, 5, 6
@@ -62,7 +63,7 @@ def spring_damper_force(u: float, w: float, k_lin: float, k_cubic: float, c: flo
     (Romeo, Sigalov, Bergman and Vakakis, J. Comput. Nonlinear Dyn. 10 (2015) 011007; Habib and
     Romeo, Nonlinear Dyn. 89 (2017)): stable at ``u = +-sqrt(-k_lin / k)``.
     """
-    return -(k_lin + k_cubic * u * u) * u - c * w
+    return fused(-(k_lin + k_cubic * u * u), u, -(c * w))
 
 
 @njit(**INLINE)

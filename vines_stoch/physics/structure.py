@@ -39,12 +39,12 @@ def structure_forces(x, v, nf: int, storey_k, storey_c, floor_c, force):
         # written as the one-storey -k1 x1 - c1 v1: the negated coefficients are loop
         # invariants, so the force is one multiply and one fused multiply-add on the step's
         # critical path (negating a sum would add an operation there)
-        force[k] = -storey_k[k] * d - storey_c[k] * dv
+        force[k] = fused(-storey_k[k], d, -storey_c[k] * dv)
         if k > 0:
-            force[k - 1] += storey_k[k] * d + storey_c[k] * dv
+            force[k - 1] += fused(storey_k[k], d, storey_c[k] * dv)
     if nf > 1:
         for k in range(nf):
-            force[k] -= floor_c[k] * v[k]
+            force[k] = fused(-floor_c[k], v[k], force[k])
 
 
 @njit(**INLINE)

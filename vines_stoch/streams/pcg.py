@@ -30,7 +30,7 @@ from numba import njit, types
 from numba.extending import intrinsic
 from numba.np.random._constants import fi_double, ki_double, wi_double, ziggurat_nor_inv_r, ziggurat_nor_r
 
-from ..jit.flags import INLINE, ROUNDED
+from ..jit.flags import INLINE, KERNEL
 
 #: A PCG64 stream: the 128-bit state and increment as 64-bit halves.
 PCG_DTYPE = np.dtype([("state_high", np.uint64), ("state_low", np.uint64),
@@ -223,7 +223,7 @@ def pcg_normal(stream) -> float:
     return _normal_rest(stream, idx, rabs, x)
 
 
-@njit(**ROUNDED)
+@njit(**KERNEL)
 def _normal_rest(stream, idx, rabs, x) -> float:
     """The ziggurat from a draw its fast path did not accept: the tail beyond the base layer
     (``idx`` 0) or the layer's wedge, then fresh draws until one is accepted."""

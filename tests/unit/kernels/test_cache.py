@@ -145,9 +145,10 @@ def test_processes_starting_the_same_loop_compile_it_once(tmp_path):
 
 
 def test_the_first_run_of_a_loop_in_a_process_compiles_nothing_more():
-    """``kernels.simulate`` compiles a loop for the very argument types it then runs it with."""
+    """``kernels.simulate`` compiles a loop for the very argument types it then runs it with (a
+    short path's: the general loop)."""
     scene = scene_from(example_data("cubic_nes_impulse"), changes={"simulation.duration": 1.0})
-    kernel = kernel_for(scene)
+    kernel = kernel_for(scene, general=True)
     for started in [s for s in _STARTED if s[0] is kernel]:
         _STARTED.discard(started)
     simulate(scene)
@@ -164,7 +165,7 @@ from tests.helpers import ROOT, example_data, scene_from
 from vines_stoch.kernels import kernel_for, simulate
 scene = scene_from(example_data("cubic_nes_impulse", "sweep"), changes={"simulation.duration": 0.1})
 simulate(scene)
-k = kernel_for(scene)
+k = kernel_for(scene, general=True)
 print(json.dumps({"misses": sum(k.stats.cache_misses.values()), "hits": sum(k.stats.cache_hits.values())}))
 '''
 

@@ -98,13 +98,14 @@ def test_asking_for_a_record_compiles_nothing(case):
     loop as one that keeps none, on the signature the first compiled, and so does a chunk of
     the scalar loop that keeps them."""
     scene = _scene(*CASES[case])
-    kernel = kernel_for(scene)
+    kernel = kernel_for(scene, general=True)  # (the loop of a short path: ``kernels.general_run``)
     simulate(scene, np.random.default_rng(5))
     signatures = len(kernel.overloads)
+    assert signatures > 0
     limited = replace(scene, limits=np.array([limit_row("e1_max", 1e-9, scene.n_floors)]))
     simulate(limited, np.random.default_rng(5), events=new_events(7), history=np.zeros((5, 2)),
              signals=("x1", "contact_1"), stride=scene.n_steps // 4)
-    assert kernel_for(limited) is kernel and len(kernel.overloads) == signatures
+    assert kernel_for(limited, general=True) is kernel and len(kernel.overloads) == signatures
     run = chunk_runner(scene, "scalar")
     simulate_chunk(scene, 5, 0, 0, 1, executor="scalar")
     chunks = len(run.overloads)
