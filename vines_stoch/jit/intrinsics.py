@@ -200,10 +200,10 @@ def bits_float(typingctx, value):
 
 @intrinsic
 def fused(typingctx, a, b, c):
-    """``a b + c`` rounded once (``llvm.fma``), for ``float64`` operands: where a product's
-    factor is the same for every SIMD lane (a load on the time grid), the compiler computes that
-    product once outside the lane loop and rounds it, where the scalar loop fuses it into the
-    sum; written fused, the two compute the same bits (``kernels/lanes.py``)."""
+    """``a b + c`` rounded once (``llvm.fma``), for ``float64`` operands: the only fused
+    multiply-adds of the loops, which take no fast-math licence (``jit.flags.KERNEL``), so that
+    every loop that writes the same arithmetic computes the same bits, however the compiler
+    unrolls or vectorises it (the scalar, lane, pass and general loops)."""
     if not all(t == types.float64 for t in (a, b, c)):
         return None
 

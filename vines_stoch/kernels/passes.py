@@ -17,11 +17,10 @@ Each pass computes, lane by lane, the terms of the scalar step in the scalar ste
 ``common.floor_peaks``), the per-lane formulas being the same functions: a lane's numbers are
 the scalar loop's on its Philox streams, bitwise (``tests/unit/kernels/test_passes.py``), as the
 lanes' are.  Where the scalar step rounds a product once and uses it several times (a ground
-acceleration's impulse), the pass rounds it in a pass of its own: computed where it is used,
-the compiler would fuse it into each use.  The rare work (the window's opening, the divergence
-checks, the history rows, the declared metrics, the first passages, a lane's end) and the
-filters (``lanes.filter_rows``: each lane's, on its Philox filter stream) run the lanes' and
-the scalar loop's functions lane by lane.
+acceleration's impulse), the pass rounds it once too, in a pass of its own.  The rare work (the
+window's opening, the divergence checks, the history rows, the declared metrics, the first
+passages, a lane's end) and the filters (``lanes.filter_rows``: each lane's, on its Philox
+filter stream) run the lanes' and the scalar loop's functions lane by lane.
 
 Which scenes run here is ``pass_scene``'s: scenes without impacts or Hertz contact (whose lanes
 leave the vector pass for the scalar step, ``lanes.py``), of three bodies or more (below that
@@ -120,9 +119,8 @@ def kick_pass(s, V, vn, f, dwh, loads, at_load, at_ag, half, inv_mass, nl, nf, n
     ``vn``: forces ``f``, the half increments ``dwh``, the lane's loads in rows ``at_load`` of
     ``loads`` and, where ``ground``, its ground acceleration in row ``at_ag``, its impulse a
     unit mass into the scratch row ``base`` first: one product, rounded once, as the scalar
-    step's, which all its bodies share (computed where it is used, the compiler would fuse it
-    into each use).  Without one, the scalar step's ``- 0.0``, which the compiler folds (an
-    impulse joins its velocity in one rounding), is written out as it is."""
+    step's, which all its bodies share.  Without one, the scalar step's ``- 0.0`` is written
+    out as it is."""
     if ground:
         for lane in range(nl):
             base[lane] = loads[at_ag, lane] * half
@@ -158,8 +156,7 @@ def work_pass(s, V, WORK, vn, dws, loads, at_load, at_ag, dt, nl, nf, nb, mass, 
     """Every lane's input work over a half kick (``lanes``' ``half_kick``: ``energy.impulse_work``
     and, with a ground acceleration, ``energy.momentum``) added to its row ``WORK``; ``w``, ``p``:
     scratch rows; the lane's loads in rows ``at_load``, ``at_ag`` of ``loads``.  The first two
-    floors' terms are one sum, as in the scalar step, where the
-    compiler fuses one of the two products into it: the same one here."""
+    floors' terms are one sum, as in the scalar step."""
     if nf == 1:
         for lane in range(nl):
             w[lane] = impulse_term(loads, at_load, dt, dws, s, V, vn, 0, lane)

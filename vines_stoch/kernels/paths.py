@@ -143,8 +143,9 @@ def filter_draws(scene) -> int:
 def _streams_for(scene, replay: bool, streams: Streams | np.random.Generator | None) -> tuple[tuple, tuple]:
     """The kernel's generators (increments, bridge, filter), and the numpy generators they stand
     for (``_as_streams``).  A generator is passed only where the kernel draws from it, a stream it
-    never draws from elsewhere (``_UNUSED``, Philox, where a Philox stream is given; ``_UNDRAWN``,
-    PCG64, else: an array costs next to nothing to pass, and the loop sees one kind of stream); a
+    never draws from elsewhere (``_UNDRAWN``, PCG64, where it draws from a PCG64 stream or a numpy
+    generator; ``_UNUSED``, Philox, else: an array costs next to nothing to pass, and the loop
+    sees one kind of stream); a
     Philox stream (an array, ``rng.philox_stream``, as on the GPU) is passed all the same, so that the loop is
     the one the cuda backend runs.  A replayed path keeps a stream (``_UNDRAWN``, or the Philox
     stream given) in the increments' place, so that it runs the kernel a drawn path runs (the
@@ -160,9 +161,11 @@ def _streams_for(scene, replay: bool, streams: Streams | np.random.Generator | N
     for name, want, gen in zip(("increments", "bridge", "filter"), wanted, chosen):
         if want and gen is None:
             raise ValueError(f"streams: this scene draws from the {name} stream; it is None")
-    # (an unused place takes a stream of the kind of those given: one signature of the general loop)
-    philox = any(isinstance(gen, np.ndarray) and gen.dtype == np.uint64 for gen in chosen)
-    unused = _UNUSED if philox else _UNDRAWN
+    # (an unused place takes a stream of the kind of those drawn from, Philox where none is: the
+    # signatures of the general loop are its chunks', all PCG64 or all Philox)
+    pcg = any(want and not (isinstance(gen, np.ndarray) and gen.dtype == np.uint64)
+              for want, gen in zip(wanted, chosen))
+    unused = _UNDRAWN if pcg else _UNUSED
     gens = [gen if want or isinstance(gen, np.ndarray) else unused for want, gen in zip(wanted, chosen)]
     if replay and scene.has_white_noise and gens[0] is _UNUSED:
         gens[0] = _UNDRAWN
