@@ -17,7 +17,7 @@ from ..outputs import EVENT_COLUMNS, SLOTS, new_events, new_metrics
 from ..schemes import SCHEMES
 from ..signals import declare
 from ..streams import Streams
-from ..streams.pcg import new_stream, set_state, state_of
+from ..streams.pcg import PCG_DTYPE, new_stream, set_state, state_of
 from ..streams.rng import STREAM_WORDS, uniform
 from .bundles import Absorbers, Bodies, Filters, Grid, Loads, Noise, Outputs
 from .carry import SEED_HIGH, SEED_LOW, new_carry
@@ -163,7 +163,7 @@ def _streams_for(scene, replay: bool, streams: Streams | np.random.Generator | N
             raise ValueError(f"streams: this scene draws from the {name} stream; it is None")
     # (an unused place takes a stream of the kind of those drawn from, Philox where none is: the
     # signatures of the general loop are its chunks', all PCG64 or all Philox)
-    pcg = any(want and not (isinstance(gen, np.ndarray) and gen.dtype == np.uint64)
+    pcg = any(want and (isinstance(gen, np.random.Generator) or getattr(gen, "dtype", None) == PCG_DTYPE)
               for want, gen in zip(wanted, chosen))
     unused = _UNDRAWN if pcg else _UNUSED
     gens = [gen if want or isinstance(gen, np.ndarray) else unused for want, gen in zip(wanted, chosen)]
