@@ -21,11 +21,43 @@ def vector_problem() -> str | None:
             f"{', '.join(map(str, VECTOR_CHOICES))}")
 
 
+#: Runs of fewer path-steps than this (realisations times steps, every sweep point together) take
+#: the general loop of their scheme, compiled once for every structure; longer ones a loop
+#: specialised to their structure (``kernels.paths.general_run``), unless the environment
+#: variable ``GENERAL_SWITCH`` sets another threshold.  The two loops give the same numbers.
+GENERAL_WORK = 100_000_000
+GENERAL_SWITCH = "VINES_STOCH_GENERAL_WORK"
+
+
+def general_work() -> float | None:
+    """The path-steps below which a run takes the general loops: ``VINES_STOCH_GENERAL_WORK``
+    where set (a number >= 0; ``inf``: every run, 0: none), else ``GENERAL_WORK`` (None: the
+    variable holds no such number)."""
+    text = os.environ.get(GENERAL_SWITCH)
+    if text is None:
+        return GENERAL_WORK
+    try:
+        work = float(text)
+    except ValueError:
+        return None
+    return work if work >= 0 else None
+
+
+def general_problem() -> str | None:
+    """Why ``VINES_STOCH_GENERAL_WORK`` cannot be used (None: unset, or a number it takes)."""
+    if general_work() is not None:
+        return None
+    return (f"environment variable {GENERAL_SWITCH}={os.environ[GENERAL_SWITCH]!r}: the path-steps below "
+            f"which a run takes the general loops, a number >= 0 (default {GENERAL_WORK:.0e}; inf: every "
+            "run, 0: none)")
+
+
 def problems() -> list[str]:
     """One line for each environment variable set to what it cannot take:
     ``VINES_STOCH_VECTOR_BITS`` (``vector_problem``), ``VINES_STOCH_MEMORY_SHARE`` (a share
-    above 0) and ``NUMBA_NUM_THREADS`` (numba's threads, a whole number >= 1)."""
-    found = [why] if (why := vector_problem()) else []
+    above 0), ``VINES_STOCH_GENERAL_WORK`` (path-steps, a number >= 0) and ``NUMBA_NUM_THREADS``
+    (numba's threads, a whole number >= 1)."""
+    found = [why for why in (vector_problem(), general_problem()) if why]
     if memory_share() is None:
         found.append(f"environment variable {MEMORY_SWITCH}={os.environ[MEMORY_SWITCH]!r}: the share of this "
                      "machine's memory a study may plan to keep, a number > 0 (default "

@@ -12,6 +12,7 @@ from typing import Any
 
 import numpy as np
 
+from ..environment import GENERAL_WORK, general_problem, general_work
 from ..jit.cache import compile_once
 from ..outputs import EVENT_COLUMNS, SLOTS, new_events, new_metrics
 from ..schemes import SCHEMES
@@ -77,18 +78,19 @@ def spec_of(scene, gpu: bool = False, lanes: bool = False, general: bool = False
                 ground=kind(scene.has_ground) if grid else False, shaped=kind(scene.has_shaped), gpu=gpu)
 
 
-#: Runs of fewer path-steps than this (realisations times steps, all sweep points together) run
-#: the general loop of their scheme (``spec_of``), compiled once for every structure; longer ones
-#: a loop specialised to theirs, compiled for it (and cached): at 10-25 M path-steps/s on one core
-#: the general loop runs them in about the 10-20 s that compiling a specialised loop takes, which
-#: then runs 2-3x faster (and in SIMD lanes, where the scheme has them, 5-10x).  The two give the
-#: same numbers, bitwise (``tests/unit/kernels/test_general_loop.py``).
-GENERAL_WORK = 100_000_000
-
-
 def general_run(path_steps: int) -> bool:
-    """Whether a run of ``path_steps`` path-steps runs the general loop (``GENERAL_WORK``)."""
-    return path_steps < GENERAL_WORK
+    """Whether a run of ``path_steps`` path-steps (realisations times steps, all sweep points
+    together) runs the general loop of its scheme (``spec_of``), compiled once for every
+    structure: below ``GENERAL_WORK`` (10^8), or below ``VINES_STOCH_GENERAL_WORK`` where that is
+    set (``environment.general_work``).  A longer run takes a loop specialised to its structure,
+    compiled for it (and cached): at 10-25 M path-steps/s on one core the general loop runs 10^8
+    path-steps in about the 10-20 s that compiling a specialised loop takes, which then runs 2-3x
+    faster (and in SIMD lanes, where the scheme has them, 5-10x).  The two give the same numbers,
+    bitwise (``tests/unit/kernels/test_general_loop.py``)."""
+    work = general_work()
+    if work is None:
+        raise ValueError(general_problem())
+    return path_steps < work
 
 
 def kernel_for(scene, gpu: bool = False, general: bool = False):

@@ -25,6 +25,7 @@ from tests.unit.kernels.test_passes import (
     RECORDED,
     frame,
 )
+from vines_stoch.environment import problems
 from vines_stoch.kernels import kernel_for, simulate, simulate_chunk, start_path
 from vines_stoch.kernels.chunk import chunk_loop
 from vines_stoch.kernels.driver import step_loop
@@ -137,7 +138,22 @@ def _compiled(dispatchers) -> list[tuple[int, int, int]]:
             for d in dispatchers]
 
 
-def test_short_runs_take_the_general_loop_and_long_runs_a_specialised_one():
+def test_short_runs_take_the_general_loop_and_long_runs_a_specialised_one(monkeypatch):
+    monkeypatch.delenv("VINES_STOCH_GENERAL_WORK", raising=False)  # (the suite's: every run general)
     scene = scene_from(frame(2, [CUBIC], [NOISE]))
     assert general_run(scene.n_steps) and general_run(GENERAL_WORK - 1) and not general_run(GENERAL_WORK)
     assert start_path(scene, np.random.default_rng(0)).kernel is kernel_for(scene, general=True)
+    monkeypatch.setenv("VINES_STOCH_GENERAL_WORK", "1e3")
+    assert general_run(999) and not general_run(1000)
+    monkeypatch.setenv("VINES_STOCH_GENERAL_WORK", "0")
+    assert not general_run(0) and not general_run(1)
+    monkeypatch.setenv("VINES_STOCH_GENERAL_WORK", "inf")
+    assert general_run(10**18)
+
+
+@pytest.mark.parametrize("value", ["many", "-1", "nan"])
+def test_a_general_work_it_cannot_take_is_named_with_what_it_takes(monkeypatch, value):
+    monkeypatch.setenv("VINES_STOCH_GENERAL_WORK", value)
+    with pytest.raises(ValueError, match=f"VINES_STOCH_GENERAL_WORK='{value}'.*a number >= 0"):
+        general_run(1)
+    assert any("VINES_STOCH_GENERAL_WORK" in line for line in problems())
