@@ -15,12 +15,6 @@ if os.environ.get("PYTEST_XDIST_WORKER"):
     for _blas in ("OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
         os.environ.setdefault(_blas, "1")
 
-# Every run takes the general loops (``kernels.general_run``), compiled once for the whole suite:
-# the specialised loops give the same numbers bitwise (``tests/unit/kernels/test_general_loop.py``)
-# and are compiled where a test asks for them by name (the lanes' tests, the general loop's, the
-# bench's).  With the default threshold the suite compiled 72 loops, most of its time.
-os.environ.setdefault("VINES_STOCH_GENERAL_WORK", "inf")
-
 import pytest  # noqa: E402
 
 

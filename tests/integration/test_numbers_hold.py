@@ -1,5 +1,7 @@
 """The numbers do not move: every example scenario (shortened), and each scheme on a few of
-them, gives the metrics recorded in ``tests/data/numbers.json``.
+them, gives the metrics recorded in ``tests/data/numbers.json``, run as a run of it runs (``run_chunk``:
+the general loops at these sizes, which give the specialised loops' numbers bitwise,
+``tests/unit/kernels/test_general_loop.py``).
 
 A rewrite of the step loops that keeps the arithmetic keeps the numbers bitwise on the host that
 wrote the record; another host (another SIMD width, another order of a reduction) changes the

@@ -13,7 +13,15 @@ from .. import history as hist
 from .. import psd
 from ..binding import binding
 from ..dynamics import refine_regimes
-from ..kernels import DEFAULT_SIGNALS, ground_paths, lane_scene, parameter_draws, seed_keys, simulate_chunk
+from ..kernels import (
+    DEFAULT_SIGNALS,
+    general_run,
+    ground_paths,
+    lane_scene,
+    parameter_draws,
+    seed_keys,
+    simulate_chunk,
+)
 from ..metrics import finish_table, ground_intensities
 from ..outputs import EVENT_COLUMNS, EVENT_T
 from ..scenario import History, Spectra, Study
@@ -43,15 +51,18 @@ def draw_parameters(study: Study, seed: int, point: int, realization: int,
 def run_chunk(scene: Scene, seed: int, point: int, start: int, stop: int,
               grid: tuple[int, int] | None = None, study: Study | None = None,
               common: bool = True, signals: tuple[str, ...] = DEFAULT_SIGNALS,
-              executor: str = "lanes", general: bool = False) -> tuple[pd.DataFrame, np.ndarray | None]:
+              executor: str = "lanes", general: bool | None = None) -> tuple[pd.DataFrame, np.ndarray | None]:
     """Realisations ``start..stop-1`` of one sweep point: one metric row each and, when a
     history ``grid = (stride, size)`` is asked for, the paths of the history ``signals``
     ``(len(signals), size, stop - start)``.  The realisations run in one compiled call of
     ``executor`` (``kernels.EXECUTORS``, ``kernels.simulate_chunk``; ``general``: in the scheme's
-    general loop, the same numbers, ``kernels.general_run``).  With ``study`` (a study
-    with uncertain parameters) each realisation runs its own scene (``binding``: the point's scene
-    with the drawn values set), its drawn values in columns named by their keys.
+    general loop, the same numbers; by default where the chunk's work asks, ``kernels.general_run``).
+    With ``study`` (a study with uncertain parameters) each realisation runs its own scene
+    (``binding``: the point's scene with the drawn values set), its drawn values in columns named
+    by their keys.
     ``common``: common random numbers across sweep points (see ``generator``)."""
+    if general is None:
+        general = general_run(scene.n_steps * (stop - start))
     if study is None:
         drawn, scenes = {}, scene
         parts = [simulate_chunk(scene, seed, point, start, stop, common, grid, signals, scene.event_rows,
