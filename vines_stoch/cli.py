@@ -208,16 +208,23 @@ def headline(study: Study, summary: pd.DataFrame) -> list[str]:
 
 @app.command(name="compile")
 def compile_(
-    scenarios: list[Path] = typer.Argument(..., help="Scenario TOML files."),
+    scenarios: list[Path] = typer.Argument(None, help="Scenario TOML files."),
     executor: str = typer.Option("lanes", "--executor",
                                  help="The executor the runs will use: lanes or scalar."),
     paths: bool = typer.Option(False, "--paths", help="Also the loops of runs that keep their paths."),
+    general: bool = typer.Option(False, "--general",
+                                 help="The general loops of every scheme: after them no run shorter than "
+                                      "1e8 path-steps compiles anything, whatever its structure."),
 ) -> None:
     """Compile the step loops the scenarios' runs need, and run nothing (a cluster image, a
     notebook server): later runs load them from the cache on disk."""
-    from .ensemble import compile_loops
+    from .ensemble import compile_general, compile_loops
 
-    for scenario in scenarios:
+    if not scenarios and not general:
+        _fail("compile: name scenario files, or --general")
+    if general:
+        compile_general()
+    for scenario in scenarios or ():
         try:
             study = load_scenario(scenario)
             compile_loops(study, executor=executor, paths=paths)

@@ -10,7 +10,7 @@ import sys
 
 import pytest
 
-from tests.helpers import toml_text, two_dof_data
+from tests.helpers import cli, toml_text, two_dof_data
 from vines_stoch.progress import Progress, rate_text
 
 DATA = {
@@ -83,3 +83,16 @@ def test_compile_puts_the_loops_a_run_needs_in_the_cache(tmp_path):
     assert second.returncode == 0 and "loaded from the cache" in second.stderr, second.stderr
     wrong = cli_run("compile", str(path), "--executor", "simd")
     assert wrong.returncode != 0 and "executor = 'simd'" in wrong.stderr
+
+
+def test_compile_general_readies_every_scheme_and_compile_asks_for_something():
+    """``vines-stoch compile --general`` readies the general loop of each scheme for paths and for
+    chunks of both executors (a line each); ``compile`` with neither files nor ``--general`` is
+    an error that says what it takes."""
+    code, err = cli("compile", "--general")
+    assert code == 0, err
+    for scheme in ("euler-maruyama", "sra", "rk4"):
+        assert f"the general {scheme} loop for paths" in err
+        assert f"the general {scheme} loop (every structure)" in err
+    code, err = cli("compile")
+    assert code == 2 and "name scenario files, or --general" in err

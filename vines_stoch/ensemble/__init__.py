@@ -25,9 +25,9 @@ from .chunks import chunk_parameters, draw_parameters, poincare_columns, recordi
 from .control import Interrupted
 from .folding import TARGET_STEP, PointState
 from .planning import BACKENDS, CHUNKS_PER_POINT, Plan, plan, prepare_loops, structure
-from .running import compile_loops, output_directory, run, sample, solve
+from .running import compile_general, compile_loops, output_directory, run, sample, solve
 
 __all__ = ["BACKENDS", "CHUNKS_PER_POINT", "METRICS", "TARGET_STEP", "Interrupted", "Plan", "PointState",
-           "chunk_parameters", "compile_loops", "draw_parameters", "generator", "output_directory", "plan",
-           "poincare_columns", "prepare_loops", "recording", "run", "run_chunk", "run_chunk_cuda",
-           "sample", "solve", "structure"]
+           "chunk_parameters", "compile_general", "compile_loops", "draw_parameters", "generator",
+           "output_directory", "plan", "poincare_columns", "prepare_loops", "recording", "run", "run_chunk",
+           "run_chunk_cuda", "sample", "solve", "structure"]

@@ -5,6 +5,8 @@ realisation's time histories."""
 from __future__ import annotations
 
 import os
+import sys
+import time
 from collections.abc import Callable, Mapping
 from contextlib import ExitStack, closing
 from dataclasses import dataclass
@@ -19,7 +21,7 @@ from .. import history as hist
 from .. import notices, psd, rare, schedulers, sensitivity, store
 from ..binding import binding
 from ..environment import memory_problem, require_cluster
-from ..kernels import DEFAULT_SIGNALS, check_executor, general_run
+from ..kernels import DEFAULT_SIGNALS, EXECUTORS, check_executor, general_run, simulate
 from ..metrics import residual_warnings
 from ..progress import Progress
 from ..results import Results, Solution, as_study, check_whole
@@ -419,6 +421,42 @@ def compile_loops(scenario: Study | Mapping[str, Any] | str | os.PathLike, *, ex
     signals, grid = recording(the_plan.scenes[0], grid_spec, base.output.spectra)
     prepare_loops(the_plan.scenes, base.ensemble.seed, base.ensemble.common_random_numbers, grid,
                   signals or DEFAULT_SIGNALS, show=show, executor=executor, general=the_plan.general)
+
+
+#: One small structure for each scheme and kind of stream the general loops are compiled for: a
+#: noisy and a deterministic kick-drift-kick and SRA3 scene (their paths and chunks draw from
+#: PCG64 or Philox streams, or from none), a deterministic RK4 scene.
+GENERAL_SET = (("euler-maruyama", "white-noise"), ("euler-maruyama", "harmonic"), ("sra", "white-noise"),
+               ("sra", "harmonic"), ("rk4", "harmonic"))
+
+
+def general_scene(scheme: str, load: str) -> Scene:
+    """A one-storey structure with a cubic absorber under ``load``, run by ``scheme``."""
+    force = {"type": load, "intensity": 0.1} if load == "white-noise" else {
+        "type": load, "amplitude": 0.1, "frequency": 1.0}
+    data = {"name": "general-loops", "primary": {"mass": 1.0, "stiffness": 1.0, "damping": 0.01},
+            "absorbers": [{"type": "cubic", "mass": 0.05, "stiffness": 1.0, "damping": 0.01}],
+            "loads": [force], "simulation": {"duration": 0.1, "dt": 0.01, "scheme": scheme}}
+    return build_scene(as_study(data).points[0])
+
+
+def compile_general(*, show: bool = True) -> None:
+    """Compile, or load from the cache on disk, the general loops of every scheme (``GENERAL_SET``)
+    for paths (``simulate``, ``solve``) and for chunks of both executors, and run nothing: after
+    it no run shorter than ``kernels.GENERAL_WORK`` path-steps compiles anything, whatever its
+    structure (``vines-stoch compile --general``: a cluster image, a notebook server).  ``show``:
+    a line a loop on standard error, as ``prepare_loops``."""
+    for scheme, load in GENERAL_SET:
+        scene = general_scene(scheme, load)
+        what = f"the general {scheme} loop for paths ({load})"
+        if show:
+            print(f"step loop: {what}: compiling or loading ...", end="", file=sys.stderr, flush=True)
+        start = time.monotonic()
+        simulate(scene, np.random.default_rng(0))
+        if show:
+            print(f" ready in {time.monotonic() - start:.1f} s", file=sys.stderr, flush=True)
+        for executor in EXECUTORS:
+            prepare_loops([scene], 0, True, show=show, executor=executor, general=True)
 
 
 def solve(scenario: Study | Mapping[str, Any] | str | os.PathLike, *, point: int = 0, realization: int = 0,

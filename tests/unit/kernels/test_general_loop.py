@@ -25,6 +25,7 @@ from tests.unit.kernels.test_passes import (
     RECORDED,
     frame,
 )
+from vines_stoch.ensemble.running import GENERAL_SET, compile_general, general_scene
 from vines_stoch.environment import problems
 from vines_stoch.kernels import kernel_for, simulate, simulate_chunk, start_path
 from vines_stoch.kernels.chunk import chunk_loop
@@ -101,18 +102,12 @@ def _structures():
 
 
 def test_new_structures_run_the_general_loop_and_compile_nothing():
-    """After one run of each scheme's general loop, scenes of other storeys, absorbers, loads and
-    outputs run it as paths and as chunks of either executor: no loop is made, none compiles a
-    new signature (numba's dispatcher statistics), and none is loaded from the cache."""
-    # (each scheme noisy and deterministic: a path's streams are PCG64 where it draws from
-    # numpy generators, Philox where it draws nothing, as the GPU's; a chunk's, either)
-    first = [scene_from(frame(3, [CUBIC], loads, **{"simulation.scheme": s}))
-             for s in ("euler-maruyama", "sra", "rk4") for loads in ([NOISE], [HARMONIC]) if s != "rk4" or
-             loads == [HARMONIC]]
-    for scene in first:
-        simulate(scene, np.random.default_rng(1))
-        for executor in ("scalar", "lanes"):
-            simulate_chunk(scene, SEED, 0, 0, 2, executor=executor, general=True)
+    """After ``compile_general`` (``vines-stoch compile --general``: each scheme's general loop
+    once), scenes of other storeys, absorbers, loads and outputs run it as paths and as chunks of
+    either executor: no loop is made, none compiles a new signature (numba's dispatcher
+    statistics), and none is loaded from the cache."""
+    compile_general(show=False)
+    first = [general_scene(scheme, load) for scheme, load in GENERAL_SET]
     loops = {id(kernel_for(s, general=True)): kernel_for(s, general=True) for s in first}
     chunks = [chunk_loop(k) for k in loops.values()]
     made = _made()
