@@ -130,20 +130,25 @@ def prepare_loops(scenes: list[Scene], seed: int, common: bool, grid: tuple[int,
     seen = set()
     for point, scene in enumerate(scenes):
         run = chunk_runner(scene, executor, general)  # (the lane loop or the scalar loop's chunk)
-        if run in seen or run.overloads:
+        if run in seen:
             continue
         seen.add(run)
         what = ("the pass loop (every smooth kick-drift-kick structure of three bodies or more)"
                 if run is pass_loop else f"the general {scene.scheme} loop (every structure)" if general
                 else structure(scene))
-        if show:
+        # (a loop run before may lack this run's signature: the general loop of a scheme takes
+        # PCG64 streams under the scalar executor, Philox ones under the lanes)
+        fresh, known = not run.overloads, len(run.overloads)
+        if show and fresh:
             print(f"step loop: {what}: compiling or loading ...", end="", file=sys.stderr, flush=True)
         hits, start = sum(run.stats.cache_hits.values()), time.monotonic()
         simulate_chunk(scene, seed, point, 0, 0, common, grid, signals, scene.event_rows, executor,
                        general=general)
+        if len(run.overloads) == known:
+            continue
         loaded = sum(run.stats.cache_hits.values()) > hits
         outcome = (f"{'loaded from the cache' if loaded else 'compiled (cached on disk for later runs)'} "
                    f"in {time.monotonic() - start:.1f} s")
         LOG.info("step loop: %s: %s", what, outcome)
         if show:
-            print(f" {outcome}", file=sys.stderr, flush=True)
+            print(f" {outcome}" if fresh else f"step loop: {what}: {outcome}", file=sys.stderr, flush=True)

@@ -4,11 +4,14 @@ realisation's time histories."""
 
 from __future__ import annotations
 
+import io
+import multiprocessing
 import os
 import sys
 import time
 from collections.abc import Callable, Mapping
-from contextlib import ExitStack, closing
+from concurrent.futures import ProcessPoolExecutor
+from contextlib import ExitStack, closing, redirect_stderr
 from dataclasses import dataclass
 from functools import partial
 from pathlib import Path
@@ -440,13 +443,35 @@ def general_scene(scheme: str, load: str) -> Scene:
     return build_scene(as_study(data).points[0])
 
 
-def compile_general(*, show: bool = True) -> None:
+def compile_general(*, show: bool = True, workers: int | None = None) -> None:
     """Compile, or load from the cache on disk, the general loops of every scheme (``GENERAL_SET``)
     for paths (``simulate``, ``solve``) and for chunks of both executors, and run nothing: after
     it no run shorter than ``kernels.GENERAL_WORK`` path-steps compiles anything, whatever its
-    structure (``vines-stoch compile --general``: a cluster image, a notebook server).  ``show``:
-    a line a loop on standard error, as ``prepare_loops``."""
-    for scheme, load in GENERAL_SET:
+    structure (``vines-stoch compile --general``: a cluster image, a notebook server).  The
+    schemes compile side by side in ``workers`` processes (default: one a core, at most one a
+    scheme); ``show``: a line a loop on standard error, as ``prepare_loops``."""
+    schemes = list(dict.fromkeys(scheme for scheme, _ in GENERAL_SET))
+    workers = min(workers or os.cpu_count() or 1, len(schemes))
+    if workers == 1:
+        for scheme in schemes:
+            _compile_scheme(scheme, show)
+        return
+    if show:
+        print(f"step loops: the general loops of {', '.join(schemes)} in {workers} processes",
+              file=sys.stderr, flush=True)
+    with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn")) as pool:
+        for done in [pool.submit(_compile_scheme, scheme, show, True) for scheme in schemes]:
+            print(done.result(), end="", file=sys.stderr, flush=True)
+
+
+def _compile_scheme(scheme: str, show: bool, kept: bool = False) -> str:
+    """``compile_general`` of one scheme's structures in ``GENERAL_SET``; with ``kept``, its lines
+    are returned instead of written (a worker process's, printed whole by the parent)."""
+    if kept:
+        with redirect_stderr(io.StringIO()) as lines:
+            _compile_scheme(scheme, show)
+        return lines.getvalue()
+    for load in (load for name, load in GENERAL_SET if name == scheme):
         scene = general_scene(scheme, load)
         what = f"the general {scheme} loop for paths ({load})"
         if show:
@@ -457,6 +482,7 @@ def compile_general(*, show: bool = True) -> None:
             print(f" ready in {time.monotonic() - start:.1f} s", file=sys.stderr, flush=True)
         for executor in EXECUTORS:
             prepare_loops([scene], 0, True, show=show, executor=executor, general=True)
+    return ""
 
 
 def solve(scenario: Study | Mapping[str, Any] | str | os.PathLike, *, point: int = 0, realization: int = 0,

@@ -106,7 +106,7 @@ def test_new_structures_run_the_general_loop_and_compile_nothing():
     once), scenes of other storeys, absorbers, loads and outputs run it as paths and as chunks of
     either executor: no loop is made, none compiles a new signature (numba's dispatcher
     statistics), and none is loaded from the cache."""
-    compile_general(show=False)
+    compile_general(show=False, workers=1)  # (in this process: its dispatchers are counted)
     first = [general_scene(scheme, load) for scheme, load in GENERAL_SET]
     loops = {id(kernel_for(s, general=True)): kernel_for(s, general=True) for s in first}
     chunks = [chunk_loop(k) for k in loops.values()]
