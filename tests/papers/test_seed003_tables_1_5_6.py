@@ -23,7 +23,8 @@ single-sided and the double-sided designs; we read it as the double-sided design
 within 3.5 %, tested below; the reading itself is not demonstrated); the single-sided ones give
 949, 571, 818 and 621 J (+122 %, -5.3 %, +99 %, +10.8 %; with the obstacle from the primary 1105,
 764, 993 and 929 J).  SS-4(60) as printed (D = 0.759 m) gives 1071 J against
-145 J, SS-1(20) 727 J against 586 J (+24 %) and SS-4(20) 1240 J against 526 J
+145 J, SS-1(20) 727 J against 586 J (+24 %; its other steady regime's 602 J is the paper's,
+``test_seed003_tables_2_and_4.py``) and SS-4(20) 1240 J against 526 J
 (``reports/seed-tables.md``)."""
 
 from __future__ import annotations
