@@ -5,6 +5,7 @@ mistake there is a clear error naming the variable and what it takes, not an int
 from __future__ import annotations
 
 import os
+from collections.abc import Callable
 
 #: The environment variable that sets the vector width the lane loops ask for
 #: (``jit.flags.VECTOR_BITS``), and the widths it may take (bits).
@@ -33,14 +34,20 @@ def general_work() -> float | None:
     """The path-steps below which a run takes the general loops: ``VINES_STOCH_GENERAL_WORK``
     where set (a number >= 0; ``inf``: every run, 0: none), else ``GENERAL_WORK`` (None: the
     variable holds no such number)."""
-    text = os.environ.get(GENERAL_SWITCH)
+    return _number(GENERAL_SWITCH, GENERAL_WORK, lambda work: work >= 0)
+
+
+def _number(name: str, default: float, allowed: Callable[[float], bool]) -> float | None:
+    """The number the environment variable ``name`` holds, ``default`` where it is unset (None:
+    it holds no number ``allowed`` takes)."""
+    text = os.environ.get(name)
     if text is None:
-        return GENERAL_WORK
+        return default
     try:
-        work = float(text)
+        value = float(text)
     except ValueError:
         return None
-    return work if work >= 0 else None
+    return value if allowed(value) else None
 
 
 def general_problem() -> str | None:
@@ -93,14 +100,7 @@ MEMORY_SWITCH = "VINES_STOCH_MEMORY_SHARE"
 def memory_share() -> float | None:
     """The share of memory a study may plan to keep: ``VINES_STOCH_MEMORY_SHARE`` where set, else
     ``MEMORY_SHARE`` (None: the variable holds no number > 0)."""
-    text = os.environ.get(MEMORY_SWITCH)
-    if text is None:
-        return MEMORY_SHARE
-    try:
-        share = float(text)
-    except ValueError:
-        return None
-    return share if 0 < share < float("inf") else None
+    return _number(MEMORY_SWITCH, MEMORY_SHARE, lambda share: 0 < share < float("inf"))
 
 
 def memory_problem(what: str, need: float) -> str | None:

@@ -128,8 +128,10 @@ def _quantiles(values, q, out):
 
 def quantiles(values: np.ndarray, q: np.ndarray) -> np.ndarray:
     """``np.quantile(values, q)`` (``linear``) of ``values`` without NaN, bit for bit."""
-    values = np.ascontiguousarray(values, dtype=np.float64)
-    q = np.ascontiguousarray(q, dtype=np.float64)
+    # (contiguous and writable: a read-only array, a column of a table read back, would be
+    # another numba type, and compile the loops again)
+    values = np.require(values, np.float64, ["C", "W"])
+    q = np.require(q, np.float64, ["C", "W"])
     if values.size < 2:
         return np.quantile(values, q)
     out = np.empty(q.size)

@@ -9,6 +9,7 @@ import multiprocessing
 import os
 import sys
 import time
+import warnings
 from collections.abc import Callable, Mapping
 from concurrent.futures import ProcessPoolExecutor
 from contextlib import ExitStack, closing, redirect_stderr
@@ -455,6 +456,7 @@ def compile_general(*, show: bool = True, workers: int | None = None) -> None:
     if workers == 1:
         for scheme in schemes:
             _compile_scheme(scheme, show)
+        _finish_run(show)
         return
     if show:
         print(f"step loops: the general loops of {', '.join(schemes)} in {workers} processes",
@@ -462,6 +464,48 @@ def compile_general(*, show: bool = True, workers: int | None = None) -> None:
     with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn")) as pool:
         for done in [pool.submit(_compile_scheme, scheme, show, True) for scheme in schemes]:
             print(done.result(), end="", file=sys.stderr, flush=True)
+    _finish_run(show)
+
+
+def _every_law(absorbers: list[dict], loads: list[dict]) -> dict[str, Any]:
+    """A two-storey frame with ``absorbers`` under ``loads``, a limit and history: 4 paths of 0.2 s."""
+    return {"name": "every-law", "primary": {"masses": [1.0, 1.0], "stiffnesses": [4.0, 4.0],
+                                              "dampings": [0.05, 0.05]},
+            "absorbers": absorbers, "loads": loads, "limits": {"drift": {"metric": "x_max_1", "value": 0.1}},
+            "ensemble": {"realizations": 4},
+            "simulation": {"duration": 0.2, "dt": 1e-3, "history": {"points": 8}}}
+
+
+#: Runs that touch what a run compiles besides its step loop (the summary's order statistics, the
+#: formulas of every absorber law that the estimates beside an ensemble read outside the loop,
+#: history and limits), run once by ``compile_general``: the smooth laws (estimated) and the
+#: impact and contact ones.
+EVERY_LAW = (
+    _every_law([{"type": "cubic", "mass": 0.05, "stiffness": 1.0, "damping": 0.01},
+                {"type": "bistable", "mass": 0.05, "stiffness": 1.0, "linear_stiffness": -0.05,
+                 "damping": 0.01},
+                {"type": "geometric", "mass": 0.05, "stiffness": 1.0, "free_length": 1.0, "length": 1.0,
+                 "damping": 0.01},
+                {"type": "gap", "mass": 0.05, "stiffness": 1.0, "gap": 0.01, "damping": 0.01}],
+               [{"type": "white-noise", "intensity": 0.1},
+                {"type": "ground-motion", "model": "kanai-tajimi", "soil": "medium", "intensity": 0.1}]),
+    _every_law([{"type": "impact", "mass": 0.05, "clearance": 0.02, "restitution": 0.6},
+                {"type": "hertz", "geometry": "double-sided", "mass": 0.05, "stiffness": 0.5, "damping": 0.01,
+                 "offset": 0.0, "gap": 0.05, "contact_left": {"k": 1e5}, "contact_right": {"k": 1e5}}],
+               [{"type": "white-noise", "intensity": 0.1}]),
+)
+
+
+def _finish_run(show: bool) -> None:
+    """Run each of ``EVERY_LAW`` once, keeping nothing (``compile_general``'s last step)."""
+    start = time.monotonic()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        for data in EVERY_LAW:
+            run(data, workers=1)
+    if show:
+        print(f"the rest of a run (summary, every absorber law): ready in {time.monotonic() - start:.1f} s",
+              file=sys.stderr, flush=True)
 
 
 def _compile_scheme(scheme: str, show: bool, kept: bool = False) -> str:

@@ -644,6 +644,61 @@ def _startup(directory: Path) -> list[tuple[str, float, float]]:
     return rows
 
 
+def _frame_data(storeys: int, absorbers: list[dict], loads: list[dict], **more: Any) -> dict[str, Any]:
+    """A shear frame of ``storeys`` equal storeys (1 kg, 4 n^2 N/m, 0.05 N s/m) with ``absorbers``
+    and ``loads``, 5 s at dt = 1e-3, 16 realisations: a structure no earlier run had."""
+    data = {"name": f"new-{storeys}", "primary": {"masses": [1.0] * storeys,
+                                                  "stiffnesses": [4.0 * storeys**2] * storeys,
+                                                  "dampings": [0.05] * storeys},
+            "absorbers": absorbers, "loads": loads, "ensemble": {"realizations": 16},
+            "simulation": {"duration": 5.0, "dt": 1e-3}}
+    return scenes.changed(data, more)
+
+
+#: Structures never run before (storeys, absorber laws, loads, declared outputs) whose first run
+#: ``_new_structures`` times after ``vines-stoch compile --general``.
+NEW_STRUCTURES = {
+    "1 storey, no absorber, harmonic": (
+        1, [], [{"type": "harmonic", "amplitude": 0.1, "frequency": 2.0}], {}),
+    "2 storeys, bistable + geometric NES, Kanai-Tajimi ground motion": (
+        2, [{"type": "bistable", "mass": 0.05, "stiffness": 1.0, "linear_stiffness": -0.05, "damping": 0.01},
+            {"type": "geometric", "mass": 0.05, "stiffness": 1.0, "free_length": 1.0, "length": 1.0,
+             "damping": 0.01, "floor": 1}],
+        [{"type": "ground-motion", "model": "kanai-tajimi", "soil": "medium", "intensity": 0.1}], {}),
+    "5 storeys, Hertz NES, white noise, history and limits": (
+        5, [{"type": "hertz", "geometry": "double-sided", "mass": 0.05, "stiffness": 0.5, "damping": 0.01,
+             "offset": 0.0, "gap": 0.05, "contact_left": {"k": 1e5}, "contact_right": {"k": 1e5}}],
+        [{"type": "white-noise", "intensity": 0.2}],
+        {"simulation.history": {"points": 50}, "limits": {"drift": {"metric": "x_max_1", "value": 0.2}}}),
+    "9 storeys, cubic + impact NES, Clough-Penzien ground motion": (
+        9, [{"type": "cubic", "mass": 0.05, "stiffness": 1.0, "damping": 0.01},
+            {"type": "impact", "mass": 0.05, "clearance": 0.02, "restitution": 0.6, "floor": 8}],
+        [{"type": "ground-motion", "model": "clough-penzien", "soil": "firm", "intensity": 0.1}], {}),
+}
+
+
+def _new_structures(directory: Path) -> tuple[float, list[tuple[str, float, int]]]:
+    """Seconds of ``vines-stoch compile --general`` on an empty numba cache, then the wall time of
+    the first ``vines-stoch run`` of each structure of ``NEW_STRUCTURES`` in a fresh process on
+    the cache it wrote, and how many functions that run compiled (numba's own count of the
+    entries it saved to the cache, ``NUMBA_DEBUG_CACHE``)."""
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(directory / "general-cache")}
+    start = time.perf_counter()
+    subprocess.run([sys.executable, "-m", "vines_stoch.cli", "compile", "--general"], check=True, env=env,
+                   capture_output=True)
+    compiled = time.perf_counter() - start
+    rows = []
+    for k, (name, (storeys, absorbers, loads, more)) in enumerate(NEW_STRUCTURES.items()):
+        path = directory / f"new{k}.toml"
+        path.write_text(scenes.text(_frame_data(storeys, absorbers, loads, **more)))
+        start = time.perf_counter()
+        done = subprocess.run([sys.executable, "-m", "vines_stoch.cli", "run", str(path), "--quiet",
+                               "--out", str(directory / f"new{k}")], check=True, capture_output=True,
+                              text=True, env={**env, "NUMBA_DEBUG_CACHE": "1"})
+        rows.append((name, time.perf_counter() - start, (done.stdout + done.stderr).count("data saved to")))
+    return compiled, rows
+
+
 def _estimate_times(rounds: int = 3) -> list[tuple[str, int, str, float]]:
     """``vines_stoch.estimate`` of every shipped scenario whose points it can estimate (one
     ``exact-linear`` or ``statistical-linearization`` row at least), best of ``rounds``: rows
@@ -695,6 +750,7 @@ def main(out: Path = Path("reports/benchmarks.md"), n_paths: int = 200) -> str:
         memory = {n: _peak_memory(n, Path(tmp) / f"history{n}") for n in (10_000, 100_000)}
         overhead = _distributed_overhead(Path(tmp))
         startup = _startup(Path(tmp))
+        general = _new_structures(Path(tmp))
     short = _short_paths()
     outputs = _output_costs()
     floors = _floors()
@@ -722,8 +778,8 @@ def main(out: Path = Path("reports/benchmarks.md"), n_paths: int = 200) -> str:
                     res_impact=res_impact, short=short, outputs=outputs, contact=contact,
                     same_path=same_path, ssvi=ssvi, scipy_row=scipy_row, work_precision=work_precision,
                     stability_suite=stability_suite, rare_events=rare_events, estimates=estimates,
-                    startup=startup, seismic=seismic, floors=floors, frames=frames, overhead=overhead,
-                    memory=memory)
+                    startup=startup, general=general, seismic=seismic, floors=floors, frames=frames,
+                    overhead=overhead, memory=memory)
     text = "".join(section(measured) for section in SECTIONS)
     out.parent.mkdir(parents=True, exist_ok=True)
     gpu_section = section_of(out.read_text()) if out.exists() else None  # (make bench-gpu's: kept)
@@ -956,7 +1012,7 @@ say why not in a few milliseconds), all sweep points, best of 3, in this process
 
 def _startup_section(m: dict[str, Any]) -> str:
     """The report's section "Compile time and start-up" from the measurements ``m``."""
-    startup = m["startup"]
+    startup, (compiled, firsts) = m["startup"], m["general"]
     return f"""
 ## Compile time and start-up
 
@@ -966,6 +1022,15 @@ the scene needs is compiled), then again with the cache written by the first run
 | scenario | first run, cold cache (s) | cached start-up and run (s) |
 | --- | ---: | ---: |
 {chr(10).join(f"| {name} | {cold:.1f} | {warm:.2f} |" for name, cold, warm in startup)}
+
+`vines-stoch compile --general` on an empty cache took {compiled:.1f} s (the general loops of every
+scheme, one process a core, and one run of every absorber law). After it, the first run of
+structures no run had before (16 realisations of 5 s, `vines-stoch run --quiet` in a fresh
+process; functions compiled: the entries numba saved to its cache, `NUMBA_DEBUG_CACHE`):
+
+| structure | first run (s) | functions compiled |
+| --- | ---: | ---: |
+{chr(10).join(f"| {name} | {seconds:.2f} | {saved} |" for name, seconds, saved in firsts)}
 """
 
 
