@@ -14,18 +14,20 @@ The package by concern: ``planning`` (the chunks, their sizes, the backends and 
 compiled before the first chunk), ``chunks`` (a chunk run in one compiled call into its table
 and paths), ``folding`` (each point's chunks folded in realisation order, the checkpoint),
 ``tables`` (the result tables gathered and written), ``control`` (Ctrl-C, the cluster's
-client) and ``running`` (``run``, ``sample``, ``solve``).
+client), ``running`` (``run``, ``sample``, ``solve``) and ``ahead`` (loops compiled ahead of the
+runs: ``compile_loops``, ``compile_general``).
 """
 
 from __future__ import annotations
 
 from ..metrics import METRICS
 from ..streams import generator
+from .ahead import compile_general, compile_loops
 from .chunks import chunk_parameters, draw_parameters, poincare_columns, recording, run_chunk, run_chunk_cuda
 from .control import Interrupted
 from .folding import TARGET_STEP, PointState
 from .planning import BACKENDS, CHUNKS_PER_POINT, Plan, plan, prepare_loops, structure
-from .running import compile_general, compile_loops, output_directory, run, sample, solve
+from .running import output_directory, run, sample, solve
 
 __all__ = ["BACKENDS", "CHUNKS_PER_POINT", "METRICS", "TARGET_STEP", "Interrupted", "Plan", "PointState",
            "chunk_parameters", "compile_general", "compile_loops", "draw_parameters", "generator",

@@ -25,7 +25,7 @@ from tests.unit.kernels.test_passes import (
     RECORDED,
     frame,
 )
-from vines_stoch.ensemble.running import GENERAL_SET, compile_general, general_scene
+from vines_stoch.ensemble.ahead import GENERAL_SET, compile_general, general_scene
 from vines_stoch.environment import problems
 from vines_stoch.kernels import kernel_for, simulate, simulate_chunk, start_path
 from vines_stoch.kernels.chunk import chunk_loop

@@ -1,0 +1,146 @@
+"""Step loops compiled ahead of the runs that need them, running nothing (a cluster image, a
+notebook server): those of a scenario's runs (``compile_loops``) and the general loops of every
+scheme (``compile_general``), ``vines-stoch compile``."""
+
+from __future__ import annotations
+
+import io
+import multiprocessing
+import os
+import sys
+import time
+import warnings
+from collections.abc import Mapping
+from concurrent.futures import ProcessPoolExecutor
+from contextlib import redirect_stderr
+from typing import Any
+
+import numpy as np
+
+from ..kernels import DEFAULT_SIGNALS, EXECUTORS, check_executor, simulate
+from ..results import as_study
+from ..scenario import History, Study
+from ..scene import Scene, build_scene
+from .chunks import recording
+from .planning import plan, prepare_loops
+from .running import run
+
+
+def compile_loops(scenario: Study | Mapping[str, Any] | str | os.PathLike, *, executor: str = "lanes",
+                  paths: bool = False, show: bool = True) -> None:
+    """Compile, or load from the cache on disk, the step loops that ``run`` of ``scenario`` with
+    ``executor`` (and ``paths``) needs, and run nothing: ahead of the runs, for a cluster image
+    or a notebook server (``vines-stoch compile``).  A loop depends on the structure (bodies,
+    floors, absorber laws, loads, what the run records), not on the parameters' values, so one
+    scenario covers its whole sweep and its uncertain parameters; ``show``: a line a loop on
+    standard error (``prepare_loops``)."""
+    check_executor(executor)
+    study = as_study(scenario)
+    base = study.base
+    grid_spec = base.simulation.history or (History() if paths else None)
+    the_plan = plan(study, executor=executor)
+    signals, grid = recording(the_plan.scenes[0], grid_spec, base.output.spectra)
+    prepare_loops(the_plan.scenes, base.ensemble.seed, base.ensemble.common_random_numbers, grid,
+                  signals or DEFAULT_SIGNALS, show=show, executor=executor, general=the_plan.general)
+
+
+#: One small structure for each scheme and kind of stream the general loops are compiled for: a
+#: noisy and a deterministic kick-drift-kick and SRA3 scene (their paths and chunks draw from
+#: PCG64 or Philox streams, or from none), a deterministic RK4 scene.
+GENERAL_SET = (("euler-maruyama", "white-noise"), ("euler-maruyama", "harmonic"), ("sra", "white-noise"),
+               ("sra", "harmonic"), ("rk4", "harmonic"))
+
+
+def general_scene(scheme: str, load: str) -> Scene:
+    """A one-storey structure with a cubic absorber under ``load``, run by ``scheme``."""
+    force = {"type": load, "intensity": 0.1} if load == "white-noise" else {
+        "type": load, "amplitude": 0.1, "frequency": 1.0}
+    data = {"name": "general-loops", "primary": {"mass": 1.0, "stiffness": 1.0, "damping": 0.01},
+            "absorbers": [{"type": "cubic", "mass": 0.05, "stiffness": 1.0, "damping": 0.01}],
+            "loads": [force], "simulation": {"duration": 0.1, "dt": 0.01, "scheme": scheme}}
+    return build_scene(as_study(data).points[0])
+
+
+def compile_general(*, show: bool = True, workers: int | None = None) -> None:
+    """Compile, or load from the cache on disk, the general loops of every scheme (``GENERAL_SET``)
+    for paths (``simulate``, ``solve``) and for chunks of both executors, and run nothing: after
+    it no run shorter than ``kernels.GENERAL_WORK`` path-steps compiles anything, whatever its
+    structure (``vines-stoch compile --general``: a cluster image, a notebook server).  The
+    schemes compile side by side in ``workers`` processes (default: one a core, at most one a
+    scheme); ``show``: a line a loop on standard error, as ``prepare_loops``."""
+    schemes = list(dict.fromkeys(scheme for scheme, _ in GENERAL_SET))
+    workers = min(workers or os.cpu_count() or 1, len(schemes))
+    if workers == 1:
+        for scheme in schemes:
+            _compile_scheme(scheme, show)
+        _finish_run(show)
+        return
+    if show:
+        print(f"step loops: the general loops of {', '.join(schemes)} in {workers} processes",
+              file=sys.stderr, flush=True)
+    with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn")) as pool:
+        for done in [pool.submit(_compile_scheme, scheme, show, True) for scheme in schemes]:
+            print(done.result(), end="", file=sys.stderr, flush=True)
+    _finish_run(show)
+
+
+def _every_law(absorbers: list[dict], loads: list[dict]) -> dict[str, Any]:
+    """A two-storey frame with ``absorbers`` under ``loads``, a limit and history: 4 paths of 0.2 s."""
+    return {"name": "every-law", "primary": {"masses": [1.0, 1.0], "stiffnesses": [4.0, 4.0],
+                                              "dampings": [0.05, 0.05]},
+            "absorbers": absorbers, "loads": loads, "limits": {"drift": {"metric": "x_max_1", "value": 0.1}},
+            "ensemble": {"realizations": 4},
+            "simulation": {"duration": 0.2, "dt": 1e-3, "history": {"points": 8}}}
+
+
+#: Runs that touch what a run compiles besides its step loop (the summary's order statistics, the
+#: formulas of every absorber law that the estimates beside an ensemble read outside the loop,
+#: history and limits), run once by ``compile_general``: the smooth laws (estimated) and the
+#: impact and contact ones.
+EVERY_LAW = (
+    _every_law([{"type": "cubic", "mass": 0.05, "stiffness": 1.0, "damping": 0.01},
+                {"type": "bistable", "mass": 0.05, "stiffness": 1.0, "linear_stiffness": -0.05,
+                 "damping": 0.01},
+                {"type": "geometric", "mass": 0.05, "stiffness": 1.0, "free_length": 1.0, "length": 1.0,
+                 "damping": 0.01},
+                {"type": "gap", "mass": 0.05, "stiffness": 1.0, "gap": 0.01, "damping": 0.01}],
+               [{"type": "white-noise", "intensity": 0.1},
+                {"type": "ground-motion", "model": "kanai-tajimi", "soil": "medium", "intensity": 0.1}]),
+    _every_law([{"type": "impact", "mass": 0.05, "clearance": 0.02, "restitution": 0.6},
+                {"type": "hertz", "geometry": "double-sided", "mass": 0.05, "stiffness": 0.5, "damping": 0.01,
+                 "offset": 0.0, "gap": 0.05, "contact_left": {"k": 1e5}, "contact_right": {"k": 1e5}}],
+               [{"type": "white-noise", "intensity": 0.1}]),
+)
+
+
+def _finish_run(show: bool) -> None:
+    """Run each of ``EVERY_LAW`` once, keeping nothing (``compile_general``'s last step)."""
+    start = time.monotonic()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        for data in EVERY_LAW:
+            run(data, workers=1)
+    if show:
+        print(f"the rest of a run (summary, every absorber law): ready in {time.monotonic() - start:.1f} s",
+              file=sys.stderr, flush=True)
+
+
+def _compile_scheme(scheme: str, show: bool, kept: bool = False) -> str:
+    """``compile_general`` of one scheme's structures in ``GENERAL_SET``; with ``kept``, its lines
+    are returned instead of written (a worker process's, printed whole by the parent)."""
+    if kept:
+        with redirect_stderr(io.StringIO()) as lines:
+            _compile_scheme(scheme, show)
+        return lines.getvalue()
+    for load in (load for name, load in GENERAL_SET if name == scheme):
+        scene = general_scene(scheme, load)
+        what = f"the general {scheme} loop for paths ({load})"
+        if show:
+            print(f"step loop: {what}: compiling or loading ...", end="", file=sys.stderr, flush=True)
+        start = time.monotonic()
+        simulate(scene, np.random.default_rng(0))
+        if show:
+            print(f" ready in {time.monotonic() - start:.1f} s", file=sys.stderr, flush=True)
+        for executor in EXECUTORS:
+            prepare_loops([scene], 0, True, show=show, executor=executor, general=True)
+    return ""
