@@ -214,7 +214,8 @@ def compile_(
     paths: bool = typer.Option(False, "--paths", help="Also the loops of runs that keep their paths."),
     general: bool = typer.Option(False, "--general",
                                  help="The general loops of every scheme: after them no run shorter than "
-                                      "1e8 path-steps compiles anything, whatever its structure."),
+                                      "1e8 path-steps (VINES_STOCH_GENERAL_WORK) compiles a step loop, "
+                                      "whatever its structure."),
 ) -> None:
     """Compile the step loops the scenarios' runs need, and run nothing (a cluster image, a
     notebook server): later runs load them from the cache on disk."""

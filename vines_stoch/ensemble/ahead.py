@@ -63,11 +63,12 @@ def general_scene(scheme: str, load: str) -> Scene:
 
 def compile_general(*, show: bool = True, workers: int | None = None) -> None:
     """Compile, or load from the cache on disk, the general loops of every scheme (``GENERAL_SET``)
-    for paths (``simulate``, ``solve``) and for chunks of both executors, and run nothing: after
-    it no run shorter than ``kernels.GENERAL_WORK`` path-steps compiles anything, whatever its
-    structure (``vines-stoch compile --general``: a cluster image, a notebook server).  The
-    schemes compile side by side in ``workers`` processes (default: one a core, at most one a
-    scheme); ``show``: a line a loop on standard error, as ``prepare_loops``."""
+    for paths (``simulate``, ``solve``) and for chunks of both executors, keeping nothing: after
+    it no run shorter than ``kernels.GENERAL_WORK`` path-steps compiles a step loop, whatever its
+    structure (``vines-stoch compile --general``: a cluster image, a notebook server); then two
+    tiny runs (``EVERY_LAW``) compile what a run compiles besides its loop.  The schemes compile
+    side by side in ``workers`` processes (default: one a core, at most one a scheme); ``show``:
+    a line a loop on standard error, as ``prepare_loops``."""
     schemes = list(dict.fromkeys(scheme for scheme, _ in GENERAL_SET))
     workers = min(workers or os.cpu_count() or 1, len(schemes))
     if workers == 1:

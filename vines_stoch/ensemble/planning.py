@@ -138,8 +138,8 @@ def prepare_loops(scenes: list[Scene], seed: int, common: bool, grid: tuple[int,
                 else structure(scene))
         # (a loop run before may lack this run's signature: the general loop of a scheme takes
         # PCG64 streams under the scalar executor, Philox ones under the lanes)
-        fresh, known = not run.overloads, len(run.overloads)
-        if show and fresh:
+        known = len(run.overloads)
+        if show and not known:
             print(f"step loop: {what}: compiling or loading ...", end="", file=sys.stderr, flush=True)
         hits, start = sum(run.stats.cache_hits.values()), time.monotonic()
         simulate_chunk(scene, seed, point, 0, 0, common, grid, signals, scene.event_rows, executor,
@@ -151,4 +151,4 @@ def prepare_loops(scenes: list[Scene], seed: int, common: bool, grid: tuple[int,
                    f"in {time.monotonic() - start:.1f} s")
         LOG.info("step loop: %s: %s", what, outcome)
         if show:
-            print(f" {outcome}" if fresh else f"step loop: {what}: {outcome}", file=sys.stderr, flush=True)
+            print(f"step loop: {what}: {outcome}" if known else f" {outcome}", file=sys.stderr, flush=True)
