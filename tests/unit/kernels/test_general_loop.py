@@ -7,6 +7,8 @@ compiling anything."""
 
 from __future__ import annotations
 
+import os
+
 import numpy as np
 import pytest
 
@@ -152,3 +154,18 @@ def test_a_general_work_it_cannot_take_is_named_with_what_it_takes(monkeypatch, 
     with pytest.raises(ValueError, match=f"VINES_STOCH_GENERAL_WORK='{value}'.*a number >= 0"):
         general_run(1)
     assert any("VINES_STOCH_GENERAL_WORK" in line for line in problems())
+
+
+def test_the_bench_times_the_specialised_loops_and_starts_fresh_processes_as_a_user_s(monkeypatch):
+    """``make bench``'s throughput rows run the loops specialised to their structure whatever their
+    work (``bench.main``), its general-loop row the general loop, and the processes of its start-up
+    section the default choice; the variable is as it was after each block."""
+    from vines_stoch.validation import bench
+
+    monkeypatch.delenv("VINES_STOCH_GENERAL_WORK", raising=False)
+    with bench._general_work("0"):
+        assert not general_run(1) and "VINES_STOCH_GENERAL_WORK" not in bench._fresh_env(A="1")
+        with bench._general_work("inf"):
+            assert general_run(10**18)
+        assert not general_run(1)
+    assert "VINES_STOCH_GENERAL_WORK" not in os.environ and general_run(1)
