@@ -11,11 +11,13 @@ registers too, at several times the compile time of every kernel).
 
 from __future__ import annotations
 
+from functools import cache
+
 import numpy as np
 from numba import njit
 
 from ..jit.flags import INLINE, KERNEL
-from ..jit.intrinsics import larger, pick, plain, put, runtime_value, scratch_of, smaller
+from ..jit.intrinsics import larger, pick, plain, put, runtime_value, scratch_within, smaller
 from ..outputs import (
     ACC_MAX_K,
     DRIFT_MAX_K,
@@ -65,7 +67,7 @@ from ..signals import (
     SIGNAL_X,
     SIGNAL_XA,
 )
-from .protocol import BODY_ROOM, KIND_BITS, KINDS, ROOM
+from .protocol import KIND_BITS, KINDS
 
 #: Impacts resolved inside one outer step before the rest of the step ignores the walls.
 MAX_EVENTS = 64
@@ -80,11 +82,26 @@ CHECK_EVERY = 1024
 #: A displacement beyond this counts as divergence.
 DIVERGED = 1e100
 
-#: Zeroed arrays on a loop's stack, one item a body or a floor: of a size constant in the loop, or
-#: read at run time within ``protocol.BODY_ROOM`` and ``protocol.ROOM`` (``jit.intrinsics.scratch_of``).
-body_scratch, floor_scratch = scratch_of(BODY_ROOM), scratch_of(ROOM)
 
 NOISE_BIT, IMPACT_BIT, HERTZ_BIT, PARTNERS_BIT, FILTERED_BIT, GROUND_BIT, SHAPED_BIT = KIND_BITS.values()
+
+
+@cache
+def stack_scratch(body_room: int, floor_room: int) -> tuple:
+    """Zeroed arrays on a loop's stack, one item a body (``body_scratch(n)``) or a floor
+    (``floor_scratch(n)``), each holding ``body_room`` or ``floor_room`` items or ``n`` where the
+    loop knows it as a constant (``protocol.rooms``: the loop's sizes where it takes them as
+    constants; ``jit.intrinsics.scratch_within``)."""
+
+    @njit(**INLINE)
+    def body_scratch(n):
+        return scratch_within(n, body_room)
+
+    @njit(**INLINE)
+    def floor_scratch(n):
+        return scratch_within(n, floor_room)
+
+    return body_scratch, floor_scratch
 
 
 @njit(**INLINE)

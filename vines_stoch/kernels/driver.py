@@ -38,22 +38,21 @@ from .common import (
     IMPACT_BIT,
     bit_set,
     block_end,
-    body_scratch,
     diverged,
     first_passages,
     floor_peaks,
-    floor_scratch,
     fold_declared,
     kinds_of,
     record_history,
     record_sample,
     recording,
+    stack_scratch,
     start_history,
     stored_energy,
     write_floor_metrics,
 )
 from .energy import write_accounts
-from .protocol import Spec, Step
+from .protocol import Spec, Step, rooms
 
 
 @njit(**INLINE)
@@ -79,6 +78,7 @@ def step_loop(plug: Step, spec: Spec):
     SAMPLES = plug.samples
     FORCE_PEAKS = plug.force_peaks
     NB, NF = spec.n_bodies, spec.n_floors
+    body_scratch, floor_scratch = stack_scratch(*rooms(spec)[:2])  # (arrays on the loop's stack)
     GPU = spec.gpu
     _, HAS_IMPACT, HAS_HERTZ, _, _, _, _ = kinds_of(spec)  # (what the scene holds, or ``RUN_TIME``)
 

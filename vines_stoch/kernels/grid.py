@@ -16,7 +16,6 @@ from ..streams.rng import normal
 from .carry import GROUND_NEXT, restore_loads, restore_rows, save_loads, save_rows
 from .common import attachment_forces, shaped_forces
 from .loads import advance_filters, copy_into, excitation, phasors, rotations, turn
-from .protocol import ROOM
 
 
 class GridLoads(NamedTuple):
@@ -47,19 +46,22 @@ class GridLoads(NamedTuple):
 
 
 @njit(**INLINE)
-def grid_room(nf: int, nr: int, nz: int, load3: int, mid: int, copies: int, load_copy: int) -> GridLoads:
+def grid_room(nf: int, nr: int, nz: int, load3: int, mid: int, copies: int, load_copy: int, floor_room: int,
+              row_room: int, state_room: int) -> GridLoads:
     """A step's ``GridLoads`` on the loop's stack: ``nf`` floors, ``nr`` load rows, ``nz``
-    filter states; ``load3``, ``mid`` (the midpoint's and half-step phasors), ``copies`` (of
-    the filter states) and ``load_copy``: the sizes of what a step keeps of its own.  Each size
-    a constant, or a run-time count within ``protocol.ROOM`` (``jit.intrinsics.scratch_within``:
-    the CPU loop's load rows and filter states, ``paths.spec_of``)."""
-    return GridLoads(scratch_within(nf, ROOM), scratch_within(nf, ROOM), scratch_within(nf, ROOM),
-                     scratch_within(load3, ROOM), scratch_within(nr, ROOM), scratch_within(nr, ROOM),
-                     scratch_within(mid, ROOM), scratch_within(mid, ROOM), scratch_within(nr, ROOM),
-                     scratch_within(nr, ROOM), scratch_within(mid, ROOM), scratch_within(mid, ROOM),
-                     scratch_within(nz, ROOM), scratch_within(nz, ROOM), scratch_within(nz, ROOM),
-                     scratch_within(copies, ROOM), scratch_within(copies, ROOM),
-                     scratch_within(load_copy, ROOM))
+    filter states; ``load3`` (a floor's), ``mid`` (a load row's: the midpoint's and half-step
+    phasors), ``copies`` (a filter state's) and ``load_copy`` (a floor's): the sizes of what a step
+    keeps of its own.  Each array holds the room of its kind, ``floor_room``, ``row_room`` or
+    ``state_room`` (constants of the loop: ``protocol.rooms``; ``jit.intrinsics.scratch_within``)."""
+    f = floor_room
+    r = row_room
+    z = state_room
+    return GridLoads(scratch_within(nf, f), scratch_within(nf, f), scratch_within(nf, f),
+                     scratch_within(load3, f), scratch_within(nr, r), scratch_within(nr, r),
+                     scratch_within(mid, r), scratch_within(mid, r), scratch_within(nr, r),
+                     scratch_within(nr, r), scratch_within(mid, r), scratch_within(mid, r),
+                     scratch_within(nz, z), scratch_within(nz, z), scratch_within(nz, z),
+                     scratch_within(copies, z), scratch_within(copies, z), scratch_within(load_copy, f))
 
 
 @njit(**INLINE)

@@ -68,17 +68,16 @@ from .common import (
     SHAPED_BIT,
     attachment_forces,
     bit_set,
-    body_scratch,
     contact_force,
     contact_forces,
     contact_step,
-    floor_scratch,
     keep_in_cavities,
     kinds_of,
     log_event,
     pin_to_walls,
     resolve_impact,
     shaped_forces,
+    stack_scratch,
     stick_together,
 )
 from .energy import absorber_dissipation, impulse_work, momentum, structure_dissipation
@@ -97,7 +96,7 @@ from .grid import (
     step_normals,
 )
 from .loads import has_breaks
-from .protocol import ROOM, RUN_TIME, Step
+from .protocol import ROOM, RUN_TIME, Step, rooms
 
 #: Iterations of the bracketed search for the impact instant (Illinois method).
 ROOT_ITERATIONS = 100
@@ -360,6 +359,8 @@ def kdk_step(spec) -> Step:
     MEMO_ROOM = MEMO * (NF if NF >= 0 else ROOM) if TREE else 1
     NR = spec.n_rows
     NZ = spec.n_states
+    BODY_ITEMS, FLOOR_ITEMS, ROW_ITEMS, STATE_ITEMS = rooms(spec)  # (the stack arrays' rooms)
+    body_scratch, floor_scratch = stack_scratch(BODY_ITEMS, FLOOR_ITEMS)  # (arrays on the loop's stack)
     GPU = spec.gpu
 
     @njit(**INLINE)
@@ -374,7 +375,7 @@ def kdk_step(spec) -> Step:
         tree = TREE if TREE >= 0 else bit_set(grid.kinds, NOISE_BIT) and bit_set(grid.kinds, EVENT_BITS)
         nr, nz = NR if NR >= 0 else ex.forces.shape[0], NZ if NZ >= 0 else fl.phi.shape[0]
         na, nw = nb - nf, nb if partners else nf
-        gl = grid_room(nf, nr, nz, 0, 0, nz, nf)
+        gl = grid_room(nf, nr, nz, 0, 0, nz, nf, FLOOR_ITEMS, ROW_ITEMS, STATE_ITEMS)
         noise_scale, slot = floor_scratch(nf), floor_scratch(nf)
         noisy = noise_scales(noise.sigma, grid.dt, noise_scale, slot)
         # the seed of the Brownian trees inside the steps (``brownian``)

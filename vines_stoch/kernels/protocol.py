@@ -42,6 +42,19 @@ from typing import Any, NamedTuple
 RUN_TIME, ROOM = -1, 16
 BODY_ROOM = 2 * ROOM
 
+
+
+def rooms(spec) -> tuple[int, int, int, int]:
+    """The items a loop's stack arrays hold (``jit.intrinsics.scratch_within``'s room) for its
+    bodies, floors, load rows and filter states: a size the loop takes as a constant (``Spec``),
+    or the most a run-time count may be, ``BODY_ROOM`` and ``ROOM`` (``paths.spec_of``).  An
+    array of a count that numba types as a plain integer (a count worked out from others, or
+    passed through a function) holds its room: with ``ROOM`` there, a structure of more floors
+    than ``ROOM`` wrote past its arrays."""
+    return tuple(size if size >= 0 else room for size, room in zip(
+        (spec.n_bodies, spec.n_floors, spec.n_rows, spec.n_states), (BODY_ROOM, ROOM, ROOM, ROOM)))
+
+
 #: What a scene holds that a loop may take as constants (``Spec``'s flags, in this order), and
 #: their bits in the run's ``Grid.kinds``, which a loop built with ``RUN_TIME`` in their place
 #: reads at run time (``common.kinds_of``).

@@ -39,24 +39,23 @@ from .common import (
     accelerate,
     attachment_forces,
     bit_set,
-    body_scratch,
     contact_force,
     contact_forces,
     contact_step,
     first_passages,
     floor_peaks,
-    floor_scratch,
     keep_in_cavities,
     kinds_of,
     log_event,
     pin_to_walls,
     resolve_impact,
     shaped_forces,
+    stack_scratch,
     stick_together,
 )
 from .events import EXIT, IMPACT_EVENT, NONE, ONSET, event_ahead, gap_sign
 from .loads import applied, has_breaks, next_break
-from .protocol import Step
+from .protocol import Step, rooms
 
 NEWTON_ITERATIONS = 12
 #: Bits of the ``contact`` argument of ``accelerations``: Hertz contact forces (at run time:
@@ -246,6 +245,7 @@ def rk4_step(spec) -> Step:
     (``loads.has_breaks``) end its sub-steps (a run-time value).  ``spec.gpu``: per-absorber flags
     on the stack (as ``kdk.kdk_step``)."""
     NB, NF = spec.n_bodies, spec.n_floors  # (``RUN_TIME``: the counts read at run time)
+    body_scratch, floor_scratch = stack_scratch(*rooms(spec)[:2])  # (arrays on the loop's stack)
     NA = NB - NF
     GPU = spec.gpu
     HAS_NOISE, HAS_IMPACT, HAS_HERTZ, PARTNERS, FILTERED, GROUND, SHAPED = kinds_of(spec)  # (or ``RUN_TIME``)

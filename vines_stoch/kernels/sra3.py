@@ -31,10 +31,9 @@ from .common import (
     accelerate,
     attachment_forces,
     bit_set,
-    body_scratch,
-    floor_scratch,
     kinds_of,
     shaped_forces,
+    stack_scratch,
 )
 from .energy import momentum
 from .grid import (
@@ -51,7 +50,7 @@ from .grid import (
     step_normals,
 )
 from .loads import has_breaks
-from .protocol import Step
+from .protocol import Step, rooms
 
 
 @njit(**INLINE)
@@ -153,6 +152,8 @@ def sra3_step(spec) -> Step:
     NB, NF = spec.n_bodies, spec.n_floors
     NR = spec.n_rows
     NZ = spec.n_states
+    BODY_ITEMS, FLOOR_ITEMS, ROW_ITEMS, STATE_ITEMS = rooms(spec)  # (the stack arrays' rooms)
+    body_scratch, floor_scratch = stack_scratch(BODY_ITEMS, FLOOR_ITEMS)  # (arrays on the loop's stack)
     HAS_NOISE, HAS_IMPACT, HAS_HERTZ, PARTNERS, FILTERED, GROUND, SHAPED = kinds_of(spec)  # (or ``RUN_TIME``)
     ROOT3 = math.sqrt(3.0)
 
@@ -164,7 +165,7 @@ def sra3_step(spec) -> Step:
         filtered = FILTERED if FILTERED >= 0 else bit_set(grid.kinds, FILTERED_BIT)
         ground = GROUND if GROUND >= 0 else bit_set(grid.kinds, GROUND_BIT)
         nr, nz = NR if NR >= 0 else ex.forces.shape[0], NZ if NZ >= 0 else fl.phi.shape[0]
-        gl = grid_room(nf, nr, nz, nf, nr, 0, 0)
+        gl = grid_room(nf, nr, nz, nf, nr, 0, 0, FLOOR_ITEMS, ROW_ITEMS, STATE_ITEMS)
         noise_scale, slot = floor_scratch(nf), floor_scratch(nf)
         noisy = noise_scales(noise.sigma, grid.dt, noise_scale, slot)
         replayed = int(carry[REPLAYED]) if resume else 0

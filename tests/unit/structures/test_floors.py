@@ -8,6 +8,8 @@
   roof against a tight scipy DOP853 path with located impacts (EDM, impact count, energy balance).
 - Bad multi-storey input refused with the dotted key and the allowed range.
 - A one-storey primary written as lists gives bit-identical metrics to the scalar form.
+- A frame of more floors than a loop's stack room (``protocol.ROOM``) against scipy (RK4) and
+  the exact mean input of its white noise (kick-drift-kick, impacts included).
 
 Every reference (matrices, Lyapunov solution, event-located path) is built in this file from
 the equations of MODEL.md, not from the package.
@@ -21,8 +23,10 @@ import pytest
 from scipy.integrate import solve_ivp
 from scipy.linalg import solve_continuous_lyapunov
 
-from tests.helpers import study_from
+from tests.helpers import scene_from, study_from
 from vines_stoch.ensemble import sample
+from vines_stoch.kernels import simulate
+from vines_stoch.kernels.protocol import ROOM
 from vines_stoch.scenario import ScenarioError
 
 
@@ -396,3 +400,65 @@ def test_history_selects_floor_signals(tmp_path):
 def test_history_signal_out_of_range_is_refused():
     with pytest.raises(ScenarioError, match=r"simulation\.history\.signals.*'drift_4'.*\[1, 3\]"):
         floor_history(["drift_4"])
+
+
+# ----------------------------------------------------------------------------- taller than a loop's room
+
+#: Floors beyond what a loop's stack arrays hold when it reads the count at run time
+#: (``protocol.ROOM``): such a structure runs a loop of its own sizes (``paths.spec_of``), whose
+#: stack arrays hold those sizes (``protocol.rooms``).  Before, an array whose count numba typed
+#: as a plain integer held ``ROOM`` items: 17 floors or more wrote past it (zero metrics or a crash).
+TALL = ROOM + 4
+TALL_K = 4.0 * TALL**2  # (the first mode near 1 rad/s, as make bench's floors)
+
+
+def tall_frame(absorbers: list[dict], loads: list[dict], **simulation) -> dict:
+    """A shear frame of ``TALL`` unit floors with ``absorbers`` and ``loads``."""
+    return {"name": "tall", "primary": floors([1.0] * TALL, [TALL_K] * TALL, [0.05] * TALL),
+            "absorbers": absorbers, "loads": loads, "simulation": simulation}
+
+
+def test_a_frame_taller_than_the_loops_room_against_scipy():
+    """RK4: a roof impulse on the frame with a cubic NES on the roof, against DOP853 at rtol
+    1e-12 (which moves by 3e-10 from rtol 1e-10): the final state converges to it at the scheme's
+    order, the largest error divided by 15.6 (4th order: 16; asked: 12 to 20) from dt = 1e-3 to
+    5e-4, where it is 1.3e-6 of the largest state value (the roof's impulse excites the modes up
+    to omega_max = 80 rad/s, omega_max dt = 0.04)."""
+    nes = {"type": "cubic", "mass": 0.05, "stiffness": 50.0, "damping": 0.02}
+    m, k, c = np.ones(TALL), storey_matrix([TALL_K] * TALL), storey_matrix([0.05] * TALL)
+
+    def rhs(t, y):
+        x, v = y[:TALL + 1], y[TALL + 1:]
+        u, w = x[TALL] - x[TALL - 1], v[TALL] - v[TALL - 1]
+        f = -nes["stiffness"] * u**3 - nes["damping"] * w  # (the roof's force on the NES)
+        acc = np.append((-k @ x[:TALL] - c @ v[:TALL]) / m, f / nes["mass"])
+        acc[TALL - 1] -= f
+        return np.concatenate([v, acc])
+
+    y0 = np.zeros(2 * (TALL + 1))
+    y0[2 * TALL] = 1.0  # (the roof's velocity)
+    ref = solve_ivp(rhs, (0.0, 5.0), y0, method="DOP853", rtol=1e-12, atol=1e-14).y[:, -1]
+    errors = []
+    for dt in (1e-3, 5e-4):
+        final = np.zeros((2, TALL + 1))
+        simulate(scene_from(tall_frame([nes], [{"type": "impulse", "velocity": 1.0}], duration=5.0, dt=dt,
+                                       scheme="rk4")), final=final)
+        errors.append(np.abs(np.concatenate([final[0], final[1]]) - ref).max())
+    assert errors[1] < 2e-6 * np.abs(ref).max() and 12.0 < errors[0] / errors[1] < 20.0, errors
+
+
+def test_a_frame_taller_than_the_loops_room_takes_the_input_of_its_noise():
+    """Kick-drift-kick: white noise of intensity s on the roof feeds in ``s^2 T / (2 m)`` on average
+    over a window T, whatever the structure (the roof's unit mass), with a cubic NES on the roof and
+    an impact absorber below it: 32 paths within 4 standard errors, and each path's energy
+    balance closed (``energy_residual`` below 1e-3)."""
+    absorbers = [{"type": "cubic", "mass": 0.05, "stiffness": 50.0, "damping": 0.02},
+                 {"type": "impact", "floor": TALL - 1, "mass": 0.05, "clearance": 0.002, "restitution": 0.7}]
+    data = tall_frame(absorbers, [{"type": "white-noise", "intensity": 0.5}], duration=4.0, dt=1e-3)
+    data["ensemble"] = {"realizations": 32, "seed": 3}
+    frame = sample(study_from(data), workers=1)
+    assert (frame["status"] == "ok").all() and (frame["energy_residual"].abs() < 1e-3).all()
+    expected = 0.5**2 * 4.0 / 2.0
+    mean, se = frame["input_energy"].mean(), frame["input_energy"].std(ddof=1) / np.sqrt(len(frame))
+    assert abs(mean - expected) < 4.0 * se, (mean, expected, se)
+    assert frame["impacts"].sum() > 0
