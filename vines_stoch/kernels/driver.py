@@ -77,9 +77,8 @@ def step_loop(plug: Step, spec: Spec):
     INTEGRATES = plug.integrates
     SAMPLES = plug.samples
     FORCE_PEAKS = plug.force_peaks
-    NB, NF = spec.n_bodies, spec.n_floors
+    NB, NF, GPU = spec.n_bodies, spec.n_floors, spec.gpu
     body_scratch, floor_scratch = stack_scratch(*rooms(spec)[:2])  # (arrays on the loop's stack)
-    GPU = spec.gpu
     _, HAS_IMPACT, HAS_HERTZ, _, _, _, _ = kinds_of(spec)  # (what the scene holds, or ``RUN_TIME``)
 
     @njit(**KERNEL)

@@ -349,7 +349,7 @@ def kdk_step(spec) -> Step:
     arrays (on the stack the impact-rich scene ran 8 % slower).
     """
     HAS_NOISE, HAS_IMPACT, HAS_HERTZ, PARTNERS, FILTERED, GROUND, SHAPED = kinds_of(spec)  # (or ``RUN_TIME``)
-    NB, NF = spec.n_bodies, spec.n_floors
+    NB, NF, GPU = spec.n_bodies, spec.n_floors, spec.gpu
     NA = spec.n_bodies - spec.n_floors
     # sub-steps take increments from the Brownian trees (white noise, impact or Hertz absorbers):
     # a constant, or ``RUN_TIME``; room for the trees' descent memo where they may
@@ -357,11 +357,9 @@ def kdk_step(spec) -> Step:
     TREE = (RUN_TIME if RUN_TIME in (HAS_NOISE, HAS_IMPACT, HAS_HERTZ)
             else HAS_NOISE and (HAS_IMPACT or HAS_HERTZ))
     MEMO_ROOM = MEMO * (NF if NF >= 0 else ROOM) if TREE else 1
-    NR = spec.n_rows
-    NZ = spec.n_states
+    NR, NZ = spec.n_rows, spec.n_states
     BODY_ITEMS, FLOOR_ITEMS, ROW_ITEMS, STATE_ITEMS = rooms(spec)  # (the stack arrays' rooms)
     body_scratch, floor_scratch = stack_scratch(BODY_ITEMS, FLOOR_ITEMS)  # (arrays on the loop's stack)
-    GPU = spec.gpu
 
     @njit(**INLINE)
     def start(bodies, absorbers, ex, fl, noise, grid, carry, resume, x, v, gen_bridge):

@@ -246,8 +246,7 @@ def rk4_step(spec) -> Step:
     on the stack (as ``kdk.kdk_step``)."""
     NB, NF = spec.n_bodies, spec.n_floors  # (``RUN_TIME``: the counts read at run time)
     body_scratch, floor_scratch = stack_scratch(*rooms(spec)[:2])  # (arrays on the loop's stack)
-    NA = NB - NF
-    GPU = spec.gpu
+    NA, GPU = NB - NF, spec.gpu
     HAS_NOISE, HAS_IMPACT, HAS_HERTZ, PARTNERS, FILTERED, GROUND, SHAPED = kinds_of(spec)  # (or ``RUN_TIME``)
 
     @njit(**INLINE)
