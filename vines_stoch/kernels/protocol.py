@@ -43,7 +43,6 @@ RUN_TIME, ROOM = -1, 16
 BODY_ROOM = 2 * ROOM
 
 
-
 def rooms(spec) -> tuple[int, int, int, int]:
     """The items a loop's stack arrays hold (``jit.intrinsics.scratch_within``'s room) for its
     bodies, floors, load rows and filter states: a size the loop takes as a constant (``Spec``),

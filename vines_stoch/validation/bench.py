@@ -31,10 +31,10 @@ import subprocess
 import sys
 import tempfile
 import time
-from collections.abc import Iterator, Mapping
-from contextlib import contextmanager
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
+from unittest.mock import patch
 
 import numpy as np
 from numba import njit
@@ -129,23 +129,11 @@ def minimal_euler(n_steps: int, dt: float, gen) -> float:
     return acc
 
 
-@contextmanager
-def _general_work(value: str | None) -> Iterator[None]:
-    """Inside the block, runs below ``value`` path-steps take the general loops
-    (``VINES_STOCH_GENERAL_WORK``: ``"0"`` none, ``"inf"`` every run; None: the default,
-    ``kernels.general_run``); the variable as it was after."""
-    before = os.environ.get(GENERAL_SWITCH)
-    if value is None:
-        os.environ.pop(GENERAL_SWITCH, None)
-    else:
-        os.environ[GENERAL_SWITCH] = value
-    try:
-        yield
-    finally:
-        if before is None:
-            os.environ.pop(GENERAL_SWITCH, None)
-        else:
-            os.environ[GENERAL_SWITCH] = before
+def _general_work(value: str) -> Any:
+    """A block inside which runs below ``value`` path-steps take the general loops
+    (``VINES_STOCH_GENERAL_WORK``: ``"0"`` none, ``"inf"`` every run); the variable as it was
+    after it."""
+    return patch.dict(os.environ, {GENERAL_SWITCH: value})
 
 
 def _fresh_env(**more: str) -> dict[str, str]:
