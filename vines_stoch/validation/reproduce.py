@@ -49,6 +49,13 @@ MATCH = 0.10
 TABLE_1 = {"40.0 kg": (40.0, 217.0, 64.8, 0.496, 0.238, 517.0),
            "49.3 kg": (49.3, 196.0, 70.2, 0.416, 0.256, 282.0),
            "66.1 kg": (66.1, 223.0, 71.9, 0.154, 0.250, 101.0)}
+#: Seed 003 Table 3: c2 (N s/m) and C (m) of the 40 kg designs, all it prints of them (their k2 and
+#: D or V are in the paper's ref. [18]); DS-2(40)'s are Table 1's 40.0 kg design's, printed whole.
+TABLE_3 = {"SS-1(40)": (232.0, 0.300), "SS-2(40)": (76.7, 0.518), "SS-3(40)": (64.1, 0.644),
+           "SS-4(40)": (42.6, 0.771), "DS-1(40)": (232.0, 0.158), "DS-2(40)": (64.8, 0.238),
+           "DS-3(40)": (97.6, 0.260), "DS-4(40)": (74.5, 0.276)}
+#: The seed 003 mass classes (kg) of optimised designs, heaviest first (Tables 2-5).
+MASS_CLASSES = (60, 40, 20, 10)
 #: Seed 003 Table 5, double-sided rows (m2 = 10 kg), and the E1max row printed under them.
 TABLE_5 = {"DS-1(10)": (10.0, 354.0, 7.14, 0.0194, 1.037, 428.0),
            "DS-2(10)": (10.0, 414.0, 14.8, 0.185, 0.735, 603.0),
@@ -121,6 +128,9 @@ E1MAX_FIGURES = {
     60: ("Fig. 2", "good mitigation of the primary's vibrations, similar for the single- and double-sided "
                    "designs", "T,0,0, 3T,1,0, 2T,1,0, T,1,1 and AM (single-sided; Table 2), T,0,0 and T,1,1 "
                    "(double-sided)"),
+    40: ("Fig. 6", "the pattern of the primary's energy is similar to the 60 kg designs'; Table 3 prints c2 "
+                   "and C alone, so of its eight designs DS-2(40), Table 1's 40.0 kg design, is the one run",
+         "none (the 40 kg designs' dynamics are the paper's ref. [18])"),
     20: ("Fig. 7", "no more than the figure (narrow zones of bilateral impacts, Fig. 8)",
          "T,0,0, T,1,0, 2T,2,2, 3T,3,1, T,1,1 and 2T,1,0 (single-sided; Table 4), T,0,0, T,1,1, 3T,2,2, AM "
          "and chaos (double-sided)"),
@@ -378,6 +388,7 @@ def seed003(scenarios: Path, figures: Path) -> list[str]:
         e1, regime = _steady(design(scenarios, name, *parameters))
         lines.append(f"| {label} | very weak mitigation, bilateral impacts | {e1:.0f} | "
                      f"{e1 / e1_primary:.0%} | {regime} |")
+    lines += ["", *_table_3(scenarios)]
     alone = [_steady(_points(scenarios, "seed003_primary", {"loads.0.frequency": w})[0])[0]
              for w in E1MAX_FREQUENCIES]
     for mass in E1MAX_FIGURES:
@@ -398,14 +409,18 @@ def _class(mass: int | str) -> str:
 def _class_designs(scenarios: Path, mass: int | str) -> list[tuple[str, str, tuple, float | None]]:
     """The designs of one seed 003 mass class: label, scenario their geometry comes from, (m2, k2,
     c2, D, C) and the E1max printed for them at 6.3 rad/s (None where the paper prints none of
-    theirs): the 60 and 20 kg classes from their scenarios (SS-4(60) with D = 0.0759 m), the 10 kg
-    class from Table 5; ``"normal"``: Table 6's "normal" 10 kg designs beside the first "strange" ones
+    theirs): the 60 and 20 kg classes from their scenarios (SS-4(60) with D = 0.0759 m), the 40 kg
+    class's DS-2(40) alone (Table 1's 40.0 kg design; ``TABLE_3``), the 10 kg class from Table 5;
+    ``"normal"``: Table 6's "normal" 10 kg designs beside the first "strange" ones
     of Table 5 (Fig. 13)."""
     if mass == NORMAL:
         return ([(f"{label} (normal)", name, tuple(parameters), None) for label, (name, *parameters) in
                  TABLE_6.items()]
                 + [("SS-1(10) (strange)", "seed003_ss20", TABLE_5_SS["SS-1(10)"], None),
                    ("DS-1(10) (strange)", TABLE_SCENARIOS["Table 5"], TABLE_5["DS-1(10)"][:5], None)])
+    if mass == 40:  # (Table 3 prints the others' c2 and C alone)
+        *parameters, e1_paper = TABLE_1["40.0 kg"]
+        return [("DS-2(40)", TABLE_SCENARIOS["Table 1"], tuple(parameters), e1_paper)]
     if mass == 10:
         return ([(label, "seed003_ss20", parameters, None) for label, parameters in TABLE_5_SS.items()]
                 + [(label, TABLE_SCENARIOS["Table 5"], tuple(values[:5]), values[5])
@@ -420,6 +435,33 @@ def _class_designs(scenarios: Path, mass: int | str) -> list[tuple[str, str, tup
             label = f"{label}, D = {offset:g} m" if offset != a.offset else label
             found.append((label, name, (a.mass, a.stiffness, a.damping, offset, a.gap), e1_paper))
     return found
+
+
+def table_3_trend(scenarios: Path) -> dict[str, list[tuple[float, float]]]:
+    """Seed 003 Table 3's trend, "increasing the clearance C and decreasing the damping coefficient
+    c2 with decreasing the damper mass", on the printed designs: for the single- and double-sided
+    designs (``"SS"``, ``"DS"``), the median (c2, C) of each mass class of ``MASS_CLASSES`` (Tables
+    2-5; the 40 kg class from ``TABLE_3``)."""
+    printed = {mass: [(label, parameters[2], parameters[4]) for label, _, parameters, _ in
+                      _class_designs(scenarios, mass)] for mass in MASS_CLASSES if mass != 40}
+    printed[40] = [(label, c2, gap) for label, (c2, gap) in TABLE_3.items()]
+    return {side: [(float(np.median([c2 for label, c2, _ in printed[mass] if label.startswith(side)])),
+                    float(np.median([gap for label, _, gap in printed[mass] if label.startswith(side)])))
+                   for mass in MASS_CLASSES] for side in ("SS", "DS")}
+
+
+def _table_3(scenarios: Path) -> list[str]:
+    """The report's section on seed 003 Table 3 (``table_3_trend``)."""
+    trend = table_3_trend(scenarios)
+    lines = ["### Table 3 (40 kg): the clearance grows and the damping falls as the mass falls", "",
+             "Table 3 prints c2 and C of the eight 40 kg designs, no more; its title says C grows and "
+             "c2 falls as the damper's mass falls. The median of each class's printed designs (Tables "
+             "2-5; tested):", "", "| designs | " + " | ".join(f"{m} kg" for m in MASS_CLASSES) + " |",
+             "|---|" + "---|" * len(MASS_CLASSES)]
+    for side, medians in trend.items():
+        lines.append(f"| {side}, median c2 (N s/m) | " + " | ".join(f"{c2:.3g}" for c2, _ in medians) + " |")
+        lines.append(f"| {side}, median C (m) | " + " | ".join(f"{gap:.3g}" for _, gap in medians) + " |")
+    return lines
 
 
 def _e1max_frequency(scenarios: Path, figures: Path, mass: int | str, alone: list[float]) -> list[str]:
@@ -457,7 +499,7 @@ def _e1max_frequency(scenarios: Path, figures: Path, mass: int | str, alone: lis
     worst = {label: max(values) for label, values in curves.items()}
     ss = sorted({r for label, found in regimes.items() if label.startswith("SS") for r in found})
     ds = sorted({r for label, found in regimes.items() if label.startswith("DS") for r in found})
-    return [*_impact_zones(figures, mass, zones), "",
+    return [*(_impact_zones(figures, mass, zones) if mass in ZONE_FIGURES else []), "",
             f"### {figure} ({_class(mass)}): E1max against frequency", "",
             f"Figure: `figures/{what}`, {len(E1MAX_FREQUENCIES)} frequencies from {E1MAX_FREQUENCIES[0]:g} "
             f"to {E1MAX_FREQUENCIES[-1]:g} rad/s, the designs as in the table above"
@@ -853,7 +895,8 @@ def reproduce(scenarios: Path = Path("scenarios"), out: Path = Path("reports/see
     return out
 
 
-__all__ = ["FIG4_FREQUENCIES", "FRAME_DEVICES", "FRAME_STIFFNESSES", "PRIMARY_E1MAX", "REGIMES_MISSED",
-           "REGIMES_PRINTED", "SECTIONS", "SEED002_FREQUENCIES", "SS_4_60", "TABLES", "TABLE_1", "TABLE_5",
-           "TABLE_6", "WANE", "WEAK", "ZERO_CLEARANCE", "class_sweep", "design", "fig4_sweep",
-           "frame_devices", "paired_cut", "primary_sweep", "reproduce", "zone", "zone_sweep", "zones_of"]
+__all__ = ["FIG4_FREQUENCIES", "FRAME_DEVICES", "FRAME_STIFFNESSES", "MASS_CLASSES", "PRIMARY_E1MAX",
+           "REGIMES_MISSED", "REGIMES_PRINTED", "SECTIONS", "SEED002_FREQUENCIES", "SS_4_60", "TABLES",
+           "TABLE_1", "TABLE_3", "TABLE_5", "TABLE_6", "WANE", "WEAK", "ZERO_CLEARANCE", "class_sweep",
+           "design", "fig4_sweep", "frame_devices", "paired_cut", "primary_sweep", "reproduce",
+           "table_3_trend", "zone", "zone_sweep", "zones_of"]
