@@ -5,7 +5,7 @@ frequencies from 5 to 8 rad/s every design's regimes (``dynamics.refine_regimes`
 those two, and the designs together meet both; DS-4(60), as printed (V = 0.635 m), never reaches
 its obstacles (T,0,0 throughout).  One response, DS-5(60) at 6.5 rad/s, has not settled by the
 run's end (400 s) and reads ``transient``, which the paper's steady table does not list.  The
-single-sided designs' rows are not tested: here they also meet orbits of long period (7T,5,3,
+single-sided designs' rows are not tested: here they also meet orbits of long period (8T,3,0,
 8T,6,4) that the paper does not print (``reports/seed-tables.md``).
 
 Tables 4 and 5's "Regimes" rows (20 and 10 kg designs) over the frequencies 5.5-7.0 rad/s at 0.1
