@@ -213,7 +213,8 @@ def compile_(
                                  help="The executor the runs will use: lanes or scalar."),
     paths: bool = typer.Option(False, "--paths", help="Also the loops of runs that keep their paths."),
     general: bool = typer.Option(False, "--general",
-                                 help="The general loops of every scheme: after them no run shorter than "
+                                 help="The general loops of every scheme and the pass loop: after them no "
+                                      "run shorter than "
                                       "1e8 path-steps (VINES_STOCH_GENERAL_WORK) compiles a step loop, "
                                       "whatever its structure."),
 ) -> None:

@@ -87,12 +87,13 @@ def test_compile_puts_the_loops_a_run_needs_in_the_cache(tmp_path):
 
 def test_compile_general_readies_every_scheme_and_compile_asks_for_something():
     """``vines-stoch compile --general`` readies the general loop of each scheme for paths and for
-    chunks of both executors (a line each); ``compile`` with neither files nor ``--general`` is
-    an error that says what it takes."""
+    chunks of both executors, and the pass loop (a line each); ``compile`` with neither files nor
+    ``--general`` is an error that says what it takes."""
     code, err = cli("compile", "--general")
     assert code == 0, err
     for scheme in ("euler-maruyama", "sra", "rk4"):
         assert f"the general {scheme} loop for paths" in err
         assert f"the general {scheme} loop (every structure)" in err
+    assert "the pass loop (every smooth kick-drift-kick structure of three bodies or more)" in err
     code, err = cli("compile")
     assert code == 2 and "name scenario files, or --general" in err

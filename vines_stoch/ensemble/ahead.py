@@ -51,11 +51,13 @@ GENERAL_SET = (("euler-maruyama", "white-noise"), ("euler-maruyama", "harmonic")
                ("sra", "harmonic"), ("rk4", "harmonic"))
 
 
-def general_scene(scheme: str, load: str) -> Scene:
-    """A one-storey structure with a cubic absorber under ``load``, run by ``scheme``."""
+def general_scene(scheme: str, load: str, storeys: int = 1) -> Scene:
+    """A structure of ``storeys`` storeys with a cubic absorber under ``load``, run by ``scheme``."""
     force = {"type": load, "intensity": 0.1} if load == "white-noise" else {
         "type": load, "amplitude": 0.1, "frequency": 1.0}
-    data = {"name": "general-loops", "primary": {"mass": 1.0, "stiffness": 1.0, "damping": 0.01},
+    primary = ({"mass": 1.0, "stiffness": 1.0, "damping": 0.01} if storeys == 1 else
+               {"masses": [1.0] * storeys, "stiffnesses": [1.0] * storeys, "dampings": [0.01] * storeys})
+    data = {"name": "general-loops", "primary": primary,
             "absorbers": [{"type": "cubic", "mass": 0.05, "stiffness": 1.0, "damping": 0.01}],
             "loads": [force], "simulation": {"duration": 0.1, "dt": 0.01, "scheme": scheme}}
     return build_scene(as_study(data).points[0])
@@ -63,7 +65,8 @@ def general_scene(scheme: str, load: str) -> Scene:
 
 def compile_general(*, show: bool = True, workers: int | None = None) -> None:
     """Compile, or load from the cache on disk, the general loops of every scheme (``GENERAL_SET``)
-    for paths (``simulate``, ``solve``) and for chunks of both executors, keeping nothing: after
+    for paths (``simulate``, ``solve``) and for chunks of both executors, and the pass loop (the
+    lanes of every smooth kick-drift-kick structure of three bodies or more), keeping nothing: after
     it no run shorter than ``kernels.GENERAL_WORK`` path-steps compiles a step loop, whatever its
     structure (``vines-stoch compile --general``: a cluster image, a notebook server); then two
     tiny runs (``EVERY_LAW``) compile what a run compiles besides its loop.  The schemes compile
@@ -144,4 +147,6 @@ def _compile_scheme(scheme: str, show: bool, kept: bool = False) -> str:
             print(f" ready in {time.monotonic() - start:.1f} s", file=sys.stderr, flush=True)
         for executor in EXECUTORS:
             prepare_loops([scene], 0, True, show=show, executor=executor, general=True)
+    if scheme == "euler-maruyama":  # (the pass loop: ``kernels.in_pass_loop``)
+        prepare_loops([general_scene(scheme, "white-noise", storeys=2)], 0, True, show=show, general=True)
     return ""

@@ -27,6 +27,7 @@ from .chunk import (
     chunk_loop,
     chunk_runner,
     ground_paths,
+    in_pass_loop,
     lane_scene,
     parameter_draws,
     realization_streams,
@@ -71,10 +72,9 @@ def stretcher(*args: Any, **kwargs: Any):
     return make(*args, **kwargs)
 
 
-__all__ = ["DEFAULT_SIGNALS", "EXECUTORS", "LANES", "SLOTS", "Path", "advance", "bundles",
-           "check_executor", "chunk_loop", "chunk_runner", "compile_first", "filter_draws", "general_run",
-           "ground_paths",
-           "history_columns", "kernel_for", "lane_normals", "lane_scene", "launcher", "load_history",
-           "needed_streams", "parameter_draws", "pass_loop", "pass_scene", "realization_streams",
-           "sample_buffer", "seed_keys", "simulate", "simulate_chunk", "spec_of", "start_path", "step_of",
-           "stretch_to", "stretcher"]
+__all__ = ["DEFAULT_SIGNALS", "EXECUTORS", "LANES", "SLOTS", "Path", "advance", "bundles", "check_executor",
+           "chunk_loop", "chunk_runner", "compile_first", "filter_draws", "general_run", "ground_paths",
+           "history_columns", "in_pass_loop", "kernel_for", "lane_normals", "lane_scene", "launcher",
+           "load_history", "needed_streams", "parameter_draws", "pass_loop", "pass_scene",
+           "realization_streams", "sample_buffer", "seed_keys", "simulate", "simulate_chunk", "spec_of",
+           "start_path", "step_of", "stretch_to", "stretcher"]

@@ -171,9 +171,10 @@ def simulate_chunk(scene, seed: int, point: int, start: int, stop: int, common: 
     (stride, size)`` keeps ``size`` history rows of ``signals`` (``signals.declare``) every
     ``stride`` steps; ``event_rows`` rows of event log.  ``specialised``: the lane loop specialised
     to the structure even where the pass loop would run it (``passes.pass_scene``; the
-    benchmark's comparison: the same numbers).  ``general``: the scheme's general scalar loop
-    (``paths.GENERAL_WORK``), on the streams ``executor`` gives (a lane scene's Philox streams:
-    the lanes' numbers, bitwise), compiled once for every structure."""
+    benchmark's comparison: the same numbers).  ``general``: a loop compiled once for every
+    structure (``paths.GENERAL_WORK``): the pass loop where it takes the scene's lanes
+    (``in_pass_loop``), else the scheme's general scalar loop, on the streams ``executor`` gives
+    (a lane scene's Philox streams: the lanes' numbers, bitwise)."""
     n = stop - start
     stride, size = history or (1, 0)
     template = _NO_HISTORY if size == 0 else np.zeros((1, len(signals)))
@@ -185,7 +186,7 @@ def simulate_chunk(scene, seed: int, point: int, start: int, stop: int, common: 
     history_rows = np.full((n, size, columns.shape[0]), np.nan)
     events = np.full((n, event_rows, len(EVENT_COLUMNS)), np.nan)
     philox = lane_scene(scene, executor)  # (on the Philox streams)
-    if philox and not general:
+    if philox and (not general or in_pass_loop(scene, executor, specialised)):
         simulate_lanes(scene, seed, point, start, common, raw, history_rows, stride, columns, events,
                        specialised)
         return Chunk(raw, samples, history_rows, events)
@@ -229,11 +230,19 @@ def lane_scene(scene, executor: str = "lanes") -> bool:
     return executor == "lanes" and in_lanes(scene.scheme)
 
 
+def in_pass_loop(scene, executor: str = "lanes", specialised: bool = False) -> bool:
+    """Whether ``scene``'s realisations run in the pass loop under ``executor`` (``lane_scene`` and
+    ``passes.pass_scene``, unless ``specialised``), short runs too: the pass loop is itself one
+    loop for every structure it takes, compiled once (``ensemble.compile_general``), and runs them
+    in SIMD lanes, 5-10x the general scalar loop's speed (the same numbers, bitwise)."""
+    return lane_scene(scene, executor) and pass_scene(scene) and not specialised
+
+
 def chunk_runner(scene, executor: str = "lanes", general: bool = False):
     """The compiled loop a chunk of ``scene`` runs under ``executor`` (``simulate_chunk``'s
-    choice), whatever it records: the lane loop or the scalar loop's chunk (``general``: the
-    scheme's general loop's)."""
-    if lane_scene(scene, executor) and not general:
+    choice), whatever it records: the lane loop or the scalar loop's chunk (``general``: a loop
+    compiled once for every structure, the pass loop or the scheme's general loop's)."""
+    if lane_scene(scene, executor) and (not general or in_pass_loop(scene, executor)):
         return lane_runner(scene)
     return chunk_loop(kernel_for(scene, general=general))
 
@@ -314,6 +323,6 @@ def parameter_draws(keys, point: int, start: int, common: bool, normal, out) -> 
             out[j, k] = pcg_normal(stream) if normal[k] else pcg_uniform(stream)
 
 
-__all__ = ["Chunk", "chunk_loop", "chunk_runner", "ground_paths", "lane_call", "lane_scene",
+__all__ = ["Chunk", "chunk_loop", "chunk_runner", "ground_paths", "in_pass_loop", "lane_call", "lane_scene",
            "parameter_draws", "philox_keys", "realization_streams", "reseed", "seed_keys",
            "simulate_chunk", "simulate_lanes"]

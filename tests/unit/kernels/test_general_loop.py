@@ -12,8 +12,8 @@ import os
 import numpy as np
 import pytest
 
-from tests.helpers import example_scene, scene_from
-from tests.unit.kernels.test_lanes import FILTERED, SEED, same
+from tests.helpers import example_scene, scene_from, study_from
+from tests.unit.kernels.test_lanes import FILTERED, SEED, philox_streams, same
 from tests.unit.kernels.test_passes import (
     BISTABLE,
     BLAST,
@@ -27,9 +27,18 @@ from tests.unit.kernels.test_passes import (
     RECORDED,
     frame,
 )
+from vines_stoch.ensemble import plan
 from vines_stoch.ensemble.ahead import GENERAL_SET, compile_general, general_scene
 from vines_stoch.environment import problems
-from vines_stoch.kernels import kernel_for, simulate, simulate_chunk, start_path
+from vines_stoch.kernels import (
+    chunk_runner,
+    in_pass_loop,
+    kernel_for,
+    pass_loop,
+    simulate,
+    simulate_chunk,
+    start_path,
+)
 from vines_stoch.kernels.chunk import chunk_loop
 from vines_stoch.kernels.driver import step_loop
 from vines_stoch.kernels.lanes import lane_loop
@@ -105,13 +114,13 @@ def _structures():
 
 def test_new_structures_run_the_general_loop_and_compile_nothing():
     """After ``compile_general`` (``vines-stoch compile --general``: each scheme's general loop
-    once), scenes of other storeys, absorbers, loads and outputs run it as paths and as chunks of
-    either executor: no loop is made, none compiles a new signature (numba's dispatcher
-    statistics), and none is loaded from the cache."""
+    once, and the pass loop), scenes of other storeys, absorbers, loads and outputs run them as
+    paths and as chunks of either executor: no loop is made, none compiles a new signature
+    (numba's dispatcher statistics), and none is loaded from the cache."""
     compile_general(show=False, workers=1)  # (in this process: its dispatchers are counted)
     first = [general_scene(scheme, load) for scheme, load in GENERAL_SET]
     loops = {id(kernel_for(s, general=True)): kernel_for(s, general=True) for s in first}
-    chunks = [chunk_loop(k) for k in loops.values()]
+    chunks = [chunk_loop(k) for k in loops.values()] + [pass_loop]
     made = _made()
     compiled = _compiled((*loops.values(), *chunks))
     for data in _structures():
@@ -122,6 +131,24 @@ def test_new_structures_run_the_general_loop_and_compile_nothing():
                            signals=("x1", "e1"), event_rows=4)
     assert len(loops) == 3
     assert _made() == made and _compiled((*loops.values(), *chunks)) == compiled
+
+
+def test_a_short_run_of_a_pass_loop_structure_runs_in_the_pass_loop(monkeypatch):
+    """A smooth kick-drift-kick structure of three bodies or more runs its lanes in the pass loop
+    however short the run (itself one loop for every such structure: ``kernels.in_pass_loop``),
+    the general scalar loop under the scalar executor; the pass loop's rows are the scalar loop's
+    on the same Philox streams, bitwise (``test_passes.py``), so the choice moves no number."""
+    monkeypatch.delenv("VINES_STOCH_GENERAL_WORK", raising=False)
+    scene = scene_from(frame(2, [CUBIC], [NOISE]))
+    study = study_from(frame(2, [CUBIC], [NOISE]), {"ensemble.realizations": 3})
+    assert scene.mass.shape[0] == 3 and general_run(3 * scene.n_steps) and in_pass_loop(scene)
+    assert plan(study).general and chunk_runner(scene, "lanes", general=True) is pass_loop
+    assert chunk_runner(scene, "scalar", general=True) is chunk_loop(kernel_for(scene, general=True))
+    assert not in_pass_loop(scene, "scalar") and not in_pass_loop(scene, specialised=True)
+    assert not in_pass_loop(scene_from(frame(1, [CUBIC], [NOISE])))  # (two bodies: the general loop)
+    rows = simulate_chunk(scene, SEED, 0, 0, 3, general=True).raw  # (the pass loop)
+    for r in range(3):  # (a path: the general loop, on the realisation's Philox streams)
+        assert same(rows[r], simulate(scene, philox_streams(r)))
 
 
 def _made() -> tuple[int, int, int]:
