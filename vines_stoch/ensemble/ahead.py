@@ -41,7 +41,8 @@ def compile_loops(scenario: Study | Mapping[str, Any] | str | os.PathLike, *, ex
     the_plan = plan(study, executor=executor)
     signals, grid = recording(the_plan.scenes[0], grid_spec, base.output.spectra)
     prepare_loops(the_plan.scenes, base.ensemble.seed, base.ensemble.common_random_numbers, grid,
-                  signals or DEFAULT_SIGNALS, show=show, executor=executor, general=the_plan.general)
+                  signals or DEFAULT_SIGNALS, show=show, executor=executor, general=the_plan.general,
+                  batch=the_plan.batch)
 
 
 #: One small structure for each scheme and kind of stream the general loops are compiled for: a

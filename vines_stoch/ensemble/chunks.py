@@ -55,8 +55,10 @@ def run_chunk(scene: Scene, seed: int, point: int, start: int, stop: int,
     """Realisations ``start..stop-1`` of one sweep point: one metric row each and, when a
     history ``grid = (stride, size)`` is asked for, the paths of the history ``signals``
     ``(len(signals), size, stop - start)``.  The realisations run in one compiled call of
-    ``executor`` (``kernels.EXECUTORS``, ``kernels.simulate_chunk``; ``general``: in the scheme's
-    general loop, the same numbers; by default where the chunk's work asks, ``kernels.general_run``).
+    ``executor`` (``kernels.EXECUTORS``, ``kernels.simulate_chunk``; ``general``: in a loop
+    compiled once for every structure, the pass loop where it takes the chunk
+    (``kernels.in_pass_loop``) or else the scheme's general loop, the same numbers; by default
+    where the chunk's work asks, ``kernels.general_run``).
     With ``study`` (a study with uncertain parameters) each realisation runs its own scene
     (``binding``: the point's scene with the drawn values set), its drawn values in columns named
     by their keys.

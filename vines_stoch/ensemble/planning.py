@@ -47,12 +47,16 @@ BACKENDS = ("cpu", "cuda")
 @dataclass
 class Plan:
     """Scenes of the sweep points and the chunks ``(point, start, stop)`` covering them, and
-    whether the run is short enough for the general loop of its scheme (``kernels.general_run``:
-    its path-steps, every point's together; the CPU's choice, the same numbers either way)."""
+    whether the run is short enough for a loop compiled once for every structure, the general
+    loop of its scheme or the pass loop (``kernels.general_run``: its path-steps, every point's
+    together; ``kernels.in_pass_loop``; the CPU's choice, the same numbers either way)."""
 
     scenes: list[Scene]
     chunks: list[tuple[int, int, int]]
     general: bool = False
+    #: The most realisations one compiled call runs (``prepare_loops``' ``batch``): a chunk's, or
+    #: one where each realisation has parameters of its own (``run_chunk``).
+    batch: int = 1
 
 
 def plan(study: Study, chunk: int | None = None, realizations: int | None = None,
@@ -85,7 +89,8 @@ def plan(study: Study, chunk: int | None = None, realizations: int | None = None
             size = min(size, max(1, HISTORY_CHUNK_BYTES // row_bytes))
         chunks += [(p, s, min(s + size, n)) for s in range(0, n, size)]
     work = sum(n * scene.n_steps for scene, n in zip(scenes, counts))
-    return Plan(scenes, chunks, general=backend == "cpu" and general_run(work))
+    batch = 1 if random else max((stop - start for _, start, stop in chunks), default=1)
+    return Plan(scenes, chunks, general=backend == "cpu" and general_run(work), batch=batch)
 
 
 def _auto_chunk(scene: Scene, n: int, lanes: bool) -> int:
@@ -120,16 +125,18 @@ def structure(scene: Scene) -> str:
 
 def prepare_loops(scenes: list[Scene], seed: int, common: bool, grid: tuple[int, int] | None = None,
                   signals: tuple[str, ...] = DEFAULT_SIGNALS, show: bool = True,
-                  executor: str = "lanes", general: bool = False) -> None:
+                  executor: str = "lanes", general: bool = False, batch: int = LANES) -> None:
     """Compile (or load from numba's cache on disk) the step loop of each structure among
     ``scenes`` that this process has not run yet, before any chunk starts, with one line each
     (logged at INFO on the ``vines_stoch`` logger, and with ``show`` on standard error): which
     structure, and whether it was compiled (once: later runs load it) or loaded.  A chunk of no
     realisations runs each loop with the argument types of ``run_chunk`` under ``executor``
-    (``general``: the scheme's general loop, ``Plan.general``)."""
+    (``general``: a loop compiled once for every structure, ``Plan.general``; ``batch``: the
+    realisations of the run's chunks, which choose between the pass loop and the general loop,
+    ``kernels.in_pass_loop``)."""
     seen = set()
     for point, scene in enumerate(scenes):
-        run = chunk_runner(scene, executor, general)  # (the lane loop or the scalar loop's chunk)
+        run = chunk_runner(scene, executor, general, batch)  # (the lane loop or the scalar loop's chunk)
         if run in seen:
             continue
         seen.add(run)
@@ -143,7 +150,7 @@ def prepare_loops(scenes: list[Scene], seed: int, common: bool, grid: tuple[int,
             print(f"step loop: {what}: compiling or loading ...", end="", file=sys.stderr, flush=True)
         hits, start = sum(run.stats.cache_hits.values()), time.monotonic()
         simulate_chunk(scene, seed, point, 0, 0, common, grid, signals, scene.event_rows, executor,
-                       general=general)
+                       general=general, batch=batch)
         if len(run.overloads) == known:
             continue
         loaded = sum(run.stats.cache_hits.values()) > hits

@@ -284,7 +284,7 @@ def _run(study: Study, directory: Path | None, o: _Options) -> Results | None:
         if o.backend == "cpu" and not o.scheduler and todo:
             prepare_loops(the_plan.scenes, seed, base.ensemble.common_random_numbers, recorded[0][1],
                           recorded[0][0] or DEFAULT_SIGNALS, show=o.progress, executor=o.executor,
-                          general=the_plan.general)
+                          general=the_plan.general, batch=the_plan.batch)
         with ExitStack() as stack:
             interrupted = stack.enter_context(noting_interrupts())
             fold_ready()

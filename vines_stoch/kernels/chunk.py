@@ -164,7 +164,7 @@ class Chunk(NamedTuple):
 def simulate_chunk(scene, seed: int, point: int, start: int, stop: int, common: bool = True,
                    history: tuple[int, int] | None = None, signals: tuple[str, ...] | None = None,
                    event_rows: int = 0, executor: str = "lanes", specialised: bool = False,
-                   general: bool = False) -> Chunk:
+                   general: bool = False, batch: int | None = None) -> Chunk:
     """Realisations ``start .. stop - 1`` of ``scene`` at sweep point ``point`` on the streams of
     ``seed`` (``realization_streams``; ``common``: common random numbers), in one compiled call
     of ``executor`` (``EXECUTORS``): what ``simulate`` gives for each, bitwise.  ``history =
@@ -174,7 +174,9 @@ def simulate_chunk(scene, seed: int, point: int, start: int, stop: int, common: 
     benchmark's comparison: the same numbers).  ``general``: a loop compiled once for every
     structure (``paths.GENERAL_WORK``): the pass loop where it takes the scene's lanes
     (``in_pass_loop``), else the scheme's general scalar loop, on the streams ``executor`` gives
-    (a lane scene's Philox streams: the lanes' numbers, bitwise)."""
+    (a lane scene's Philox streams: the lanes' numbers, bitwise).  ``batch``: the realisations of
+    the chunks this call stands for, where they are not its own (``ensemble.prepare_loops``'
+    chunks of none)."""
     n = stop - start
     stride, size = history or (1, 0)
     template = _NO_HISTORY if size == 0 else np.zeros((1, len(signals)))
@@ -186,7 +188,7 @@ def simulate_chunk(scene, seed: int, point: int, start: int, stop: int, common: 
     history_rows = np.full((n, size, columns.shape[0]), np.nan)
     events = np.full((n, event_rows, len(EVENT_COLUMNS)), np.nan)
     philox = lane_scene(scene, executor)  # (on the Philox streams)
-    if philox and (not general or in_pass_loop(scene, executor, specialised)):
+    if philox and (not general or in_pass_loop(scene, executor, specialised, n if batch is None else batch)):
         simulate_lanes(scene, seed, point, start, common, raw, history_rows, stride, columns, events,
                        specialised)
         return Chunk(raw, samples, history_rows, events)
@@ -230,19 +232,29 @@ def lane_scene(scene, executor: str = "lanes") -> bool:
     return executor == "lanes" and in_lanes(scene.scheme)
 
 
-def in_pass_loop(scene, executor: str = "lanes", specialised: bool = False) -> bool:
-    """Whether ``scene``'s realisations run in the pass loop under ``executor`` (``lane_scene`` and
-    ``passes.pass_scene``, unless ``specialised``), short runs too: the pass loop is itself one
-    loop for every structure it takes, compiled once (``ensemble.compile_general``), and runs them
-    in SIMD lanes, 5-10x the general scalar loop's speed (the same numbers, bitwise)."""
-    return lane_scene(scene, executor) and pass_scene(scene) and not specialised
+#: The fewest realisations of a chunk that a short run takes to the pass loop (``in_pass_loop``):
+#: with fewer lanes its passes cost more than they share (on a three-storey frame a lone lane ran
+#: at 1.3 M path-steps/s against the general scalar loop's 12, 16 lanes at 10.7 against 7.8).
+PASS_LANES = 16
 
 
-def chunk_runner(scene, executor: str = "lanes", general: bool = False):
-    """The compiled loop a chunk of ``scene`` runs under ``executor`` (``simulate_chunk``'s
-    choice), whatever it records: the lane loop or the scalar loop's chunk (``general``: a loop
-    compiled once for every structure, the pass loop or the scheme's general loop's)."""
-    if lane_scene(scene, executor) and (not general or in_pass_loop(scene, executor)):
+def in_pass_loop(scene, executor: str = "lanes", specialised: bool = False,
+                 realisations: int = PASS_LANES) -> bool:
+    """Whether a chunk of ``realisations`` of ``scene`` runs in the pass loop under ``executor``
+    however short the run (``lane_scene`` and ``passes.pass_scene``, unless ``specialised``; at
+    least ``PASS_LANES`` realisations): the pass loop is itself one loop for every structure it
+    takes, compiled once (``ensemble.compile_general``), and runs them in SIMD lanes, 3-4x the
+    general scalar loop's speed on a three-storey frame (the same numbers, bitwise)."""
+    return (lane_scene(scene, executor) and pass_scene(scene) and not specialised
+            and realisations >= PASS_LANES)
+
+
+def chunk_runner(scene, executor: str = "lanes", general: bool = False, batch: int = PASS_LANES):
+    """The compiled loop a chunk of ``batch`` realisations of ``scene`` runs under ``executor``
+    (``simulate_chunk``'s choice), whatever it records: the lane loop or the scalar loop's chunk
+    (``general``: a loop compiled once for every structure, the pass loop or the scheme's general
+    loop's)."""
+    if lane_scene(scene, executor) and (not general or in_pass_loop(scene, executor, realisations=batch)):
         return lane_runner(scene)
     return chunk_loop(kernel_for(scene, general=general))
 
@@ -323,6 +335,6 @@ def parameter_draws(keys, point: int, start: int, common: bool, normal, out) -> 
             out[j, k] = pcg_normal(stream) if normal[k] else pcg_uniform(stream)
 
 
-__all__ = ["Chunk", "chunk_loop", "chunk_runner", "ground_paths", "in_pass_loop", "lane_call", "lane_scene",
-           "parameter_draws", "philox_keys", "realization_streams", "reseed", "seed_keys",
+__all__ = ["PASS_LANES", "Chunk", "chunk_loop", "chunk_runner", "ground_paths", "in_pass_loop", "lane_call",
+           "lane_scene", "parameter_draws", "philox_keys", "realization_streams", "reseed", "seed_keys",
            "simulate_chunk", "simulate_lanes"]

@@ -80,8 +80,9 @@ def spec_of(scene, gpu: bool = False, lanes: bool = False, general: bool = False
 
 def general_run(path_steps: int) -> bool:
     """Whether a run of ``path_steps`` path-steps (realisations times steps, all sweep points
-    together) runs the general loop of its scheme (``spec_of``), compiled once for every
-    structure: below ``GENERAL_WORK`` (10^8), or below ``VINES_STOCH_GENERAL_WORK`` where that is
+    together) runs a loop compiled once for every structure, the general loop of its scheme
+    (``spec_of``; or the pass loop where it takes a chunk's lanes, ``chunk.in_pass_loop``):
+    below ``GENERAL_WORK`` (10^8), or below ``VINES_STOCH_GENERAL_WORK`` where that is
     set (``environment.general_work``).  A longer run takes a loop specialised to its structure,
     compiled for it (and cached): at 10-25 M path-steps/s on one core the general loop runs 10^8
     path-steps in about the 10-20 s that compiling a specialised loop takes, which then runs 2-3x

@@ -1063,7 +1063,7 @@ the scene needs is compiled), then again with the cache written by the first run
 {chr(10).join(f"| {name} | {cold:.1f} | {warm:.2f} |" for name, cold, warm in startup)}
 
 `vines-stoch compile --general` on an empty cache took {compiled:.1f} s (the general loops of every
-scheme, one process a core, and one run of every absorber law). After it, the first run of
+scheme and the pass loop, one process a core, and one run of every absorber law). After it, the first run of
 structures no run had before (16 realisations of 5 s, `vines-stoch run --quiet` in a fresh
 process; functions compiled: the entries numba saved to its cache, `NUMBA_DEBUG_CACHE`):
 

@@ -30,6 +30,7 @@ from tests.unit.kernels.test_passes import (
 from vines_stoch.ensemble import plan
 from vines_stoch.ensemble.ahead import GENERAL_SET, compile_general, general_scene
 from vines_stoch.environment import problems
+from vines_stoch.kernels import chunk as chunk_module
 from vines_stoch.kernels import (
     chunk_runner,
     in_pass_loop,
@@ -39,7 +40,7 @@ from vines_stoch.kernels import (
     simulate_chunk,
     start_path,
 )
-from vines_stoch.kernels.chunk import chunk_loop
+from vines_stoch.kernels.chunk import PASS_LANES, chunk_loop, simulate_lanes
 from vines_stoch.kernels.driver import step_loop
 from vines_stoch.kernels.lanes import lane_loop
 from vines_stoch.kernels.paths import GENERAL_WORK, general_run, spec_of
@@ -98,8 +99,8 @@ def test_the_general_loop_gives_the_specialised_loop_s_numbers_bitwise(case):
 
 
 def _structures():
-    """Scenes never run before: 1, 2, 5 and 9 storeys; no absorber, a cubic, a bistable, a
-    geometric, an impact and a Hertz absorber, two at once; harmonic, blast, white noise,
+    """Scenes never run before: 1, 2, 3, 5 and 9 storeys; no absorber, a cubic, a bistable, a
+    geometric, a gap, an impact and a Hertz absorber, two at once; harmonic, blast, white noise,
     ground motion; declared metrics and limits."""
     return [
         frame(1, [], [HARMONIC]),
@@ -109,6 +110,7 @@ def _structures():
         frame(9, [CUBIC, {**IMPACT, "floor": 8}], [CLOUGH_PENZIEN]),
         frame(9, [], [NOISE], **{"simulation.scheme": "sra"}),
         frame(5, [{**IMPACT, "floor": 3}, {**HERTZ, "floor": 5}], [BLAST], **{"simulation.scheme": "rk4"}),
+        frame(3, [CUBIC, {**GAP, "floor": 2}], [NOISE, CLOUGH_PENZIEN], **RECORDED),
     ]
 
 
@@ -129,26 +131,39 @@ def test_new_structures_run_the_general_loop_and_compile_nothing():
         for executor in ("scalar", "lanes"):
             simulate_chunk(scene, SEED, 0, 0, 2, executor=executor, general=True, history=(10, 4),
                            signals=("x1", "e1"), event_rows=4)
+        if in_pass_loop(scene):  # (a chunk the pass loop takes)
+            simulate_chunk(scene, SEED, 0, 0, PASS_LANES, general=True, history=(10, 4), signals=("x1", "e1"),
+                           event_rows=4)
     assert len(loops) == 3
     assert _made() == made and _compiled((*loops.values(), *chunks)) == compiled
 
 
 def test_a_short_run_of_a_pass_loop_structure_runs_in_the_pass_loop(monkeypatch):
-    """A smooth kick-drift-kick structure of three bodies or more runs its lanes in the pass loop
-    however short the run (itself one loop for every such structure: ``kernels.in_pass_loop``),
-    the general scalar loop under the scalar executor; the pass loop's rows are the scalar loop's
-    on the same Philox streams, bitwise (``test_passes.py``), so the choice moves no number."""
+    """A smooth kick-drift-kick structure of three bodies or more runs a chunk of ``PASS_LANES``
+    realisations or more in the pass loop however short the run (itself one loop for every such
+    structure: ``kernels.in_pass_loop``), a smaller chunk (a path, ``solve``, a realisation with
+    parameters of its own) and the scalar executor's in the general scalar loop; the pass loop's
+    rows are the general loop's paths on the same Philox streams, bitwise, so the choice moves
+    no number."""
     monkeypatch.delenv("VINES_STOCH_GENERAL_WORK", raising=False)
     scene = scene_from(frame(2, [CUBIC], [NOISE]))
-    study = study_from(frame(2, [CUBIC], [NOISE]), {"ensemble.realizations": 3})
-    assert scene.mass.shape[0] == 3 and general_run(3 * scene.n_steps) and in_pass_loop(scene)
-    assert plan(study).general and chunk_runner(scene, "lanes", general=True) is pass_loop
-    assert chunk_runner(scene, "scalar", general=True) is chunk_loop(kernel_for(scene, general=True))
+    study = study_from(frame(2, [CUBIC], [NOISE]), {"ensemble.realizations": 40})
+    assert scene.mass.shape[0] == 3 and general_run(40 * scene.n_steps) and in_pass_loop(scene)
+    assert plan(study).general and plan(study).batch == 40
+    assert chunk_runner(scene, "lanes", general=True, batch=PASS_LANES) is pass_loop
+    general = chunk_loop(kernel_for(scene, general=True))
+    assert chunk_runner(scene, "lanes", general=True, batch=PASS_LANES - 1) is general
+    assert chunk_runner(scene, "scalar", general=True) is general
     assert not in_pass_loop(scene, "scalar") and not in_pass_loop(scene, specialised=True)
     assert not in_pass_loop(scene_from(frame(1, [CUBIC], [NOISE])))  # (two bodies: the general loop)
-    rows = simulate_chunk(scene, SEED, 0, 0, 3, general=True).raw  # (the pass loop)
-    for r in range(3):  # (a path: the general loop, on the realisation's Philox streams)
-        assert same(rows[r], simulate(scene, philox_streams(r)))
+    lanes = []  # (the chunks that ran in SIMD lanes)
+    monkeypatch.setattr(chunk_module, "simulate_lanes", lambda *args, **kwargs: lanes.append(
+        simulate_lanes(*args, **kwargs)))
+    rows = simulate_chunk(scene, SEED, 0, 0, PASS_LANES, general=True).raw
+    few = simulate_chunk(scene, SEED, 0, 0, 2, general=True).raw
+    assert len(lanes) == 1  # (the first chunk alone)
+    for r in range(2):  # (a path: the general loop, on the realisation's Philox streams)
+        assert same(rows[r], simulate(scene, philox_streams(r))) and same(few[r], rows[r])
 
 
 def _made() -> tuple[int, int, int]:
