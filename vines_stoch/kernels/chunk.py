@@ -188,7 +188,7 @@ def simulate_chunk(scene, seed: int, point: int, start: int, stop: int, common: 
     history_rows = np.full((n, size, columns.shape[0]), np.nan)
     events = np.full((n, event_rows, len(EVENT_COLUMNS)), np.nan)
     philox = lane_scene(scene, executor)  # (on the Philox streams)
-    if philox and (not general or in_pass_loop(scene, executor, specialised, n if batch is None else batch)):
+    if lane_chunk(scene, executor, general, specialised, n if batch is None else batch):
         simulate_lanes(scene, seed, point, start, common, raw, history_rows, stride, columns, events,
                        specialised)
         return Chunk(raw, samples, history_rows, events)
@@ -232,15 +232,16 @@ def lane_scene(scene, executor: str = "lanes") -> bool:
     return executor == "lanes" and in_lanes(scene.scheme)
 
 
-#: The fewest realisations of a chunk that a short run takes to the pass loop (``in_pass_loop``):
-#: with fewer lanes its passes cost more than they share (on a three-storey frame a lone lane ran
-#: at 1.3 M path-steps/s against the general scalar loop's 12, 16 lanes at 10.7 against 7.8).
+#: The fewest realisations of a chunk that runs in the pass loop (``in_pass_loop``; fewer run in
+#: the scalar loop, ``lane_chunk``): with fewer lanes its passes cost more than they share (on a
+#: three-storey frame a lone lane ran at 1.3 M path-steps/s against the general scalar loop's 12,
+#: 16 lanes at 10.7 against 7.8).
 PASS_LANES = 16
 
 
 def in_pass_loop(scene, executor: str = "lanes", specialised: bool = False,
                  realisations: int = PASS_LANES) -> bool:
-    """Whether a chunk of ``realisations`` of ``scene`` runs in the pass loop under ``executor``
+    """Whether a chunk of ``realisations`` of ``scene`` runs in the pass loop under ``executor``,
     however short the run (``lane_scene`` and ``passes.pass_scene``, unless ``specialised``; at
     least ``PASS_LANES`` realisations): the pass loop is itself one loop for every structure it
     takes, compiled once (``ensemble.compile_general``), and runs them in SIMD lanes, 3-4x the
@@ -249,12 +250,25 @@ def in_pass_loop(scene, executor: str = "lanes", specialised: bool = False,
             and realisations >= PASS_LANES)
 
 
+def lane_chunk(scene, executor: str, general: bool, specialised: bool, realisations: int) -> bool:
+    """Whether a chunk of ``realisations`` of ``scene`` runs in SIMD lanes under ``executor``: a
+    lane scene's (``lane_scene``) in the lane loop ``specialised`` to it, or in the pass loop
+    where that takes it (``in_pass_loop``; short runs too); a structure of the pass loop in fewer
+    than ``PASS_LANES`` realisations, and a short run (``general``) of another lane scene, in the
+    scalar loop on the same Philox streams (the same numbers, bitwise)."""
+    if not lane_scene(scene, executor):
+        return False
+    if pass_scene(scene) and not specialised:
+        return in_pass_loop(scene, executor, specialised, realisations)
+    return specialised or not general
+
+
 def chunk_runner(scene, executor: str = "lanes", general: bool = False, batch: int = PASS_LANES):
     """The compiled loop a chunk of ``batch`` realisations of ``scene`` runs under ``executor``
-    (``simulate_chunk``'s choice), whatever it records: the lane loop or the scalar loop's chunk
-    (``general``: a loop compiled once for every structure, the pass loop or the scheme's general
-    loop's)."""
-    if lane_scene(scene, executor) and (not general or in_pass_loop(scene, executor, realisations=batch)):
+    (``simulate_chunk``'s choice, ``lane_chunk``), whatever it records: the lane loop or the
+    scalar loop's chunk (``general``: a loop compiled once for every structure, the pass loop or
+    the scheme's general loop's)."""
+    if lane_chunk(scene, executor, general, False, batch):
         return lane_runner(scene)
     return chunk_loop(kernel_for(scene, general=general))
 
@@ -336,5 +350,5 @@ def parameter_draws(keys, point: int, start: int, common: bool, normal, out) -> 
 
 
 __all__ = ["PASS_LANES", "Chunk", "chunk_loop", "chunk_runner", "ground_paths", "in_pass_loop", "lane_call",
-           "lane_scene", "parameter_draws", "philox_keys", "realization_streams", "reseed", "seed_keys",
-           "simulate_chunk", "simulate_lanes"]
+           "lane_chunk", "lane_scene", "parameter_draws", "philox_keys", "realization_streams", "reseed",
+           "seed_keys", "simulate_chunk", "simulate_lanes"]
