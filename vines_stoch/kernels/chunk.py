@@ -232,10 +232,10 @@ def lane_scene(scene, executor: str = "lanes") -> bool:
     return executor == "lanes" and in_lanes(scene.scheme)
 
 
-#: The fewest realisations of a chunk that runs in the pass loop (``in_pass_loop``; fewer run in
-#: the scalar loop, ``lane_chunk``): with fewer lanes its passes cost more than they share (on a
-#: three-storey frame a lone lane ran at 1.3 M path-steps/s against the general scalar loop's 12,
-#: 16 lanes at 10.7 against 7.8).
+#: The fewest realisations of a short run's chunk that runs in the pass loop (``in_pass_loop``;
+#: fewer run in the general scalar loop, ``lane_chunk``): with fewer lanes its passes cost more
+#: than they share (on a three-storey frame a lone lane ran at 1.3 M path-steps/s against the
+#: general scalar loop's 12, 16 lanes at 10.7 against 7.8).
 PASS_LANES = 16
 
 
@@ -253,14 +253,12 @@ def in_pass_loop(scene, executor: str = "lanes", specialised: bool = False,
 def lane_chunk(scene, executor: str, general: bool, specialised: bool, realisations: int) -> bool:
     """Whether a chunk of ``realisations`` of ``scene`` runs in SIMD lanes under ``executor``: a
     lane scene's (``lane_scene``) in the lane loop ``specialised`` to it, or in the pass loop
-    where that takes it (``in_pass_loop``; short runs too); a structure of the pass loop in fewer
-    than ``PASS_LANES`` realisations, and a short run (``general``) of another lane scene, in the
-    scalar loop on the same Philox streams (the same numbers, bitwise)."""
-    if not lane_scene(scene, executor):
-        return False
-    if pass_scene(scene) and not specialised:
-        return in_pass_loop(scene, executor, specialised, realisations)
-    return specialised or not general
+    where that takes it (``in_pass_loop``; short runs too); a short run's (``general``) chunk of
+    fewer than ``PASS_LANES`` realisations of a structure of the pass loop, and of another lane
+    scene, in the general scalar loop on the same Philox streams (the same numbers, bitwise)."""
+    if general and pass_scene(scene) and not specialised:
+        return in_pass_loop(scene, executor, realisations=realisations)
+    return lane_scene(scene, executor) and (specialised or not general)
 
 
 def chunk_runner(scene, executor: str = "lanes", general: bool = False, batch: int = PASS_LANES):

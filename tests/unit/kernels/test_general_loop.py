@@ -142,8 +142,8 @@ def test_a_short_run_of_a_pass_loop_structure_runs_in_the_pass_loop(monkeypatch)
     """A smooth kick-drift-kick structure of three bodies or more runs a chunk of ``PASS_LANES``
     realisations or more in the pass loop however short the run (itself one loop for every such
     structure: ``kernels.in_pass_loop``), a smaller chunk (a path, ``solve``, a realisation with
-    parameters of its own) in the scalar loop on the same Philox streams (the general one in a
-    short run, ``kernels.lane_chunk``), the scalar executor's in the scalar loop; the pass loop's
+    parameters of its own) in the general scalar loop on the same Philox streams
+    (``kernels.lane_chunk``), the scalar executor's in the scalar loop; the pass loop's
     rows are the general loop's paths on the same Philox streams, bitwise, so the choice moves
     no number."""
     monkeypatch.delenv("VINES_STOCH_GENERAL_WORK", raising=False)
@@ -162,11 +162,9 @@ def test_a_short_run_of_a_pass_loop_structure_runs_in_the_pass_loop(monkeypatch)
         simulate_lanes(*args, **kwargs)))
     rows = simulate_chunk(scene, SEED, 0, 0, PASS_LANES, general=True).raw
     few = simulate_chunk(scene, SEED, 0, 0, 2, general=True).raw
-    long_few = simulate_chunk(scene, SEED, 0, 0, 2).raw  # (a long run's: the specialised scalar loop)
     assert len(lanes) == 1  # (the first chunk alone)
     for r in range(2):  # (a path: the general loop, on the realisation's Philox streams)
         assert same(rows[r], simulate(scene, philox_streams(r))) and same(few[r], rows[r])
-        assert same(long_few[r], rows[r])
 
 
 def _made() -> tuple[int, int, int]:
