@@ -8,7 +8,16 @@ import sys
 import time
 from dataclasses import dataclass
 
-from ..kernels import DEFAULT_SIGNALS, LANES, chunk_runner, general_run, lane_scene, pass_loop, simulate_chunk
+from ..kernels import (
+    DEFAULT_SIGNALS,
+    LANES,
+    chunk_runner,
+    general_run,
+    lane_scene,
+    pass_loop,
+    scalar_general,
+    simulate_chunk,
+)
 from ..notices import LOG
 from ..scenario import History, Study
 from ..scene import Scene, build_scene
@@ -141,8 +150,8 @@ def prepare_loops(scenes: list[Scene], seed: int, common: bool, grid: tuple[int,
             continue
         seen.add(run)
         what = ("the pass loop (every smooth kick-drift-kick structure of three bodies or more)"
-                if run is pass_loop else f"the general {scene.scheme} loop (every structure)" if general
-                else structure(scene))
+                if run is pass_loop else f"the general {scene.scheme} loop (every structure)"
+                if scalar_general(scene, executor, general) else structure(scene))
         # (a loop run before may lack this run's signature: the general loop of a scheme takes
         # PCG64 streams under the scalar executor, Philox ones under the lanes)
         known = len(run.overloads)

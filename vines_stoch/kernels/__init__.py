@@ -31,6 +31,7 @@ from .chunk import (
     lane_scene,
     parameter_draws,
     realization_streams,
+    scalar_general,
     seed_keys,
     simulate_chunk,
 )
@@ -76,5 +77,5 @@ __all__ = ["DEFAULT_SIGNALS", "EXECUTORS", "LANES", "SLOTS", "Path", "advance", 
            "chunk_loop", "chunk_runner", "compile_first", "filter_draws", "general_run", "ground_paths",
            "history_columns", "in_pass_loop", "kernel_for", "lane_normals", "lane_scene", "launcher",
            "load_history", "needed_streams", "parameter_draws", "pass_loop", "pass_scene",
-           "realization_streams", "sample_buffer", "seed_keys", "simulate", "simulate_chunk", "spec_of",
-           "start_path", "step_of", "stretch_to", "stretcher"]
+           "realization_streams", "sample_buffer", "scalar_general", "seed_keys", "simulate",
+           "simulate_chunk", "spec_of", "start_path", "step_of", "stretch_to", "stretcher"]

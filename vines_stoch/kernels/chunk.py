@@ -202,6 +202,7 @@ def simulate_chunk(scene, seed: int, point: int, start: int, stop: int, common: 
     args = bundles(scene, scene.x0.copy(), scene.v0.copy(), filter_tuple(scene, None), np.zeros(0), out0,
                    buffer, template, stride, gens, 1, _NO_CARRY, columns,
                    np.zeros((0, len(EVENT_COLUMNS))))
+    general = scalar_general(scene, executor, general, specialised)
     run = chunk_loop(kernel_for(scene, general=general))
     keys = philox_keys(seed) if philox else seed_keys(seed)
     call = (*args, keys, point, start, common, wanted, scene.x0, scene.v0, scene.filters["p0"], raw, samples,
@@ -232,43 +233,58 @@ def lane_scene(scene, executor: str = "lanes") -> bool:
     return executor == "lanes" and in_lanes(scene.scheme)
 
 
-#: The fewest realisations of a short run's chunk that runs in the pass loop (``in_pass_loop``;
-#: fewer run in the general scalar loop, ``lane_chunk``): with fewer lanes its passes cost more
-#: than they share (on a three-storey frame a lone lane ran at 1.3 M path-steps/s against the
-#: general scalar loop's 12, 16 lanes at 10.7 against 7.8).
+#: The fewest realisations of a chunk that runs in the pass loop (``in_pass_loop``; fewer run
+#: in the general scalar loop, ``lane_chunk``): with fewer lanes its passes cost more than they
+#: share (on a three-storey frame a lone lane ran at 1.3 M path-steps/s against the general
+#: scalar loop's 12, 16 lanes at 10.7 against 7.8).
 PASS_LANES = 16
 
 
 def in_pass_loop(scene, executor: str = "lanes", specialised: bool = False,
                  realisations: int = PASS_LANES) -> bool:
     """Whether a chunk of ``realisations`` of ``scene`` runs in the pass loop under ``executor``,
-    however short the run (``lane_scene`` and ``passes.pass_scene``, unless ``specialised``; at
-    least ``PASS_LANES`` realisations): the pass loop is itself one loop for every structure it
-    takes, compiled once (``ensemble.compile_general``), and runs them in SIMD lanes, 3-4x the
-    general scalar loop's speed on a three-storey frame (the same numbers, bitwise)."""
-    return (lane_scene(scene, executor) and pass_scene(scene) and not specialised
-            and realisations >= PASS_LANES)
+    however short or long the run (``lane_scene`` and ``passes.pass_scene``, unless
+    ``specialised``; at least ``PASS_LANES`` realisations): the pass loop is itself one loop for
+    every structure it takes, compiled once (``ensemble.compile_general``), and runs them in SIMD
+    lanes, 3-4x the general scalar loop's speed on a three-storey frame (the same numbers,
+    bitwise)."""
+    return pass_structure(scene, executor, specialised) and realisations >= PASS_LANES
+
+
+def pass_structure(scene, executor: str = "lanes", specialised: bool = False) -> bool:
+    """Whether ``scene``'s lane realisations run in the pass loop under ``executor`` in chunks of
+    ``PASS_LANES`` or more (``in_pass_loop``), and in the general scalar loop in smaller ones."""
+    return lane_scene(scene, executor) and pass_scene(scene) and not specialised
 
 
 def lane_chunk(scene, executor: str, general: bool, specialised: bool, realisations: int) -> bool:
     """Whether a chunk of ``realisations`` of ``scene`` runs in SIMD lanes under ``executor``: a
     lane scene's (``lane_scene``) in the lane loop ``specialised`` to it, or in the pass loop
-    where that takes it (``in_pass_loop``; short runs too); a short run's (``general``) chunk of
-    fewer than ``PASS_LANES`` realisations of a structure of the pass loop, and of another lane
-    scene, in the general scalar loop on the same Philox streams (the same numbers, bitwise)."""
-    if general and pass_scene(scene) and not specialised:
-        return in_pass_loop(scene, executor, realisations=realisations)
+    where that takes it (``in_pass_loop``, whatever the run's length); a chunk of fewer than
+    ``PASS_LANES`` realisations of a structure of the pass loop (a path, ``solve``, each
+    realisation of a study with uncertain parameters), and a short run's (``general``) chunk of
+    another lane scene, in the general scalar loop on the same Philox streams (``scalar_general``;
+    the same numbers, bitwise)."""
+    if pass_structure(scene, executor, specialised):
+        return realisations >= PASS_LANES
     return lane_scene(scene, executor) and (specialised or not general)
+
+
+def scalar_general(scene, executor: str, general: bool, specialised: bool = False) -> bool:
+    """Whether a chunk of ``scene`` that runs in the scalar loop (``lane_chunk``) runs its
+    scheme's general loop, compiled once for every structure: in a short run (``general``), and
+    for a structure of the pass loop in any run (its chunks too small for the pass loop)."""
+    return general or pass_structure(scene, executor, specialised)
 
 
 def chunk_runner(scene, executor: str = "lanes", general: bool = False, batch: int = PASS_LANES):
     """The compiled loop a chunk of ``batch`` realisations of ``scene`` runs under ``executor``
     (``simulate_chunk``'s choice, ``lane_chunk``), whatever it records: the lane loop or the
     scalar loop's chunk (``general``: a loop compiled once for every structure, the pass loop or
-    the scheme's general loop's)."""
+    the scheme's general loop's; ``scalar_general``)."""
     if lane_chunk(scene, executor, general, False, batch):
         return lane_runner(scene)
-    return chunk_loop(kernel_for(scene, general=general))
+    return chunk_loop(kernel_for(scene, general=scalar_general(scene, executor, general)))
 
 
 def lane_runner(scene, specialised: bool = False):
@@ -348,5 +364,5 @@ def parameter_draws(keys, point: int, start: int, common: bool, normal, out) -> 
 
 
 __all__ = ["PASS_LANES", "Chunk", "chunk_loop", "chunk_runner", "ground_paths", "in_pass_loop", "lane_call",
-           "lane_chunk", "lane_scene", "parameter_draws", "philox_keys", "realization_streams", "reseed",
-           "seed_keys", "simulate_chunk", "simulate_lanes"]
+           "lane_chunk", "lane_scene", "parameter_draws", "pass_structure", "philox_keys",
+           "realization_streams", "reseed", "scalar_general", "seed_keys", "simulate_chunk", "simulate_lanes"]

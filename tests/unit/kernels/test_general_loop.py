@@ -138,33 +138,40 @@ def test_new_structures_run_the_general_loop_and_compile_nothing():
     assert _made() == made and _compiled((*loops.values(), *chunks)) == compiled
 
 
-def test_a_short_run_of_a_pass_loop_structure_runs_in_the_pass_loop(monkeypatch):
+def test_a_pass_loop_structure_runs_chunks_of_16_in_the_pass_loop_and_smaller_ones_in_the_general_loop(
+        monkeypatch):
     """A smooth kick-drift-kick structure of three bodies or more runs a chunk of ``PASS_LANES``
-    realisations or more in the pass loop however short the run (itself one loop for every such
-    structure: ``kernels.in_pass_loop``), a smaller chunk (a path, ``solve``, a realisation with
-    parameters of its own) in the general scalar loop on the same Philox streams
-    (``kernels.lane_chunk``), the scalar executor's in the scalar loop; the pass loop's
-    rows are the general loop's paths on the same Philox streams, bitwise, so the choice moves
-    no number."""
+    realisations or more in the pass loop however short or long the run (itself one loop for
+    every such structure: ``kernels.in_pass_loop``), a smaller chunk (a path, ``solve``, a
+    realisation with parameters of its own) in the general scalar loop on the same Philox streams
+    however long the run (``kernels.lane_chunk``, ``kernels.scalar_general``), the scalar
+    executor's in the scalar loop (the general one in a short run); the pass loop's rows are the
+    general loop's paths on the same Philox streams, bitwise, so the choice moves no number."""
     monkeypatch.delenv("VINES_STOCH_GENERAL_WORK", raising=False)
     scene = scene_from(frame(2, [CUBIC], [NOISE]))
     study = study_from(frame(2, [CUBIC], [NOISE]), {"ensemble.realizations": 40})
     assert scene.mass.shape[0] == 3 and general_run(40 * scene.n_steps) and in_pass_loop(scene)
     assert plan(study).general and plan(study).batch == 40
-    assert chunk_runner(scene, "lanes", general=True, batch=PASS_LANES) is pass_loop
     general = chunk_loop(kernel_for(scene, general=True))
-    assert chunk_runner(scene, "lanes", general=True, batch=PASS_LANES - 1) is general
+    for short in (True, False):
+        assert chunk_runner(scene, "lanes", general=short, batch=PASS_LANES) is pass_loop
+        assert chunk_runner(scene, "lanes", general=short, batch=PASS_LANES - 1) is general
     assert chunk_runner(scene, "scalar", general=True) is general
+    assert chunk_runner(scene, "scalar", general=False) is chunk_loop(kernel_for(scene))
     assert not in_pass_loop(scene, "scalar") and not in_pass_loop(scene, specialised=True)
     assert not in_pass_loop(scene_from(frame(1, [CUBIC], [NOISE])))  # (two bodies: the general loop)
     lanes = []  # (the chunks that ran in SIMD lanes)
     monkeypatch.setattr(chunk_module, "simulate_lanes", lambda *args, **kwargs: lanes.append(
         simulate_lanes(*args, **kwargs)))
     rows = simulate_chunk(scene, SEED, 0, 0, PASS_LANES, general=True).raw
+    long_rows = simulate_chunk(scene, SEED, 0, 0, PASS_LANES).raw
     few = simulate_chunk(scene, SEED, 0, 0, 2, general=True).raw
-    assert len(lanes) == 1  # (the first chunk alone)
+    long_few = simulate_chunk(scene, SEED, 0, 0, 2).raw
+    assert len(lanes) == 2  # (the chunks of PASS_LANES alone)
+    assert same(long_rows, rows)
     for r in range(2):  # (a path: the general loop, on the realisation's Philox streams)
         assert same(rows[r], simulate(scene, philox_streams(r))) and same(few[r], rows[r])
+        assert same(long_few[r], rows[r])
 
 
 def _made() -> tuple[int, int, int]:

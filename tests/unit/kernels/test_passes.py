@@ -1,5 +1,6 @@
 """The pass loop (kernels/passes.py): one compiled loop for the lane realisations of every smooth
-structure of three bodies or more (filtered loads included).  Each realisation's metric vector,
+structure of three bodies or more (filtered loads included), in chunks of ``PASS_LANES``
+realisations or more (a smaller one runs in the general scalar loop).  Each realisation's metric vector,
 history rows and declared metrics are, bitwise, the scalar loop's on its Philox streams,
 whatever the structure; and structures that differ in storeys, absorbers, loads and outputs run
 it without compiling anything."""
@@ -14,7 +15,7 @@ import pytest
 from tests.helpers import changed, scene_from
 from tests.unit.kernels.test_lanes import FILTERED, FRAME, SEED, philox_streams, same
 from vines_stoch.kernels import chunk_runner, simulate
-from vines_stoch.kernels.chunk import simulate_chunk
+from vines_stoch.kernels.chunk import PASS_LANES, simulate_chunk
 from vines_stoch.kernels.driver import step_loop
 from vines_stoch.kernels.lanes import lane_loop
 from vines_stoch.kernels.passes import pass_loop, pass_scene
@@ -77,8 +78,8 @@ SCENES = {
 def test_a_pass_lane_is_the_scalar_loop_on_its_philox_streams(name):
     scene = scene_from(SCENES[name])
     assert pass_scene(scene) and chunk_runner(scene) is pass_loop
-    rows = simulate_chunk(scene, SEED, 0, 0, 4).raw
-    for r in range(4):
+    rows = simulate_chunk(scene, SEED, 0, 0, PASS_LANES).raw
+    for r in range(PASS_LANES):
         scalar = simulate(scene, philox_streams(r))
         assert same(rows[r], scalar), (r, np.flatnonzero(rows[r] != scalar))
     assert not np.isnan(rows).any() or scene.limits.shape[0] > 0
@@ -92,8 +93,8 @@ def test_the_pass_loop_keeps_the_scalar_loop_s_history_rows():
     that keeps none."""
     scene = scene_from(SCENES["5 storeys, bistable, recorded"])
     signals = ("x1", "e1", "share", "x_2", "v_5", "drift_3", "xa_1", "va_2", "stroke_2")
-    plain = simulate_chunk(scene, SEED, 0, 0, 3).raw
-    kept = simulate_chunk(scene, SEED, 0, 0, 3, history=(40, 16), signals=signals)
+    plain = simulate_chunk(scene, SEED, 0, 0, PASS_LANES).raw
+    kept = simulate_chunk(scene, SEED, 0, 0, PASS_LANES, history=(40, 16), signals=signals)
     assert same(kept.raw, plain)
     for r in range(3):
         history = np.full((16, len(signals)), np.nan)
@@ -104,8 +105,8 @@ def test_the_pass_loop_keeps_the_scalar_loop_s_history_rows():
 def test_a_path_that_diverges_ends_in_the_pass_loop_as_in_the_scalar_loop():
     base = scene_from(changed(FRAME, {"simulation.duration": 3.0}))
     scene = dataclasses.replace(base, storey_k=base.storey_k * 4e5)  # past the step's stability limit
-    rows = simulate_chunk(scene, SEED, 0, 0, 2).raw
-    for r in range(2):
+    rows = simulate_chunk(scene, SEED, 0, 0, PASS_LANES).raw
+    for r in range(PASS_LANES):
         assert rows[r][STATUS] == STATUS_DIVERGED
         assert same(rows[r], simulate(scene, philox_streams(r)))
 
@@ -117,8 +118,8 @@ def test_one_pass_loop_serves_every_structure():
     before = (lane_loop.cache_info().currsize, step_loop.cache_info().currsize)
     for data in SCENES.values():
         scene = scene_from(changed(data, {"simulation.duration": 1.0}))
-        simulate_chunk(scene, SEED, 0, 0, 2, history=(10, 5), signals=("x1", "e1"))
-        simulate_chunk(scene, SEED, 0, 0, 2)
+        simulate_chunk(scene, SEED, 0, 0, PASS_LANES, history=(10, 5), signals=("x1", "e1"))
+        simulate_chunk(scene, SEED, 0, 0, PASS_LANES)
     assert (lane_loop.cache_info().currsize, step_loop.cache_info().currsize) == before
     assert len(pass_loop.overloads) == 1
 
