@@ -179,9 +179,7 @@ def finish_table(raw: np.ndarray, scene: Scene | Sequence[Scene],
                 folded = rms((folded - 0.5 * last * last) * dt)
         columns[name] = folded
         finite &= np.isfinite(folded)
-    with np.errstate(invalid="ignore"):  # (off by half the input: the scheme failed, FAILED_BALANCE)
-        failed = np.abs(residual) > FAILED_BALANCE
-    ok = finite & (slot["status"] != STATUS_DIVERGED) & ~failed
+    ok = finite & (slot["status"] != STATUS_DIVERGED) & ~failed_balance(slot)
     # string columns as codes into their few values (far faster than a string a row)
     columns["status"] = pd.Series(["diverged", "ok"]).array.take(ok.astype(np.intp))
     codes, labels = np.zeros(n, dtype=np.intp), {None: 0}
@@ -193,6 +191,22 @@ def finish_table(raw: np.ndarray, scene: Scene | Sequence[Scene],
             codes[i] = labels.setdefault(label, len(labels))
     columns["regime"] = pd.array(list(labels), dtype="string").take(codes)
     return pd.DataFrame(columns, copy=False)  # (the arrays are this table's alone)
+
+
+def failed_balance(slot: dict[str, np.ndarray]) -> np.ndarray:
+    """Whether each row's energy accounts say its scheme failed (``FAILED_BALANCE``): where energy
+    went in, a balance off by more than that share of the input (``|energy_residual|``); where
+    none did (no residual is defined), a balance off by more than that share of the largest
+    account; and anywhere a dissipation negative by more than it (a dashpot or an impact gives
+    energy back only within the scheme's error).  A row with no energy at all passes."""
+    input_energy, final = slot["input_energy"], slot["final_energy"]
+    losses = (slot["primary_dissipation"], slot["absorber_dissipation"], slot["impact_loss"])
+    dissipated = losses[1] + losses[2] + losses[0]  # (as ``energy_residual`` sums them)
+    with np.errstate(invalid="ignore", over="ignore"):
+        largest = np.max(np.abs([input_energy, final, *losses]), axis=0)
+        scale = np.where(input_energy > 0, input_energy, largest)
+        return (np.abs(input_energy - final - dissipated) > FAILED_BALANCE * scale) | (
+            dissipated < -FAILED_BALANCE * scale)
 
 
 def _stacked(samples: Sequence[np.ndarray | None] | np.ndarray | None, n: int) -> np.ndarray | None:
@@ -293,8 +307,8 @@ def residual_warnings(realizations: pd.DataFrame, source: str, tolerance: float)
         where = f"sweep point {point}: " if len(points) > 1 else ""
         failed = int((group["status"] != "ok").sum())
         if failed:
-            why = ("status: a path that grew without bound, a metric not finite, or an energy balance off by "
-                   "more than half the input")
+            why = ("status: a path that grew without bound, a metric not finite, or energy accounts that say "
+                   "the scheme failed, such as a balance off by more than half the input")
             lines.append(Notice(f"{source}: {where}{failed} of {len(group)} realisation(s) diverged ({why}); "
                                 "a smaller simulation.dt makes them run", DivergedWarning))
         note = residual_notes(group[group["status"] == "ok"], tolerance)

@@ -116,13 +116,15 @@ def test_work_that_cannot_fit_is_refused_before_it_starts():
 def test_a_failed_scheme_is_diverged_not_ok():
     """A cubic NES with dt = 0.5 (stable for the linear structure, far too coarse for the NES):
     a realisation whose energy balance misses more than half the input energy is ``diverged``, so
-    none ended ok carries one (the summary averages only what the scheme computed)."""
+    none ended ok carries one (the summary averages only what the scheme computed).  Such a
+    balance with finite energies is rare (most unstable paths overflow): 28 of 10,000 realisations
+    (the others diverge by growth, three in four), so the run holds some whatever its streams."""
     from vines_stoch.metrics import FAILED_BALANCE
 
     data = {"name": "unstable", "primary": {"mass": 1.0, "stiffness": 1.0, "damping": 0.05},
             "absorbers": [{"type": "cubic", "mass": 0.05, "stiffness": 1.0, "damping": 0.01}],
             "loads": [{"type": "white-noise", "intensity": 0.1}],
-            "simulation": {"duration": 200.0, "dt": 0.5}, "ensemble": {"realizations": 20, "seed": 1}}
+            "simulation": {"duration": 200.0, "dt": 0.5}, "ensemble": {"realizations": 10_000, "seed": 1}}
     with pytest.warns(vines_stoch.VinesStochWarning):
         results = vines_stoch.run(data)
     r = results.realizations

@@ -86,7 +86,14 @@ def reference_row(raw: np.ndarray, scene, samples: np.ndarray | None = None) -> 
     passages = passage_slots(nf)
     for limit, name in enumerate(scene.limit_names):
         row[f"first_passage_{name}"] = g(passages + limit)
-    failed = abs(residual) > FAILED_BALANCE  # (a balance off by more than half the input: NaN is not)
+    # (the scheme failed: a balance off by more than half the input, or where none went in by more
+    # than half the largest account; a dissipation negative beyond that; NaN is not)
+    final, losses = g(_S["final_energy"]), [g(_S[k]) for k in ("primary_dissipation", "absorber_dissipation",
+                                                                  "impact_loss")]
+    dissipated = losses[1] + losses[2] + losses[0]
+    scale = input_energy if input_energy > 0 else max(abs(v) for v in (input_energy, final, *losses))
+    failed = (abs(input_energy - final - dissipated) > FAILED_BALANCE * scale
+              or dissipated < -FAILED_BALANCE * scale)
     row["status"] = "diverged" if g(_S["status"]) == STATUS_DIVERGED or not finite or failed else "ok"
     row["regime"] = (regime(samples, 2.0 * np.pi / scene.period)
                      if samples is not None and samples.size and row["status"] == "ok" else None)
@@ -239,8 +246,11 @@ def test_periodic_rows_get_their_regime_and_edge_values_their_status():
         {"x1_square_integral": -1.0},                        # clipped to 0
         {"x1_square_integral": -0.0},                        # max(-0.0, 0.0) is -0.0
         {"x1_square_integral": 1e308},                       # overflows over a short window
-        {"input_energy": 0.0},                               # edm, residual NaN; still ok
-        {"input_energy": -2.0},
+        {"input_energy": 0.0},                               # edm, residual NaN; energy from nowhere
+        {"input_energy": -2.0},                              # the same: diverged
+        {"input_energy": 0.0, "final_energy": 0.0, "primary_dissipation": 0.0, "absorber_dissipation": 0.0,
+         "impact_loss": 0.0},                                # no energy at all: ok
+        {"absorber_dissipation": -raw[_S["input_energy"]]},  # a dashpot giving energy back: diverged
         {"input_energy": math.nan},                          # diverged
         {"final_energy": math.inf},                          # an infinite residual: the scheme failed
         {"final_energy": raw[_S["final_energy"]] + 0.25 * raw[_S["input_energy"]]},  # residual -0.25: ok
@@ -267,6 +277,7 @@ def test_periodic_rows_get_their_regime_and_edge_values_their_status():
     want = [reference_row(r, scene, s) for r, s in zip(table_raw, rows_samples)]
     assert [w["regime"] for w in want[:4]] == ["T,2,2", "2T,1,0", "aperiodic", None]
     assert [w["status"] for w in want[3:6]] == ["diverged"] * 3
+    assert [w["status"] for w in want[9:13]] == ["diverged", "diverged", "ok", "diverged"]
     # samples as one array (realisations, samples, columns)
     stacked = np.stack([samples[0], orbit(2, count), noisy])
     assert_rows(finish_table(table_raw[:3], scene, stacked), want[:3])
