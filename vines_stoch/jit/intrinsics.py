@@ -173,46 +173,57 @@ def int_scratch(typingctx, size):
     return _stack_array(types.int64, size)
 
 
+#: The float types whose bits ``float_bits`` and ``bits_float`` cast, with the unsigned integer of
+#: their width.
+_BIT_TYPES = {types.float64: (types.uint64, ir.DoubleType(), 64),
+              types.float32: (types.uint32, ir.FloatType(), 32)}
+
+
 @intrinsic
 def float_bits(typingctx, value):
-    """The bits of a ``float64`` as a ``uint64`` (a bit cast, no conversion: the exponent and
-    mantissa of ``rng.log_positive``'s argument)."""
-    if value != types.float64:
+    """The bits of a ``float64`` as a ``uint64``, of a ``float32`` as a ``uint32`` (a bit cast, no
+    conversion: the exponent and mantissa of ``rng.log_positive``'s argument)."""
+    if value not in _BIT_TYPES:
         return None
+    unsigned, _, width = _BIT_TYPES[value]
 
     def codegen(context, builder, signature, args):
-        return builder.bitcast(args[0], ir.IntType(64))
+        return builder.bitcast(args[0], ir.IntType(width))
 
-    return types.uint64(types.float64), codegen
+    return unsigned(value), codegen
 
 
 @intrinsic
 def bits_float(typingctx, value):
-    """The ``float64`` whose bits are a ``uint64`` (``float_bits``'s inverse)."""
-    if value != types.uint64:
+    """The ``float64`` whose bits are a ``uint64``, the ``float32`` whose bits are a ``uint32``
+    (``float_bits``'s inverse)."""
+    floats = {unsigned: (real, llvm_type) for real, (unsigned, llvm_type, _) in _BIT_TYPES.items()}
+    if value not in floats:
         return None
+    real, llvm_type = floats[value]
 
     def codegen(context, builder, signature, args):
-        return builder.bitcast(args[0], ir.DoubleType())
+        return builder.bitcast(args[0], llvm_type)
 
-    return types.float64(types.uint64), codegen
+    return real(value), codegen
 
 
 @intrinsic
 def fused(typingctx, a, b, c):
-    """``a b + c`` rounded once (``llvm.fma``), for ``float64`` operands: the only fused
-    multiply-adds of the loops, which take no fast-math licence (``jit.flags.KERNEL``), so that
-    every loop that writes the same arithmetic computes the same bits, however the compiler
-    unrolls or vectorises it (the scalar, lane, pass and general loops)."""
-    if not all(t == types.float64 for t in (a, b, c)):
+    """``a b + c`` rounded once (``llvm.fma``), for ``float64`` operands or ``float32`` ones: the
+    only fused multiply-adds of the loops, which take no fast-math licence (``jit.flags.KERNEL``),
+    so that every loop that writes the same arithmetic computes the same bits, however the
+    compiler unrolls or vectorises it (the scalar, lane, pass and general loops)."""
+    if a not in _BIT_TYPES or not b == c == a:
         return None
+    llvm_type = _BIT_TYPES[a][1]
 
     def codegen(context, builder, signature, args):
-        double = ir.DoubleType()
-        fma = builder.module.declare_intrinsic("llvm.fma", [double], ir.FunctionType(double, [double] * 3))
+        fma = builder.module.declare_intrinsic("llvm.fma", [llvm_type],
+                                               ir.FunctionType(llvm_type, [llvm_type] * 3))
         return builder.call(fma, args)
 
-    return types.float64(types.float64, types.float64, types.float64), codegen
+    return a(a, a, a), codegen
 
 
 @intrinsic

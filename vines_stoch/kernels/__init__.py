@@ -35,7 +35,7 @@ from .chunk import (
     seed_keys,
     simulate_chunk,
 )
-from .lanes import LANES, lane_normals
+from .lanes import LANES, SPARE_ROWS, lane_normals
 from .passes import pass_loop, pass_scene
 from .paths import (
     DEFAULT_SIGNALS,
@@ -73,9 +73,9 @@ def stretcher(*args: Any, **kwargs: Any):
     return make(*args, **kwargs)
 
 
-__all__ = ["DEFAULT_SIGNALS", "EXECUTORS", "LANES", "SLOTS", "Path", "advance", "bundles", "check_executor",
-           "chunk_loop", "chunk_runner", "compile_first", "filter_draws", "general_run", "ground_paths",
-           "history_columns", "in_pass_loop", "kernel_for", "lane_normals", "lane_scene", "launcher",
-           "load_history", "needed_streams", "parameter_draws", "pass_loop", "pass_scene",
+__all__ = ["DEFAULT_SIGNALS", "EXECUTORS", "LANES", "SLOTS", "SPARE_ROWS", "Path", "advance", "bundles",
+           "check_executor", "chunk_loop", "chunk_runner", "compile_first", "filter_draws", "general_run",
+           "ground_paths", "history_columns", "in_pass_loop", "kernel_for", "lane_normals", "lane_scene",
+           "launcher", "load_history", "needed_streams", "parameter_draws", "pass_loop", "pass_scene",
            "realization_streams", "sample_buffer", "scalar_general", "seed_keys", "simulate",
            "simulate_chunk", "spec_of", "start_path", "step_of", "stretch_to", "stretcher"]

@@ -11,10 +11,11 @@ registers), which LLVM turns into vector code, ``LANES`` paths an instruction gr
 
 The noise comes from counter-based Philox streams (``rng.py``): lane ``l``'s normals of step
 ``i`` are draws ``i m .. i m + m - 1`` (``m`` noisy floors) of its realisation's stream, a block
-of Philox4x32-10 and a branch-free Box-Muller pair (``rng.philox_pair``) every two draws, in a
-loop of their own over the lanes.  A realisation's numbers therefore depend on (seed, purpose,
-point, realisation) alone, as the cuda backend's do, and the scalar loop given the same Philox
-streams runs the same arithmetic: the two agree bitwise (``tests/unit/kernels/test_lanes.py``).
+of Philox4x32-10 and its two branch-free ``float32`` Box-Muller pairs (``rng.block_normals``)
+every four draws, in a loop of their own over the lanes.  A realisation's numbers therefore
+depend on (seed, purpose, point, realisation) alone, as the cuda backend's do, and the scalar
+loop given the same Philox streams runs the same arithmetic: the two agree bitwise
+(``tests/unit/kernels/test_lanes.py``).
 
 Events leave the lanes.  The lane body is the step's first pass without an event, and a test
 without a branch (``events.quiet_band``) flags each lane whose drift ends outside its absorbers'
@@ -70,7 +71,14 @@ from ..outputs import (
 from ..physics.absorbers import CLEARANCE, WALL_HI, WALL_LO
 from ..physics.absorbers import HERTZ as HERTZ_LAW
 from ..physics.structure import primary_energy, wall_of
-from ..streams.rng import STREAM_WORDS, block_uniforms, packed_block, packed_pair
+from ..streams.rng import (
+    BLOCK_NORMALS,
+    STREAM_WORDS,
+    block_normals,
+    block_uniforms,
+    packed_block,
+    packed_normals,
+)
 from .brownian import forget, tree_seed
 from .common import (
     CHECK_EVERY,
@@ -137,28 +145,54 @@ def aligned_rows(rows: int):
     return buffer[skip:skip + rows * LANES]
 
 
+#: Rows of the normals a lane keeps from a block for its next draws (``lane_normals``).
+SPARE_ROWS = BLOCK_NORMALS - 1
+
+
+@njit(**INLINE)
+def spare_rows():
+    """The rows a batch's lanes keep their block's next normals in (``lane_normals``)."""
+    return aligned_rows(SPARE_ROWS).reshape((SPARE_ROWS, LANES))
+
+
 @njit(**KERNEL)
 def lane_normals(z, spare, nl: int, draw: int, key, places, first: int) -> None:
     """Draw ``draw`` of the Philox streams ``(key, places[first + lane])`` into ``z[lane]``, lane by
-    lane: at an even draw the Box-Muller pair of its block (``rng.philox_pair``), its second
-    half kept in ``spare`` for the next draw; at an odd draw that half.  (Out of line, as the
-    lane step: a small function that the compiler vectorises on its own.)
+    lane: at a draw ``4m`` the normals of block ``m`` (``rng.block_normals``), the last three kept
+    in the rows of ``spare`` (``(SPARE_ROWS, lanes)``) for the next three draws, which take them.
+    (Out of line, as the lane step: a small function that the compiler vectorises on its own.)
 
-    An even draw runs two loops over the lanes: the Philox rounds, the block parked in ``z`` and
-    ``spare`` as the bits of its two 64-bit words (``rng.packed_block``), then their Box-Muller
-    pair.  The same arithmetic as one loop, in a quarter less time (AVX-512 host: the integer
-    rounds and the floating-point transform, vectorised apart, each keep their registers)."""
+    A block's draw runs two loops over the lanes: the Philox rounds, the block parked in ``z``
+    and ``spare``'s first row as the bits of its two 64-bit words (``rng.packed_block``), then
+    its two ``float32`` Box-Muller pairs (``rng.packed_normals``), each loop vectorised apart
+    (their integer and floating-point work each keep their registers).  A tail pair (one in
+    65,536) sends the batch to ``tail_lanes``."""
     prefer_vectors()
-    if draw & 1 == 0:
-        block = np.uint64(draw >> 1)
+    q = draw & 3
+    if q == 0:
+        block = np.uint64(draw >> 2)
         for lane in range(nl):
             a, b = packed_block(key, places[first + lane], block)
-            z[lane], spare[lane] = bits_float(a), bits_float(b)
+            z[lane], spare[0, lane] = bits_float(a), bits_float(b)
+        tails = 0
         for lane in range(nl):
-            z[lane], spare[lane] = packed_pair(float_bits(z[lane]), float_bits(spare[lane]))
+            z0, z1, z2, z3, tail = packed_normals(float_bits(z[lane]), float_bits(spare[0, lane]))
+            z[lane], spare[0, lane], spare[1, lane], spare[2, lane] = z0, z1, z2, z3
+            tails += tail
+        if tails > 0:
+            tail_lanes(z, spare, nl, block, key, places, first)
     else:
         for lane in range(nl):
-            z[lane] = spare[lane]
+            z[lane] = spare[q - 1, lane]
+
+
+@njit(**KERNEL)
+def tail_lanes(z, spare, nl: int, block, key, places, first: int) -> None:
+    """A batch's block of normals again, lane by lane, where a lane's holds a tail pair
+    (``lane_normals``; ``rng.block_normals``: the same bits for the other pairs)."""
+    for lane in range(nl):
+        place = places[first + lane]
+        z[lane], spare[0, lane], spare[1, lane], spare[2, lane] = block_normals(key, place, block)
 
 
 @njit(**INLINE)
@@ -704,8 +738,8 @@ def lane_loop(spec: Spec):
             history, stride, signals, reductions, events):
         prefer_vectors()
         n = raw.shape[0]
-        s, z, spare = aligned_rows(ROWS), aligned_rows(NF), aligned_rows(1)
-        fz, fspare = aligned_rows(NZ), aligned_rows(1)  # (the filters' normals)
+        s, z, spare = aligned_rows(ROWS), aligned_rows(NF), spare_rows()
+        fz, fspare = aligned_rows(NZ), spare_rows()  # (the filters' normals)
         passages = aligned_rows(limits.shape[0])
         # the scalar step's state and scratch for the lanes whose step holds an event (its own
         # start: the lanes set what is theirs into it), the lanes' tree seeds

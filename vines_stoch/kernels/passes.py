@@ -51,6 +51,7 @@ from .lanes import (
     lane_state,
     pass_rows,
     record_rows,
+    spare_rows,
     start_filter_rows,
 )
 from .loads import filter_scales, has_breaks
@@ -498,13 +499,14 @@ def pass_loop(bodies, absorbers, ex, fl, noise, grid, limits, key, bridge_key, f
     scratch_rows = (aligned_rows(nb).reshape((nb, W)), aligned_rows(nb).reshape((nb, W)),
                     aligned_rows(nf).reshape((nf, W)), aligned_rows(nf).reshape((nf, W)), aligned_rows(1),
                     aligned_rows(1), aligned_rows(1))
-    z, spare = aligned_rows(nf).reshape((nf, W)), aligned_rows(1)
+    z, spare = aligned_rows(nf).reshape((nf, W)), spare_rows()
     passages = aligned_rows(limits.shape[0])
     lane = (np.zeros(nb), np.zeros(nb), np.zeros(nb), np.zeros(nf), np.zeros(nf))
     nz = fl.phi.shape[0]
     n_rows = load_rows(nf, nz)[1]
     fs = aligned_rows(n_rows)
-    filters = (fs, fs.reshape((n_rows, W)), aligned_rows(nz), aligned_rows(1), np.zeros(nz), np.zeros(nz),
+    fspare = spare_rows()
+    filters = (fs, fs.reshape((n_rows, W)), aligned_rows(nz), fspare, np.zeros(nz), np.zeros(nz),
                np.zeros(nz), np.zeros(nz))
     for first in range(0, raw.shape[0], W):
         nl = min(W, raw.shape[0] - first)

@@ -6,19 +6,31 @@ or a numpy ``Generator`` (of a bit generator other than ``PCG64``, passed by a u
 
 A Philox stream is a ``uint64`` array of ``STREAM_WORDS``: the key (two 32-bit words, from the
 seed and the purpose), the stream's place (the realisation, and the sweep point without common
-random numbers: the counter's upper 64 bits) and the number of draws so far.  Draw ``n`` is
-half ``n mod 2`` of block ``n // 2`` of Philox4x32-10 (the block number: the counter's lower
-64 bits; Salmon, Moraes, Dror and Shaw, "Parallel random numbers: as easy as 1, 2, 3", SC '11,
-doi:10.1145/2063384.2063405; the Random123 reference), so realisation ``r``'s numbers are a
-function of (seed, purpose, point, r) and the draw's index alone: the same whatever the launch
-configuration, batch or SIMD lane (``kernels/lanes.py`` draws a block's two normals at once).
-A block's four words are two 53-bit uniforms: uniform ``n`` is the first or the second; normals
-``2m`` and ``2m + 1`` are the Box-Muller pair of block ``m`` (Box and Muller, Ann. Math.
-Statist. 29 (1958) 610, doi:10.1214/aoms/1177706645), its cosine and its sine.  The logarithm
-and the sine and cosine are branch-free polynomials (``log_positive``, ``sincos_turn``: fdlibm's,
-within an ulp or two of the correctly rounded values), so that a loop over SIMD lanes
-vectorises them and every lane and every scalar draw computes the same bits.  A stream gives
-one kind of draw (a purpose draws normals or uniforms, not both).
+random numbers: the counter's upper 64 bits), the number of draws so far and the normals kept
+from the last block.  Its draws come from blocks of Philox4x32-10 (the block number: the
+counter's lower 64 bits; Salmon, Moraes, Dror and Shaw, "Parallel random numbers: as easy as
+1, 2, 3", SC '11, doi:10.1145/2063384.2063405; the Random123 reference), so realisation ``r``'s
+numbers are a function of (seed, purpose, point, r) and the draw's index alone: the same
+whatever the launch configuration, batch or SIMD lane (``kernels/lanes.py`` draws a block's
+normals at once).  A block's four 32-bit words are two 53-bit uniforms (uniform ``n``: the first
+or the second half of block ``n // 2``) or four normals: normals ``4m .. 4m + 3`` are the
+Box-Muller pairs (Box and Muller, Ann. Math. Statist. 29 (1958) 610,
+doi:10.1214/aoms/1177706645) of block ``m``'s first two words and of its last two, each the
+cosine then the sine (``block_normals``).
+
+A pair's radius ``sqrt(-2 log u1)`` takes ``u1 = (w + 1/2) 2^-32`` from its first word ``w`` and
+its angle ``2 pi w' 2^-32`` from the second, computed in ``float32`` arithmetic (``fast_pair``:
+musl's ``logf`` after fdlibm, Cephes' single-precision sine and cosine polynomials; all
+branch-free, so that a loop over SIMD lanes vectorises them with twice the numbers a vector of
+``float64`` holds, and every lane and every scalar draw computes the same bits).  Its relative
+error, a few ``float32`` ulp (below 1e-6), is far below a step's (``docs/numerics.md``).  The
+exact tail: where ``w < 2^16`` (``u1 < 2^-16``, a radius beyond 4.7, one pair in 65,536) the
+32-bit grid of ``u1`` is too coarse for the normal law's tail, and the pair is recomputed in
+``float64`` (``tail_pair``) with ``u1 = (w + v) 2^-32``, ``v`` a 53-bit uniform in ``(0, 1]`` from
+the block's tail block (block ``m + 2^63`` of the stream): ``u1`` is then uniform below
+``2^-16`` to a ``float64``'s last bit (its smallest value ``2^-85``), and the radius reaches 10.8
+standard deviations, its law exact to 8 and beyond.
+A stream gives one kind of draw (a purpose draws normals or uniforms, not both).
 
 The kernels call ``normal`` and ``uniform``; numba picks the implementation by the stream's
 type when it compiles a kernel, and plain Python (the CUDA simulator) by ``isinstance`` and
@@ -38,15 +50,18 @@ from ..jit.intrinsics import bits_float, float_bits, fused
 from .pcg import PCG_DTYPE, pcg_normal, pcg_uniform
 
 #: Words of a Philox stream: key, place, draws made, and the block (plus one; 0: none) whose
-#: second normal the stream holds, with that normal's bits (``philox_normal``).
-STREAM_WORDS = 5
-KEY, PLACE, DRAWN, PAIRED, SPARE = range(STREAM_WORDS)
+#: last three normals the stream holds, with those normals' bits (``philox_normal``).
+STREAM_WORDS = 7
+KEY, PLACE, DRAWN, PAIRED, SPARE = range(5)
+#: Normals of a block (``block_normals``).
+BLOCK_NORMALS = 4
 
 _M0, _M1 = np.uint64(0xD2511F53), np.uint64(0xCD9E8D57)  # Philox4x32 multipliers
 _W0, _W1 = np.uint64(0x9E3779B9), np.uint64(0xBB67AE85)  # key schedule (Weyl) increments
 _LOW = np.uint64(0xFFFFFFFF)
 _S32, _S11, _S21 = np.uint64(32), np.uint64(11), np.uint64(21)
 _ONE = np.uint64(1)
+_TWO_BITS, _THREE = np.uint64(2), np.uint64(3)
 _ULP53 = 2.0**-53
 # fdlibm's (and musl's) log: ln 2 in two parts and the minimax coefficients of
 # log((1 + s) / (1 - s)) = 2 s + Lg1 s^3 + ... on the reduced range (e_log.c)
@@ -63,6 +78,26 @@ _S4, _S5, _S6 = 2.75573137070700676789e-06, -2.50507602534068634195e-08, 1.58969
 _C1, _C2, _C3 = 4.16666666666666019037e-02, -1.38888888888741095749e-03, 2.48015872894767294178e-05
 _C4, _C5, _C6 = -2.75573143513906633035e-07, 2.08757232129817482790e-09, -1.13596475577881948265e-11
 _HALF_PI = 0.5 * np.pi
+_F = np.float32
+# musl's logf (after fdlibm's e_logf.c): ln 2 in two parts, the minimax coefficients on the
+# reduced range, and the bits that move sqrt(2)/2 .. sqrt(2) onto one exponent
+_LN2_HI_F, _LN2_LO_F = _F(6.9313812256e-01), _F(9.0580006145e-06)
+_LG1_F, _LG2_F, _LG3_F, _LG4_F = _F(0.66666662693), _F(0.40000972152), _F(0.28498786688), _F(0.24279078841)
+_OFFSET_F, _SQRT_HALF_F = np.uint32(0x3F800000 - 0x3F3504F3), np.uint32(0x3F3504F3)
+_MANTISSA_F, _S23 = np.uint32(0x007FFFFF), np.uint32(23)
+# Cephes' sinf and cosf polynomials on [-pi/4, pi/4] (Moshier, Cephes Math Library, sinf.c)
+_SA_F, _SB_F, _SC_F = _F(-1.9515295891e-4), _F(8.3321608736e-3), _F(-1.6666654611e-1)
+_CA_F, _CB_F, _CC_F = _F(2.443315711809948e-5), _F(-1.388731625493765e-3), _F(4.166664568298827e-2)
+_ZERO_F, _ONE_F, _HALF_F, _MINUS_TWO_F = _F(0.0), _F(1.0), _F(0.5), _F(-2.0)
+#: The first word whose ``u1`` is ``sqrt(2)/2`` or more (``fast_radius``).
+_WORD_SQRT_HALF = np.uint64(math.ceil(2.0**32 * math.sqrt(0.5)))
+_TURN_F = _F(2.0**-32)
+_QUARTER_TURN_F = _F(2.0**-30 * np.pi / 2)
+_EIGHTH, _QUARTER_BITS, _S30 = np.uint64(1 << 29), np.uint64((1 << 30) - 1), np.uint64(30)
+#: A pair's first word below this is a tail pair (``tail_pair``): ``u1 < 2^-16``.
+TAIL_WORD = np.uint64(1 << 16)
+#: Added to a block's number, the number of its tail block (``tail_pair``).
+TAIL_BLOCK = np.uint64(1 << 63)
 
 
 @njit(**INLINE)
@@ -160,51 +195,145 @@ def sincos_turn(u: float):
 
 
 @njit(**INLINE)
-def box_muller(w0, w1, w2, w3):
-    """The Box-Muller pair ``(r cos t, r sin t)`` of a block's words: ``r = sqrt(-2 log u1)``,
-    ``u1`` in ``(0, 1]`` from the first two words (its logarithm finite), ``t = 2 pi u2``."""
-    u1 = (unit_53(w0, w1) + 1.0) * _ULP53
-    r = math.sqrt(-2.0 * log_positive(u1))
-    c, s = sincos_turn(unit_53(w2, w3) * _ULP53)
+def log_f32(x):
+    """``log(x)`` of a positive normal ``float32``, branch-free, in ``float32`` (musl's ``logf``,
+    after fdlibm's ``e_logf.c``: ``x = 2^k (1 + f)``, ``1 + f`` in ``[sqrt(2)/2, sqrt(2))``
+    (``reduced_f32``), then ``log1p_f32``; error below 1 ulp)."""
+    k, f = reduced_f32(x)
+    return log1p_f32(k, f)
+
+
+@njit(**INLINE)
+def reduced_f32(x):
+    """``(k, f)`` with ``x = 2^k (1 + f)``, ``1 + f`` in ``[sqrt(2)/2, sqrt(2))``, of a positive
+    normal ``float32`` (from its bits: exact)."""
+    bits = np.uint32(float_bits(x) + _OFFSET_F)
+    k = _F(np.int32(bits >> _S23) - np.int32(0x7F))
+    return k, bits_float(np.uint32((bits & _MANTISSA_F) + _SQRT_HALF_F)) - _ONE_F
+
+
+@njit(**INLINE)
+def log1p_f32(k, f):
+    """``k log 2 + log(1 + f)`` in ``float32`` for ``1 + f`` in ``[sqrt(2)/2, sqrt(2))``: musl's
+    minimax polynomial in ``s = f / (2 + f)``, ``log 2`` in two parts."""
+    s = f / (_F(2.0) + f)
+    z = s * s
+    w = z * z
+    t1 = w * fused(w, _LG4_F, _LG2_F)
+    t2 = z * fused(w, _LG3_F, _LG1_F)
+    hfsq = _HALF_F * f * f
+    return s * (hfsq + (t2 + t1)) + k * _LN2_LO_F - hfsq + f + k * _LN2_HI_F
+
+
+@njit(**INLINE)
+def sincos_word(w):
+    """``(cos 2 pi t, sin 2 pi t)`` in ``float32`` of the turn ``t = w 2^-32`` of a 32-bit word
+    ``w``, branch-free: the quadrant ``q`` nearest ``4 t`` and the rest ``x`` in ``[-pi/4, pi/4)``
+    from the word's bits (exact), then Cephes' polynomials of ``sinf`` and ``cosf``."""
+    shifted = (w + _EIGHTH) & _LOW
+    quadrant = np.int64(shifted >> _S30)
+    x = _F(np.int64(shifted & _QUARTER_BITS) - np.int64(1 << 29)) * _QUARTER_TURN_F
+    z = x * x
+    sin_x = fused(fused(fused(_SA_F, z, _SB_F), z, _SC_F) * z, x, x)
+    cos_x = fused(fused(fused(_CA_F, z, _CB_F), z, _CC_F) * z, z, _ONE_F - _HALF_F * z)
+    swap = (quadrant & 1) == 1
+    # the signs as factors of +-1 (exact), not branches: the cosine's negative in quadrants 1
+    # and 2, the sine's in 2 and 3
+    c = (sin_x if swap else cos_x) * (_ONE_F - _F((quadrant + 1) & 2))
+    s = (cos_x if swap else sin_x) * (_ONE_F - _F(quadrant & 2))
+    return c, s
+
+
+@njit(**INLINE)
+def fast_radius(wa):
+    """A fast pair's radius ``sqrt(-2 log u1)`` in ``float32``, ``u1 = (wa + 1/2) 2^-32``
+    (``fast_pair``).  Where ``u1 >= sqrt(2)/2`` its log is ``log1p_f32`` of ``f = u1 - 1`` taken
+    from the word (rounded once, to ``float32``): ``u1`` rounded to ``float32`` would keep a small
+    ``f``, a small radius, to ``2^-24`` only (a radius of 0.01 within 3e-4); so every radius is
+    within a few ``float32`` ulps, branch-free."""
+    k, f = reduced_f32((_F(np.int64(wa)) + _HALF_F) * _TURN_F)
+    near = wa >= _WORD_SQRT_HALF
+    f_near = (_F(np.int64(wa) - np.int64(1 << 32)) + _HALF_F) * _TURN_F
+    return math.sqrt(_MINUS_TWO_F * log1p_f32(_ZERO_F if near else k, f_near if near else f))
+
+
+@njit(**INLINE)
+def fast_pair(wa, wb):
+    """The Box-Muller pair ``(r cos t, r sin t)`` in ``float32`` of two 32-bit words:
+    ``r = sqrt(-2 log u1)``, ``u1 = (wa + 1/2) 2^-32`` (rounded to ``float32``), ``t = 2 pi wb
+    2^-32`` (the module's docstring: exact where ``wa >= TAIL_WORD``)."""
+    r = fast_radius(wa)
+    c, s = sincos_word(wb)
+    return r * c, r * s
+
+
+@njit(**INLINE)
+def tail_radius(wa, k: float) -> float:
+    """A tail pair's radius ``sqrt(-2 log u1)``, ``u1 = (wa + v) 2^-32`` with ``v = k 2^-53``
+    (``k`` in ``1 .. 2^53``: ``tail_pair``)."""
+    return math.sqrt(-2.0 * log_positive((float(wa) + k * _ULP53) * 2.0**-32))
+
+
+@njit(**INLINE)
+def tail_pair(key, place, block, half, wa, wb):
+    """The Box-Muller pair of a tail pair (``wa < TAIL_WORD``), the ``half``-th of block ``block``
+    of the stream ``(key, place)``, in ``float64``: ``u1 = (wa + v) 2^-32`` with ``v`` in
+    ``(0, 1]`` the ``half``-th 53-bit uniform of the block's tail block (``TAIL_BLOCK``), so that
+    ``u1`` is uniform below ``2^-16`` to a ``float64``'s last bit (``tail_radius``); the angle as
+    ``fast_pair``'s, in ``float64``."""
+    t0, t1, t2, t3 = philox_block(key, place, block + TAIL_BLOCK)
+    r = tail_radius(wa, (unit_53(t2, t3) if half else unit_53(t0, t1)) + 1.0)
+    c, s = sincos_turn(float(wb) * 2.0**-32)
     return r * c, r * s
 
 
 @njit(**INLINE)
 def packed_block(key, place, block):
     """Block ``block`` of the Philox stream ``(key, place)`` as two 64-bit words, the first two
-    of its 32-bit words and the last two (what ``packed_pair`` takes)."""
+    of its 32-bit words and the last two (what ``packed_normals`` takes)."""
     w0, w1, w2, w3 = philox_block(key, place, block)
     return (w0 << _S32) | w1, (w2 << _S32) | w3
 
 
 @njit(**INLINE)
-def packed_pair(a, b):
-    """The Box-Muller pair of a block given as ``packed_block``'s two words."""
-    return box_muller(a >> _S32, a & _LOW, b >> _S32, b & _LOW)
+def packed_normals(a, b):
+    """The ``fast_pair`` normals of a block given as ``packed_block``'s two words (``float64``),
+    and whether either pair is a tail pair (``tail_pair``: to recompute)."""
+    wa0, wa1 = a >> _S32, b >> _S32
+    c0, s0 = fast_pair(wa0, a & _LOW)
+    c1, s1 = fast_pair(wa1, b & _LOW)
+    return float(c0), float(s0), float(c1), float(s1), (wa0 < TAIL_WORD) | (wa1 < TAIL_WORD)
 
 
 @njit(**INLINE)
-def philox_pair(key, place, block):
-    """The two normals of block ``block`` of the Philox stream ``(key, place)``: draws
-    ``2 block`` and ``2 block + 1`` of its normals."""
+def block_normals(key, place, block):
+    """Normals ``4 block .. 4 block + 3`` of the Philox stream ``(key, place)``: the Box-Muller
+    pairs of block ``block``'s first two words and of its last two (``fast_pair``, or
+    ``tail_pair`` for a tail pair)."""
     a, b = packed_block(key, place, block)
-    return packed_pair(a, b)
+    z0, z1, z2, z3, tail = packed_normals(a, b)
+    if tail:
+        if a >> _S32 < TAIL_WORD:
+            z0, z1 = tail_pair(key, place, block, 0, a >> _S32, a & _LOW)
+        if b >> _S32 < TAIL_WORD:
+            z2, z3 = tail_pair(key, place, block, 1, b >> _S32, b & _LOW)
+    return z0, z1, z2, z3
 
 
 @njit(**INLINE)
 def philox_normal(stream) -> float:
-    """A standard normal: the cosine or the sine of the Box-Muller pair of its block.  The
-    sine of the last pair computed is kept in the stream, so that a stream drawn in order
-    computes each block once."""
+    """A standard normal: normal ``n mod 4`` of block ``n // 4`` (``block_normals``) at the
+    stream's ``n``-th draw.  A block's last three normals are kept in the stream, so that a
+    stream drawn in order computes each block once."""
     n = stream[DRAWN]
     stream[DRAWN] = n + _ONE
-    block = n >> _ONE
-    if n & _ONE and stream[PAIRED] == block + _ONE:
-        return bits_float(stream[SPARE])
-    c, s = philox_pair(stream[KEY], stream[PLACE], block)
+    block, q = n >> _TWO_BITS, n & _THREE
+    if q > 0 and stream[PAIRED] == block + _ONE:
+        return bits_float(stream[SPARE + np.int64(q) - 1])
+    z0, z1, z2, z3 = block_normals(stream[KEY], stream[PLACE], block)
     stream[PAIRED] = block + _ONE
-    stream[SPARE] = float_bits(s)
-    return s if n & _ONE else c
+    stream[SPARE], stream[SPARE + 1], stream[SPARE + 2] = float_bits(z1), float_bits(z2), float_bits(z3)
+    return z0 if q == 0 else z1 if q == 1 else z2 if q == 2 else z3
 
 
 @njit(**INLINE)

@@ -19,7 +19,7 @@ from vines_stoch.jit.flags import KERNEL, VECTOR_BITS
 from vines_stoch.kernels import SLOTS, simulate, spec_of
 from vines_stoch.kernels.chunk import lane_call, lane_scene, simulate_chunk
 from vines_stoch.kernels.events import NONE, event_ahead, quiet_band
-from vines_stoch.kernels.lanes import ALIGN, LANES, aligned_rows, lane_loop, lane_normals
+from vines_stoch.kernels.lanes import ALIGN, LANES, SPARE_ROWS, aligned_rows, lane_loop, lane_normals
 from vines_stoch.outputs import STATUS, STATUS_DIVERGED, new_events, new_metrics
 from vines_stoch.physics.absorbers import HERTZ as HERTZ_LAW
 from vines_stoch.physics.absorbers import IMPACT as IMPACT_LAW
@@ -247,16 +247,19 @@ def test_lanes_keep_the_scalar_loop_s_event_logs_and_declared_metrics(data):
     assert np.abs(kept.history[:, :, 2:]).max() > 0  # (and an absorber pushed its host)
 
 
-def _packed(asm: str, width: str) -> int:
-    """Packed double-precision arithmetic on ``width`` registers (``ymm``, ``zmm``) in ``asm``."""
-    return len(re.findall(rf"\bv(?:fn?m(?:add|sub)\d*pd|mulpd|addpd|subpd|sqrtpd)\b[^\n]*%{width}", asm))
+def _packed(asm: str, width: str, kind: str = "pd") -> int:
+    """Packed arithmetic on ``width`` registers (``ymm``, ``zmm``; a pattern) in ``asm``, of double
+    precision (``kind``: ``pd``) or single (``ps``)."""
+    ops = rf"fn?m(?:add|sub)\d*{kind}|mul{kind}|add{kind}|sub{kind}|sqrt{kind}"
+    return len(re.findall(rf"\bv(?:{ops})\b[^\n]*%{width}", asm))
 
 
 @pytest.mark.parametrize("data", [SMOOTH, IMPACT, HERTZ], ids=["smooth", "impact", "hertz"])
 def test_the_lane_loops_are_vector_code_on_this_host(data):
-    """The update loop and the normals compile to packed arithmetic on the registers of the
-    width they ask for (``flags.VECTOR_BITS``, 512 unless set) as far as the host has them:
-    ``zmm`` on an AVX-512 host, ``ymm`` on an AVX2 host, with and without events; skipped on a
+    """The update loop compiles to packed arithmetic on the registers of the width it asks for
+    (``flags.VECTOR_BITS``, 512 unless set) as far as the host has them: ``zmm`` on an AVX-512
+    host, ``ymm`` on an AVX2 host, with and without events; the normals to packed ``float32``
+    arithmetic (on ``ymm`` registers where their 64-bit Philox words fill ``zmm``); skipped on a
     host without AVX2.  The lane loop holds the normals' loop too:
     beyond the normals' own packed arithmetic, a scalar update loop left 5 instructions (an
     impact scene's, where one float sum kept it scalar), a vector one 110 to 180 (AVX2 host).
@@ -269,12 +272,13 @@ def test_the_lane_loops_are_vector_code_on_this_host(data):
     with frontend.compiling():  # (the package's faster front end, as its own compiles)
         run(*lane_call(scene, SEED, 0, 0, True, new_metrics_rows(scene, 2)))
     normals = njit(**{**KERNEL, "cache": False})(lane_normals.py_func)
-    normals(np.zeros(8), np.zeros(8), 8, 0, np.uint64(1), np.arange(8, dtype=np.uint64), 0)
+    normals(np.zeros(8), np.zeros((SPARE_ROWS, 8)), 8, 0, np.uint64(1), np.arange(8, dtype=np.uint64), 0)
     update = run.inspect_asm(run.signatures[0])
     drawn = normals.inspect_asm(normals.signatures[0])
     host = 512 if llvm.get_host_cpu_features().get("avx512f") else 256
     wide = {128: "xmm", 256: "ymm", 512: "zmm"}[min(host, VECTOR_BITS)]
-    assert _packed(drawn, wide) >= 10 and re.search(rf"vsqrtpd[^\n]*%{wide}", drawn), \
+    # (the normals' float32 arithmetic: vectors as many lanes wide as their Philox words', 64-bit)
+    assert _packed(drawn, "[yz]mm", "ps") >= 10 and re.search(r"vsqrtps[^\n]*%[yz]mm", drawn), \
         "the lanes' normals are not vectorised"
     assert _packed(update, wide) - _packed(drawn, wide) >= 40, "the lane update loop is not vectorised"
 

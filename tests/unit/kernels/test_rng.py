@@ -12,16 +12,22 @@ from numba import njit
 
 from vines_stoch.streams.rng import (
     DRAWN,
+    TAIL_BLOCK,
+    TAIL_WORD,
+    block_normals,
+    fast_radius,
+    log_f32,
     log_positive,
     normal,
     philox4x32,
     philox_block,
     philox_normal,
-    philox_pair,
     philox_stream,
     sincos_turn,
+    sincos_word,
     stream_key,
     stream_place,
+    tail_radius,
     uniform,
 )
 
@@ -108,43 +114,93 @@ def test_streams_of_neighbouring_realisations_are_uncorrelated():
     assert abs(corr.mean()) < 5.0 / math.sqrt(m * corr.size)
 
 
-def test_two_draws_share_a_block_the_cosine_then_the_sine():
-    """Draws ``2m`` and ``2m + 1`` are the Box-Muller pair of block ``m``: the same radius."""
+def test_four_draws_share_a_block_two_pairs_each_the_cosine_then_the_sine():
+    """Draws ``4m .. 4m + 3`` are block ``m``'s normals (``block_normals``): the Box-Muller pairs
+    of its first two words and of its last two, the radius ``sqrt(-2 log u1)`` of ``u1 = (w +
+    1/2) 2^-32`` within ``float32`` rounding."""
     s = philox_stream(9, 0, 0)
-    pairs = np.array([[philox_normal(s), philox_normal(s)] for _ in range(50)])
-    assert s[DRAWN] == 100
+    quads = np.array([[philox_normal(s) for _ in range(4)] for _ in range(50)])
+    assert s[DRAWN] == 200
     key, place = U(s[0]), U(s[1])
     for m in (0, 7, 49):
-        assert tuple(pairs[m]) == philox_pair(key, place, U(m))
+        assert tuple(quads[m]) == block_normals(key, place, U(m))
     w = philox_block(key, place, U(7))
-    u1 = ((int(w[0]) << 21 | int(w[1]) >> 11) + 1) * 2.0**-53
-    assert math.hypot(*pairs[7]) == pytest.approx(math.sqrt(-2.0 * math.log(u1)), rel=1e-15)
+    for half in (0, 1):
+        u1 = (int(w[2 * half]) + 0.5) * 2.0**-32
+        assert math.hypot(*quads[7, 2 * half:2 * half + 2]) == pytest.approx(math.sqrt(-2.0 * math.log(u1)),
+                                                                            rel=1e-6)
 
 
-def _reference_pair(key: int, place: int, block: int) -> tuple[float, float]:
+def _reference_block(key: int, place: int, block: int) -> list[float]:
     """An independent Philox4x32-10 (Python integers, after the Random123 specification) and
-    Box-Muller pair (the C library's ``log``, ``cos`` and ``sin``)."""
+    the block's two Box-Muller pairs in ``float64`` (the C library's ``log``, ``cos`` and
+    ``sin``): ``u1 = (w + 1/2) 2^-32``, below ``TAIL_WORD`` ``u1 = (w + v) 2^-32`` with ``v`` the
+    53-bit uniform of the tail block."""
     mask = 0xFFFFFFFF
-    c = [block & mask, block >> 32, place & mask, place >> 32]
-    k0, k1 = key & mask, key >> 32
-    for _ in range(10):
-        p0, p1 = 0xD2511F53 * c[0], 0xCD9E8D57 * c[2]
-        c = [(p1 >> 32) ^ c[1] ^ k0, p1 & mask, (p0 >> 32) ^ c[3] ^ k1, p0 & mask]
-        k0, k1 = (k0 + 0x9E3779B9) & mask, (k1 + 0xBB67AE85) & mask
-    u1 = ((c[0] << 21 | c[1] >> 11) + 1) * 2.0**-53
-    u2 = (c[2] << 21 | c[3] >> 11) * 2.0**-53
-    r = math.sqrt(-2.0 * math.log(u1))
-    return r * math.cos(2.0 * math.pi * u2), r * math.sin(2.0 * math.pi * u2)
+
+    def words(counter: int) -> list[int]:
+        c = [counter & mask, counter >> 32, place & mask, place >> 32]
+        k0, k1 = key & mask, key >> 32
+        for _ in range(10):
+            p0, p1 = 0xD2511F53 * c[0], 0xCD9E8D57 * c[2]
+            c = [(p1 >> 32) ^ c[1] ^ k0, p1 & mask, (p0 >> 32) ^ c[3] ^ k1, p0 & mask]
+            k0, k1 = (k0 + 0x9E3779B9) & mask, (k1 + 0xBB67AE85) & mask
+        return c
+
+    w, normals = words(block), []
+    for half in (0, 1):
+        wa, wb = w[2 * half], w[2 * half + 1]
+        u1 = (wa + 0.5) * 2.0**-32
+        if wa < int(TAIL_WORD):
+            t = words(block + int(TAIL_BLOCK))
+            u1 = (wa + ((t[2 * half] << 21 | t[2 * half + 1] >> 11) + 1) * 2.0**-53) * 2.0**-32
+        r = math.sqrt(-2.0 * math.log(u1))
+        normals += [r * math.cos(2.0 * math.pi * wb * 2.0**-32), r * math.sin(2.0 * math.pi * wb * 2.0**-32)]
+    return normals
 
 
 def test_normals_match_an_independent_implementation():
     """Known answers: the first normals of streams of three seeds, purposes and places against
-    ``_reference_pair`` within 4 ulp (the polynomials against the C library: not bitwise)."""
+    ``_reference_block`` within ``float32`` rounding (``1e-6``: a few ``float32`` ulps, ``6e-8``
+    each, through ``log``, ``sqrt`` and the polynomials, of normals up to about 3)."""
     for seed, purpose, r in ((0, 0, 0), (2026, 3, 17), (7, 4, 1 << 40)):
         stream = philox_stream(seed, purpose, r)
         drawn = _draws(stream, 40, 0)
-        expected = [z for m in range(20) for z in _reference_pair(stream_key(seed, purpose), r, m)]
-        assert np.allclose(drawn, expected, rtol=4 * 2.0**-52, atol=4 * 2.0**-52 * 8.6)
+        expected = [z for m in range(10) for z in _reference_block(stream_key(seed, purpose), r, m)]
+        assert np.allclose(drawn, expected, rtol=1e-6, atol=1e-6)
+
+
+def _tail_place(key: int) -> tuple[int, int, int]:
+    """A place, block and half of the Philox stream ``key`` whose pair is a tail pair."""
+    for place in range(1 << 20):
+        for block in range(64):
+            w = philox_block(U(key), U(place), U(block))
+            for half in (0, 1):
+                if w[2 * half] < TAIL_WORD:
+                    return place, block, half
+    raise AssertionError("no tail pair found")
+
+
+def test_a_tail_pair_is_recomputed_from_its_tail_block_in_every_executor():
+    """A pair whose first word is below ``TAIL_WORD`` (radius beyond 4.7) takes its radius from
+    the tail block, as the independent reference does (within 4 ulp), in the scalar draws and in
+    the lanes alike (bitwise), beside lanes without one."""
+    from vines_stoch.kernels.lanes import SPARE_ROWS, lane_normals
+
+    key = stream_key(2026, 0)
+    place, block, half = _tail_place(key)
+    expected = _reference_block(key, place, block)
+    got = block_normals(U(key), U(place), U(block))
+    assert math.hypot(*got[2 * half:2 * half + 2]) > 4.7
+    assert np.allclose(got, expected, rtol=1e-6, atol=1e-6)
+    assert np.allclose(got[2 * half:2 * half + 2], expected[2 * half:2 * half + 2], rtol=4 * 2.0**-52, atol=0)
+    places = np.arange(place - 5, place + 3, dtype=np.uint64)  # (the tail's lane, and lanes without)
+    z, spare = np.zeros((4, places.size)), np.zeros((SPARE_ROWS, places.size))
+    for d in range(4 * block, 4 * block + 4):
+        lane_normals(z[d - 4 * block], spare, places.size, d, U(key), places, 0)
+    for lane, p in enumerate(places):
+        assert tuple(z[:, lane]) == block_normals(U(key), p, U(block))
+    assert tuple(z[:, 5]) == got
 
 
 @njit
@@ -187,27 +243,106 @@ def test_the_branch_free_log_sine_and_cosine_are_within_an_ulp_or_two():
     assert np.array_equal(quarter, [[1.0, 0.0], [0.0, 1.0], [-1.0, 0.0], [0.0, -1.0]])
 
 
+def _count_past(radius, r: float, top: int) -> int:
+    """The count of points ``m`` in ``0 .. top`` whose ``radius(m)`` exceeds ``r``, ``radius``
+    falling in ``m``: bisected."""
+    lo, hi = -1, top + 1  # radius(lo) > r >= radius(hi), with radius(-1) = inf, radius(top + 1) = 0
+    while hi - lo > 1:
+        mid = (lo + hi) // 2
+        if radius(mid) > r:
+            lo = mid
+        else:
+            hi = mid
+    return hi
+
+
 def test_the_tails_are_those_of_the_normal_law_to_8_standard_deviations():
-    """The radius ``R = sqrt(-2 log u1)`` of the 53-bit grid ``u1 = (m + 1) 2^-53``: ``P(R > r)``
-    is the count of grid points whose radius exceeds ``r`` (the transform is monotone), which
-    must be ``2^53 exp(-r^2 / 2)`` within one point, at ``r`` from 3 to 8 (at 8: 114 points);
-    the largest radius is ``sqrt(106 ln 2)``.  With the angle uniform, the normal's tails
-    follow from the radius's law exactly."""
+    """``P(R > r)`` of a pair's radius ``R = sqrt(-2 log u1)`` is ``exp(-r^2 / 2)`` (with the angle
+    uniform, the normal's tails follow from the radius's law exactly).  Beyond 4.7 (``u1 <
+    2^-16``, the tail pairs: ``u1 = (w + k 2^-53) 2^-32``, ``w < 2^16``, ``k`` in ``1 .. 2^53``) the
+    count of grid points past ``r`` is ``2^85 exp(-r^2 / 2)`` within ``float64`` rounding (a radius
+    a few ulps off moves the threshold on ``u1`` by ``r^2`` ulps of it: at 8, within one point of
+    about ``4.9e11``) at ``r`` = 5, 6, 7 and 8; below it (``float32`` pairs, ``u1 = (w + 1/2) 2^-32``) the
+    count of words past ``r`` is ``2^32 exp(-r^2 / 2)`` within ``float32`` rounding (of ``u1``,
+    of its log and of the radius: a few ulps, ``2^-24`` each, of ``u1`` and ``r^2`` of them) at
+    ``r`` = 1, 2, 3 and 4.  The largest radius is ``sqrt(170 ln 2)``, 10.8; the
+    tail's smallest meets the fast pairs' largest."""
+    tail = int(TAIL_WORD)
 
-    @njit
-    def radius(m):
-        return math.sqrt(-2.0 * log_positive((m + 1.0) * 2.0**-53))
+    def tail_point(m: int) -> float:  # (the m-th point of the tail's grid, w-major)
+        return tail_radius(m >> 53, float((m & (2**53 - 1)) + 1))
 
-    for r in (3.0, 4.0, 5.0, 6.0, 7.0, 8.0):
-        lo, hi = 0, 2**53 - 1  # radius(lo) > r >= radius(hi): bisect the count of points past r
-        while hi - lo > 1:
-            mid = (lo + hi) // 2
-            if radius(float(mid)) > r:
-                lo = mid
-            else:
-                hi = mid
-        assert abs(hi - 2.0**53 * math.exp(-0.5 * r * r)) <= 1.0, r
-    assert radius(0.0) == pytest.approx(math.sqrt(106.0 * math.log(2.0)), rel=1e-15)
+    for r in (5.0, 6.0, 7.0, 8.0):
+        expected = 2.0**85 * math.exp(-0.5 * r * r)
+        count = _count_past(tail_point, r, tail * 2**53 - 1)
+        # (the radius rounded within a few ulps moves the threshold on u1 by r^2 ulps of it)
+        assert abs(count - expected) <= 1.0 + 4 * 2.0**-53 * r * r * expected, r
+    for r in (1.0, 2.0, 3.0, 4.0):
+        expected = 2.0**32 * math.exp(-0.5 * r * r)
+        count = _count_past(lambda w: fast_radius(U(w)), r, 2**32 - 1)
+        assert abs(count - expected) <= 1.0 + 4 * 2.0**-24 * (1.0 + r * r) * expected, r
+    assert tail_radius(0, 1.0) == pytest.approx(math.sqrt(170.0 * math.log(2.0)), rel=1e-15)
+    assert fast_radius(U(tail)) <= tail_radius(tail - 1, 2.0**53) < fast_radius(U(tail)) + 1e-4 < 4.72
+
+
+@njit
+def _fast_radii(w):
+    out = np.empty(w.shape[0])
+    for i in range(w.shape[0]):
+        out[i] = fast_radius(w[i])
+    return out
+
+
+def test_the_fast_radius_is_within_float32_rounding_of_the_exact_one():
+    """``rng.fast_radius`` against ``sqrt(-2 log u1)`` in ``float64`` of the same ``u1 = (w + 1/2)
+    2^-32``: within ``4e-7`` relative (a few ``float32`` ulps, ``6e-8`` each) on a million words
+    and at the ends: the largest words (``u1`` near 1, radii down to ``1.7e-5``), whose small
+    ``f = u1 - 1`` the word gives exactly, both sides of ``sqrt(2)/2``, and the tail's edge."""
+    rng = np.random.default_rng(8)
+    edge = math.ceil(2.0**32 * math.sqrt(0.5))
+    w = np.concatenate([rng.integers(int(TAIL_WORD), 2**32, 1_000_000), 2**32 - 1 - np.arange(1000),
+                        edge + np.arange(-50, 50), int(TAIL_WORD) + np.arange(10)]).astype(np.uint64)
+    exact = np.sqrt(-2.0 * np.log((w.astype(np.float64) + 0.5) * 2.0**-32))
+    assert np.all(np.abs(_fast_radii(w) - exact) <= 4e-7 * exact)
+
+
+@njit
+def _logs_f32(x):
+    out = np.empty_like(x)
+    for i in range(x.shape[0]):
+        out[i] = log_f32(x[i])
+    return out
+
+
+@njit
+def _word_turns(w):
+    out = np.empty((w.shape[0], 2), np.float32)
+    for i in range(w.shape[0]):
+        out[i, 0], out[i, 1] = sincos_word(w[i])
+    return out
+
+
+def test_the_float32_log_sine_and_cosine_are_within_two_ulps():
+    """The ``float32`` polynomials of the fast pairs against ``float64`` references: the log
+    within 2 ``float32`` ulps of the exact value (musl's ``logf``: below 1 ulp), on a million
+    arguments over the range of ``u1`` (``2^-32 .. 1``), the ends included; the sine and cosine
+    of the turn of a 32-bit word within 2 ulps of the exact value plus ``2^-25`` (the absolute
+    rounding of the reduced angle near the zeros), on a million words and the quadrants' edges,
+    the quarter turns exact."""
+    rng = np.random.default_rng(6)
+    x = np.concatenate([rng.random(500_000), 2.0 ** -rng.uniform(0.0, 32.0, 500_000),
+                        [1.0, 2.0**-32, 0.5, math.sqrt(0.5), math.sqrt(2.0) / 2 + 1e-7]]).astype(np.float32)
+    ref = np.log(x.astype(np.float64))
+    assert np.all(np.abs(_logs_f32(x) - ref) <= 2.0 * np.spacing(np.abs(ref).astype(np.float32)))
+    w = np.concatenate([rng.integers(0, 2**32, 1_000_000), np.arange(16) << 28,
+                        (np.arange(1, 9) << 29) - 1]).astype(np.uint64)
+    got = _word_turns(w).astype(np.float64)
+    turn = 2.0 * np.pi * w.astype(np.float64) * 2.0**-32
+    for k, f in enumerate((np.cos, np.sin)):
+        ref = f(turn)
+        assert np.all(np.abs(got[:, k] - ref) <= 2.0 * np.spacing(np.abs(ref).astype(np.float32)) + 2.0**-25)
+    quarter = _word_turns(np.array([0, 1 << 30, 2 << 30, 3 << 30], np.uint64))
+    assert np.array_equal(quarter, [[1.0, 0.0], [0.0, 1.0], [-1.0, 0.0], [0.0, -1.0]])
 
 
 def test_lane_normals_have_the_standard_law_and_no_correlations():
@@ -216,11 +351,11 @@ def test_lane_normals_have_the_standard_law_and_no_correlations():
     frequencies of ``|z| > 3`` and ``> 4`` within 5 binomial standard errors, and no
     correlation between neighbouring lanes, between successive draws (the two halves of a
     pair among them) or between a pair's squares."""
-    from vines_stoch.kernels.lanes import lane_normals
+    from vines_stoch.kernels.lanes import SPARE_ROWS, lane_normals
 
     lanes, draws = 1024, 4096
     key, places = U(stream_key(2026, 0)), np.arange(lanes, dtype=np.uint64)
-    z, spare = np.zeros((draws, lanes)), np.zeros(lanes)
+    z, spare = np.zeros((draws, lanes)), np.zeros((SPARE_ROWS, lanes))
     for d in range(draws):
         lane_normals(z[d], spare, lanes, d, key, places, 0)
     x = z.ravel()
@@ -240,6 +375,8 @@ def test_lane_normals_have_the_standard_law_and_no_correlations():
     assert abs(corr(z[1:].ravel(), z[:-1].ravel())) < 5.0 / math.sqrt(n)  # successive draws
     assert abs(corr(z[2:].ravel(), z[:-2].ravel())) < 5.0 / math.sqrt(n)
     assert abs(corr(z[0::2].ravel() ** 2, z[1::2].ravel() ** 2)) < 5.0 / math.sqrt(pairs)
+    radii = z[0::2] ** 2 + z[1::2] ** 2  # (a block's two pairs: radii from words of their own)
+    assert abs(corr(radii[0::2].ravel(), radii[1::2].ravel())) < 5.0 / math.sqrt(pairs // 2)
 
 
 def test_a_tape_replays_the_filter_noise_a_stream_draws():

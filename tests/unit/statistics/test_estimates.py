@@ -228,11 +228,13 @@ def test_the_ensembles_beside_their_estimates():
     """The run's summary carries each estimate and the Monte Carlo mean's distance from it.  A
     linear oscillator with a TMD (the estimate exact but for the mean peak, Vanmarcke's, and the
     EDM, a ratio of expectations): the window rms, the input energy, the energy integral and the
-    EDM within 4 standard errors (a two-sided 6e-5 test; measured 1.0, 0.3, 0.9, -0.4), the
-    mean peak within 5 % (measured 2.6 % low).  A cubic NES under weak noise (nearly Gaussian:
-    within 4; measured 0.8) and under ten times stronger noise, where statistical linearisation
-    misses the non-Gaussian response by more than 4 standard errors (measured: rms -5.5, EDM 21.6:
-    the NES dissipates 0.44 of the input, the linearisation says 0.28)."""
+    EDM within 4 standard errors (a two-sided 6e-5 test; measured 0.6, 0.9, 0.7, 2.8), the
+    mean peak within 5 % (measured 2.1 % high; 2.6 % low on the streams' earlier normals).  A
+    cubic NES under weak noise (nearly Gaussian: within 4; measured 1.8) and under ten times
+    stronger noise, where statistical linearisation misses the non-Gaussian response by more than
+    4 standard errors: 1,000 realisations, where its distance is about 11 (measured: rms -10.7,
+    EDM 44.2: the NES dissipates 0.44 of the input, the linearisation says 0.28); 200 put the rms
+    near 4 (-3.9 and -5.5 on two sets of streams)."""
     import vines_stoch
 
     linear = vines_stoch.run(tuned_mass_damper(), realizations=200).summary
@@ -241,7 +243,7 @@ def test_the_ensembles_beside_their_estimates():
         assert abs(linear[f"{metric}_z"].iloc[0]) < 4, (metric, linear[f"{metric}_z"].iloc[0])
     assert linear["x1_max_mean"].iloc[0] == pytest.approx(linear["x1_max_estimate"].iloc[0], rel=0.05)
     mild = vines_stoch.run(cubic_nes(0.005), realizations=200).summary
-    strong = vines_stoch.run(cubic_nes(0.05), realizations=200).summary
+    strong = vines_stoch.run(cubic_nes(0.05), realizations=1000).summary
     assert mild["estimate_method"].iloc[0] == strong["estimate_method"].iloc[0] == "statistical-linearization"
     assert abs(mild["x1_rms_z"].iloc[0]) < 4 < abs(strong["x1_rms_z"].iloc[0])
     assert strong["edm_z"].iloc[0] > 4
