@@ -260,8 +260,8 @@ def fast_radius(wa):
 @njit(**INLINE)
 def fast_pair(wa, wb):
     """The Box-Muller pair ``(r cos t, r sin t)`` in ``float32`` of two 32-bit words:
-    ``r = sqrt(-2 log u1)``, ``u1 = (wa + 1/2) 2^-32`` (rounded to ``float32``), ``t = 2 pi wb
-    2^-32`` (the module's docstring: exact where ``wa >= TAIL_WORD``)."""
+    ``r = sqrt(-2 log u1)``, ``u1 = (wa + 1/2) 2^-32`` (``fast_radius``), ``t = 2 pi wb 2^-32``
+    (``sincos_word``; the module's docstring: the normal law's where ``wa >= TAIL_WORD``)."""
     r = fast_radius(wa)
     c, s = sincos_word(wb)
     return r * c, r * s
