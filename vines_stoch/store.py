@@ -33,6 +33,7 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 
 from . import __version__
+from .streams.rng import NORMALS
 
 DEPENDENCIES = ("numpy", "scipy", "numba", "pandas", "pyarrow", "dask", "distributed", "pydantic")
 
@@ -252,10 +253,12 @@ def _take_over(path: Path, stale: str | None) -> None:
 
 
 def run_key(scenario_text: str, plan: list[tuple[int, int, int]], backend: str = "cpu") -> str:
-    """Fingerprint of a run (scenario text, seed included, chunk plan and, other than the CPU, the
-    backend, whose streams differ): parts of another run are never reused."""
+    """Fingerprint of a run (scenario text, seed included, chunk plan, the definition of the
+    streams' normals, ``rng.NORMALS``, and, other than the CPU, the backend, whose streams
+    differ): parts of another run are never reused."""
     digest = hashlib.sha256(scenario_text.encode())
     digest.update(json.dumps(plan).encode())
+    digest.update(NORMALS.encode())
     if backend != "cpu":
         digest.update(backend.encode())
     return digest.hexdigest()[:16]

@@ -14,6 +14,7 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+import re
 import shutil
 import subprocess
 import sys
@@ -130,3 +131,49 @@ def test_the_kept_ptx_is_named_by_every_input_of_the_compile(tmp_path, monkeypat
     assert inputs_hash("seed003_ds20") == first
     monkeypatch.setattr(metadata, "version", lambda dist: "0.0" if dist == "numba-cuda" else "1.0")
     assert inputs_hash("seed003_ds20") != first
+
+
+#: Compiles ``rng.fast_pair`` (a block's two float32 Box-Muller pairs) in a kernel for sm_90 and
+#: prints its PTX.
+FAST_PAIR = r"""
+import sys
+from numba.cuda import compile_ptx
+import numba.cuda.dispatcher as dispatcher
+try:
+    compile_ptx(lambda a: None, "(float64[:],)", cc=(9, 0))
+except Exception as exc:
+    print("skip:", type(exc).__name__, exc); sys.exit(0)
+class Sm90:
+    compute_capability = (9, 0)
+dispatcher.get_current_device = lambda: Sm90()
+from vines_stoch.streams.rng import fast_pair
+def kernel(words, out):
+    out[0], out[1] = fast_pair(words[0], words[1])
+print(compile_ptx(kernel, "(uint64[:], float32[:])", cc=(9, 0))[0])
+"""
+
+
+def test_the_fast_pairs_leave_the_gpu_compiler_nothing_to_fuse():
+    """NVVM fuses a product into a sum where it chooses, and ptxas an unrounded ``mul.f32`` into
+    the ``add.f32`` that reads it: the ``float32`` normals would round apart on a GPU (``6e-8`` a
+    normal).  The fast pairs write every product that meets a sum as a ``fused`` multiply-add:
+    their PTX holds those and no other (``fma.rn.f32``, one a ``fused`` call of ``rng.log1p_f32``
+    and ``rng.sincos_word``), and no ``add.f32`` or ``sub.f32`` reads a ``mul.f32``'s register, so
+    a GPU computes the CPU's bits."""
+    import inspect
+
+    from vines_stoch.streams import rng
+
+    env = {**os.environ, "NUMBA_ENABLE_CUDASIM": "0", "PYTHONPATH": str(ROOT)}
+    done = subprocess.run([sys.executable, "-c", FAST_PAIR], cwd=ROOT, env=env, capture_output=True,
+                          text=True, timeout=600)
+    assert done.returncode == 0, done.stderr[-3000:]
+    if done.stdout.startswith("skip:"):
+        pytest.skip(f"no NVVM to compile with: {done.stdout.strip()}")
+    ptx = done.stdout
+    written = sum(inspect.getsource(f).count("fused(") for f in (rng.log1p_f32, rng.sincos_word))
+    assert ptx.count("fma.rn.f32") == written > 0
+    products = set(re.findall(r"^\s*mul\.f32\s+(%f\d+),", ptx, re.M))
+    sums = re.findall(r"^\s*(?:add|sub)\.f32\s+%f\d+,\s*([^;]+);", ptx, re.M)
+    assert products and sums
+    assert not [s for s in sums if products & {a.strip() for a in s.split(",")}], "a product meets a sum"

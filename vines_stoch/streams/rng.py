@@ -55,6 +55,9 @@ STREAM_WORDS = 7
 KEY, PLACE, DRAWN, PAIRED, SPARE = range(5)
 #: Normals of a block (``block_normals``).
 BLOCK_NORMALS = 4
+#: The definition of the Philox streams' normals, part of a run's key (``store.run_key``), so that
+#: a run begun on other normals (two a block in ``float64``, before) is not resumed on these.
+NORMALS = "philox4x32-10, four normals a block, float32 pairs, float64 tail pairs below 2^-16"
 
 _M0, _M1 = np.uint64(0xD2511F53), np.uint64(0xCD9E8D57)  # Philox4x32 multipliers
 _W0, _W1 = np.uint64(0x9E3779B9), np.uint64(0xBB67AE85)  # key schedule (Weyl) increments
@@ -195,18 +198,10 @@ def sincos_turn(u: float):
 
 
 @njit(**INLINE)
-def log_f32(x):
-    """``log(x)`` of a positive normal ``float32``, branch-free, in ``float32`` (musl's ``logf``,
-    after fdlibm's ``e_logf.c``: ``x = 2^k (1 + f)``, ``1 + f`` in ``[sqrt(2)/2, sqrt(2))``
-    (``reduced_f32``), then ``log1p_f32``; error below 1 ulp)."""
-    k, f = reduced_f32(x)
-    return log1p_f32(k, f)
-
-
-@njit(**INLINE)
 def reduced_f32(x):
     """``(k, f)`` with ``x = 2^k (1 + f)``, ``1 + f`` in ``[sqrt(2)/2, sqrt(2))``, of a positive
-    normal ``float32`` (from its bits: exact)."""
+    normal ``float32`` (from its bits: exact), the range reduction of musl's ``logf`` (after
+    fdlibm's ``e_logf.c``; ``log x = log1p_f32(k, f)``, error below 1 ulp)."""
     bits = np.uint32(float_bits(x) + _OFFSET_F)
     k = _F(np.int32(bits >> _S23) - np.int32(0x7F))
     return k, bits_float(np.uint32((bits & _MANTISSA_F) + _SQRT_HALF_F)) - _ONE_F
@@ -215,27 +210,32 @@ def reduced_f32(x):
 @njit(**INLINE)
 def log1p_f32(k, f):
     """``k log 2 + log(1 + f)`` in ``float32`` for ``1 + f`` in ``[sqrt(2)/2, sqrt(2))``: musl's
-    minimax polynomial in ``s = f / (2 + f)``, ``log 2`` in two parts."""
+    minimax polynomial in ``s = f / (2 + f)``, ``log 2`` in two parts, musl's sum
+    ``s (f^2/2 + R) + k ln2_lo - f^2/2 + f + k ln2_hi`` with every product that meets a sum fused
+    (``fused``): no product is left for a compiler to fuse where it chooses (NVVM does, on a
+    GPU), so the GPU computes the CPU's bits."""
     s = f / (_F(2.0) + f)
     z = s * s
     w = z * z
-    t1 = w * fused(w, _LG4_F, _LG2_F)
-    t2 = z * fused(w, _LG3_F, _LG1_F)
-    hfsq = _HALF_F * f * f
-    return s * (hfsq + (t2 + t1)) + k * _LN2_LO_F - hfsq + f + k * _LN2_HI_F
+    half_f = _HALF_F * f
+    r = fused(z, fused(w, _LG3_F, _LG1_F), w * fused(w, _LG4_F, _LG2_F))
+    total = fused(-half_f, f, fused(s, fused(half_f, f, r), k * _LN2_LO_F))
+    return fused(k, _LN2_HI_F, total + f)
 
 
 @njit(**INLINE)
 def sincos_word(w):
     """``(cos 2 pi t, sin 2 pi t)`` in ``float32`` of the turn ``t = w 2^-32`` of a 32-bit word
     ``w``, branch-free: the quadrant ``q`` nearest ``4 t`` and the rest ``x`` in ``[-pi/4, pi/4)``
-    from the word's bits (exact), then Cephes' polynomials of ``sinf`` and ``cosf``."""
+    from the word's bits (the quadrant and the rest's 30-bit integer exact, ``x`` rounded once to
+    ``float32``), then Cephes' polynomials of ``sinf`` and ``cosf``, every product that meets a
+    sum fused (``log1p_f32``)."""
     shifted = (w + _EIGHTH) & _LOW
     quadrant = np.int64(shifted >> _S30)
     x = _F(np.int64(shifted & _QUARTER_BITS) - np.int64(1 << 29)) * _QUARTER_TURN_F
     z = x * x
     sin_x = fused(fused(fused(_SA_F, z, _SB_F), z, _SC_F) * z, x, x)
-    cos_x = fused(fused(fused(_CA_F, z, _CB_F), z, _CC_F) * z, z, _ONE_F - _HALF_F * z)
+    cos_x = fused(fused(fused(_CA_F, z, _CB_F), z, _CC_F) * z, z, fused(-_HALF_F, z, _ONE_F))
     swap = (quadrant & 1) == 1
     # the signs as factors of +-1 (exact), not branches: the cosine's negative in quadrants 1
     # and 2, the sine's in 2 and 3
