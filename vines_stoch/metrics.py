@@ -125,8 +125,8 @@ def finish_table(raw: np.ndarray, scene: Scene | Sequence[Scene],
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         positive = input_energy > 0  # (NaN where not: no energy in, or none defined)
         edm = np.where(positive, absorbed / input_energy, np.nan)
-        residual = np.where(positive, (input_energy - slot["final_energy"] - dissipated) / input_energy,
-                            np.nan)
+        imbalance = input_energy - slot["final_energy"] - dissipated
+        residual = np.where(positive, imbalance / input_energy, np.nan)
 
         def rms(square_integral: np.ndarray) -> np.ndarray:  # (negative -> 0 as max(v, 0.0): NaN, -0.0 kept)
             return np.sqrt(np.where(square_integral < 0, 0.0, square_integral) / window)
@@ -179,7 +179,7 @@ def finish_table(raw: np.ndarray, scene: Scene | Sequence[Scene],
                 folded = rms((folded - 0.5 * last * last) * dt)
         columns[name] = folded
         finite &= np.isfinite(folded)
-    ok = finite & (slot["status"] != STATUS_DIVERGED) & ~failed_balance(slot)
+    ok = finite & (slot["status"] != STATUS_DIVERGED) & ~failed_balance(slot, dissipated, imbalance)
     # string columns as codes into their few values (far faster than a string a row)
     columns["status"] = pd.Series(["diverged", "ok"]).array.take(ok.astype(np.intp))
     codes, labels = np.zeros(n, dtype=np.intp), {None: 0}
@@ -193,20 +193,20 @@ def finish_table(raw: np.ndarray, scene: Scene | Sequence[Scene],
     return pd.DataFrame(columns, copy=False)  # (the arrays are this table's alone)
 
 
-def failed_balance(slot: dict[str, np.ndarray]) -> np.ndarray:
-    """Whether each row's energy accounts say its scheme failed (``FAILED_BALANCE``): where energy
-    went in, a balance off by more than that share of the input (``|energy_residual|``); where
-    none did (no residual is defined), a balance off by more than that share of the largest
-    account; and anywhere a dissipation negative by more than it (a dashpot or an impact gives
-    energy back only within the scheme's error).  A row with no energy at all passes."""
-    input_energy, final = slot["input_energy"], slot["final_energy"]
-    losses = (slot["primary_dissipation"], slot["absorber_dissipation"], slot["impact_loss"])
-    dissipated = losses[1] + losses[2] + losses[0]  # (as ``energy_residual`` sums them)
+def failed_balance(slot: dict[str, np.ndarray], dissipated: np.ndarray, imbalance: np.ndarray) -> np.ndarray:
+    """Whether each row's energy accounts say its scheme failed (``FAILED_BALANCE``), given the
+    rows' accounts (``slot``), their dissipation in all and their ``imbalance`` (input less final
+    energy less dissipation; ``finish_table``'s): where energy went in, a balance off by more than
+    that share of the input (``|energy_residual|``); where none did (no residual is defined), a
+    balance off by more than that share of the largest account; and anywhere a dissipation
+    negative by more than it (a dashpot or an impact gives energy back only within the scheme's
+    error).  A row with no energy at all passes."""
+    input_energy = slot["input_energy"]
+    accounts = (input_energy, slot["final_energy"], slot["primary_dissipation"], slot["absorber_dissipation"],
+                slot["impact_loss"])
     with np.errstate(invalid="ignore", over="ignore"):
-        largest = np.max(np.abs([input_energy, final, *losses]), axis=0)
-        scale = np.where(input_energy > 0, input_energy, largest)
-        return (np.abs(input_energy - final - dissipated) > FAILED_BALANCE * scale) | (
-            dissipated < -FAILED_BALANCE * scale)
+        scale = np.where(input_energy > 0, input_energy, np.max(np.abs(accounts), axis=0))
+        return (np.abs(imbalance) > FAILED_BALANCE * scale) | (dissipated < -FAILED_BALANCE * scale)
 
 
 def _stacked(samples: Sequence[np.ndarray | None] | np.ndarray | None, n: int) -> np.ndarray | None:
