@@ -28,6 +28,7 @@ import numpy as np
 from numba import njit
 
 from ..jit.flags import INLINE
+from ..streams.rng import TAIL_WORD, fast_radius, log_positive, sincos_turn, sincos_word
 
 #: Levels of bisection below a (fine) step; the path is linear between the leaves.
 TREE_DEPTH = 14
@@ -37,7 +38,6 @@ _MIX1 = np.uint64(0xBF58476D1CE4E5B9)
 _MIX2 = np.uint64(0x94D049BB133111EB)
 _LOW32 = np.uint64(0xFFFFFFFF)
 _S30, _S27, _S31, _S32 = np.uint64(30), np.uint64(27), np.uint64(31), np.uint64(32)
-_TWO_PI = 2.0 * np.pi
 
 
 @njit(**INLINE)
@@ -58,11 +58,17 @@ def interval_key(seed, interval: int, floor: int):
 
 @njit(**INLINE)
 def node_normal(key, node: int) -> float:
-    """The standard normal of tree node ``node`` (Box-Muller on the hash's two 32-bit halves)."""
+    """The standard normal of tree node ``node``: the cosine half of the Box-Muller pair of the
+    hash's two 32-bit halves, ``rng.fast_pair``'s ``float32`` transform (a few ns where the
+    ``float64`` logarithm and cosine cost about 40: a contact's sub-steps and a root search's
+    trials each query the tree), and where the first half is below ``rng.TAIL_WORD`` (radius
+    beyond 4.7, one node in 65,536) the ``float64`` pair of ``u1 = (w + 1/2) 2^-32``."""
     h = mix(key ^ (np.uint64(node) * _GOLDEN))
-    u1 = (np.float64(h >> _S32) + 0.5) * 2.0**-32
-    u2 = (np.float64(h & _LOW32) + 0.5) * 2.0**-32
-    return math.sqrt(-2.0 * math.log(u1)) * math.cos(_TWO_PI * u2)
+    wa, wb = h >> _S32, h & _LOW32
+    if wa >= TAIL_WORD:
+        return float(fast_radius(wa) * sincos_word(wb)[0])
+    u1 = (np.float64(wa) + 0.5) * 2.0**-32
+    return math.sqrt(-2.0 * log_positive(u1)) * sincos_turn(np.float64(wb) * 2.0**-32)[0]
 
 
 @njit(**INLINE)
