@@ -17,15 +17,12 @@ depend on (seed, purpose, point, realisation) alone, as the cuda backend's do, a
 loop given the same Philox streams runs the same arithmetic: the two agree bitwise
 (``tests/unit/kernels/test_lanes.py``).
 
-Events leave the lanes.  The lane body is the step's first pass without an event (an impact
-absorber stuck to its wall moving with it, ``common.stick_together``, and released where the
-wall would pull it), and a test without a branch (``events.quiet_band``) flags each lane whose
-drift ends outside its free absorbers' bands free of events, or whose Hertz absorber touches; a
-flagged lane keeps its state as before the step, and after the vector loop the flagged lanes
-take, one at a time, the scalar step after its loads and increments (``kdk``'s ``advance``:
-root search on the lane's Brownian tree, impacts, the start of sticking, contact sub-steps),
-their absorbers' state (the wall each sticks to, the side each touches) kept in rows of the
-batch.
+Events leave the lanes.  The lane body is the step's first pass without an event, and a test
+without a branch (``events.quiet_band``) flags each lane whose drift ends outside its absorbers'
+bands free of events, or whose absorber sticks or touches; a flagged lane keeps its state as
+before the step, and after the vector loop the flagged lanes take, one at a time, the scalar
+step after its loads and increments (``kdk``'s ``advance``: root search on the lane's Brownian
+tree, impacts, sticking, contact sub-steps), their absorbers' state kept in rows of the batch.
 
 Filtered loads are the lanes' own: each lane advances its filters on its Philox filter stream
 (``loads.filter_row``; the envelopes, the same for every lane, once a step), and its loads are
@@ -93,10 +90,8 @@ from .common import (
     fold_declared,
     history_row,
     keep_in_cavities,
-    pin_to_walls,
     recording,
     shaped_forces,
-    stick_together,
     stored_energy,
     write_floor_metrics,
 )
@@ -449,19 +444,15 @@ def lane_loop(spec: Spec):
 
     @njit(**INLINE)
     def half_kick(x, v, vn, force, dwh, dws, load, ag, dt, inside, accounts, mass, inv_mass, storey_k,
-                  storey_c, floor_c, kind, host, rows, sticking, release):
+                  storey_c, floor_c, kind, host, rows):
         """A half kick of the step (``kdk.kdk_step``'s without an event: the forces at ``x``, the
-        kick from ``v`` into ``vn``, then with impact absorbers ``common.stick_together``: the
-        absorbers stuck to their walls move with them, those the wall would pull released first
-        where ``release``; ``sticking``: each absorber's wall side, its walls, scratch) and,
-        inside the metrics window, its input work and dissipation added to the ``accounts``."""
+        kick from ``v`` into ``vn``; with no absorber stuck, ``common.stick_together`` leaves every
+        velocity as it is) and, inside the metrics window, its input work and dissipation added to
+        the ``accounts``."""
         attachment_forces(x, v, NF, storey_k, storey_c, floor_c, host, rows, force)
         contact_forces(x, NF, kind, host, rows, force, CONTACT)
         shaped_forces(x, NF, host, rows, force, SHAPED)
         kick(v, 0.5 * dt, dwh, load, ag, force, inv_mass, vn, GROUND)
-        if IMPACT:
-            stuck, walls, group_mass, group_sum = sticking
-            stick_together(mass, vn, NF, stuck, walls, group_mass, group_sum, release)
         work, d_primary, d_absorber = accounts
         if inside:
             work += 0.5 * impulse_work(load, dt, dws, v, vn) - (
@@ -492,15 +483,11 @@ def lane_loop(spec: Spec):
     def update(s, z, nl, inside, dt, ag, ag_next, load, load_next, noise_scale, mass, inv_mass, storey_k,
                storey_c, floor_c, kind, host, rows, walls, band):
         """One kick-drift-kick step of every lane, as ``kdk.kdk_step``'s first pass without an
-        event (the absorbers stuck to their walls moving with them, and released where the wall
-        would pull), then (``EVENTS``: the scene has impact or Hertz absorbers) each lane flagged
-        whose step holds an impact, a contact's onset or end or whose absorber touches, its
-        state as before the step (``fix_lanes`` finishes it; returns how many), and inside the
+        event, then (``EVENTS``: the scene has impact or Hertz absorbers) each lane flagged
+        whose step holds an impact, a contact's onset or end or whose absorber sticks or touches,
+        its state as before the step (``fix_lanes`` finishes it; returns how many), and inside the
         metrics window the loop driver's accounts at the step's end of every lane not flagged."""
         x, v, vn, force = scratch(NB), scratch(NB), scratch(NB), scratch(NB)
-        # each impact absorber's wall side (0: free), and ``common.stick_together``'s scratch
-        sticking = (int_scratch(NA), walls, scratch(NW), scratch(NW))
-        stuck = sticking[0]
         x0, v0 = scratch(NB), scratch(NB)
         dws, dwh, acc = scratch(NF), scratch(NF), scratch(NF)
         x_max, drift_max, acc_max = scratch(NF), scratch(NF), scratch(NF)
@@ -521,25 +508,23 @@ def lane_loop(spec: Spec):
             for k in range(NF):
                 dws[k] = noise_scale[k] * z[k * W + lane] if NOISE else 0.0
                 dwh[k] = 0.5 * dws[k]
-            for a in range(NA if IMPACT else 0):
-                stuck[a] = int(s[(STUCK + a) * W + lane])
             before = (s[WORK * W + lane], s[DP * W + lane], s[DA * W + lane])
             accounts = half_kick(x, v, vn, force, dwh, dws, f_start, g_start, dt, inside, before, mass,
-                                 inv_mass, storey_k, storey_c, floor_c, kind, host, rows, sticking, True)
-            held = 0.0  # (events ahead, absorbers touching: a sum, no branch)
+                                 inv_mass, storey_k, storey_c, floor_c, kind, host, rows)
+            held = 0.0  # (events ahead, absorbers stuck or touching: a sum, no branch)
             for a in range(NA if EVENTS else 0):
                 h = wall_of(walls, a, NW)
                 j = NF + a
                 u_end = x[j] - x[h] + dt * (vn[j] - vn[h])  # (``kdk``'s event test at the drift's end)
-                # (a stuck absorber meets no wall: ``events.event_ahead``)
-                ahead = ((u_end < band[2 * a]) | (u_end > band[2 * a + 1])) & (not IMPACT or stuck[a] == 0)
-                held += (1.0 if ahead else 0.0) + abs(s[(TOUCHING + a) * W + lane])
+                ahead = (u_end < band[2 * a]) | (u_end > band[2 * a + 1])
+                held += (1.0 if ahead else 0.0) + abs(s[(STUCK + a) * W + lane]) + abs(
+                    s[(TOUCHING + a) * W + lane])
             for b in range(NB):
                 x[b] = fused(dt, vn[b], x[b])
                 v[b] = vn[b]
             work, d_primary, d_absorber = half_kick(x, v, vn, force, dwh, dws, f_end, g_end, dt, inside,
                                                     accounts, mass, inv_mass, storey_k, storey_c, floor_c,
-                                                    kind, host, rows, sticking, False)
+                                                    kind, host, rows)
             for b in range(NB):
                 v[b] = vn[b]
             for k in range(NF):
@@ -552,10 +537,7 @@ def lane_loop(spec: Spec):
                         peak = larger(peak, contact_force(x, NF, a, host, rows))
                 if IMPACT:
                     keep_in_cavities(x, NF, NW, kind, walls, rows)
-                    pin_to_walls(x, NF, NW, stuck, walls, rows)
                 keep = held > 0.0 and s[DONE * W + lane] == 0.0
-                for a in range(NA if IMPACT else 0):
-                    s[(STUCK + a) * W + lane] = s[(STUCK + a) * W + lane] if keep else stuck[a]
                 for b in range(NB):  # (selects: the stores are unconditional)
                     s[(X + b) * W + lane] = x0[b] if keep else x[b]
                     s[(V + b) * W + lane] = v0[b] if keep else v[b]
