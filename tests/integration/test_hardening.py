@@ -394,3 +394,15 @@ def test_one_version_string_from_the_package_metadata():
     project = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]
     assert vines_stoch.__version__ == project["version"]
     assert provenance("", "", 0, "embedded")["vines_stoch.version"] == project["version"]
+
+
+def test_a_run_key_holds_the_definition_of_every_normal_it_draws(monkeypatch):
+    """A run begun on other normals is not resumed on these: the key changes with ``rng.NORMALS``,
+    which names both the Philox streams' normals and the Brownian trees' node normals."""
+    from vines_stoch import store
+    from vines_stoch.streams.rng import NORMALS
+
+    assert "philox" in NORMALS and "tree nodes" in NORMALS
+    key = store.run_key("scenario", [(0, 0, 4)])
+    monkeypatch.setattr(store, "NORMALS", NORMALS.replace("float32 pair's cosine", "float64 cosine"))
+    assert store.run_key("scenario", [(0, 0, 4)]) != key

@@ -28,7 +28,7 @@ import numpy as np
 from numba import njit
 
 from ..jit.flags import INLINE
-from ..streams.rng import TAIL_WORD, fast_radius, log_positive, sincos_turn, sincos_word
+from ..streams.rng import TAIL_WORD, fast_pair, log_positive, sincos_turn
 
 #: Levels of bisection below a (fine) step; the path is linear between the leaves.
 TREE_DEPTH = 14
@@ -67,7 +67,7 @@ def node_normal(key, node: int) -> float:
     h = mix(key ^ (np.uint64(node) * _GOLDEN))
     wa, wb = h >> _S32, h & _LOW32
     if wa >= TAIL_WORD:
-        return float(fast_radius(wa) * sincos_word(wb)[0])
+        return float(fast_pair(wa, wb)[0])
     u1 = (np.float64(wa) + 0.5) * 2.0**-32
     return math.sqrt(-2.0 * log_positive(u1)) * sincos_turn(np.float64(wb) * 2.0**-32)[0]
 

@@ -55,9 +55,11 @@ STREAM_WORDS = 7
 KEY, PLACE, DRAWN, PAIRED, SPARE = range(5)
 #: Normals of a block (``block_normals``).
 BLOCK_NORMALS = 4
-#: The definition of the Philox streams' normals, part of a run's key (``store.run_key``), so that
-#: a run begun on other normals (two a block in ``float64``, before) is not resumed on these.
-NORMALS = "philox4x32-10, four normals a block, float32 pairs, float64 tail pairs below 2^-16"
+#: The definition of the normals a run draws, part of its key (``store.run_key``), so that a run
+#: begun on other normals is not resumed on these: the Philox streams' (two a block in ``float64``,
+#: before) and the Brownian trees' nodes (``brownian.node_normal``; libm's ``float64`` before).
+NORMALS = ("philox4x32-10, four normals a block, float32 pairs, float64 tail pairs below 2^-16; "
+           "tree nodes: splitmix64, the float32 pair's cosine, float64 below 2^-16")
 
 _M0, _M1 = np.uint64(0xD2511F53), np.uint64(0xCD9E8D57)  # Philox4x32 multipliers
 _W0, _W1 = np.uint64(0x9E3779B9), np.uint64(0xBB67AE85)  # key schedule (Weyl) increments
