@@ -70,23 +70,23 @@ def compile_general(*, show: bool = True, workers: int | None = None) -> None:
     lanes of every smooth kick-drift-kick structure of three bodies or more), keeping nothing: after
     it no run shorter than ``kernels.GENERAL_WORK`` path-steps compiles a step loop, whatever its
     structure (``vines-stoch compile --general``: a cluster image, a notebook server); then two
-    tiny runs (``EVERY_LAW``) compile what a run compiles besides its loop.  The schemes compile
-    side by side in ``workers`` processes (default: one a core, at most one a scheme); ``show``:
-    a line a loop on standard error, as ``prepare_loops``."""
-    schemes = list(dict.fromkeys(scheme for scheme, _ in GENERAL_SET))
-    workers = min(workers or os.cpu_count() or 1, len(schemes))
+    tiny runs (``EVERY_LAW``) compile what a run compiles besides its loop.  The loops
+    (``GENERAL_PIECES``) compile side by side in ``workers`` processes (default: one a core), the
+    longest first; ``show``: a line a loop on standard error, as ``prepare_loops``."""
+    workers = min(workers or os.cpu_count() or 1, len(GENERAL_PIECES))
     if workers == 1:
-        for scheme in schemes:
-            _compile_scheme(scheme, show)
+        for piece in GENERAL_PIECES:
+            _compile_piece(piece, show)
         _finish_run(show)
         return
     if show:
-        print(f"step loops: the general loops of {', '.join(schemes)} in {workers} processes",
+        print(f"step loops: the general loops of every scheme and the pass loop in {workers} processes",
               file=sys.stderr, flush=True)
     with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn")) as pool:
-        for done in [pool.submit(_compile_scheme, scheme, show, True) for scheme in schemes]:
+        tasks = [pool.submit(_compile_piece, piece, show, True) for piece in GENERAL_PIECES]
+        tasks.append(pool.submit(_finish_run, show, True))  # (beside the last loops: it runs on the first)
+        for done in tasks:
             print(done.result(), end="", file=sys.stderr, flush=True)
-    _finish_run(show)
 
 
 def _every_law(absorbers: list[dict], loads: list[dict]) -> dict[str, Any]:
@@ -118,8 +118,13 @@ EVERY_LAW = (
 )
 
 
-def _finish_run(show: bool) -> None:
-    """Run each of ``EVERY_LAW`` once, keeping nothing (``compile_general``'s last step)."""
+def _finish_run(show: bool, kept: bool = False) -> str:
+    """Run each of ``EVERY_LAW`` once, keeping nothing (``compile_general``'s last step); with
+    ``kept``, its line is returned instead of written (a worker process's)."""
+    if kept:
+        with redirect_stderr(io.StringIO()) as lines:
+            _finish_run(show)
+        return lines.getvalue()
     start = time.monotonic()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
@@ -128,26 +133,42 @@ def _finish_run(show: bool) -> None:
     if show:
         print(f"the rest of a run (summary, every absorber law): ready in {time.monotonic() - start:.1f} s",
               file=sys.stderr, flush=True)
+    return ""
 
 
-def _compile_scheme(scheme: str, show: bool, kept: bool = False) -> str:
-    """``compile_general`` of one scheme's structures in ``GENERAL_SET``; with ``kept``, its lines
-    are returned instead of written (a worker process's, printed whole by the parent)."""
+#: The loops ``compile_general`` compiles, as (scheme, load, what) of ``GENERAL_SET``: the
+#: general loop for paths (``paths``), for chunks of both executors (``chunks``), or the pass
+#: loop (``pass``).  The longest come first, and a loop that another's signature serves (the
+#: same loop under another load) after that one, so that two processes seldom wait on one loop.
+GENERAL_PIECES = (("euler-maruyama", "white-noise", "chunks"), ("euler-maruyama", "white-noise", "paths"),
+                  ("euler-maruyama", "white-noise", "pass"), ("rk4", "harmonic", "paths"),
+                  ("sra", "white-noise", "paths"), ("sra", "harmonic", "paths"),
+                  ("rk4", "harmonic", "chunks"), ("sra", "white-noise", "chunks"),
+                  ("sra", "harmonic", "chunks"), ("euler-maruyama", "harmonic", "paths"),
+                  ("euler-maruyama", "harmonic", "chunks"))
+
+
+def _compile_piece(piece: tuple[str, str, str], show: bool, kept: bool = False) -> str:
+    """``compile_general`` of one of ``GENERAL_PIECES``; with ``kept``, its lines are returned
+    instead of written (a worker process's, printed whole by the parent)."""
     if kept:
         with redirect_stderr(io.StringIO()) as lines:
-            _compile_scheme(scheme, show)
+            _compile_piece(piece, show)
         return lines.getvalue()
-    for load in (load for name, load in GENERAL_SET if name == scheme):
-        scene = general_scene(scheme, load)
-        what = f"the general {scheme} loop for paths ({load})"
-        if show:
-            print(f"step loop: {what}: compiling or loading ...", end="", file=sys.stderr, flush=True)
-        start = time.monotonic()
-        simulate(scene, np.random.default_rng(0))
-        if show:
-            print(f" ready in {time.monotonic() - start:.1f} s", file=sys.stderr, flush=True)
+    scheme, load, what = piece
+    if what == "pass":  # (the pass loop: ``kernels.in_pass_loop``)
+        prepare_loops([general_scene(scheme, load, storeys=2)], 0, True, show=show, general=True)
+        return ""
+    scene = general_scene(scheme, load)
+    if what == "chunks":
         for executor in EXECUTORS:
             prepare_loops([scene], 0, True, show=show, executor=executor, general=True)
-    if scheme == "euler-maruyama":  # (the pass loop: ``kernels.in_pass_loop``)
-        prepare_loops([general_scene(scheme, "white-noise", storeys=2)], 0, True, show=show, general=True)
+        return ""
+    if show:
+        print(f"step loop: the general {scheme} loop for paths ({load}): compiling or loading ...", end="",
+              file=sys.stderr, flush=True)
+    start = time.monotonic()
+    simulate(scene, np.random.default_rng(0))
+    if show:
+        print(f" ready in {time.monotonic() - start:.1f} s", file=sys.stderr, flush=True)
     return ""

@@ -28,7 +28,7 @@ from tests.unit.kernels.test_passes import (
     frame,
 )
 from vines_stoch.ensemble import plan
-from vines_stoch.ensemble.ahead import GENERAL_SET, compile_general, general_scene
+from vines_stoch.ensemble.ahead import GENERAL_PIECES, GENERAL_SET, compile_general, general_scene
 from vines_stoch.environment import problems
 from vines_stoch.kernels import chunk as chunk_module
 from vines_stoch.kernels import (
@@ -112,6 +112,15 @@ def _structures():
         frame(5, [{**IMPACT, "floor": 3}, {**HERTZ, "floor": 5}], [BLAST], **{"simulation.scheme": "rk4"}),
         frame(3, [CUBIC, {**GAP, "floor": 2}], [NOISE, CLOUGH_PENZIEN], **RECORDED),
     ]
+
+
+def test_compile_general_hands_its_processes_every_general_loop_once():
+    """``compile_general``'s pieces are each scheme's general loop for paths and for chunks under
+    each load of ``GENERAL_SET``, and the pass loop, each once."""
+    pieces = [(scheme, load, what) for scheme, load, what in GENERAL_PIECES if what != "pass"]
+    assert sorted(pieces) == sorted((scheme, load, what) for scheme, load in GENERAL_SET
+                                    for what in ("paths", "chunks"))
+    assert [what for _, _, what in GENERAL_PIECES].count("pass") == 1
 
 
 def test_new_structures_run_the_general_loop_and_compile_nothing():
