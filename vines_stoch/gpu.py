@@ -306,13 +306,13 @@ def advance_many(paths: list, stops: list[int]) -> None:
     simulator (which runs the CPU loop), up to rounding on a GPU (see ``simulate_many``).  The
     rare-event estimates' paths on the cuda backend (``rare.py``)."""
     from .kernels import compile_first, stretch_to
-    from .streams.pcg import PCG_DTYPE
+    from .streams.kinds import PCG_KIND, kind_of
 
     todo = []
     for path, stop in zip(paths, stops):
         if not stretch_to(path, stop):
             continue
-        if any(not isinstance(g, np.ndarray) or g.dtype == PCG_DTYPE for g in path.args[7:]):
+        if any(kind_of(g) in (None, PCG_KIND) for g in path.args[7:]):
             raise ValueError("gpu.advance_many: a path on a PCG64 stream or a numpy generator; the GPU draws "
                              "from counter-based streams (rng.philox_stream, rng.tape)")
         if path.args[5]._replace(n_steps=0, first=0) != paths[0].args[5]._replace(n_steps=0, first=0):

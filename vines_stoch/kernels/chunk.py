@@ -20,7 +20,7 @@ from functools import cache, lru_cache
 from typing import NamedTuple
 
 import numpy as np
-from numba import njit, types
+from numba import njit
 from numba.extending import overload
 
 from ..jit.cache import stable_cache
@@ -28,7 +28,8 @@ from ..jit.flags import INLINE, KERNEL
 from ..outputs import EVENT_COLUMNS, new_metrics
 from ..schemes import in_lanes
 from ..streams import BRIDGE, FILTER, INCREMENTS, PARAMETERS, Streams, streams
-from ..streams.pcg import PCG_DTYPE, POOL_SIZE, new_stream, pcg_normal, pcg_uniform, seed_pool, seed_stream
+from ..streams.kinds import KIND, PCG_KIND
+from ..streams.pcg import POOL_SIZE, new_stream, pcg_normal, pcg_uniform, seed_pool, seed_stream
 from ..streams.rng import STREAM_WORDS, open_stream, philox_stream, stream_key, stream_place
 from .bundles import Outputs
 from .lanes import lane_loop
@@ -60,15 +61,13 @@ def reseed(stream, keys, purpose, point, realization, common, pool, words) -> No
 
 @overload(reseed, jit_options=INLINE)
 def _reseed(stream, keys, purpose, point, realization, common, pool, words):
-    if isinstance(stream, types.Array) and isinstance(stream.dtype, types.Record):
-        def pcg(stream, keys, purpose, point, realization, common, pool, words):
+    def by_kind(stream, keys, purpose, point, realization, common, pool, words):
+        if stream[KIND] == PCG_KIND:
             seed_stream(stream, keys[:POOL_SIZE], keys[POOL_SIZE], purpose, point, realization, common, pool,
                         words)
-        return pcg
-
-    def philox(stream, keys, purpose, point, realization, common, pool, words):
-        open_stream(stream, keys[purpose], stream_place(realization, point, common))
-    return philox
+        else:
+            open_stream(stream, keys[purpose], stream_place(realization, point, common))
+    return by_kind
 
 
 @lru_cache(maxsize=64)
@@ -354,7 +353,7 @@ def parameter_draws(keys, point: int, start: int, common: bool, normal, out) -> 
     in each realisation's parameter stream (``streams.PARAMETERS``), one draw a parameter in
     file order, a standard normal where ``normal`` is set, else a uniform (the draws of
     ``scenario.distributions``)."""
-    stream = np.zeros(1, PCG_DTYPE)
+    stream = np.zeros(STREAM_WORDS, np.uint64)
     pool, words = np.zeros(POOL_SIZE, np.uint64), np.zeros(8, np.uint64)
     for j in range(out.shape[0]):
         seed_stream(stream, keys[:POOL_SIZE], keys[POOL_SIZE], PARAMETERS, point, start + j, common, pool,

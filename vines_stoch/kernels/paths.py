@@ -18,7 +18,7 @@ from ..outputs import EVENT_COLUMNS, SLOTS, new_events, new_metrics
 from ..schemes import SCHEMES
 from ..signals import declare
 from ..streams import Streams
-from ..streams.pcg import PCG_DTYPE, new_stream, set_state, state_of
+from ..streams.pcg import set_state, state_of
 from ..streams.rng import STREAM_WORDS, uniform
 from .bundles import Absorbers, Bodies, Filters, Grid, Loads, Noise, Outputs
 from .carry import SEED_HIGH, SEED_LOW, new_carry
@@ -27,11 +27,8 @@ from .loads import load_path, stationary_start
 from .protocol import BODY_ROOM, ROOM, RUN_TIME, Spec
 
 _NO_NORMALS = np.zeros(0)
-#: The stream in the increments' place of a replayed path: never drawn from.
-_UNDRAWN = new_stream()
 #: A stream the kernel has no use for: an empty Philox stream (``rng.philox_stream``), never drawn
-#: from.  The cuda backend passes Philox streams in every place, so a deterministic scene runs
-#: the same loop (the same argument types: one compilation) on the CPU and on the simulator.
+#: from (every stream is one type, ``streams.kinds``: a loop given it compiles nothing more).
 _UNUSED = np.zeros(STREAM_WORDS, np.uint64)
 _NO_HISTORY = np.zeros((0, 2))
 _NO_SIGNALS = np.zeros((0, 2), np.int64)
@@ -145,14 +142,10 @@ def filter_draws(scene) -> int:
 
 def _streams_for(scene, replay: bool, streams: Streams | np.random.Generator | None) -> tuple[tuple, tuple]:
     """The kernel's generators (increments, bridge, filter), and the numpy generators they stand
-    for (``_as_streams``).  A generator is passed only where the kernel draws from it, a stream it
-    never draws from elsewhere (``_UNDRAWN``, PCG64, where it draws from a PCG64 stream or a numpy
-    generator; ``_UNUSED``, Philox, else: an array costs next to nothing to pass, and the loop
-    sees one kind of stream); a
-    Philox stream (an array, ``rng.philox_stream``, as on the GPU) is passed all the same, so that the loop is
-    the one the cuda backend runs.  A replayed path keeps a stream (``_UNDRAWN``, or the Philox
-    stream given) in the increments' place, so that it runs the kernel a drawn path runs (the
-    same argument types) and not a specialisation of its own."""
+    for (``_as_streams``).  A generator is passed only where the kernel draws from it, the stream
+    ``_UNUSED`` elsewhere (an array costs next to nothing to pass); a stream array given is passed
+    all the same.  Every stream is one type (``streams.kinds``), so a path, a replayed path, a
+    chunk of either executor and the cuda backend's simulator run one loop, compiled once."""
     wanted = needed_streams(scene, replay)
     if isinstance(streams, np.random.Generator):
         streams = Streams.shared(streams)
@@ -164,14 +157,7 @@ def _streams_for(scene, replay: bool, streams: Streams | np.random.Generator | N
     for name, want, gen in zip(("increments", "bridge", "filter"), wanted, chosen):
         if want and gen is None:
             raise ValueError(f"streams: this scene draws from the {name} stream; it is None")
-    # (an unused place takes a stream of the kind of those drawn from, Philox where none is: the
-    # signatures of the general loop are its chunks', all PCG64 or all Philox)
-    pcg = any(want and (isinstance(gen, np.random.Generator) or getattr(gen, "dtype", None) == PCG_DTYPE)
-              for want, gen in zip(wanted, chosen))
-    unused = _UNDRAWN if pcg else _UNUSED
-    gens = [gen if want or isinstance(gen, np.ndarray) else unused for want, gen in zip(wanted, chosen)]
-    if replay and scene.has_white_noise and gens[0] is _UNUSED:
-        gens[0] = _UNDRAWN
+    gens = [gen if want or isinstance(gen, np.ndarray) else _UNUSED for want, gen in zip(wanted, chosen)]
     return _as_streams(gens)
 
 
@@ -208,7 +194,7 @@ def _streams_for_copy(gens: list, streams: Streams | np.random.Generator) -> tup
     chosen = (streams.increments, streams.bridge, streams.filter)
     fresh = []
     for name, old, new in zip(("increments", "bridge", "filter"), gens, chosen):
-        if old is _UNUSED or old is _UNDRAWN:
+        if old is _UNUSED:
             fresh.append(old)
         elif new is None:
             raise ValueError(f"branch: this path draws from the {name} stream; it is None")
@@ -303,7 +289,7 @@ class Path:
             _sync(self.sources, back=False)
             # (one copy of a stream given in several places; the never-drawn placeholders kept as
             # they are, so that a copy branches on new streams as its original would)
-            copies = {id(_UNUSED): _UNUSED, id(_UNDRAWN): _UNDRAWN}
+            copies = {id(_UNUSED): _UNUSED}
             gens = [copies.setdefault(id(g), g.copy()) if isinstance(g, np.ndarray)
                     else copy.deepcopy(g, copies) for g in gens]
         else:

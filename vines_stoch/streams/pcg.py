@@ -2,8 +2,9 @@
 and ``Generator.standard_normal`` / ``Generator.random``, bit for bit.
 
 A CPU realisation draws from ``PCG64(SeedSequence(seed, spawn_key=key))`` (``streams/``).
-Here the stream is a ``PCG_DTYPE`` record array of one element (the generator's 128-bit state
-and increment), made from the key inside the compiled ensemble loop (``seed_stream``: no Python
+Here the stream is a ``uint64`` array of ``kinds.STREAM_WORDS`` (its kind, ``kinds.PCG_KIND``,
+then the generator's 128-bit state and increment as 64-bit halves: ``STATE_HIGH`` ..
+``INC_LOW``), made from the key inside the compiled ensemble loop (``seed_stream``: no Python
 object per realisation) or taken from a numpy ``Generator`` and written back to it
 (``state_of``, ``set_state``), so a loop given a numpy generator and a loop deriving its
 streams draw the same numbers.  The algorithms are numpy's:
@@ -24,6 +25,8 @@ streams draw the same numbers.  The algorithms are numpy's:
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from llvmlite import ir
 from numba import njit, types
@@ -31,10 +34,10 @@ from numba.extending import intrinsic
 from numba.np.random._constants import fi_double, ki_double, wi_double, ziggurat_nor_inv_r, ziggurat_nor_r
 
 from ..jit.flags import INLINE, KERNEL
+from .kinds import KIND, PCG_KIND, STREAM_WORDS
 
-#: A PCG64 stream: the 128-bit state and increment as 64-bit halves.
-PCG_DTYPE = np.dtype([("state_high", np.uint64), ("state_low", np.uint64),
-                      ("inc_high", np.uint64), ("inc_low", np.uint64)])
+#: The words of a PCG64 stream after its kind: the 128-bit state and increment as 64-bit halves.
+STATE_HIGH, STATE_LOW, INC_HIGH, INC_LOW = 1, 2, 3, 4
 
 _MASK32 = np.uint64(0xFFFFFFFF)
 _INIT_A, _MULT_A = np.uint64(0x43B0D7E5), np.uint64(0x931E8875)
@@ -133,7 +136,7 @@ def key_words(words, at: int, value: int) -> int:
 
 @njit(**INLINE)
 def seed_stream(stream, pool0, hash0, purpose, point, realization, common: bool, pool, words) -> None:
-    """Set ``stream`` (``PCG_DTYPE``) to ``PCG64(SeedSequence(seed, spawn_key=key))`` with
+    """Set ``stream`` (a PCG64 stream's words) to ``PCG64(SeedSequence(seed, spawn_key=key))`` with
     ``key = (purpose, realization)``, or ``(purpose, point, realization)`` without common
     random numbers (``streams.generator``), from the seed's pool ``pool0, hash0``
     (``seed_pool``); ``pool`` (4) and ``words`` (8) are scratch."""
@@ -159,38 +162,37 @@ def seed_stream(stream, pool0, hash0, purpose, point, realization, common: bool,
 
 
 @njit(**INLINE)
-def _step(s) -> None:
+def _step(stream) -> None:
     """The LCG's step: ``state = state * MULT + inc`` (mod 2^128)."""
-    high, low = s.state_high, s.state_low
+    high, low = stream[STATE_HIGH], stream[STATE_LOW]
     new_low = low * _MUL_LOW
     new_high = mul_high(low, _MUL_LOW) + high * _MUL_LOW + low * _MUL_HIGH
-    low = new_low + s.inc_low
-    s.state_high = new_high + s.inc_high + (_ONE if low < new_low else np.uint64(0))
-    s.state_low = low
+    low = new_low + stream[INC_LOW]
+    stream[STATE_HIGH] = new_high + stream[INC_HIGH] + (_ONE if low < new_low else np.uint64(0))
+    stream[STATE_LOW] = low
 
 
 @njit(**INLINE)
 def seed_pcg(stream, state_high, state_low, seq_high, seq_low) -> None:
     """numpy's ``pcg64_set_seed``: the stream of the 128-bit seed ``state`` and sequence."""
-    s = stream[0]
-    s.inc_high = (seq_high << _ONE) | (seq_low >> np.uint64(63))
-    s.inc_low = (seq_low << _ONE) | _ONE
-    s.state_high = np.uint64(0)
-    s.state_low = np.uint64(0)
-    _step(s)
-    low = s.state_low + state_low
-    s.state_high = s.state_high + state_high + (_ONE if low < state_low else np.uint64(0))
-    s.state_low = low
-    _step(s)
+    stream[KIND] = PCG_KIND
+    stream[INC_HIGH] = (seq_high << _ONE) | (seq_low >> np.uint64(63))
+    stream[INC_LOW] = (seq_low << _ONE) | _ONE
+    stream[STATE_HIGH] = np.uint64(0)
+    stream[STATE_LOW] = np.uint64(0)
+    _step(stream)
+    low = stream[STATE_LOW] + state_low
+    stream[STATE_HIGH] = stream[STATE_HIGH] + state_high + (_ONE if low < state_low else np.uint64(0))
+    stream[STATE_LOW] = low
+    _step(stream)
 
 
 @njit(**INLINE)
 def next_uint64(stream):
     """The next 64 random bits (XSL-RR output of the stepped state)."""
-    s = stream[0]
-    _step(s)
-    high = s.state_high
-    word = high ^ s.state_low
+    _step(stream)
+    high = stream[STATE_HIGH]
+    word = high ^ stream[STATE_LOW]
     rot = high >> _S58
     return (word >> rot) | (word << ((_S64 - rot) & np.uint64(63)))
 
@@ -230,11 +232,11 @@ def _normal_rest(stream, idx, rabs, x) -> float:
     while True:
         if idx == 0:
             while True:
-                xx = -ziggurat_nor_inv_r * np.log1p(-pcg_uniform(stream))
-                yy = -np.log1p(-pcg_uniform(stream))
+                xx = -ziggurat_nor_inv_r * math.log1p(-pcg_uniform(stream))
+                yy = -math.log1p(-pcg_uniform(stream))
                 if yy + yy > xx * xx:
                     return -(ziggurat_nor_r + xx) if (rabs >> _S8) & _ONE else ziggurat_nor_r + xx
-        if (_FI[idx - 1] - _FI[idx]) * pcg_uniform(stream) + _FI[idx] < np.exp(-0.5 * x * x):
+        if (_FI[idx - 1] - _FI[idx]) * pcg_uniform(stream) + _FI[idx] < math.exp(-0.5 * x * x):
             return x
         idx, rabs, x = _layer(next_uint64(stream))
         if rabs < _KI[idx]:
@@ -245,8 +247,13 @@ def _normal_rest(stream, idx, rabs, x) -> float:
 
 
 def new_stream() -> np.ndarray:
-    """An unseeded stream (``PCG_DTYPE``, one element)."""
-    return np.zeros(1, PCG_DTYPE)
+    """An unseeded PCG64 stream (``kinds.STREAM_WORDS`` words, its kind ``kinds.PCG_KIND``)."""
+    stream = np.zeros(STREAM_WORDS, np.uint64)
+    stream[KIND] = PCG_KIND
+    return stream
+
+
+_LOW64 = 0xFFFFFFFFFFFFFFFF
 
 
 def state_of(gen: np.random.Generator, stream: np.ndarray | None = None) -> np.ndarray | None:
@@ -256,16 +263,15 @@ def state_of(gen: np.random.Generator, stream: np.ndarray | None = None) -> np.n
         return None
     st = gen.bit_generator.state["state"]
     stream = new_stream() if stream is None else stream
-    s = stream[0]
-    s["state_high"], s["state_low"] = st["state"] >> 64, st["state"] & 0xFFFFFFFFFFFFFFFF
-    s["inc_high"], s["inc_low"] = st["inc"] >> 64, st["inc"] & 0xFFFFFFFFFFFFFFFF
+    stream[KIND] = PCG_KIND
+    stream[STATE_HIGH], stream[STATE_LOW] = st["state"] >> 64, st["state"] & _LOW64
+    stream[INC_HIGH], stream[INC_LOW] = st["inc"] >> 64, st["inc"] & _LOW64
     return stream
 
 
 def set_state(gen: np.random.Generator, stream: np.ndarray) -> None:
     """Move a ``PCG64`` numpy generator to where ``stream`` stands (its 32-bit buffer kept)."""
     state = gen.bit_generator.state
-    s = stream[0]
-    state["state"] = {"state": int(s["state_high"]) << 64 | int(s["state_low"]),
-                      "inc": int(s["inc_high"]) << 64 | int(s["inc_low"])}
+    state["state"] = {"state": int(stream[STATE_HIGH]) << 64 | int(stream[STATE_LOW]),
+                      "inc": int(stream[INC_HIGH]) << 64 | int(stream[INC_LOW])}
     gen.bit_generator.state = state

@@ -1,11 +1,12 @@
 """Random draws of the kernels from each kind of stream: a PCG64 stream (the CPU ensembles,
-``streams/__init__.py``; ``pcg.py``: numpy's generator in compiled code, a ``pcg.PCG_DTYPE`` record
-array), a counter-based Philox stream (the GPU ensembles, ``gpu.py``), a tape of given normals
-(``tape``: a ``float64`` array, replayed in order; subset simulation's filter noise, ``rare.py``)
-or a numpy ``Generator`` (of a bit generator other than ``PCG64``, passed by a user).
+``streams/__init__.py``; ``pcg.py``: numpy's generator in compiled code), a counter-based Philox
+stream (the SIMD lanes and the GPU ensembles, ``gpu.py``), a tape of given normals (``tape``,
+replayed in order; subset simulation's filter noise, ``rare.py``), each a ``uint64`` array whose
+first word says its kind (``kinds.py``: one type, so a loop compiles once for every mix of
+streams), or a numpy ``Generator`` (of a bit generator other than ``PCG64``, passed by a user).
 
-A Philox stream is a ``uint64`` array of ``STREAM_WORDS``: the key (two 32-bit words, from the
-seed and the purpose), the stream's place (the realisation, and the sweep point without common
+A Philox stream is a ``uint64`` array of ``STREAM_WORDS``: its kind, the key (two 32-bit words,
+from the seed and the purpose), the stream's place (the realisation, and the sweep point without common
 random numbers: the counter's upper 64 bits), the number of draws so far and the normals kept
 from the last block.  Its draws come from blocks of Philox4x32-10 (the block number: the
 counter's lower 64 bits; Salmon, Moraes, Dror and Shaw, "Parallel random numbers: as easy as
@@ -32,9 +33,9 @@ the block's tail block (block ``m + 2^63`` of the stream): ``u1`` is then unifor
 standard deviations, its law exact to 8 and beyond.
 A stream gives one kind of draw (a purpose draws normals or uniforms, not both).
 
-The kernels call ``normal`` and ``uniform``; numba picks the implementation by the stream's
-type when it compiles a kernel, and plain Python (the CUDA simulator) by ``isinstance`` and
-the array's dtype.
+The kernels call ``normal`` and ``uniform``, which read a stream's kind at run time (numba
+picks a numpy ``Generator``'s methods by its type when it compiles a kernel), and plain Python
+(the CUDA simulator) likewise.
 """
 
 from __future__ import annotations
@@ -47,12 +48,15 @@ from numba.extending import overload
 
 from ..jit.flags import INLINE
 from ..jit.intrinsics import bits_float, float_bits, fused
-from .pcg import PCG_DTYPE, pcg_normal, pcg_uniform
+from .kinds import KIND, PCG_KIND, PHILOX_KIND, STREAM_WORDS, TAPE_KIND, kind_of
+from .pcg import pcg_normal, pcg_uniform
 
-#: Words of a Philox stream: key, place, draws made, and the block (plus one; 0: none) whose
-#: last three normals the stream holds, with those normals' bits (``philox_normal``).
-STREAM_WORDS = 7
-KEY, PLACE, DRAWN, PAIRED, SPARE = range(5)
+#: Words of a Philox stream after its kind (``kinds.KIND``): key, place, draws made, and the block
+#: (plus one; 0: none) whose last three normals the stream holds, with those normals' bits
+#: (``philox_normal``), ``kinds.STREAM_WORDS`` in all.
+KEY, PLACE, DRAWN, PAIRED, SPARE = range(1, 6)
+#: Words of a tape after its kind: the count drawn, then the values' bits.
+TAPE_DRAWN, TAPE_VALUES = 1, 2
 #: Normals of a block (``block_normals``).
 BLOCK_NORMALS = 4
 #: The definition of the normals a run draws, part of its key (``store.run_key``), so that a run
@@ -340,7 +344,8 @@ def philox_normal(stream) -> float:
 
 @njit(**INLINE)
 def open_stream(stream, key, place) -> None:
-    """Set ``stream`` (``STREAM_WORDS`` words) to the start of the stream ``(key, place)``."""
+    """Set ``stream`` (``STREAM_WORDS`` words) to the start of the Philox stream ``(key, place)``."""
+    stream[KIND] = PHILOX_KIND
     stream[KEY] = key
     stream[PLACE] = place
     stream[DRAWN] = 0
@@ -348,57 +353,78 @@ def open_stream(stream, key, place) -> None:
 
 
 def tape(values: np.ndarray) -> np.ndarray:
-    """A stream that replays ``values`` as its normals, in order: the count drawn so far, then
-    the values (a ``float64`` array).  Draws past its end are NaN (a path that diverges, not
-    numbers from elsewhere); it gives no uniforms."""
-    return np.concatenate([[0.0], np.asarray(values, dtype=np.float64)])
+    """A stream that replays ``values`` as its normals, in order: its kind (``kinds.TAPE_KIND``),
+    the count drawn so far, then the values' bits.  Draws past its end are NaN (a path that
+    diverges, not numbers from elsewhere), and so are its uniforms (it gives none)."""
+    values = np.ascontiguousarray(values, dtype=np.float64)
+    stream = np.zeros(TAPE_VALUES + values.shape[0], np.uint64)
+    stream[KIND] = TAPE_KIND
+    stream[TAPE_VALUES:] = values.view(np.uint64)
+    return stream
 
 
 @njit(**INLINE)
 def tape_normal(stream) -> float:
     """The tape's next value (NaN past its end), counting it drawn."""
-    i = int(stream[0]) + 1
-    stream[0] += 1.0
-    return stream[i] if i < stream.shape[0] else math.nan
+    at = TAPE_VALUES + np.int64(stream[TAPE_DRAWN])
+    stream[TAPE_DRAWN] += np.uint64(1)
+    return bits_float(stream[at]) if at < stream.shape[0] else math.nan
 
 
 def normal(gen) -> float:
     """One standard normal from ``gen`` (a PCG64 or Philox stream, a tape, or a numpy Generator)."""
-    if isinstance(gen, np.ndarray):
-        if gen.dtype == PCG_DTYPE:
-            return pcg_normal(gen)
-        return tape_normal(gen) if gen.dtype == np.float64 else philox_normal(gen)
-    return gen.standard_normal()
+    kind = kind_of(gen)
+    if kind is None:
+        return gen.standard_normal()
+    if kind == PCG_KIND:
+        return pcg_normal(gen)
+    return tape_normal(gen) if kind == TAPE_KIND else philox_normal(gen)
 
 
 def uniform(gen) -> float:
-    """One uniform in ``[0, 1)`` from ``gen`` (a PCG64 or Philox stream, or a numpy Generator)."""
-    if isinstance(gen, np.ndarray):
-        if gen.dtype == np.float64:
-            raise TypeError("uniform: a tape replays normals only")
-        return pcg_uniform(gen) if gen.dtype == PCG_DTYPE else philox_uniform(gen)
-    return gen.random()
+    """One uniform in ``[0, 1)`` from ``gen`` (a PCG64 or Philox stream, or a numpy Generator; a
+    tape replays normals only: ``TypeError`` here, NaN in compiled code)."""
+    kind = kind_of(gen)
+    if kind is None:
+        return gen.random()
+    if kind == TAPE_KIND:
+        raise TypeError("uniform: a tape replays normals only")
+    return pcg_uniform(gen) if kind == PCG_KIND else philox_uniform(gen)
+
+
+@njit(**INLINE)
+def stream_normal(gen) -> float:
+    """``normal`` of a stream array, its kind read at run time."""
+    kind = gen[KIND]
+    if kind == PHILOX_KIND:
+        return philox_normal(gen)
+    if kind == PCG_KIND:
+        return pcg_normal(gen)
+    return tape_normal(gen)
+
+
+@njit(**INLINE)
+def stream_uniform(gen) -> float:
+    """``uniform`` of a stream array, its kind read at run time (NaN from a tape)."""
+    kind = gen[KIND]
+    if kind == PHILOX_KIND:
+        return philox_uniform(gen)
+    if kind == PCG_KIND:
+        return pcg_uniform(gen)
+    return math.nan
 
 
 @overload(normal)
 def _normal(gen):
     if isinstance(gen, types.Array):
-        if isinstance(gen.dtype, types.Record):
-            return lambda gen: pcg_normal(gen)
-        if isinstance(gen.dtype, types.Float):
-            return lambda gen: tape_normal(gen)
-        return lambda gen: philox_normal(gen)
+        return lambda gen: stream_normal(gen)
     return lambda gen: gen.standard_normal()
 
 
 @overload(uniform)
 def _uniform(gen):
     if isinstance(gen, types.Array):
-        if isinstance(gen.dtype, types.Record):
-            return lambda gen: pcg_uniform(gen)
-        if isinstance(gen.dtype, types.Float):
-            return None  # (a tape replays normals only)
-        return lambda gen: philox_uniform(gen)
+        return lambda gen: stream_uniform(gen)
     return lambda gen: gen.random()
 
 
@@ -423,7 +449,7 @@ def keyed_stream(key: int, place: int) -> np.ndarray:
     """The Philox stream ``(key, place)`` before its first draw (``STREAM_WORDS`` words: build
     streams here, never by hand, the kernels reading every word)."""
     stream = np.zeros(STREAM_WORDS, np.uint64)
-    stream[KEY], stream[PLACE] = key, place
+    stream[KIND], stream[KEY], stream[PLACE] = PHILOX_KIND, key, place
     return stream
 
 

@@ -12,6 +12,8 @@ from numba import njit
 
 from vines_stoch.streams.rng import (
     DRAWN,
+    KEY,
+    PLACE,
     TAIL_BLOCK,
     TAIL_WORD,
     block_normals,
@@ -122,7 +124,7 @@ def test_four_draws_share_a_block_two_pairs_each_the_cosine_then_the_sine():
     s = philox_stream(9, 0, 0)
     quads = np.array([[philox_normal(s) for _ in range(4)] for _ in range(50)])
     assert s[DRAWN] == 200
-    key, place = U(s[0]), U(s[1])
+    key, place = U(s[KEY]), U(s[PLACE])
     for m in (0, 7, 49):
         assert tuple(quads[m]) == block_normals(key, place, U(m))
     w = philox_block(key, place, U(7))
@@ -395,7 +397,7 @@ def test_a_tape_replays_the_filter_noise_a_stream_draws():
     from tests.helpers import scene_from
     from vines_stoch.kernels import filter_draws, simulate
     from vines_stoch.streams import Streams
-    from vines_stoch.streams.rng import tape
+    from vines_stoch.streams.rng import TAPE_DRAWN, tape
 
     filtered = {"type": "filtered-noise", "intensity": 3.0, "frequency": 6.0, "damping": 0.3,
                 "start": "stationary"}
@@ -409,7 +411,7 @@ def test_a_tape_replays_the_filter_noise_a_stream_draws():
     replayed = tape(np.random.default_rng(2).standard_normal(drawn))
     again = simulate(scene, Streams(np.random.default_rng(1), None, replayed))
     assert np.array_equal(out, again, equal_nan=True)
-    assert replayed[0] == drawn
+    assert replayed[TAPE_DRAWN] == drawn
     short = tape([0.5])
     assert normal(short) == 0.5 and math.isnan(normal(short))
     with pytest.raises(TypeError, match="normals only"):
