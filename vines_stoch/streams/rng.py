@@ -393,38 +393,28 @@ def uniform(gen) -> float:
 
 
 @njit(**INLINE)
-def stream_normal(gen) -> float:
-    """``normal`` of a stream array, its kind read at run time."""
+def stream_draw(gen, normals: bool) -> float:
+    """``normal`` (``normals``) or ``uniform`` of a stream array, its kind read at run time (a
+    tape's uniform: NaN)."""
     kind = gen[KIND]
     if kind == PHILOX_KIND:
-        return philox_normal(gen)
+        return philox_normal(gen) if normals else philox_uniform(gen)
     if kind == PCG_KIND:
-        return pcg_normal(gen)
-    return tape_normal(gen)
-
-
-@njit(**INLINE)
-def stream_uniform(gen) -> float:
-    """``uniform`` of a stream array, its kind read at run time (NaN from a tape)."""
-    kind = gen[KIND]
-    if kind == PHILOX_KIND:
-        return philox_uniform(gen)
-    if kind == PCG_KIND:
-        return pcg_uniform(gen)
-    return math.nan
+        return pcg_normal(gen) if normals else pcg_uniform(gen)
+    return tape_normal(gen) if normals else math.nan
 
 
 @overload(normal)
 def _normal(gen):
     if isinstance(gen, types.Array):
-        return lambda gen: stream_normal(gen)
+        return lambda gen: stream_draw(gen, True)
     return lambda gen: gen.standard_normal()
 
 
 @overload(uniform)
 def _uniform(gen):
     if isinstance(gen, types.Array):
-        return lambda gen: stream_uniform(gen)
+        return lambda gen: stream_draw(gen, False)
     return lambda gen: gen.random()
 
 
