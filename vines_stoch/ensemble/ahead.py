@@ -45,11 +45,10 @@ def compile_loops(scenario: Study | Mapping[str, Any] | str | os.PathLike, *, ex
                   batch=the_plan.batch)
 
 
-#: One small structure for each scheme and kind of stream the general loops are compiled for: a
-#: noisy and a deterministic kick-drift-kick and SRA3 scene (their paths and chunks draw from
-#: PCG64 or Philox streams, or from none), a deterministic RK4 scene.
-GENERAL_SET = (("euler-maruyama", "white-noise"), ("euler-maruyama", "harmonic"), ("sra", "white-noise"),
-               ("sra", "harmonic"), ("rk4", "harmonic"))
+#: One small structure for each scheme the general loops are compiled for: a noisy
+#: kick-drift-kick and SRA3 scene, a deterministic RK4 scene (every stream being one type,
+#: ``streams.kinds``, a deterministic scene and a noisy one run the same loop).
+GENERAL_SET = (("euler-maruyama", "white-noise"), ("sra", "white-noise"), ("rk4", "harmonic"))
 
 
 def general_scene(scheme: str, load: str, storeys: int = 1) -> Scene:
@@ -136,16 +135,12 @@ def _finish_run(show: bool, kept: bool = False) -> str:
     return ""
 
 
-#: The loops ``compile_general`` compiles, as (scheme, load, what) of ``GENERAL_SET``: the
-#: general loop for paths (``paths``), for chunks of both executors (``chunks``), or the pass
-#: loop (``pass``).  The longest come first, and a loop that another's signature serves (the
-#: same loop under another load) after that one, so that two processes seldom wait on one loop.
-GENERAL_PIECES = (("euler-maruyama", "white-noise", "chunks"), ("euler-maruyama", "white-noise", "paths"),
-                  ("euler-maruyama", "white-noise", "pass"), ("rk4", "harmonic", "paths"),
-                  ("sra", "white-noise", "paths"), ("sra", "harmonic", "paths"),
-                  ("rk4", "harmonic", "chunks"), ("sra", "white-noise", "chunks"),
-                  ("sra", "harmonic", "chunks"), ("euler-maruyama", "harmonic", "paths"),
-                  ("euler-maruyama", "harmonic", "chunks"))
+#: The loops ``compile_general`` compiles, as (scheme, load, what) of ``GENERAL_SET``: the general
+#: loop for paths then for chunks of both executors (``loops``: one compile, the chunks' wrappers
+#: taking the loop the paths compiled, every stream being one type), or the pass loop (``pass``).
+#: The longest come first.
+GENERAL_PIECES = (("euler-maruyama", "white-noise", "loops"), ("euler-maruyama", "white-noise", "pass"),
+                  ("sra", "white-noise", "loops"), ("rk4", "harmonic", "loops"))
 
 
 def _compile_piece(piece: tuple[str, str, str], show: bool, kept: bool = False) -> str:
@@ -160,10 +155,6 @@ def _compile_piece(piece: tuple[str, str, str], show: bool, kept: bool = False) 
         prepare_loops([general_scene(scheme, load, storeys=2)], 0, True, show=show, general=True)
         return ""
     scene = general_scene(scheme, load)
-    if what == "chunks":
-        for executor in EXECUTORS:
-            prepare_loops([scene], 0, True, show=show, executor=executor, general=True)
-        return ""
     if show:
         print(f"step loop: the general {scheme} loop for paths ({load}): compiling or loading ...", end="",
               file=sys.stderr, flush=True)
@@ -171,4 +162,6 @@ def _compile_piece(piece: tuple[str, str, str], show: bool, kept: bool = False) 
     simulate(scene, np.random.default_rng(0))
     if show:
         print(f" ready in {time.monotonic() - start:.1f} s", file=sys.stderr, flush=True)
+    for executor in EXECUTORS:
+        prepare_loops([scene], 0, True, show=show, executor=executor, general=True)
     return ""

@@ -115,11 +115,10 @@ def _structures():
 
 
 def test_compile_general_hands_its_processes_every_general_loop_once():
-    """``compile_general``'s pieces are each scheme's general loop for paths and for chunks under
-    each load of ``GENERAL_SET``, and the pass loop, each once."""
-    pieces = [(scheme, load, what) for scheme, load, what in GENERAL_PIECES if what != "pass"]
-    assert sorted(pieces) == sorted((scheme, load, what) for scheme, load in GENERAL_SET
-                                    for what in ("paths", "chunks"))
+    """``compile_general``'s pieces are each scheme's general loops under each load of
+    ``GENERAL_SET``, and the pass loop, each once."""
+    assert sorted((scheme, load) for scheme, load, what in GENERAL_PIECES if what == "loops") == sorted(
+        GENERAL_SET)
     assert [what for _, _, what in GENERAL_PIECES].count("pass") == 1
 
 
