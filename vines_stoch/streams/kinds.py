@@ -3,7 +3,10 @@
 given normals (``rng.tape``).  A draw reads the kind at run time (a branch every draw takes the
 same way), so a loop compiles once for every mix of streams it is given: the general loop
 compiled one signature a mix (five in the test suite, about 30 s each) when each kind was a
-type of its own."""
+type of its own.  The price, measured on a 2-core host: a scalar loop on PCG64 streams holds
+every kind's draw, and the scalar executor's smooth scene ran at 0.91x and its impact scene at
+0.94x (the PCG64 branch first; 0.90x and 0.88x with the Philox branch first); the SIMD lanes
+draw their normals apart (``lanes.lane_normals``) and ran as fast as before."""
 
 from __future__ import annotations
 

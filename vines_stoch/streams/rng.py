@@ -397,10 +397,10 @@ def stream_draw(gen, normals: bool) -> float:
     """``normal`` (``normals``) or ``uniform`` of a stream array, its kind read at run time (a
     tape's uniform: NaN)."""
     kind = gen[KIND]
-    if kind == PHILOX_KIND:
-        return philox_normal(gen) if normals else philox_uniform(gen)
     if kind == PCG_KIND:
         return pcg_normal(gen) if normals else pcg_uniform(gen)
+    if kind == PHILOX_KIND:
+        return philox_normal(gen) if normals else philox_uniform(gen)
     return tape_normal(gen) if normals else math.nan
 
 
