@@ -46,7 +46,7 @@ import numpy as np
 from numba import njit, types
 from numba.extending import overload
 
-from ..jit.flags import INLINE
+from ..jit.flags import INLINE, KERNEL
 from ..jit.intrinsics import bits_float, float_bits, fused
 from .kinds import KIND, PCG_KIND, PHILOX_KIND, STREAM_WORDS, TAPE_KIND, kind_of
 from .pcg import pcg_normal, pcg_uniform
@@ -395,11 +395,20 @@ def uniform(gen) -> float:
 @njit(**INLINE)
 def stream_draw(gen, normals: bool) -> float:
     """``normal`` (``normals``) or ``uniform`` of a stream array, its kind read at run time (a
-    tape's uniform: NaN)."""
-    kind = gen[KIND]
-    if kind == PCG_KIND:
+    tape's uniform: NaN).  The PCG64 draw (the scalar executor's) is inlined; the others are a
+    call of ``other_draw``, compiled once and cached for every loop, not copied into each place
+    that draws (``streams.kinds``: the compile times)."""
+    if gen[KIND] == PCG_KIND:
         return pcg_normal(gen) if normals else pcg_uniform(gen)
-    if kind == PHILOX_KIND:
+    return other_draw(gen, normals)
+
+
+@njit(**KERNEL)
+def other_draw(gen, normals: bool) -> float:
+    """``stream_draw`` of a Philox stream or a tape (a function of its own, not inlined: the
+    lanes draw their Philox normals apart, ``lanes.lane_normals``, and the scalar loop on Philox
+    streams pays a call a draw)."""
+    if gen[KIND] == PHILOX_KIND:
         return philox_normal(gen) if normals else philox_uniform(gen)
     return tape_normal(gen) if normals else math.nan
 
