@@ -3,14 +3,17 @@
 given normals (``rng.tape``).  A draw reads the kind at run time (a branch every draw takes the
 same way), so a loop compiles once for every mix of streams it is given: the general loop
 compiled one signature a mix (five in the test suite, about 30 s each) when each kind was a
-type of its own.  The price, measured on a 2-core host: a scalar loop on PCG64 streams holds
-every kind's draw, and the scalar executor's smooth scene ran at 0.91x and its impact scene at
-0.94x (the PCG64 branch first; 0.90x and 0.88x with the Philox branch first); the SIMD lanes
-draw their normals apart (``lanes.lane_normals``) and ran as fast as before.  Only the PCG64
-draw is inlined where a loop draws (the scalar executor's streams); a Philox or tape draw is a
-call of one function compiled once (``rng.stream_draw``): a small function that draws a normal
-compiled in 6 s against 9 s, a specialised scalar loop in 20-21 s against 25 s, at the same
-speed."""
+type of its own.  The price, measured on a 2-core host against the loops of one type a kind
+(64 paths, best of three, alternating runs): with every kind's draw inlined, the scalar
+executor's smooth scene ran at 0.91x and its impact scene at 0.94x.  Now only the PCG64 draw
+is inlined where a loop draws (the scalar executor's streams), the PCG64 branch first; a Philox
+or tape draw is a call of one function compiled once (``rng.stream_draw``), and the smooth
+scene runs at 0.94x, the impact scene at 0.98x, the filtered-noise scene at 0.94x.  A small
+function that draws a normal compiles in 6 s against 9 s, a specialised scalar loop of the
+impact scene in 21 s against 25 s.  The cost is the general loop's on Philox streams (a lane
+scene's short runs): 0.92x on the smooth scene and 0.95x on the impact scene against every
+draw inlined.  The SIMD lanes draw their normals apart
+(``lanes.lane_normals``) and run as fast as before."""
 
 from __future__ import annotations
 
