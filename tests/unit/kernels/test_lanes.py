@@ -79,9 +79,10 @@ HERTZ = {**SMOOTH, "name": "lanes-hertz",
          "loads": [{"type": "harmonic", "amplitude": 0.3, "frequency": 1.0},
                    {"type": "white-noise", "intensity": 0.1}]}
 #: A plastic impact absorber (restitution 0): every impact sticks, and the scalar step takes each
-#: step of a lane whose absorber is stuck.
+#: step of a lane whose absorber is stuck.  Beside the impact scene's cubic absorber: the impact
+#: scene's loop (one compile for both).
 STICKY = {**IMPACT, "name": "lanes-sticky",
-          "absorbers": [{"type": "impact", "mass": 0.05, "clearance": 0.05, "restitution": 0.0}]}
+          "absorbers": [IMPACT["absorbers"][0], {**IMPACT["absorbers"][1], "restitution": 0.0}]}
 #: A deterministic scene run by the kick-drift-kick scheme: the lanes draw nothing.
 QUIET = {**SMOOTH, "loads": [{"type": "harmonic", "amplitude": 0.1, "frequency": 1.0}]}
 #: Filtered noise beside white noise, from its stationary law, on a frame (a floor's filter),
@@ -134,6 +135,8 @@ def test_a_lane_is_the_scalar_loop_on_its_philox_streams(data):
         assert same(rows[r], scalar), (r, np.flatnonzero(rows[r] != scalar))
     if data is not QUIET:  # the realisations differ (the noise is theirs)
         assert not np.array_equal(rows[0], rows[1])
+    if data is STICKY:  # (each impact sticks)
+        assert rows[:, SLOTS.index("impacts")].min() > 0
 
 
 def test_a_realisation_is_the_same_in_any_lane_batch_or_chunk():
