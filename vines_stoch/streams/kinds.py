@@ -9,11 +9,12 @@ executor's smooth scene ran at 0.91x and its impact scene at 0.94x.  Now only th
 is inlined where a loop draws (the scalar executor's streams), the PCG64 branch first; a Philox
 or tape draw is a call of one function compiled once (``rng.stream_draw``), and the smooth
 scene runs at 0.94x, the impact scene at 0.98x, the filtered-noise scene at 0.94x.  A small
-function that draws a normal compiles in 6 s against 9 s, a specialised scalar loop of the
-impact scene in 21 s against 25 s.  The cost is the general loop's on Philox streams (a lane
-scene's short runs): 0.92x on the smooth scene and 0.95x on the impact scene against every
-draw inlined.  The SIMD lanes draw their normals apart
-(``lanes.lane_normals``) and run as fast as before."""
+function that draws a normal compiles in 6 s against 9 s, and one more in under a second (the
+draw already compiled); a specialised scalar loop of the impact scene compiled in 21 s against
+25 s once each, while alternating compiles of three scenes differed by less than the host's
+noise.  The cost is the general loop's on Philox streams (a lane scene's short runs): 0.92x on
+the smooth scene and 0.95x on the impact scene against every draw inlined.  The SIMD lanes
+draw their normals apart (``lanes.lane_normals``) and run as fast as before."""
 
 from __future__ import annotations
 
