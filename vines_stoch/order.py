@@ -12,8 +12,8 @@ those are searched again or sorted: the same order statistics, interpolated as n
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 
+from .jit import njit
 from .jit.flags import KERNEL
 
 #: Buckets of one counting pass.

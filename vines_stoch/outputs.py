@@ -7,8 +7,8 @@ metrics its loop reads from these arrays at run time (``kernels.common.recording
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 
+from .jit import njit
 from .jit.flags import INLINE
 from .signals import REDUCTION_SLOTS
 

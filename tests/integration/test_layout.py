@@ -1,10 +1,12 @@
 """The package's layout: no import circle; the validation floor (``vines_stoch.validation``)
 stands on the engine and the engine never imports it (but lazily in two CLI commands); a run
-needs neither sdeint nor matplotlib, which are extras (``[bench]``, ``[report]``)."""
+needs neither sdeint nor matplotlib, which are extras (``[bench]``, ``[report]``); numba is left
+as it ships, and the package compiles through its own ``njit``."""
 
 from __future__ import annotations
 
 import ast
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -276,3 +278,83 @@ def test_no_function_is_longer_than_150_lines():
     assert set(long) <= set(LONG_LOOPS), {name: long[name] for name in set(long) - set(LONG_LOOPS)}
     grown = {name: (long[name], LONG_LOOPS[name]) for name in long if long[name] > LONG_LOOPS[name]}
     assert not grown, grown
+
+
+#: A process that lists every attribute of numba's and numba-cuda's modules and of their classes
+#: (by identity), then imports the package, compiles a kernel through the package's compile
+#: (``jit.compile_once``: the faster front end in place while it compiles; saved in the package's
+#: disk cache) and runs it, and lists them again: the names whose values changed.
+NUMBA_UNTOUCHED = r'''
+import sys
+import numba, numba.core.caching, numba.core.compiler, numba.core.typed_passes
+import numba.core.untyped_passes, numba.core.inline_closurecall, numba.core.analysis, numba.core.ssa
+import numba.core.lowering, numba.core.ir, numba.core.typeinfer, numba.core.types.functions
+
+
+def code(value):
+    """Whether ``value`` is code (a function, a class, a method's descriptor), not numba's data
+    (its caches and lazy tables, which compiling fills)."""
+    return callable(value) or isinstance(value, (staticmethod, classmethod, property))
+
+
+def snapshot():
+    seen = {}
+    for name, module in list(sys.modules.items()):
+        if not name.startswith("numba") or module is None:
+            continue
+        for attr, value in list(vars(module).items()):
+            if code(value):
+                seen[f"{name}.{attr}"] = id(value)
+            if isinstance(value, type) and value.__module__ == name:
+                for key, item in list(vars(value).items()):
+                    if code(item):
+                        seen[f"{name}.{attr}.{key}"] = id(item)
+                    elif isinstance(item, list) and all(isinstance(i, type) for i in item):
+                        seen[f"{name}.{attr}.{key}[]"] = tuple(map(id, item))  # (the cache's locators)
+    return seen
+
+
+before = snapshot()
+import numpy as np
+from vines_stoch.jit import compile_once
+from vines_stoch.kernels.common import stored_energy
+from vines_stoch.physics.absorbers import ROW
+args = (np.zeros(2), np.zeros(2), np.ones(2), 1, np.ones(1), np.zeros(1, np.int64), np.zeros(1, np.int64),
+        np.zeros((1, ROW)))
+compile_once(stored_energy, args)
+stored_energy(*args)
+after = snapshot()
+print(sorted(k for k in before if k in after and before[k] != after[k]))
+'''
+
+
+def test_the_package_leaves_numba_as_it_ships(tmp_path):
+    """No module of the package assigns into numba's modules or classes for good: after the
+    package is imported and a kernel compiled (from an empty cache: the faster front end of
+    ``jit.frontend`` in numba's compiler for that compile alone) and run, every function and
+    class of numba's modules and every method of their classes is the object it was, and each
+    class's lists of classes (numba's cache locators among them) hold the same items."""
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "numba")}
+    done = subprocess.run([sys.executable, "-c", NUMBA_UNTOUCHED], cwd=ROOT, env=env, capture_output=True,
+                          text=True, timeout=600)
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert done.stdout.strip().splitlines()[-1] == "[]"
+
+
+def test_the_package_compiles_through_its_own_njit():
+    """Every module of the package but ``jit/cache.py`` takes ``njit`` from ``vines_stoch.jit``
+    (numba's, with the package's disk cache keyed by its sources): none imports numba's own
+    ``njit`` or calls ``numba.njit``."""
+    own = PACKAGE / "jit" / "cache.py"
+    found = []
+    for module, path in MODULES.items():
+        if path == own:
+            continue
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.ImportFrom) and (node.module or "").startswith("numba") and any(
+                    alias.name == "njit" for alias in node.names):
+                found.append(module)
+            elif isinstance(node, ast.Attribute) and node.attr == "njit" and isinstance(
+                    node.value, ast.Name) and node.value.id == "numba":
+                found.append(module)
+    assert found == []

@@ -2,14 +2,16 @@
 
 numba checks a cached function against its own source file only: a kernel that inlines a
 formula of ``physics/`` or ``kernels/common.py`` would load its stale machine code after that
-formula was edited.  ``key_by_sources`` puts the cache of every compiled function of this
-package in a folder named by a hash of all those sources (``vines-stoch-<hash>`` under the
-package's ``__pycache__`` folders, or under ``NUMBA_CACHE_DIR`` where that is set), so an edit
-anywhere in them compiles afresh, and going back to earlier sources finds their cache again.
-Functions outside the package keep numba's own locations.  ``make clean-cache`` removes the
-folders of earlier sources.  ``compile_once`` lets one process of a machine at a time compile a
-loop, so that processes starting the same loop together compile it once, with the faster front
-end (``frontend.compiling``).  ``cache_on_disk`` caches the cuda backend's launchers in the same
+formula was edited.  The package's functions are compiled by ``njit`` (numba's, with the disk
+cache ``package_cache``: a subclass of numba's, set on each of them as numba's own
+``cache=True`` sets its cache), which keeps them in a folder named by a hash of all those
+sources (``vines-stoch-<hash>`` under the package's ``__pycache__`` folders, or under
+``NUMBA_CACHE_DIR`` where that is set), so an edit anywhere in them compiles afresh, and going
+back to earlier sources finds their cache again.  numba's own classes are not changed: other
+code of the process caches as numba does.  ``make clean-cache`` removes the folders of earlier
+sources.  ``compile_once`` lets one process of a machine at a time compile a loop, so that
+processes starting the same loop together compile it once, with the faster front end
+(``frontend.compiling``).  ``cache_on_disk`` caches the cuda backend's launchers in the same
 folders (numba-cuda's own ``cache=True`` would miss in every new process: see there).
 """
 
@@ -64,30 +66,28 @@ def digest(package: Path = PACKAGE) -> str | None:
     return hashlib.sha256(f"{sources} vector-bits={VECTOR_BITS}".encode()).hexdigest()[:16]
 
 
-def key_by_sources(package: str = "numba.core") -> str:
-    """Make numba (``package``: ``numba.core``; numba-cuda's cache, ``numba.cuda.core``) cache
-    this package's compiled functions in a folder named by ``digest`` (once); returns that
-    folder's name ("" where the sources cannot be read: numba's own locations, and a zip
-    archive cannot be edited anyway)."""
+def cache_folder() -> str:
+    """The folder, under the package's ``__pycache__`` folders or ``NUMBA_CACHE_DIR``, that holds
+    the compiled functions of these sources: ``vines-stoch-<digest>`` ("" where the sources
+    cannot be read: numba's own locations, and a zip archive cannot be edited anyway)."""
+    key = digest()
+    return "" if key is None else f"vines-stoch-{key}"
+
+
+def _source_keyed_locator(package: str, name: str) -> type | None:
+    """numba's cache locator (of ``package``: ``numba.core``, or numba-cuda's ``numba.cuda.core``)
+    of the folder ``name``; None where that numba has other cache internals (its own locations
+    then stand)."""
     caching = importlib.import_module(f"{package}.caching")
     config = importlib.import_module(f"{package}.config")
-    key = digest()
-    if key is None:
-        return ""
-    name = f"vines-stoch-{key}"
-    locators = getattr(getattr(caching, "CacheImpl", None), "_locator_classes", None)
     mixin = getattr(caching, "_SourceFileBackedLocatorMixin", None)
     base = getattr(caching, "UserProvidedCacheLocator", getattr(caching, "_UserProvidedCacheLocator", None))
-    if locators is None or mixin is None or base is None:  # another numba's cache internals: its own
-        return ""
-    if any(getattr(k, "keyed_by_sources", False) for k in locators):
-        return name
+    if mixin is None or base is None:
+        return None
 
     class SourceKeyedLocator(base):
         """The cache of a function of this package: ``name`` under ``NUMBA_CACHE_DIR`` (with
         numba's own sub-path of the file's folder) or under the file's ``__pycache__``."""
-
-        keyed_by_sources = True
 
         def __init__(self, py_func, py_file):
             self._py_file = py_file
@@ -113,55 +113,77 @@ def key_by_sources(package: str = "numba.core") -> str:
             # (a folder that cannot be written: numba's next locators, a user-wide cache)
             return mixin.from_function.__func__(cls, py_func, py_file)
 
-    locators.insert(0, SourceKeyedLocator)
-    _lock_saves(caching)
-    return name
+    return SourceKeyedLocator
 
 
-def _lock_saves(caching: Any) -> None:
-    """Make numba's ``Cache.save_overload`` (of ``caching``, numba's or numba-cuda's module) save
-    the entries of this package's functions (a cache folder ``key_by_sources`` names) under a
-    lock on the function's index file, and not at all where the sources changed since this
-    process keyed its folder; other functions' saves are numba's own.  Every signature of a
-    function has its entry in one index, and numba names a new entry's data file after the
-    entries of the index it has just read: two processes that compile two signatures of one
-    function at once could read the same index and pick the same name, the later write
-    winning, so that the other's entry would load the wrong machine code (seen: step loops of
-    other structures; uncertain parameters run on another compile's draws, every realisation
-    alike).  Where numba's cache has no ``save_overload``, its own saves stand and a warning says
-    so."""
-    base = getattr(caching, "Cache", None)
-    original = getattr(base, "save_overload", None)
-    if original is None:
-        warnings.warn(f"vines_stoch.jit.cache: {caching.__name__}.Cache has no save_overload to lock; two "
-                      "processes compiling one function at once could mix its entries", RuntimeWarning,
-                      stacklevel=2)
-        return
-    if getattr(original, "locks_vines_stoch", False):
-        return
+@cache
+def package_cache(gpu: bool = False) -> type:
+    """numba's disk cache of compiled functions (numba-cuda's, of kernels, where ``gpu``) as this
+    package's functions use it (``njit``, ``stable_cache``, ``cache_on_disk``): a subclass, so
+    numba's own classes stay as they are and other code of the process caches as numba does.
 
-    def save_overload(self: Any, sig: Any, data: Any) -> None:
-        folder = os.path.basename(getattr(self, "_cache_path", ""))
-        if not folder.startswith("vines-stoch-"):
-            return original(self, sig, data)
-        if folder != f"vines-stoch-{digest()}":
-            # the sources changed since this process keyed its folder: what it compiled now is
-            # not what that folder's sources give
-            warnings.warn(f"vines_stoch.jit.cache: the package's sources changed since this process "
-                          f"started; a function compiled now is not saved in {folder}", RuntimeWarning,
-                          stacklevel=2)
-            return None
-        index = getattr(getattr(self, "_cache_file", None), "_index_path", None)
-        if index is None:  # (another numba's internals: not saved, rather than saved unlocked)
-            warnings.warn("vines_stoch.jit.cache: this numba's cache keeps no _cache_file._index_path to "
-                          "lock; a function compiled now is not saved on disk (saved unlocked, two "
-                          "processes could mix two signatures' entries)", RuntimeWarning, stacklevel=2)
-            return None
-        with FileLock(f"{index}.lock"):
-            return original(self, sig, data)
+    * Its folder is ``cache_folder``'s: an edit of any source that ``digest`` reads compiles
+      afresh, and going back to earlier sources finds their cache again.
+    * Its entries are saved one process at a time, under a lock on the function's index, and
+      not at all where the sources changed since this process started.  Every signature of a
+      function has its entry in one index, and numba names a new entry's data file after the
+      entries of the index it has just read: two processes that compile two signatures of one
+      function at once could read the same index and pick the same name, the later write
+      winning, so that the other's entry would load the wrong machine code (seen: step loops of
+      other structures; uncertain parameters run on another compile's draws, every realisation
+      alike).
 
-    save_overload.locks_vines_stoch = True
-    base.save_overload = save_overload
+    numba's own class where the sources cannot be read, or where that numba's cache internals
+    differ (then a warning says so once)."""
+    if gpu:
+        from numba.cuda.dispatcher import CUDACache as base
+    else:
+        from numba.core.caching import FunctionCache as base
+    name = cache_folder()
+    locator = _source_keyed_locator("numba.cuda.core" if gpu else "numba.core", name) if name else None
+    impl = getattr(base, "_impl_class", None)
+    if locator is None or impl is None or not hasattr(impl, "_locator_classes"):
+        if name:
+            warnings.warn(f"vines_stoch.jit.cache: this numba's cache ({base.__module__}) is not the one "
+                          "the package was written for; its functions cache in numba's own folders, not "
+                          "keyed by the package's sources", RuntimeWarning, stacklevel=2)
+        return base
+
+    class PackageCacheImpl(impl):
+        _locator_classes = [locator, *impl._locator_classes]
+
+    class PackageCache(base):
+        _impl_class = PackageCacheImpl
+
+        def save_overload(self, sig: Any, data: Any) -> None:
+            folder = os.path.basename(getattr(self, "_cache_path", ""))
+            if folder != cache_folder():
+                # the sources changed since this process keyed its folder: what it compiled now is
+                # not what that folder's sources give (or numba's next locator took the function)
+                if folder.startswith("vines-stoch-"):
+                    warnings.warn(f"vines_stoch.jit.cache: the package's sources changed since this "
+                                  f"process started; a function compiled now is not saved in {folder}",
+                                  RuntimeWarning, stacklevel=2)
+                    return None
+                return super().save_overload(sig, data)
+            with FileLock(f"{self._cache_file._index_path}.lock"):
+                return super().save_overload(sig, data)
+
+    return PackageCache
+
+
+def njit(func: Any = None, **options: Any) -> Any:
+    """``numba.njit`` for this package's functions: with ``cache=True`` they cache on disk in
+    ``package_cache`` (``@njit(**flags.KERNEL)``, ``@njit(**flags.INLINE)``)."""
+    import numba
+
+    def compiled(f: Any) -> Any:
+        dispatcher = numba.njit(**options)(f)
+        if options.get("cache"):
+            dispatcher._cache = package_cache(False)(f)  # (as numba's ``enable_caching`` sets it)
+        return dispatcher
+
+    return compiled if func is None else compiled(func)
 
 
 def _in_sources(func: Any) -> bool:
@@ -235,17 +257,13 @@ def compile_once(dispatcher: Any, args: tuple, package: str = "numba.core") -> N
 
 @cache
 def _stable_cache(gpu: bool) -> type:
-    """numba's disk cache of compiled functions (numba-cuda's, of kernels, where ``gpu``), its
-    entries keyed by ``described`` of the closure."""
-    if gpu:
-        from numba.cuda.dispatcher import CUDACache as base
-    else:
-        from numba.core.caching import FunctionCache as base
+    """The package's disk cache of compiled functions (``package_cache``; numba-cuda's, of
+    kernels, where ``gpu``), its entries keyed by ``described`` of the closure."""
 
-    class StableCache(base):
-        """numba's cache whose index key (a hash of the function's bytecode and a pickle of its
-        closure's contents) reads, in place of the closure's contents, their descriptions
-        ``cells``; its entries saved one process at a time (``_lock_saves``)."""
+    class StableCache(package_cache(gpu)):
+        """The package's cache whose index key (a hash of the function's bytecode and a pickle of
+        its closure's contents) reads, in place of the closure's contents, their descriptions
+        ``cells``."""
 
         def __init__(self, py_func: Any, cells: list[str]) -> None:
             super().__init__(py_func)
@@ -293,7 +311,7 @@ def cache_on_disk(dispatcher: Any) -> bool:
     a closure's content has no such description, or the sources cannot be read."""
     func = dispatcher.py_func
     cells = [described(c.cell_contents) for c in func.__closure__ or ()]
-    if None in cells or not key_by_sources("numba.cuda.core"):
+    if None in cells or not cache_folder():
         return False
     dispatcher._cache = _stable_cache(True)(func, cells)  # (as numba-cuda's ``enable_caching`` does)
     return True

@@ -6,13 +6,14 @@ the type of the arrays a loop owns or borrows for its whole run (``StackArray``)
 from __future__ import annotations
 
 from llvmlite import ir
-from numba import njit, types
+from numba import types
 from numba.core import cgutils
 from numba.core.datamodel.models import ArrayModel
 from numba.core.imputils import lower_cast
 from numba.extending import intrinsic, register_model
 from numba.np.arrayobj import make_array, populate_array
 
+from .cache import njit
 from .flags import INLINE, VECTOR_BITS
 
 

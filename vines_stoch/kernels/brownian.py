@@ -25,8 +25,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 
+from ..jit import njit
 from ..jit.flags import INLINE
 from ..streams.rng import TAIL_WORD, fast_pair, log_positive, sincos_turn
 

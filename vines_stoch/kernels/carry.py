@@ -17,8 +17,8 @@ carried as floats, as are step counts and the Brownian trees' seed halves (exact
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 
+from ..jit import njit
 from ..jit.flags import INLINE
 
 #: Scalar slots: the energy accounts, the impact and contact counts, the last ``E1``, the

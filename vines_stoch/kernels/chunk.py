@@ -20,9 +20,9 @@ from functools import cache, lru_cache
 from typing import NamedTuple
 
 import numpy as np
-from numba import njit
 from numba.extending import overload
 
+from ..jit import njit
 from ..jit.cache import stable_cache
 from ..jit.flags import INLINE, KERNEL
 from ..outputs import EVENT_COLUMNS, new_metrics

@@ -14,8 +14,8 @@ from __future__ import annotations
 from functools import cache
 
 import numpy as np
-from numba import njit
 
+from ..jit import njit
 from ..jit.flags import INLINE, KERNEL
 from ..jit.intrinsics import larger, pick, plain, put, runtime_value, scratch_within, smaller
 from ..outputs import (

@@ -15,8 +15,7 @@ from __future__ import annotations
 
 from functools import cache
 
-from numba import njit
-
+from ..jit import njit
 from ..jit.cache import stable_cache
 from ..jit.flags import INLINE, KERNEL
 from ..jit.intrinsics import borrowed, copy_into, plain

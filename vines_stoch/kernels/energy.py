@@ -17,8 +17,7 @@ part of a change that cost it 28 % of its speed) integrated as extra states by i
 
 from __future__ import annotations
 
-from numba import njit
-
+from ..jit import njit
 from ..jit.flags import INLINE
 from ..jit.intrinsics import fused
 from ..outputs import (

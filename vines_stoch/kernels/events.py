@@ -14,8 +14,7 @@ from __future__ import annotations
 
 import math
 
-from numba import njit
-
+from ..jit import njit
 from ..jit.flags import INLINE
 from ..physics.absorbers import HERTZ, IMPACT
 

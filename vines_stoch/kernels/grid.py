@@ -8,8 +8,7 @@ from __future__ import annotations
 import math
 from typing import Any, NamedTuple
 
-from numba import njit
-
+from ..jit import njit
 from ..jit.flags import INLINE, KERNEL
 from ..jit.intrinsics import plain, runtime_value, scratch_within
 from ..streams.rng import normal

@@ -45,8 +45,8 @@ from functools import cache
 from typing import Any, NamedTuple
 
 import numpy as np
-from numba import njit
 
+from ..jit import njit
 from ..jit.flags import INLINE
 from ..jit.intrinsics import any_set, fused, int_scratch, larger, plain, scratch_within
 from ..outputs import CAPPED

@@ -41,8 +41,8 @@ from __future__ import annotations
 from functools import cache
 
 import numpy as np
-from numba import njit
 
+from ..jit import njit
 from ..jit.cache import stable_cache
 from ..jit.flags import INLINE, KERNEL
 from ..jit.intrinsics import (

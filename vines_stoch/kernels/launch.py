@@ -11,8 +11,9 @@ from __future__ import annotations
 from functools import cache
 
 import numpy as np
-from numba import cuda, float64, njit, uint64
+from numba import cuda, float64, uint64
 
+from ..jit import njit
 from ..jit.cache import cache_on_disk
 from ..jit.intrinsics import register_cuda_model
 from ..streams.rng import STREAM_WORDS, open_stream

@@ -33,9 +33,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 
-from ..jit import INLINE, KERNEL, copy_into
+from ..jit import INLINE, KERNEL, copy_into, njit
 from ..jit.intrinsics import fused
 from ..physics.loads import (
     BLAST,

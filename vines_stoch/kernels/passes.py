@@ -30,8 +30,8 @@ the specialised lane loop is faster: ``make bench``).
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 
+from ..jit import njit
 from ..jit.flags import INLINE, KERNEL
 from ..jit.intrinsics import borrowed, fused, larger, plain, prefer_vectors
 from ..outputs import STATUS, STATUS_DIVERGED, declared_slots

@@ -21,8 +21,8 @@ from functools import cache
 from typing import Any, NamedTuple
 
 import numpy as np
-from numba import njit
 
+from ..jit import njit
 from ..jit.flags import INLINE, KERNEL
 from ..jit.intrinsics import any_set, fused, int_scratch, pick, plain, put, runtime_value
 from ..outputs import CAPPED

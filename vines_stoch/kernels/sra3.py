@@ -17,8 +17,7 @@ import math
 from functools import cache
 from typing import Any, NamedTuple
 
-from numba import njit
-
+from ..jit import njit
 from ..jit.flags import INLINE
 from ..physics.absorbers import DAMPING
 from ..physics.structure import host_of

@@ -6,8 +6,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 
+from ..jit import njit
 from ..jit.flags import INLINE
 from .absorbers import K_LEFT, K_RIGHT, WALL_HI, WALL_LO
 from .structure import host_of

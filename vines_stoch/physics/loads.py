@@ -6,8 +6,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 
+from ..jit import njit
 from ..jit.flags import INLINE
 
 #: Kinds of closed-form rows, their width and the column of their floor (``GROUND`` for a

@@ -3,8 +3,7 @@ which floor hosts an absorber and which body holds an impact absorber's walls.""
 
 from __future__ import annotations
 
-from numba import njit
-
+from ..jit import njit
 from ..jit.flags import INLINE
 from ..jit.intrinsics import fused
 

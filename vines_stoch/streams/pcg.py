@@ -29,10 +29,11 @@ import math
 
 import numpy as np
 from llvmlite import ir
-from numba import njit, types
+from numba import types
 from numba.extending import intrinsic
 from numba.np.random._constants import fi_double, ki_double, wi_double, ziggurat_nor_inv_r, ziggurat_nor_r
 
+from ..jit import njit
 from ..jit.flags import INLINE, KERNEL
 from .kinds import KIND, PCG_KIND, STREAM_WORDS
 

@@ -43,9 +43,10 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit, types
+from numba import types
 from numba.extending import overload
 
+from ..jit import njit
 from ..jit.flags import INLINE, KERNEL
 from ..jit.intrinsics import bits_float, float_bits, fused
 from .kinds import KIND, PCG_KIND, PHILOX_KIND, STREAM_WORDS, TAPE_KIND, kind_of

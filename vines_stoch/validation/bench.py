@@ -37,10 +37,10 @@ from typing import Any
 from unittest.mock import patch
 
 import numpy as np
-from numba import njit
 
 from ..ensemble import run
 from ..environment import GENERAL_SWITCH
+from ..jit import njit
 from ..jit.flags import KERNEL, VECTOR_BITS
 from ..kernels import load_history, needed_streams, simulate, simulate_chunk
 from ..outputs import ABSORBER_DISS, E1_MAX, FINAL_ENERGY, IMPACT_LOSS, INPUT, PRIMARY_DISS

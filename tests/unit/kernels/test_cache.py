@@ -1,4 +1,4 @@
-"""numba's cache keyed by the physics and kernel sources (``vines_stoch.cache``): an edited
+"""numba's cache keyed by the physics and kernel sources (``vines_stoch.jit.cache``): an edited
 formula that a cached function inlines is compiled afresh, never run stale."""
 
 from __future__ import annotations
@@ -80,7 +80,7 @@ def test_a_package_in_a_zip_archive_keeps_numba_s_own_locations(tmp_path):
             z.write(f, f.relative_to(cache.PACKAGE.parent))
     env = {**os.environ, "PYTHONPATH": str(archive)}
     done = subprocess.run([sys.executable, "-c", "import vines_stoch.jit, vines_stoch.jit.cache as c; "
-                           "print(repr(c.key_by_sources()), c.PACKAGE)"], cwd=tmp_path, env=env,
+                           "print(repr(c.cache_folder()), c.PACKAGE)"], cwd=tmp_path, env=env,
                           capture_output=True, text=True, check=True)
     assert done.stdout.startswith("'' ") and "vs.zip" in done.stdout
 
@@ -232,11 +232,12 @@ def test_the_signatures_of_one_function_are_saved_one_process_at_a_time():
     """numba names a new cache entry's data file after the index it has just read: two processes
     saving two signatures of one function at once could pick one name (the later write winning,
     the other entry loading the wrong machine code).  Every cache of this package's functions
-    saves under a lock on the index: the stable-keyed caches of the step loops and numba's
-    plain cache of the others (``cache._lock_saves``); a function outside the package keeps
-    numba's own save."""
+    saves under a lock on the index: the stable-keyed caches of the step loops and the package's
+    cache of the others (``cache.package_cache``, which ``jit.njit`` gives them); a function
+    outside the package keeps numba's own cache and save."""
     from filelock import FileLock, Timeout
     from numba import njit
+    from numba.core.caching import FunctionCache
 
     from vines_stoch.kernels.chunk import parameter_draws
 
@@ -264,8 +265,9 @@ def test_the_signatures_of_one_function_are_saved_one_process_at_a_time():
     from vines_stoch.kernels.common import stored_energy
 
     assert held_while_saving(cache._stable_cache(False)(stored_energy.py_func, []))
-    assert held_while_saving(parameter_draws._cache)  # (a plain cache of the package)
+    assert held_while_saving(parameter_draws._cache)  # (the package's cache of a plain function)
     assert not held_while_saving(shifted._cache)
+    assert type(shifted._cache) is FunctionCache and isinstance(parameter_draws._cache, FunctionCache)
 
 
 def test_an_index_is_stamped_by_its_folders_sources_and_a_loop_compiled_after_an_edit_is_not_saved(

@@ -24,12 +24,13 @@ from vines_stoch.kernels import kernel_for
 
 #: Makes the launcher of a scenario (argument 2, 1 s) without the simulator, then (argument 1)
 #: ``save``: saves a stand-in kernel through its cache; ``load``: loads it through its cache,
-#: and through numba-cuda's own cache of the same function.  Prints one JSON line.
+#: and through numba-cuda's own key of the same function in the package's folder (the package's
+#: cache without the launcher's key, ``cache.package_cache``).  Prints one JSON line.
 SCRIPT = r'''
 import json, sys
-from numba.cuda.dispatcher import CUDACache
 from tests.helpers import example_data, scene_from
 from vines_stoch.gpu import launch_types
+from vines_stoch.jit.cache import package_cache
 from vines_stoch.kernels import kernel_for
 from vines_stoch.kernels.launch import launcher
 mode, name = sys.argv[1:]
@@ -54,7 +55,7 @@ out = {"path": launch.stats.cache_path}
 if mode == "save":
     launch._cache.save_overload(sig, StandIn())
 else:
-    stock = CUDACache(launch.py_func)
+    stock = package_cache(True)(launch.py_func)
     for own in (launch._cache, stock):
         own._impl.rebuild = lambda context, payload: payload
     out.update(loaded=launch._cache.load_overload(sig, Context()), stock=stock.load_overload(sig, Context()),
