@@ -178,9 +178,9 @@ def njit(func: Any = None, **options: Any) -> Any:
     import numba
 
     def compiled(f: Any) -> Any:
-        dispatcher = numba.njit(**options)(f)
+        dispatcher = numba.njit(**{**options, "cache": False})(f)
         if options.get("cache"):
-            dispatcher._cache = package_cache(False)(f)  # (as numba's ``enable_caching`` sets it)
+            dispatcher._cache = package_cache(False)(f)  # (as numba's ``enable_caching`` sets its own)
         return dispatcher
 
     return compiled if func is None else compiled(func)
