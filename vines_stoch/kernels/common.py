@@ -346,6 +346,23 @@ def floor_peaks(x, nf: int, acc, x_max, drift_max, acc_max):
 
 
 @njit(**INLINE)
+def close_window(closes: bool, dt: float, e_sum: float, e1_last: float, x, nf: int, x2, acc_max, inv_mass,
+                 force_peaks: bool) -> float:
+    """The trapezoid rule's integral of ``E1`` over the metrics window from its sum of the step
+    ends' values ``e_sum`` (the window's ends at half weight: its last state's ``e1_last``), and
+    each floor's ``x_k^2`` integral into ``x2`` (from its sums), where the window ``closes``
+    (it opened before the path's end; else 0 and ``x2`` as it is); ``force_peaks``: ``acc_max``
+    holds the peak floor forces, made accelerations (over the masses ``1 / inv_mass``)."""
+    if not closes:
+        return 0.0
+    for k in range(nf):
+        x2[k] = (x2[k] - 0.5 * x[k] * x[k]) * dt
+        if force_peaks:  # peak absolute acceleration: the peak floor force over the mass
+            acc_max[k] *= inv_mass[k]
+    return (e_sum - 0.5 * e1_last) * dt
+
+
+@njit(**INLINE)
 def write_floor_metrics(out, nf: int, x_max, drift_max, acc_max, x2_integral):
     """Per-floor slots of the raw metric vector (``FLOOR_SLOTS``) and the roof's ``x1`` slots."""
     base = len(SLOTS)

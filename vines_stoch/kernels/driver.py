@@ -37,6 +37,7 @@ from .common import (
     IMPACT_BIT,
     bit_set,
     block_end,
+    close_window,
     diverged,
     first_passages,
     floor_peaks,
@@ -231,13 +232,8 @@ def step_loop(plug: Step, spec: Spec):
         if INTEGRATES:
             e_integral = e_sum
         else:
-            e_integral = 0.0
-            if inside and i0 < n_steps:  # (the window's last state at half weight)
-                e_integral = (e_sum - 0.5 * e1_prev) * dt
-                for k in range(nf):
-                    x2_integral[k] = (x2_integral[k] - 0.5 * x[k] * x[k]) * dt
-                    if FORCE_PEAKS:  # peak absolute acceleration: the peak floor force over the mass
-                        acc_max[k] *= inv_mass[k]
+            e_integral = close_window(inside and i0 < n_steps, dt, e_sum, e1_prev, x, nf, x2_integral,
+                                      acc_max, inv_mass, FORCE_PEAKS)
         write_accounts(out, work, d_primary, d_absorber, e_integral, e1_max, loss, n_left, n_right)
         if has_hertz:
             out[CONTACT_TIME] = contact_time

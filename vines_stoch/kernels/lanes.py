@@ -85,6 +85,7 @@ from .brownian import forget, tree_seed
 from .common import (
     CHECK_EVERY,
     attachment_forces,
+    close_window,
     contact_force,
     contact_forces,
     diverged,
@@ -400,23 +401,17 @@ def lane_loop(spec: Spec):
         x_max, drift_max, acc_max, x2 = scratch(NF), scratch(NF), scratch(NF), scratch(NF)
         if diverged(x):
             out[STATUS] = STATUS_DIVERGED
-        e_integral = 0.0
         load_peaks(s, lane, x_max, drift_max, acc_max)
         for k in range(NF):
             x2[k] = s[(X2 + k) * W + lane]
-        if inside and i0 < n_steps:  # (the window's last state at half weight)
-            e_integral = (s[ESUM * W + lane] - 0.5 * s[E1 * W + lane]) * dt
-            for k in range(NF):
-                x2[k] = (x2[k] - 0.5 * x[k] * x[k]) * dt
-                acc_max[k] *= inv_mass[k]
-        # (the impacts' rows where the scene has events: none otherwise)
+        e_integral = close_window(inside and i0 < n_steps, dt, s[ESUM * W + lane], s[E1 * W + lane], x, NF,
+                                  x2, acc_max, inv_mass, True)
         loss, n_left, n_right = ((s[LOSS * W + lane], s[LEFT * W + lane], s[RIGHT * W + lane]) if EVENTS
                                  else (0.0, 0.0, 0.0))
         write_accounts(out, s[WORK * W + lane], s[DP * W + lane], s[DA * W + lane], e_integral,
                        s[E1MAX * W + lane], loss, n_left, n_right)
         if CONTACT:
-            out[CONTACT_TIME] = s[CTIME * W + lane]
-            out[PEAK_FORCE] = s[PEAK * W + lane]
+            out[CONTACT_TIME], out[PEAK_FORCE] = s[CTIME * W + lane], s[PEAK * W + lane]
         end_metrics(out, lane, x, v, mass, NF, storey_k, kind, host, rows, (x_max, drift_max, acc_max, x2),
                     passages, limits.shape[0])
 
@@ -450,9 +445,8 @@ def lane_loop(spec: Spec):
     def half_kick(x, v, vn, force, dwh, dws, load, ag, dt, inside, accounts, mass, inv_mass, storey_k,
                   storey_c, floor_c, kind, host, rows):
         """A half kick of the step (``kdk.kdk_step``'s without an event: the forces at ``x``, the
-        kick from ``v`` into ``vn``; with no absorber stuck, ``common.stick_together`` leaves every
-        velocity as it is) and, inside the metrics window, its input work and dissipation added to
-        the ``accounts``."""
+        kick from ``v`` into ``vn``; no absorber stuck) and, inside the metrics window, its input
+        work and dissipation added to the ``accounts``."""
         attachment_forces(x, v, NF, storey_k, storey_c, floor_c, host, rows, force)
         contact_forces(x, NF, kind, host, rows, force, CONTACT)
         shaped_forces(x, NF, host, rows, force, SHAPED)
@@ -481,10 +475,8 @@ def lane_loop(spec: Spec):
 
     @njit(**INLINE)
     def observe_lanes(s, nl, mass, storey_k):
-        """``observe`` of every lane at its step's end, its state and floor forces read from
-        the batch's rows: in a scene with events, after ``fix_lanes`` finished the flagged lanes
-        (a pass of its own, so that the update loop holds no lane's accounts back: with a
-        select on each, it ran about 25 % slower)."""
+        """``observe`` of every lane, its state and floor forces read from its rows: a scene with
+        events' pass after ``fix_lanes`` (``update`` then holds back no lane's with selects)."""
         x, v, acc = scratch(NB), scratch(NB), scratch(NF)
         x_max, drift_max, acc_max = scratch(NF), scratch(NF), scratch(NF)
         for lane in range(nl):
@@ -496,18 +488,13 @@ def lane_loop(spec: Spec):
     @njit(**INLINE)
     def update(s, z, nl, inside, dt, ag, ag_next, load, load_next, noise_scale, mass, inv_mass, storey_k,
                storey_c, floor_c, kind, host, rows, walls, band):
-        """One kick-drift-kick step of every lane, as ``kdk.kdk_step``'s first pass without an
-        event, then (``EVENTS``: the scene has impact or Hertz absorbers) each lane flagged
-        whose step holds an impact, a contact's onset or end or whose absorber sticks or touches,
-        its state as before the step (``fix_lanes`` finishes it; returns how many), and every
-        lane's floor forces at the step's end (``observe_lanes`` then observes every lane); in a
-        scene without events, inside the metrics window, the loop driver's accounts at the step's
-        end of every lane."""
-        x, v, vn, force = scratch(NB), scratch(NB), scratch(NB), scratch(NB)
-        x0, v0 = scratch(NB), scratch(NB)
-        dws, dwh, acc = scratch(NF), scratch(NF), scratch(NF)
+        """Every lane's step, ``kdk.kdk_step``'s first pass without an event; with ``EVENTS`` each
+        lane whose step holds an event or whose absorber sticks or touches flagged, as before the
+        step (``fix_lanes`` finishes it; returns how many), and each lane's floor forces kept for
+        ``observe_lanes``; without, inside the metrics window, each lane's step end observed."""
+        x, v, vn, force, x0, v0 = scratch(NB), scratch(NB), scratch(NB), scratch(NB), scratch(NB), scratch(NB)
+        dws, dwh, acc, own_load, own_next = scratch(NF), scratch(NF), scratch(NF), scratch(NF), scratch(NF)
         x_max, drift_max, acc_max = scratch(NF), scratch(NF), scratch(NF)
-        own_load, own_next = scratch(NF), scratch(NF)
         flagged = 0  # (an integer sum: LLVM vectorises it, not a sum of floats, whose order it keeps)
         for lane in range(nl):
             load_lane(s, lane, x, v)
@@ -579,9 +566,8 @@ def lane_loop(spec: Spec):
                   ex, fl, noise, seeds, raw, first, events, impulses):
         """The flagged lanes' steps (``update``), one at a time, by the scalar loop's step after
         its loads and increments (``kdk``'s ``advance``: the root search on the lane's Brownian
-        tree, the impacts, sticking, the contact's sub-steps), then each one's state and floor
-        forces into its rows (``observe_lanes`` observes them): ``own`` is its state and scratch,
-        each lane's absorbers and loads set into it before its step."""
+        tree, the impacts, sticking, the contact's sub-steps), each one's state and floor forces
+        into its rows (for ``observe_lanes``); ``own``: its state and scratch, set for each lane."""
         x, v, acc = scratch(NB), scratch(NB), scratch(NF)
         for lane in range(nl):
             if s[FLAG * W + lane] == 0.0:
