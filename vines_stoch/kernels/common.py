@@ -280,14 +280,20 @@ def pin_to_walls(x, nf: int, nw: int, stuck, wall, rows):
 
 
 @njit(**INLINE)
+def into_cavity(x, h: int, j: int, lo: float, hi: float) -> float:
+    """Body ``j``'s position with its displacement relative to body ``h`` clipped into
+    ``[lo, hi]`` (``keep_in_cavities``)."""
+    return x[h] + smaller(larger(x[j] - x[h], lo), hi)
+
+
+@njit(**INLINE)
 def keep_in_cavities(x, nf: int, nw: int, kind, wall, rows):
     """Clip impact absorbers into their cavities ``|u| <= clearance`` (round-off of a located
     impact, or the rest of a step taken at once after the event cap)."""
     for a in range(x.shape[0] - nf):
         if kind[a] == IMPACT:
-            h = wall_of(wall, a, nw)
             c = rows[a, CLEARANCE]
-            x[nf + a] = x[h] + smaller(larger(x[nf + a] - x[h], -c), c)
+            x[nf + a] = into_cavity(x, wall_of(wall, a, nw), nf + a, -c, c)
 
 
 @njit(**INLINE)

@@ -72,6 +72,7 @@ from ..outputs import (
 )
 from ..physics.absorbers import CLEARANCE, WALL_HI, WALL_LO
 from ..physics.absorbers import HERTZ as HERTZ_LAW
+from ..physics.absorbers import IMPACT as IMPACT_LAW
 from ..physics.structure import primary_energy, wall_of
 from ..streams.rng import (
     BLOCK_NORMALS,
@@ -92,7 +93,7 @@ from .common import (
     floor_peaks,
     fold_declared,
     history_row,
-    keep_in_cavities,
+    into_cavity,
     recording,
     shaped_forces,
     stored_energy,
@@ -475,8 +476,7 @@ def lane_loop(spec: Spec):
 
     @njit(**INLINE)
     def observe_lanes(s, nl, mass, storey_k):
-        """``observe`` of every lane, its state and floor forces read from its rows: a scene with
-        events' pass after ``fix_lanes`` (``update`` then holds back no lane's with selects)."""
+        """``observe`` of every lane from its rows: a scene with events' pass after ``fix_lanes``."""
         x, v, acc = scratch(NB), scratch(NB), scratch(NF)
         x_max, drift_max, acc_max = scratch(NF), scratch(NF), scratch(NF)
         for lane in range(nl):
@@ -538,8 +538,9 @@ def lane_loop(spec: Spec):
                 for a in range(NA if CONTACT and inside else 0):
                     if kind[a] == HERTZ_LAW:
                         peak = larger(peak, contact_force(x, NF, a, host, rows))
-                if IMPACT:
-                    keep_in_cavities(x, NF, NW, kind, walls, rows)
+                for a in range(NA if IMPACT else 0):  # (``common.keep_in_cavities`` on the band)
+                    clipped = into_cavity(x, wall_of(walls, a, NW), NF + a, band[2 * a], band[2 * a + 1])
+                    x[NF + a] = clipped if kind[a] == IMPACT_LAW else x[NF + a]
                 keep = (held > 0.0) & (s[DONE * W + lane] == 0.0)  # (no branch: ``&``, not ``and``)
                 for b in range(NB):  # (selects: the stores are unconditional)
                     s[(X + b) * W + lane] = x0[b] if keep else x[b]
