@@ -5,7 +5,7 @@ BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 CUDA_STAMP := $(VENV)/.installed-cuda
 
-.PHONY: run test lint bench bench-gpu seeds elcentro env docs clean clean-cache
+.PHONY: run test test-slow lint bench bench-gpu seeds elcentro env docs clean clean-cache
 
 # The test tools (pytest, ruff, sdeint, numba-cuda for the CUDA simulator's tests): make test,
 # make bench and make env install them.
@@ -28,11 +28,15 @@ env: $(STAMP)
 run: $(RUN_STAMP)
 	$(BIN)/vines-stoch run scenarios/parallel_nes_impulse.toml
 
-# The linter, then every test (the slow convergence studies included) on one worker process per
-# core: the kernels they compile are shared through numba's on-disk cache; an idle worker takes
-# tests from a busy one's queue (worksteal: 97 s warm on 2 cores against 115 s a file a worker).
+# The linter, then every test but the slow ones on one worker process per core: the kernels they
+# compile are shared through numba's on-disk cache; an idle worker takes tests from a busy one's
+# queue (worksteal: 97 s warm on 2 cores against 115 s a file a worker). test-slow: the tests
+# marked slow (loops of their own to compile, long statistical runs); .ci/run runs both.
 test: lint
-	$(BIN)/python -m pytest -q -n auto --dist worksteal
+	$(BIN)/python -m pytest -q -n auto --dist worksteal -m "not slow"
+
+test-slow: $(STAMP)
+	$(BIN)/python -m pytest -q -n auto --dist worksteal -m slow
 
 lint: $(STAMP)
 	$(BIN)/ruff check .

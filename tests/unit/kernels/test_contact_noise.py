@@ -209,7 +209,6 @@ def test_noise_to_zero_reproduces_the_deterministic_contact_solution():
 # -- strong convergence on the same Brownian path -------------------------------------------
 
 
-@pytest.mark.slow
 def test_strong_order_of_hertz_contact_under_noise_is_one():
     """A double-sided Hertz absorber (K = 7e5 N/m^1.5) hitting both walls under white noise
     (``precision.SAME_PATH``):
@@ -223,7 +222,6 @@ def test_strong_order_of_hertz_contact_under_noise_is_one():
     assert strong_order(levels, errors) > 0.75
 
 
-@pytest.mark.slow
 def test_strong_order_of_impacts_under_noise_is_one_half():
     """An impact absorber (r = 0.9) under white noise: strong order 1/2 on the same path.  The
     scheme's position error O(dt) moves each impact by O(dt), and the relative velocity the

@@ -82,7 +82,19 @@ def test_the_general_spec_reads_every_size_and_kind_at_run_time():
         scene_from(frame(2, [HERTZ, {**IMPACT, "floor": 1}], [CLOUGH_PENZIEN])), general=True)
 
 
-@pytest.mark.parametrize("case", list(CASES))
+#: The cases ``make test`` leaves to ``make test-slow``: each compiles two or three loops
+#: specialised to its scene that no other test needs (20-110 s from a cold cache on 2 cores); the
+#: kick-drift-kick step with impacts under noise, the RK4 step with Hertz contact and the SRA3
+#: step stay in ``make test``.
+SLOW_CASES = {"kdk, Hertz contact and plastic impacts under noise",
+              "kdk, filtered noise from its stationary law",
+              "kdk, Clough-Penzien ground motion, recorded",
+              "kdk, shaped springs under a ground acceleration",
+              "kdk, an impact absorber in another's cavity", "rk4, impacts"}
+
+
+@pytest.mark.parametrize("case", [pytest.param(case, marks=pytest.mark.slow) if case in SLOW_CASES else case
+                                  for case in CASES])
 def test_the_general_loop_gives_the_specialised_loop_s_numbers_bitwise(case):
     """The scalar loop on the PCG64 streams, and where the scheme runs in lanes the lanes' Philox
     streams: the metric vectors, history rows and event logs of the general loop are those of

@@ -119,13 +119,20 @@ def under_ground_motion(name: str, duration: float = 2.5) -> dict:
     return changed(example_data(name), {"simulation.duration": duration})
 
 
-@pytest.mark.parametrize("data", [SMOOTH, FRAME, GROUND, QUIET, IMPACT, HERTZ, STICKY,
-                                  contact_noise_parallel(), FILTERED, SHOCK,
-                                  under_ground_motion("ground_motion"),
-                                  under_ground_motion("seed003_ss_ground_motion")],
-                         ids=["smooth", "frame", "ground", "quiet", "impact", "hertz", "sticky",
-                              "contact-noise", "filtered", "shock", "ground-motion-impact",
-                              "ground-motion-hertz"])
+#: ``make test-slow``'s scenes (``make test`` leaves them out): each compiles a lane loop and a
+#: scalar loop of its own (35-45 s from a cold cache on 2 cores) for what the impact, contact and
+#: ground scenes above check in ``make test`` too: shocks, and impacts and Hertz contact under
+#: the ground motion's filters.
+SLOW = pytest.mark.slow
+
+
+@pytest.mark.parametrize("data", [
+    pytest.param(SMOOTH, id="smooth"), pytest.param(FRAME, id="frame"), pytest.param(GROUND, id="ground"),
+    pytest.param(QUIET, id="quiet"), pytest.param(IMPACT, id="impact"), pytest.param(HERTZ, id="hertz"),
+    pytest.param(STICKY, id="sticky"), pytest.param(contact_noise_parallel(), id="contact-noise"),
+    pytest.param(FILTERED, id="filtered"), pytest.param(SHOCK, id="shock", marks=SLOW),
+    pytest.param(under_ground_motion("ground_motion"), id="ground-motion-impact", marks=SLOW),
+    pytest.param(under_ground_motion("seed003_ss_ground_motion"), id="ground-motion-hertz", marks=SLOW)])
 def test_a_lane_is_the_scalar_loop_on_its_philox_streams(data):
     scene = scene_from(data)
     assert lane_scene(scene)
@@ -308,6 +315,7 @@ np.save(sys.argv[2], simulate_chunk(scene_from(json.loads(sys.argv[1])), 2026112
 """
 
 
+@pytest.mark.slow  # (a lane loop compiled afresh in a process of its own: about 60 s on 2 cores)
 def test_the_vector_width_changes_no_number(tmp_path):
     """The lane loops asked for 256-bit vectors (``VINES_STOCH_VECTOR_BITS=256``, in a process of
     its own, its cache in a folder of its own) give the impact scene's metric rows bitwise as the

@@ -49,7 +49,6 @@ def _replay(scene, u1: np.ndarray, u2: np.ndarray) -> np.ndarray:
     return final
 
 
-@pytest.mark.slow
 def test_strong_order_and_agreement_with_kick_drift_kick():
     rng = np.random.default_rng(11)
     paths = [rng.standard_normal(round(20.0 / FINE)) for _ in range(3)]
@@ -78,7 +77,6 @@ def test_strong_order_and_agreement_with_kick_drift_kick():
         assert sra[dt] * 10 < kdk[dt], (dt, sra[dt], kdk[dt])
 
 
-@pytest.mark.slow
 @pytest.mark.parametrize("scheme", ["sra", "euler-maruyama"])
 def test_weak_error_of_the_stationary_variance(scheme):
     paths, dt = 512, 0.4
@@ -114,7 +112,6 @@ def test_refused_where_it_does_not_apply(scene, changes, rule):
     assert "simulation.scheme" in str(error.value) and "scene.toml" in str(error.value)
 
 
-@pytest.mark.slow
 def test_weak_order_of_the_energy_integral():
     """Both schemes' bias of the mean energy integral (smooth scene under 0.1 cos t + white
     noise 0.05, T = 100, 50 paths paired with SRA3 at dt = 1e-3 on the same Brownian paths)

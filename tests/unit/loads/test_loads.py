@@ -91,7 +91,6 @@ def test_shocks_match_the_duhamel_closed_form(kind):
 HARMONICS = ((1.5, 3.1, 0.4), (0.8, 11.0, -1.2))  # amplitude, frequency (rad/s), phase
 
 
-@pytest.mark.slow
 @pytest.mark.parametrize("scheme, order", [("euler-maruyama", 1), ("sra", 3)])
 def test_harmonic_loads_on_the_step_grid_converge_at_the_schemes_order(scheme, order):
     """On the step grid, harmonic rows come from turned phasors (kernels/loads.py): two rows of

@@ -107,6 +107,7 @@ def welch_agree(p: float, se: float, dof: float, q: float, se_q: float, dof_q: f
     return abs(p - q) <= stats.t.ppf(stats.norm.cdf(Z), nu) * math.sqrt(var + var_q)
 
 
+@pytest.mark.slow  # (500,000 paths and 24 replicas: about 60 s on 2 cores)
 def test_splitting_subset_and_crude_monte_carlo_agree_on_a_scene_with_impacts():
     """p about 2e-4: crude Monte Carlo on 500,000 paths (its Wilson interval's half-width over
     1.96 as its standard error), splitting and subset simulation (12 replicas each), pairwise in
@@ -261,6 +262,7 @@ def test_bad_rare_tables_are_refused_by_name(changes, key):
         study_from(rare_data(), changes)
 
 
+@pytest.mark.slow  # (100,000 paths and a subset run: about 35 s on 2 cores)
 def test_subset_simulation_samples_the_uncertain_parameters():
     """The oscillator for 3 s with a lognormal stiffness (cov 0.3) at p about 7e-4: subset
     simulation on the noise and the parameter's normal (through a run's ``[rare]`` table) and
