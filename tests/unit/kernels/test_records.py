@@ -91,7 +91,7 @@ def test_what_a_run_records_changes_no_number(case):
     np.testing.assert_array_equal(kept_final, bare_final)
 
 
-@pytest.mark.parametrize("case", ["rk4 impacts", "kdk Hertz contact and impacts under noise"])
+@pytest.mark.parametrize("case", ["rk4 Hertz contact", "kdk Hertz contact and impacts under noise"])
 def test_asking_for_a_record_compiles_nothing(case):
     """What a run records is run-time data of its loop (``common.recording``): a path that keeps
     history rows (a contact force among them), an event log and first passages runs the same
