@@ -87,8 +87,6 @@ from .common import (
     CHECK_EVERY,
     attachment_forces,
     close_window,
-    contact_force,
-    contact_forces,
     diverged,
     floor_peaks,
     fold_declared,
@@ -446,10 +444,10 @@ def lane_loop(spec: Spec):
     def half_kick(x, v, vn, force, dwh, dws, load, ag, dt, inside, accounts, mass, inv_mass, storey_k,
                   storey_c, floor_c, kind, host, rows):
         """A half kick of the step (``kdk.kdk_step``'s without an event: the forces at ``x``, the
-        kick from ``v`` into ``vn``; no absorber stuck) and, inside the metrics window, its input
-        work and dissipation added to the ``accounts``."""
+        kick from ``v`` into ``vn``; no absorber stuck, none touching: the Hertz contact forces
+        are zero, ``update`` flags a lane where one is not) and, inside the metrics window, its
+        input work and dissipation added to the ``accounts``."""
         attachment_forces(x, v, NF, storey_k, storey_c, floor_c, host, rows, force)
-        contact_forces(x, NF, kind, host, rows, force, CONTACT)
         shaped_forces(x, NF, host, rows, force, SHAPED)
         kick(v, 0.5 * dt, dwh, load, ag, force, inv_mass, vn, GROUND)
         work, d_primary, d_absorber = accounts
@@ -522,9 +520,15 @@ def lane_loop(spec: Spec):
                 ahead = (u_end < band[2 * a]) | (u_end > band[2 * a + 1])
                 held += ((1.0 if ahead else 0.0) + (abs(s[(STUCK + a) * W + lane]) if IMPACT else 0.0)
                          + (abs(s[(TOUCHING + a) * W + lane]) if CONTACT else 0.0))
+                if CONTACT:  # (a Hertz absorber beyond its surfaces at the start: a contact force)
+                    beyond = (x[j] - x[h] < band[2 * a]) | (x[j] - x[h] > band[2 * a + 1])
+                    held += 1.0 if beyond & (kind[a] == HERTZ_LAW) else 0.0
             for b in range(NB):
                 x[b] = fused(dt, vn[b], x[b])
                 v[b] = vn[b]
+            for a in range(NA if CONTACT else 0):  # (and at the drift's end, as it lies: the same)
+                u = x[NF + a] - x[wall_of(walls, a, NW)]
+                held += 1.0 if ((u < band[2 * a]) | (u > band[2 * a + 1])) & (kind[a] == HERTZ_LAW) else 0.0
             work, d_primary, d_absorber = half_kick(x, v, vn, force, dwh, dws, f_end, g_end, dt, inside,
                                                     accounts, mass, inv_mass, storey_k, storey_c, floor_c,
                                                     kind, host, rows)
@@ -533,11 +537,7 @@ def lane_loop(spec: Spec):
             for k in range(NF):
                 acc[k] = force[k] + f_end[k]
             keep = False
-            if EVENTS:
-                peak = s[PEAK * W + lane]
-                for a in range(NA if CONTACT and inside else 0):
-                    if kind[a] == HERTZ_LAW:
-                        peak = larger(peak, contact_force(x, NF, a, host, rows))
+            if EVENTS:  # (a lane kept has no contact force: its peak force stays)
                 for a in range(NA if IMPACT else 0):  # (``common.keep_in_cavities`` on the band)
                     clipped = into_cavity(x, wall_of(walls, a, NW), NF + a, band[2 * a], band[2 * a + 1])
                     x[NF + a] = clipped if kind[a] == IMPACT_LAW else x[NF + a]
@@ -548,7 +548,6 @@ def lane_loop(spec: Spec):
                 s[WORK * W + lane] = before[0] if keep else work
                 s[DP * W + lane] = before[1] if keep else d_primary
                 s[DA * W + lane] = before[2] if keep else d_absorber
-                s[PEAK * W + lane] = s[PEAK * W + lane] if keep else peak
                 s[FLAG * W + lane] = 1.0 if keep else 0.0
                 flagged += 1 if keep else 0
                 for k in range(NF):  # (``observe_lanes`` reads them; ``fix_lanes`` writes its lanes')
