@@ -182,10 +182,6 @@ def contact_force(x, nf: int, a: int, host, rows) -> float:
             + hertz_force(u - rows[a, WALL_HI], rows[a, K_RIGHT]))
 
 
-
-
-
-
 @njit(**KERNEL)
 def contact_step(x, v, nf: int, mass, host, rows, touching) -> float:
     """The sub-step the Hertz contacts in progress ask for (``touching[a]``: the side absorber
