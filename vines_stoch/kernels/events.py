@@ -65,6 +65,14 @@ def quiet_band(kind: int, clearance: float, wall_lo: float, wall_hi: float):
 
 
 @njit(**INLINE)
+def pressed(kind: int, u: float, lo: float, hi: float) -> float:
+    """1.0 where a Hertz absorber (law code ``kind``) at ``u`` lies beyond its contact surfaces
+    ``lo, hi`` (``quiet_band``'s), so that its contact force is not zero; else 0.0.  No branch:
+    the SIMD lanes sum it into their event flag (``kernels/lanes.py``)."""
+    return 1.0 if ((u < lo) | (u > hi)) & (kind == HERTZ) else 0.0
+
+
+@njit(**INLINE)
 def gap_sign(event: int, side: int) -> int:
     """The sign of an event's gap ``sign (u - wall)``, which crosses zero upwards at the event:
     the side for an impact or an onset (moving out), the other for a contact's end (moving

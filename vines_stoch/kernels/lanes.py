@@ -71,7 +71,6 @@ from ..outputs import (
     passage_slots,
 )
 from ..physics.absorbers import CLEARANCE, WALL_HI, WALL_LO
-from ..physics.absorbers import HERTZ as HERTZ_LAW
 from ..physics.absorbers import IMPACT as IMPACT_LAW
 from ..physics.structure import primary_energy, wall_of
 from ..streams.rng import (
@@ -98,7 +97,7 @@ from .common import (
     write_floor_metrics,
 )
 from .energy import absorber_dissipation, impulse_work, momentum, structure_dissipation, write_accounts
-from .events import quiet_band
+from .events import pressed, quiet_band
 from .grid import GridLoads, end_loads, noise_scales, opening_forces, reset_phasors, start_loads, step_loads
 from .kdk import contact_sides, kdk_step, kick
 from .loads import filter_row, filter_scales, has_breaks, readout, stationary, stationary_state
@@ -521,14 +520,12 @@ def lane_loop(spec: Spec):
                 held += ((1.0 if ahead else 0.0) + (abs(s[(STUCK + a) * W + lane]) if IMPACT else 0.0)
                          + (abs(s[(TOUCHING + a) * W + lane]) if CONTACT else 0.0))
                 if CONTACT:  # (a Hertz absorber beyond its surfaces at the start: a contact force)
-                    beyond = (x[j] - x[h] < band[2 * a]) | (x[j] - x[h] > band[2 * a + 1])
-                    held += 1.0 if beyond & (kind[a] == HERTZ_LAW) else 0.0
+                    held += pressed(kind[a], x[j] - x[h], band[2 * a], band[2 * a + 1])
             for b in range(NB):
                 x[b] = fused(dt, vn[b], x[b])
                 v[b] = vn[b]
             for a in range(NA if CONTACT else 0):  # (and at the drift's end, as it lies: the same)
-                u = x[NF + a] - x[wall_of(walls, a, NW)]
-                held += 1.0 if ((u < band[2 * a]) | (u > band[2 * a + 1])) & (kind[a] == HERTZ_LAW) else 0.0
+                held += pressed(kind[a], x[NF + a] - x[wall_of(walls, a, NW)], band[2 * a], band[2 * a + 1])
             work, d_primary, d_absorber = half_kick(x, v, vn, force, dwh, dws, f_end, g_end, dt, inside,
                                                     accounts, mass, inv_mass, storey_k, storey_c, floor_c,
                                                     kind, host, rows)
