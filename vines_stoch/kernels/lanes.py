@@ -441,7 +441,7 @@ def lane_loop(spec: Spec):
 
     @njit(**INLINE)
     def half_kick(x, v, vn, force, dwh, dws, load, ag, dt, inside, accounts, mass, inv_mass, storey_k,
-                  storey_c, floor_c, kind, host, rows):
+                  storey_c, floor_c, host, rows):
         """A half kick of the step (``kdk.kdk_step``'s without an event: the forces at ``x``, the
         kick from ``v`` into ``vn``; no absorber stuck, none touching: the Hertz contact forces
         are zero, ``update`` flags a lane where one is not) and, inside the metrics window, its
@@ -510,7 +510,7 @@ def lane_loop(spec: Spec):
                 dwh[k] = 0.5 * dws[k]
             before = (s[WORK * W + lane], s[DP * W + lane], s[DA * W + lane])
             accounts = half_kick(x, v, vn, force, dwh, dws, f_start, g_start, dt, inside, before, mass,
-                                 inv_mass, storey_k, storey_c, floor_c, kind, host, rows)
+                                 inv_mass, storey_k, storey_c, floor_c, host, rows)
             held = 0.0  # (events ahead, absorbers stuck or touching: a sum, no branch)
             for a in range(NA if EVENTS else 0):
                 h = wall_of(walls, a, NW)
@@ -528,7 +528,7 @@ def lane_loop(spec: Spec):
                 held += pressed(kind[a], x[NF + a] - x[wall_of(walls, a, NW)], band[2 * a], band[2 * a + 1])
             work, d_primary, d_absorber = half_kick(x, v, vn, force, dwh, dws, f_end, g_end, dt, inside,
                                                     accounts, mass, inv_mass, storey_k, storey_c, floor_c,
-                                                    kind, host, rows)
+                                                    host, rows)
             for b in range(NB):
                 v[b] = vn[b]
             for k in range(NF):
