@@ -50,15 +50,16 @@ def step_of(name: str):
 
 def spec_of(scene, gpu: bool = False, lanes: bool = False, general: bool = False) -> Spec:
     """What a scene's loop is specialised to (``protocol.Spec``); what its scheme does not use is
-    left out (white noise and filtered loads of the RK4 step, the load rows and filter states of
-    steps that read neither from the grid), so that one loop serves the scenes that differ only
-    there.  The load rows and filter states, up to ``protocol.ROOM`` of each, are sizes the
-    scalar loop reads at run time (``protocol.RUN_TIME``: a new force or filter compiles
-    nothing); the cuda loop (``gpu``: a thread's arrays on its stack, of sizes known when it
-    compiles) and the lanes' row layout (``lanes``) take them as constants.  ``general``: the
-    scheme's general scalar loop, which reads every size and kind at run time (``protocol.KINDS``;
-    the bodies and floors within ``protocol.BODY_ROOM`` and ``protocol.ROOM``, else constants of
-    a loop of their own): one loop serves every structure of the scheme."""
+    left out (white noise and filtered loads of the RK4 step, the filter states of steps that
+    read none from the grid; the RK4 step reads its load rows' count, for their phasors), so that
+    one loop serves the scenes that differ only there.  The load rows and filter states, up to
+    ``protocol.ROOM`` of each, are sizes the scalar loop reads at run time (``protocol.RUN_TIME``:
+    a new force or filter compiles nothing); the cuda loop (``gpu``: a thread's arrays on its
+    stack, of sizes known when it compiles) and the lanes' row layout (``lanes``) take them as
+    constants.  ``general``: the scheme's general scalar loop, which reads every size and kind
+    at run time (``protocol.KINDS``; the bodies and floors within ``protocol.BODY_ROOM`` and
+    ``protocol.ROOM``, else constants of a loop of their own): one loop serves every structure
+    of the scheme."""
     step = SCHEMES[scene.scheme].step
     grid = step != "rk4"
     bodies, floors = scene.mass.shape[0], scene.n_floors
@@ -67,7 +68,7 @@ def spec_of(scene, gpu: bool = False, lanes: bool = False, general: bool = False
     sized = constant or not general or bodies > BODY_ROOM or floors > ROOM
     kind = (lambda present: present) if constant or not general else (lambda present: RUN_TIME)
     return Spec(n_bodies=bodies if sized else RUN_TIME, n_floors=floors if sized else RUN_TIME,
-                n_rows=(rows if constant or rows > ROOM else RUN_TIME) if grid else 0,
+                n_rows=rows if constant or rows > ROOM else RUN_TIME,
                 n_states=(states if constant or states > ROOM else RUN_TIME) if grid else 0,
                 has_noise=kind(scene.has_white_noise) if grid else False, has_impact=kind(scene.has_impact),
                 has_hertz=kind(scene.has_hertz), partners=kind(scene.has_partners),

@@ -24,7 +24,7 @@ import numpy as np
 
 from ..jit import njit
 from ..jit.flags import INLINE, KERNEL
-from ..jit.intrinsics import any_set, fused, int_scratch, pick, plain, put, runtime_value
+from ..jit.intrinsics import any_set, fused, int_scratch, pick, plain, put, runtime_value, scratch_within
 from ..outputs import CAPPED
 from ..physics.absorbers import CLEARANCE, DAMPING, RESTITUTION, WALL_HI, WALL_LO
 from ..physics.structure import host_of, primary_energy, structure_power, wall_of
@@ -54,20 +54,22 @@ from .common import (
     stick_together,
 )
 from .events import EXIT, IMPACT_EVENT, NONE, ONSET, event_ahead, gap_sign
-from .loads import applied, has_breaks, next_break
+from .loads import applied, has_breaks, next_break, phasors, rotations, turn
 from .protocol import Step, rooms
 
 NEWTON_ITERATIONS = 12
 #: Bits of the ``contact`` argument of ``accelerations``: Hertz contact forces (at run time:
 #: absorbers in contact), shaped springs (geometric, gap; a compile-time constant of the loop:
 #: ``common.shaped_forces``), the contact constraint of stuck impact absorbers (at run
-#: time: absorbers stuck).  One argument for all: ``rk4_update`` has numba's 30.
-HERTZ_FORCES, SHAPED_FORCES, STICKING = 1, 2, 4
+#: time: absorbers stuck), and (``rk4_update``'s) a whole step of the time grid, whose stages
+#: read the harmonic rows from the step's phasors.  One argument for all: ``rk4_update`` has
+#: numba's 30.
+HERTZ_FORCES, SHAPED_FORCES, STICKING, ON_GRID = 1, 2, 4, 8
 
 
 @njit(**INLINE)
 def accelerations(x, v, t, tm, nf, mass, inv_mass, storey_k, storey_c, floor_c, kind, host, wall, rows,
-                  forces, series_t, series_v, series_ptr, series_target, stuck, release, acc, load,
+                  forces, series_t, series_v, series_ptr, series_target, pc, stuck, release, acc, load,
                   group_mass, group_sum, contact):
     """Accelerations of all bodies into ``acc`` (``load``: scratch for the floors' loads);
     returns the rates of the energy integrals (load power, structure damping power, absorber
@@ -79,12 +81,14 @@ def accelerations(x, v, t, tm, nf, mass, inv_mass, storey_k, storey_c, floor_c, 
     ``SHAPED_FORCES``, ``STICKING``) adds the Hertz contact forces and the shaped
     attachments' and applies the contact constraint of stuck impact absorbers on the bodies
     that hold their walls (``wall``: ``physics.structure.wall_of``) (flags, not branches around
-    the calls: see ``jit.flags.INLINE``).
+    the calls: see ``jit.flags.INLINE``); with its ``ON_GRID`` bit the harmonic rows are read
+    from their cosines at ``t``, ``pc`` (``loads.applied``).
     """
     attachment_forces(x, v, nf, storey_k, storey_c, floor_c, host, rows, acc)
     contact_forces(x, nf, kind, host, rows, acc, (contact & HERTZ_FORCES) != 0)
     shaped_forces(x, nf, host, rows, acc, (contact & SHAPED_FORCES) != 0)
-    ag = applied(t, tm, forces, series_t, series_v, series_ptr, series_target, series_t, False, load)
+    ag = applied(t, tm, forces, series_t, series_v, series_ptr, series_target, pc, (contact & ON_GRID) != 0,
+                 load)
     accelerate(acc, load, ag, inv_mass, acc)
     power = 0.0
     for k in range(nf):
@@ -122,23 +126,29 @@ def _wall_accelerations(x, v, t, nf, mass, inv_mass, storey_k, storey_c, floor_c
                         group_mass, group_sum, contact):
     """``accelerations`` at ``t`` (the out-of-line body of ``wall_accelerations``)."""
     accelerations(x, v, t, t, nf, mass, inv_mass, storey_k, storey_c, floor_c, kind, host, wall, rows, forces,
-                  series_t, series_v, series_ptr, series_target, stuck, release, acc, load, group_mass,
-                  group_sum, contact)
+                  series_t, series_v, series_ptr, series_target, series_t, stuck, release, acc, load,
+                  group_mass, group_sum, contact)
 
 
 @njit(**INLINE)
 def rk4_update(x, v, t, h, xo, vo, acc, xs, vs, x2, a0, mass, inv_mass, storey_k, storey_c, floor_c, kind,
-               host, wall, rows, forces, series_t, series_v, series_ptr, series_target, stuck, load,
-               group_mass, group_sum, contact):
+               host, wall, rows, forces, series_t, series_v, series_ptr, series_target, cosines, stuck, load,
+               groups, contact):
     """One RK4 step of size ``h`` from ``(x, v)`` into ``(xo, vo)``; returns the increments
     of the four energy integrals and writes those of ``x_k^2`` into ``x2`` and the floors'
     absolute accelerations at the start into ``a0``.  ``acc``, ``xs``, ``vs`` are scratch
     (the stage's accelerations and state); ``xo``, ``vo`` gather the weighted stage slopes.
+    With the ``ON_GRID`` bit of ``contact`` (a whole step of the grid) the stages read the
+    harmonic rows' cosines at the step's start, midpoint and end from ``cosines`` (``phasors``:
+    one sine and cosine a row a step, not a cosine a stage).  ``groups``: the sticking groups'
+    scratch (``common.stick_together``).
     Inlined at one call site of the step loop (a call with this many arrays cost about 40 %
     of a step; Python compiles a call of more than 30 arguments through a tuple, which numba
-    cannot inline, so the floor count comes from ``load``'s length)."""
+    cannot inline, so the floor count comes from ``load``'s length and the stack arrays come
+    in tuples, ``cosines`` and ``groups``: no reference counting)."""
     nb = x.shape[0]
     nf = load.shape[0]
+    group_mass, group_sum = groups
     tm = t + 0.5 * h
     q0 = q1 = q2 = q3 = 0.0
     for stage in range(4):
@@ -147,8 +157,9 @@ def rk4_update(x, v, t, h, xo, vo, acc, xs, vs, x2, a0, mass, inv_mass, storey_k
                 xs[b] = x[b]
                 vs[b] = v[b]
         ts = t if stage == 0 else (t + h if stage == 3 else tm)
+        pc = cosines[0] if stage == 0 else (cosines[2] if stage == 3 else cosines[1])
         r = accelerations(xs, vs, ts, tm, nf, mass, inv_mass, storey_k, storey_c, floor_c, kind, host, wall,
-                          rows, forces, series_t, series_v, series_ptr, series_target, stuck, False, acc,
+                          rows, forces, series_t, series_v, series_ptr, series_target, pc, stuck, False, acc,
                           load, group_mass, group_sum, contact)
         weight = 1.0 if stage == 0 or stage == 3 else 2.0
         c = 0.5 * h if stage < 2 else h
@@ -206,6 +217,48 @@ def next_event(x, xn, h, nf, nw, kind, walls, rows, stuck, touching):
     return event_kind, hit, hit_side, first, hit_wall
 
 
+class StagePhasors(NamedTuple):
+    """Per load row, the harmonic rows' phasors (cos, sin) at a step's start, midpoint and end,
+    and their turn over half a step (``loads.phasors``, ``loads.turn``): the loads the stages of
+    a step taken whole read (``rk4_update``)."""
+
+    pc: Any
+    ps: Any
+    mc: Any
+    ms: Any
+    ec: Any
+    es: Any
+    hc: Any
+    hs: Any
+
+
+def phasor_room(n_rows: int, row_room: int):
+    """``new_phasors(forces, dt)``: a loop's ``StagePhasors`` on its stack, for ``n_rows`` load
+    rows (``protocol.RUN_TIME``: ``forces``' rows, at most ``row_room``), with the half step's
+    turns of a grid of step ``dt``."""
+
+    @njit(**INLINE)
+    def new_phasors(forces, dt):
+        n, r = n_rows if n_rows >= 0 else forces.shape[0], row_room
+        p = StagePhasors(scratch_within(n, r), scratch_within(n, r), scratch_within(n, r),
+                         scratch_within(n, r), scratch_within(n, r), scratch_within(n, r),
+                         scratch_within(n, r), scratch_within(n, r))
+        rotations(forces, 0.5 * dt, p.hc, p.hs)
+        return p
+
+    return new_phasors
+
+
+@njit(**INLINE)
+def stage_cosines(t: float, forces, p):
+    """The harmonic rows' cosines at the start, midpoint and end of the step that starts at
+    ``t`` (``StagePhasors`` ``p``): exact at its start, turned by half a step twice."""
+    phasors(t, forces, p.pc, p.ps)
+    turn(p.pc, p.ps, p.hc, p.hs, p.mc, p.ms)
+    turn(p.mc, p.ms, p.hc, p.hs, p.ec, p.es)
+    return p.pc, p.mc, p.ec
+
+
 class Rk4State(NamedTuple):
     """The RK4 step's state and scratch on the loop's stack: per body the sub-step's end state,
     the stages' accelerations, state and the copies for the out-of-line calls (so that the
@@ -213,7 +266,7 @@ class Rk4State(NamedTuple):
     ``x_k^2`` integrals and start accelerations, and the out-of-line calls' own; per absorber
     the wall it sticks to, the side it touches and a contact's debt (none here: the carry's
     block stays zero); whether the loads have kinks or jumps (``loads.has_breaks``, found once a
-    run)."""
+    run); the harmonic rows' phasors of a step (``StagePhasors``)."""
 
     xn: Any
     vn: Any
@@ -234,6 +287,7 @@ class Rk4State(NamedTuple):
     touching: Any
     owed: Any
     piecewise: Any
+    phasors: Any
 
 
 @cache
@@ -245,8 +299,11 @@ def rk4_step(spec) -> Step:
     (``loads.has_breaks``) end its sub-steps (a run-time value).  ``spec.gpu``: per-absorber flags
     on the stack (as ``kdk.kdk_step``)."""
     NB, NF = spec.n_bodies, spec.n_floors  # (``RUN_TIME``: the counts read at run time)
-    body_scratch, floor_scratch = stack_scratch(*rooms(spec)[:2])  # (arrays on the loop's stack)
+    body_room, floor_room, row_room, _ = rooms(spec)
+    body_scratch, floor_scratch = stack_scratch(body_room, floor_room)  # (arrays on the loop's stack)
+    new_phasors = phasor_room(spec.n_rows, row_room)
     NA, GPU = NB - NF, spec.gpu
+
     HAS_NOISE, HAS_IMPACT, HAS_HERTZ, PARTNERS, FILTERED, GROUND, SHAPED = kinds_of(spec)  # (or ``RUN_TIME``)
 
     @njit(**INLINE)
@@ -266,7 +323,7 @@ def rk4_step(spec) -> Step:
                        body_scratch(nb), body_scratch(nb), body_scratch(nb), floor_scratch(nf),
                        body_scratch(nw), body_scratch(nw), floor_scratch(nf), floor_scratch(nf),
                        floor_scratch(nf), body_scratch(nw), body_scratch(nw), stuck, touching, owed,
-                       has_breaks(ex))
+                       has_breaks(ex), new_phasors(ex.forces, grid.dt))
         return own, 0
 
     @njit(**INLINE)
@@ -287,8 +344,7 @@ def rk4_step(spec) -> Step:
 
     @njit(**INLINE)
     def step(i, x, v, inv_mass, floor_acc, own, sc, acct, inside, peaks, bodies, absorbers, ex, fl, noise,
-             grid,
-             outputs, gen, gen_filter):
+             grid, outputs, gen, gen_filter):
         nb = NB if NB >= 0 else bodies.mass.shape[0]  # (``RUN_TIME``: the counts read at run time)
         nf = NF if NF >= 0 else bodies.storey_k.shape[0]
         has_impact = HAS_IMPACT if HAS_IMPACT >= 0 else bit_set(grid.kinds, IMPACT_BIT)
@@ -301,21 +357,18 @@ def rk4_step(spec) -> Step:
         kind, host, rows, walls = absorbers.kind, absorbers.host, absorbers.rows, absorbers.wall
         forces, series_t, series_v, series_ptr, series_target = (ex.forces, ex.series_t, ex.series_v,
                                                                  ex.series_ptr, ex.series_target)
-        dt = grid.dt
-        out, limits = outputs.out, outputs.limits
+        dt, out, limits = grid.dt, outputs.out, outputs.limits
         x_max, drift_max, acc_max, x2_integral = peaks
         xn, vn, acc, xs, vs = own.xn, own.vn, own.acc, own.xs, own.vs
-        x_event, acc_wall = own.x_event, own.acc_wall
-        load, group_mass, group_sum, x2, a0 = own.load, own.group_mass, own.group_sum, own.x2, own.a0
+        x_event, acc_wall, stuck, touching = own.x_event, own.acc_wall, own.stuck, own.touching
+        load, groups, x2, a0 = own.load, (own.group_mass, own.group_sum), own.x2, own.a0
         load_wall, gm_wall, gs_wall = own.load_wall, own.gm_wall, own.gs_wall
-        stuck, touching = own.stuck, own.touching
         work, d_primary, d_absorber, e_integral, e1_max, loss_sum, n_left, n_right, contact_time, \
             peak_force, pending = acct
         piecewise = own.piecewise  # sub-steps end at the loads' kinks and jumps
         t = i * dt
-        left = dt
-        n_impacts = 0
-        sub = 0
+        cosines = stage_cosines(t, forces, own.phasors)  # (the stages' harmonic loads, a step taken whole)
+        left, n_impacts, sub = dt, 0, 0
         # phase 0: a new sub-step; 1 .. NEWTON_ITERATIONS: Newton iterations on the length of the
         # sub-step that ends at an event; -1: the sub-step at the final length.  One call site of
         # the (inlined) step for all of them.
@@ -336,10 +389,11 @@ def rk4_step(spec) -> Step:
                     h = left
                     out[CAPPED] += 1
                 tau = h
+            whole = ON_GRID if sub == 0 and tau == dt else 0  # (a step of the grid: its phasors)
             inc = rk4_update(x, v, t, tau, xn, vn, acc, xs, vs, x2, a0, mass, inv_mass, storey_k, storey_c,
                              floor_c, kind, host, walls, rows, forces, series_t, series_v, series_ptr,
-                             series_target, stuck, load, group_mass, group_sum,
-                             (STICKING if sticking else 0) | (HERTZ_FORCES if contact else 0) | geo)
+                             series_target, cosines, stuck, load, groups,
+                             (STICKING if sticking else 0) | (HERTZ_FORCES if contact else 0) | geo | whole)
             if phase == 0:
                 event_kind, q, side, j, hf, sign, wall = NONE, -1, 0, 0, 0, 0, 0.0
                 if (has_impact or has_hertz) and not capped:
