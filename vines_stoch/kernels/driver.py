@@ -18,7 +18,7 @@ from functools import cache
 from ..jit import njit
 from ..jit.cache import stable_cache
 from ..jit.flags import INLINE, KERNEL
-from ..jit.intrinsics import borrowed, copy_into, plain
+from ..jit.intrinsics import borrowed, copy_into, no_builtins, plain
 from ..outputs import CONTACT_TIME, FINAL_ENERGY, PEAK_FORCE, STATUS, STATUS_DIVERGED, declared_slots
 from ..physics.structure import primary_energy
 from .carry import (
@@ -86,6 +86,8 @@ def step_loop(plug: Step, spec: Spec):
         # the bundles and the streams as borrowed views (``jit.intrinsics.borrowed``): no
         # reference counting in the loop, nor in the steps it inlines (a stream array passed to a
         # draw in a branch cost two atomic operations a draw, a quarter of a smooth step)
+        if not GPU and NB < 0:  # (the general loops: no C library calls of their small loops)
+            no_builtins()
         bodies, absorbers, ex, fl, noise, grid, outputs = borrowed(
             (bodies_, absorbers_, ex_, fl_, noise_, grid_, outputs_))
         gen, gen_bridge, gen_filter = borrowed((gen_, gen_bridge_, gen_filter_))
