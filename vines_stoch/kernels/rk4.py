@@ -28,7 +28,7 @@ from ..jit.intrinsics import any_set, fused, int_scratch, pick, plain, put, runt
 from ..outputs import CAPPED
 from ..physics.absorbers import CLEARANCE, DAMPING, RESTITUTION, WALL_HI, WALL_LO
 from ..physics.structure import host_of, primary_energy, structure_power, wall_of
-from .carry import restore_absorbers, save_absorbers
+from .carry import restore_absorbers, restore_rows, save_absorbers, save_rows
 from .common import (
     HERTZ_BIT,
     IMPACT_BIT,
@@ -139,8 +139,8 @@ def rk4_update(x, v, t, h, xo, vo, acc, xs, vs, x2, a0, mass, inv_mass, storey_k
     absolute accelerations at the start into ``a0``.  ``acc``, ``xs``, ``vs`` are scratch
     (the stage's accelerations and state); ``xo``, ``vo`` gather the weighted stage slopes.
     With the ``ON_GRID`` bit of ``contact`` (a whole step of the grid) the stages read the
-    harmonic rows' cosines at the step's start, midpoint and end from ``cosines`` (``phasors``:
-    one sine and cosine a row a step, not a cosine a stage).  ``groups``: the sticking groups'
+    harmonic rows' cosines at the step's start, midpoint and end from ``cosines``
+    (``StagePhasors``: turned phasors, not a cosine a stage).  ``groups``: the sticking groups'
     scratch (``common.stick_together``).
     Inlined at one call site of the step loop (a call with this many arrays cost about 40 %
     of a step; Python compiles a call of more than 30 arguments through a tuple, which numba
@@ -218,9 +218,12 @@ def next_event(x, xn, h, nf, nw, kind, walls, rows, stuck, touching):
 
 
 class StagePhasors(NamedTuple):
-    """Per load row, the harmonic rows' phasors (cos, sin) at a step's start, midpoint and end,
-    and their turn over half a step (``loads.phasors``, ``loads.turn``): the loads the stages of
-    a step taken whole read (``rk4_update``)."""
+    """Per load row, the harmonic rows' phasors (cos, sin) at a step's start, midpoint and end
+    (the next step's start), and their turn over half a step (``loads.phasors``, ``loads.turn``):
+    the loads the stages of a step taken whole read (``rk4_update``).  Each step turns the last
+    one's end by half a step twice; they are set exactly every ``common.CHECK_EVERY`` steps
+    (``set_phasors``) and carried between the stretches of a path (``carry.save_rows``), as the
+    grid steps' phasors (``grid.reset_phasors``)."""
 
     pc: Any
     ps: Any
@@ -233,27 +236,37 @@ class StagePhasors(NamedTuple):
 
 
 def phasor_room(n_rows: int, row_room: int):
-    """``new_phasors(forces, dt)``: a loop's ``StagePhasors`` on its stack, for ``n_rows`` load
-    rows (``protocol.RUN_TIME``: ``forces``' rows, at most ``row_room``), with the half step's
-    turns of a grid of step ``dt``."""
+    """``new_phasors(forces, dt, carry, resume, nf, na)``: a loop's ``StagePhasors`` on its
+    stack, for ``n_rows`` load rows (``protocol.RUN_TIME``: ``forces``' rows, at most
+    ``row_room``), with the half step's turns of a grid of step ``dt``, and (``resume``) the next
+    step's phasors from the carry of a path of ``nf`` floors and ``na`` absorbers."""
 
     @njit(**INLINE)
-    def new_phasors(forces, dt):
+    def new_phasors(forces, dt, carry, resume, nf, na):
         n, r = n_rows if n_rows >= 0 else forces.shape[0], row_room
         p = StagePhasors(scratch_within(n, r), scratch_within(n, r), scratch_within(n, r),
                          scratch_within(n, r), scratch_within(n, r), scratch_within(n, r),
                          scratch_within(n, r), scratch_within(n, r))
         rotations(forces, 0.5 * dt, p.hc, p.hs)
+        if resume:
+            restore_rows(carry, nf, na, p.ec, p.es)
         return p
 
     return new_phasors
 
 
 @njit(**INLINE)
-def stage_cosines(t: float, forces, p):
-    """The harmonic rows' cosines at the start, midpoint and end of the step that starts at
-    ``t`` (``StagePhasors`` ``p``): exact at its start, turned by half a step twice."""
-    phasors(t, forces, p.pc, p.ps)
+def set_phasors(t: float, forces, p) -> None:
+    """The phasors of the step that starts at ``t`` (``StagePhasors`` ``p``), set exactly."""
+    phasors(t, forces, p.ec, p.es)
+
+
+@njit(**INLINE)
+def stage_cosines(p):
+    """The harmonic rows' cosines at the start, midpoint and end of a step (``StagePhasors``
+    ``p``): the last step's end, turned by half a step twice."""
+    for r in range(p.pc.shape[0]):
+        p.pc[r], p.ps[r] = p.ec[r], p.es[r]
     turn(p.pc, p.ps, p.hc, p.hs, p.mc, p.ms)
     turn(p.mc, p.ms, p.hc, p.hs, p.ec, p.es)
     return p.pc, p.mc, p.ec
@@ -323,7 +336,7 @@ def rk4_step(spec) -> Step:
                        body_scratch(nb), body_scratch(nb), body_scratch(nb), floor_scratch(nf),
                        body_scratch(nw), body_scratch(nw), floor_scratch(nf), floor_scratch(nf),
                        floor_scratch(nf), body_scratch(nw), body_scratch(nw), stuck, touching, owed,
-                       has_breaks(ex), new_phasors(ex.forces, grid.dt))
+                       has_breaks(ex), new_phasors(ex.forces, grid.dt, carry, resume, nf, na))
         return own, 0
 
     @njit(**INLINE)
@@ -332,11 +345,12 @@ def rk4_step(spec) -> Step:
 
     @njit(**INLINE)
     def check(own, i, dt, ex):
-        pass
+        set_phasors(i * dt, ex.forces, own.phasors)
 
     @njit(**INLINE)
     def save(carry, own, sc):
         save_absorbers(carry, own.load.shape[0], own.stuck, own.touching, own.owed)
+        save_rows(carry, own.load.shape[0], own.stuck.shape[0], own.phasors.ec, own.phasors.es)
 
     @njit(**INLINE)
     def finish(own, sc, fl, out):
@@ -366,9 +380,8 @@ def rk4_step(spec) -> Step:
         work, d_primary, d_absorber, e_integral, e1_max, loss_sum, n_left, n_right, contact_time, \
             peak_force, pending = acct
         piecewise = own.piecewise  # sub-steps end at the loads' kinks and jumps
-        t = i * dt
-        cosines = stage_cosines(t, forces, own.phasors)  # (the stages' harmonic loads, a step taken whole)
-        left, n_impacts, sub = dt, 0, 0
+        cosines = stage_cosines(own.phasors)  # (the stages' harmonic loads, a step taken whole)
+        t, left, n_impacts, sub = i * dt, dt, 0, 0
         # phase 0: a new sub-step; 1 .. NEWTON_ITERATIONS: Newton iterations on the length of the
         # sub-step that ends at an event; -1: the sub-step at the final length.  One call site of
         # the (inlined) step for all of them.
