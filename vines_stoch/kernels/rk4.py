@@ -221,9 +221,9 @@ class StagePhasors(NamedTuple):
     """Per load row, the harmonic rows' phasors (cos, sin) at a step's start, midpoint and end
     (the next step's start), and their turn over half a step (``loads.phasors``, ``loads.turn``):
     the loads the stages of a step taken whole read (``rk4_update``).  Each step turns the last
-    one's end by half a step twice; they are set exactly every ``common.CHECK_EVERY`` steps
-    (``set_phasors``) and carried between the stretches of a path (``carry.save_rows``), as the
-    grid steps' phasors (``grid.reset_phasors``)."""
+    one's end by half a step twice; the end is set exactly every ``common.CHECK_EVERY`` steps
+    (``loads.phasors``) and carried between the stretches of a path (``carry.save_rows``), as
+    the grid steps' phasors (``grid.reset_phasors``)."""
 
     pc: Any
     ps: Any
@@ -253,12 +253,6 @@ def phasor_room(n_rows: int, row_room: int):
         return p
 
     return new_phasors
-
-
-@njit(**INLINE)
-def set_phasors(t: float, forces, p) -> None:
-    """The phasors of the step that starts at ``t`` (``StagePhasors`` ``p``), set exactly."""
-    phasors(t, forces, p.ec, p.es)
 
 
 @njit(**INLINE)
@@ -345,7 +339,7 @@ def rk4_step(spec) -> Step:
 
     @njit(**INLINE)
     def check(own, i, dt, ex):
-        set_phasors(i * dt, ex.forces, own.phasors)
+        phasors(i * dt, ex.forces, own.phasors.ec, own.phasors.es)  # (the next step's start, exact)
 
     @njit(**INLINE)
     def save(carry, own, sc):
