@@ -14,8 +14,9 @@ import pytest
 
 from tests.helpers import changed, scene_from
 from tests.unit.kernels.test_lanes import FILTERED, FRAME, SEED, philox_streams, same
+from vines_stoch.kernels import chunk as chunk_module
 from vines_stoch.kernels import chunk_runner, simulate
-from vines_stoch.kernels.chunk import PASS_LANES, simulate_chunk
+from vines_stoch.kernels.chunk import PASS_LANES, lane_runner, simulate_chunk
 from vines_stoch.kernels.driver import step_loop
 from vines_stoch.kernels.lanes import lane_loop
 from vines_stoch.kernels.passes import pass_loop, pass_scene
@@ -111,15 +112,21 @@ def test_a_path_that_diverges_ends_in_the_pass_loop_as_in_the_scalar_loop():
         assert same(rows[r], simulate(scene, philox_streams(r)))
 
 
-def test_one_pass_loop_serves_every_structure():
+def test_one_pass_loop_serves_every_structure(monkeypatch):
     """Structures that differ in storeys (1 to 9), absorbers (none, cubic, bistable, linear,
     geometric, gap, two and six at once), loads and what a run records run the one compiled pass
-    loop: no other loop is made, and the pass loop keeps one compiled signature."""
+    loop: every chunk runs in SIMD lanes and takes the pass loop (the loops a chunk ran, spied on,
+    so that a loop an earlier test of the process made is counted too), no other loop is made,
+    and the pass loop keeps one compiled signature."""
+    ran = []  # (the lane loop each chunk ran)
+    monkeypatch.setattr(chunk_module, "lane_runner", lambda *args, **kwargs: ran.append(
+        lane_runner(*args, **kwargs)) or ran[-1])
     before = (lane_loop.cache_info().currsize, step_loop.cache_info().currsize)
     for data in SCENES.values():
         scene = scene_from(changed(data, {"simulation.duration": 1.0}))
         simulate_chunk(scene, SEED, 0, 0, PASS_LANES, history=(10, 5), signals=("x1", "e1"))
         simulate_chunk(scene, SEED, 0, 0, PASS_LANES)
+    assert len(ran) == 2 * len(SCENES) and all(run is pass_loop for run in ran)
     assert (lane_loop.cache_info().currsize, step_loop.cache_info().currsize) == before
     assert len(pass_loop.overloads) == 1
 
