@@ -15,6 +15,12 @@ if os.environ.get("PYTEST_XDIST_WORKER"):
     for _blas in ("OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
         os.environ.setdefault(_blas, "1")
 
+# A short run takes the loops specialised to its structures where they are compiled already, on
+# disk or in this process (``ensemble.planning.specialised_loops``), unless
+# VINES_STOCH_GENERAL_WORK is set: set to its default here, so that which loop a test's run takes
+# does not depend on what other tests compiled before it (the tests of the choice unset it).
+os.environ.setdefault("VINES_STOCH_GENERAL_WORK", "100000000")
+
 import pytest  # noqa: E402
 
 

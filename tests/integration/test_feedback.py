@@ -85,6 +85,33 @@ def test_compile_puts_the_loops_a_run_needs_in_the_cache(tmp_path):
     assert wrong.returncode != 0 and "executor = 'simd'" in wrong.stderr
 
 
+def test_compile_specialised_readies_the_structure_s_own_loop_which_a_short_run_then_takes(tmp_path):
+    """``vines-stoch compile FILE --specialised`` compiles the loop specialised to the file's
+    structure (into an empty cache here), not the general one; a short run in the next process,
+    ``VINES_STOCH_GENERAL_WORK`` unset, loads it and compiles nothing (the same numbers as the
+    general loop's: ``test_general_loop.py``)."""
+    path = tmp_path / "small.toml"
+    path.write_text(toml_text({"name": "small", "primary": {"mass": 1.0, "stiffness": 1.0, "damping": 0.1},
+                               "loads": [{"type": "impulse", "velocity": 1.0}],
+                               "simulation": {"duration": 2.0, "dt": 1e-2}}))
+    env = {**{k: v for k, v in os.environ.items() if k != "VINES_STOCH_GENERAL_WORK"},
+           "NUMBA_CACHE_DIR": str(tmp_path / "cache")}
+
+    def cli_run(*args: str) -> subprocess.CompletedProcess:
+        return subprocess.run([sys.executable, "-m", "vines_stoch.cli", *args], capture_output=True,
+                              text=True, timeout=600, env=env)
+
+    first = cli_run("compile", str(path), "--specialised")
+    assert first.returncode == 0 and "step loop: rk4 loop, 1 bodies" in first.stderr, first.stderr
+    assert "compiled (cached on disk" in first.stderr and "the general" not in first.stderr, first.stderr
+    second = cli_run("run", str(path), "--out", str(tmp_path / "o"))
+    assert second.returncode == 0, second.stderr
+    assert re.search(r"step loop: rk4 loop, 1 bodies, 1 floor\(s\): loaded from the cache in \d+\.\d s "
+                     r"\(a short run takes the loop specialised to its structure where it is on disk\)",
+                     second.stderr), second.stderr
+    assert "compiled (" not in second.stderr and "the general" not in second.stderr, second.stderr
+
+
 def test_compile_general_readies_every_scheme_and_compile_asks_for_something():
     """``vines-stoch compile --general`` readies the general loop of each scheme for paths and for
     chunks of both executors, and the pass loop (a line each); ``compile`` with neither files nor

@@ -27,13 +27,15 @@ from .running import run
 
 
 def compile_loops(scenario: Study | Mapping[str, Any] | str | os.PathLike, *, executor: str = "lanes",
-                  paths: bool = False, show: bool = True) -> None:
+                  paths: bool = False, show: bool = True, specialised: bool = False) -> None:
     """Compile, or load from the cache on disk, the step loops that ``run`` of ``scenario`` with
     ``executor`` (and ``paths``) needs, and run nothing: ahead of the runs, for a cluster image
     or a notebook server (``vines-stoch compile``).  A loop depends on the structure (bodies,
     floors, absorber laws, loads, what the run records), not on the parameters' values, so one
     scenario covers its whole sweep and its uncertain parameters; ``show``: a line a loop on
-    standard error (``prepare_loops``)."""
+    standard error (``prepare_loops``).  ``specialised``: the loops specialised to its structures
+    (a long run's) whatever the run's work, which every later run of them then takes, however
+    short (``planning.specialised_loops``)."""
     check_executor(executor)
     study = as_study(scenario)
     base = study.base
@@ -41,8 +43,8 @@ def compile_loops(scenario: Study | Mapping[str, Any] | str | os.PathLike, *, ex
     the_plan = plan(study, executor=executor)
     signals, grid = recording(the_plan.scenes[0], grid_spec, base.output.spectra)
     prepare_loops(the_plan.scenes, base.ensemble.seed, base.ensemble.common_random_numbers, grid,
-                  signals or DEFAULT_SIGNALS, show=show, executor=executor, general=the_plan.general,
-                  batch=the_plan.batch)
+                  signals or DEFAULT_SIGNALS, show=show, executor=executor,
+                  general=the_plan.general and not specialised, batch=the_plan.batch)
 
 
 #: One small structure for each scheme the general loops are compiled for: a noisy

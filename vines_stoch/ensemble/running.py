@@ -7,7 +7,7 @@ from __future__ import annotations
 import os
 from collections.abc import Callable, Mapping
 from contextlib import ExitStack, closing
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import partial
 from pathlib import Path
 from typing import Any
@@ -42,7 +42,7 @@ from ..store import (
 from .chunks import draw_parameters, recording, run_chunk, run_chunk_cuda, run_viewed, view_of
 from .control import Interrupted, client, noting_interrupts
 from .folding import Checkpoint, PointState
-from .planning import BACKENDS, plan, prepare_loops
+from .planning import BACKENDS, plan, prepare_loops, specialised_loops
 from .tables import chosen_paths, consolidate, label_points
 
 
@@ -261,6 +261,10 @@ def _run(study: Study, directory: Path | None, o: _Options) -> Results | None:
     todo = [c for c in mine if c not in reusable]
     total = sum(c[2] - c[1] for c in mine)
     done = total - sum(c[2] - c[1] for c in todo)
+    if o.backend == "cpu" and not o.scheduler and todo and the_plan.general and specialised_loops(
+            the_plan.scenes, seed, base.ensemble.common_random_numbers, recorded[0][1],
+            recorded[0][0] or DEFAULT_SIGNALS, o.executor, the_plan.batch, o.progress):
+        the_plan = replace(the_plan, general=False)  # (the loops on disk: the same numbers)
     chunk_runner = (run_chunk_cuda if o.backend == "cuda"
                     else partial(run_chunk, executor=o.executor, general=the_plan.general))
 
@@ -392,6 +396,10 @@ def sample(study: Study, workers: int | None = None, executor: str = "lanes") ->
     check_executor(executor)
     the_plan = plan(study, executor=executor)
     base = study.base
+    if the_plan.general and specialised_loops(the_plan.scenes, base.ensemble.seed,
+                                              base.ensemble.common_random_numbers, executor=executor,
+                                              batch=the_plan.batch, show=False):
+        the_plan = replace(the_plan, general=False)
     uncertain = study if base.uncertain else None
     runner = partial(run_chunk, executor=executor, general=the_plan.general)
 
@@ -425,9 +433,11 @@ def solve(scenario: Study | Mapping[str, Any] | str | os.PathLike, *, point: int
                              f"(allowed: {', '.join(allowed)})")
     grid = hist.grid(scene.n_steps, points or scene.n_steps + 1)
     base = study.base
-    frame, paths = run_chunk(scene, base.ensemble.seed, point, realization, realization + 1, grid,
-                             study if base.uncertain else None, base.ensemble.common_random_numbers, signals,
-                             executor, general_run(scene.n_steps))
+    seed, common = base.ensemble.seed, base.ensemble.common_random_numbers
+    general = general_run(scene.n_steps) and not specialised_loops([scene], seed, common, grid, signals,
+                                                                   executor, 1, False)
+    frame, paths = run_chunk(scene, seed, point, realization, realization + 1, grid,
+                             study if base.uncertain else None, common, signals, executor, general)
     label_points(frame, study, point)
     ys = {s: paths[i, :, 0] for i, s in enumerate(signals)}
     return Solution(scene.dt * grid[0] * np.arange(grid[1]), ys, frame.iloc[0], point, realization, study)

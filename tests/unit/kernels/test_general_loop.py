@@ -10,10 +10,13 @@ from __future__ import annotations
 import os
 
 import numpy as np
+import pandas as pd
 import pytest
+from numba.core.caching import NullCache
 
+import vines_stoch
 from tests.helpers import example_scene, scene_from, study_from
-from tests.unit.kernels.test_lanes import FILTERED, SEED, philox_streams, same
+from tests.unit.kernels.test_lanes import FILTERED, SEED, SMOOTH, philox_streams, same
 from tests.unit.kernels.test_passes import (
     BISTABLE,
     BLAST,
@@ -27,7 +30,7 @@ from tests.unit.kernels.test_passes import (
     RECORDED,
     frame,
 )
-from vines_stoch.ensemble import plan
+from vines_stoch.ensemble import plan, planning
 from vines_stoch.ensemble.ahead import GENERAL_PIECES, GENERAL_SET, compile_general, general_scene
 from vines_stoch.environment import problems
 from vines_stoch.kernels import chunk as chunk_module
@@ -40,7 +43,7 @@ from vines_stoch.kernels import (
     simulate_chunk,
     start_path,
 )
-from vines_stoch.kernels.chunk import PASS_LANES, chunk_loop, simulate_lanes
+from vines_stoch.kernels.chunk import PASS_LANES, chunk_loop, lane_runner, simulate_lanes
 from vines_stoch.kernels.driver import step_loop
 from vines_stoch.kernels.lanes import lane_loop
 from vines_stoch.kernels.paths import GENERAL_WORK, general_run, spec_of
@@ -217,6 +220,50 @@ def test_short_runs_take_the_general_loop_and_long_runs_a_specialised_one(monkey
     assert not general_run(0) and not general_run(1)
     monkeypatch.setenv("VINES_STOCH_GENERAL_WORK", "inf")
     assert general_run(10**18)
+
+
+def test_a_short_run_takes_the_specialised_loop_where_it_is_compiled_with_the_same_numbers(monkeypatch):
+    """A run shorter than ``GENERAL_WORK`` with ``VINES_STOCH_GENERAL_WORK`` unset takes the loop
+    specialised to its structure where that is compiled already (here in this process; on disk,
+    loaded: ``planning.specialised_loops``), ``solve`` too; the rows and the path are the general
+    loop's, bitwise, which a run takes with the variable set (its work alone decides)."""
+    scene, study = scene_from(SMOOTH), study_from(SMOOTH, {"ensemble.realizations": 20})
+    simulate_chunk(scene, SEED, 0, 0, 2)  # (the lane loop specialised to the structure, compiled or loaded)
+    specialised = lane_loop(spec_of(scene, lanes=True))
+    ran = []  # (the lane loop each chunk ran)
+    monkeypatch.setattr(chunk_module, "lane_runner", lambda *args, **kwargs: ran.append(
+        lane_runner(*args, **kwargs)) or ran[-1])
+    monkeypatch.delenv("VINES_STOCH_GENERAL_WORK")
+    assert plan(study).general
+    fast, _ = vines_stoch.run(study, workers=1)
+    one = vines_stoch.solve(study, realization=3)
+    assert len(ran) >= 2 and all(run is specialised for run in ran)
+    monkeypatch.setenv("VINES_STOCH_GENERAL_WORK", str(GENERAL_WORK))
+    taken = len(ran)
+    general, _ = vines_stoch.run(study, workers=1)
+    one_general = vines_stoch.solve(study, realization=3)
+    assert len(ran) == taken  # (the general scalar loop, on the same Philox streams)
+    pd.testing.assert_frame_equal(fast, general, check_exact=True)
+    pd.testing.assert_series_equal(one.metrics, one_general.metrics, check_exact=True)
+    for name in one.ys:
+        np.testing.assert_array_equal(one.ys[name], one_general.ys[name])
+
+
+def test_a_short_run_looks_for_a_specialised_loop_once_and_compiles_nothing(monkeypatch):
+    """Where the specialised loop is neither compiled nor on disk (a fresh one without a cache,
+    here), a short run takes the general loop: looking for it compiled nothing (numba's
+    statistics: one miss, no signature), and the process does not look for it again."""
+    scene, study = scene_from(SMOOTH), study_from(SMOOTH, {"ensemble.realizations": 20})
+    fresh = lane_loop.__wrapped__(spec_of(scene, lanes=True))  # (not the memoised one)
+    fresh._cache = NullCache()
+    monkeypatch.setattr(chunk_module, "lane_runner", lambda *args, **kwargs: fresh)
+    monkeypatch.delenv("VINES_STOCH_GENERAL_WORK")
+    assert not planning.specialised_loops([scene], SEED, True, executor="lanes", batch=20, show=False)
+    assert len(fresh.overloads) == 0 and sum(fresh.stats.cache_misses.values()) == 1
+    rows, _ = vines_stoch.run(study, workers=1)
+    assert len(fresh.overloads) == 0 and sum(fresh.stats.cache_misses.values()) == 1
+    monkeypatch.setenv("VINES_STOCH_GENERAL_WORK", str(GENERAL_WORK))
+    pd.testing.assert_frame_equal(rows, vines_stoch.run(study, workers=1)[0], check_exact=True)
 
 
 @pytest.mark.parametrize("value", ["many", "-1", "nan"])
