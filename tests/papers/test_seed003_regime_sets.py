@@ -5,8 +5,11 @@ frequencies from 5 to 8 rad/s every design's regimes (``dynamics.refine_regimes`
 those two, and the designs together meet both; DS-4(60), as printed (V = 0.635 m), never reaches
 its obstacles (T,0,0 throughout).  One response, DS-5(60) at 6.5 rad/s, has not settled by the
 run's end (400 s) and reads ``transient``, which the paper's steady table does not list.  The
-single-sided designs' rows are not tested: here they also meet orbits of long period (8T,3,0,
-8T,6,4) that the paper does not print (``reports/seed-tables.md``).
+five single-sided 60 kg designs (SS-4(60) with D = 0.0759 m, the printed 0.759 m read as a
+misprint: ``test_seed003_tables_2_and_4.py``) each meet the one set Table 2 prints for them
+(T,0,0, 3T,1,0, 2T,1,0, T,1,1, AM), SS-2(60) that set alone; the others meet more only at 6.3-7.1
+rad/s, where the T,1,1 zone gives way to the unilateral 2T,1,0 and 3T,1,0 (Fig. 3): orbits of long
+period (8T,6,4 and 8T,3,0), chaos or chatter, a response still settling at 400 s.
 
 Tables 4 and 5's "Regimes" rows (20 and 10 kg designs) over the frequencies 5.5-7.0 rad/s at 0.1
 rad/s, where every regime of the report's 5-8 rad/s sweep other than T,0,0, T,1,0 and 2T,1,0 lies
@@ -64,6 +67,29 @@ def test_double_sided_60_kg_designs_meet_the_printed_regimes():
             else:
                 met.add(regime)
     assert met == PRINTED and unsettled <= UNSETTLED  # (that one, or none where it settles in time)
+
+
+#: Table 2's regimes of the single-sided 60 kg designs, one set printed under all five (AM: ``modulated``).
+PRINTED_SS = {"T,0,0", "3T,1,0", "2T,1,0", "T,1,1", "modulated"}
+#: The frequencies (rad/s) between which the single-sided 60 kg designs meet other regimes here.
+OTHER_BAND = (6.3, 7.1)
+
+
+def test_single_sided_60_kg_designs_meet_the_printed_regimes_and_others_only_where_the_zones_meet():
+    found, others = {}, set()
+    for label, name, parameters, _ in _class_designs(ROOT / "scenarios", 60):
+        if not label.startswith("SS"):
+            continue
+        found[label] = set()
+        for w in E1MAX_FREQUENCIES:
+            regime = voted(name, parameters, w)
+            regime = "T,1,1" if regime == "3T,3,3" and np.isclose(w, 6.3) else regime  # (the step grid's)
+            found[label].add(regime)
+            if regime not in PRINTED_SS:
+                others.add((label, w, regime))
+    assert len(found) == 5 and all(regimes >= PRINTED_SS for regimes in found.values()), found
+    assert found["SS-2(60)"] == PRINTED_SS
+    assert others and all(OTHER_BAND[0] - 1e-9 <= w <= OTHER_BAND[1] + 1e-9 for _, w, _ in others), others
 
 
 #: Tables 4 and 5's frequencies here (rad/s): the report's sweep (``E1MAX_FREQUENCIES``) from 5.5 to 7.0.
