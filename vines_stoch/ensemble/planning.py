@@ -4,19 +4,16 @@ compiled (or loaded) before the first chunk starts."""
 from __future__ import annotations
 
 import math
-import os
 import sys
-import threading
 import time
 from dataclasses import dataclass
+from functools import partial
 
-from numba.core.event import Listener, install_listener
-
-from ..environment import GENERAL_SWITCH
 from ..kernels import (
     DEFAULT_SIGNALS,
     LANES,
     chunk_runner,
+    compiled_already,
     general_run,
     lane_scene,
     pass_loop,
@@ -181,62 +178,25 @@ def _announce(what: str, outcome: str, show: bool, known: bool = True) -> None:
         print(f"step loop: {what}: {outcome}" if known else f" {outcome}", file=sys.stderr, flush=True)
 
 
-class _Absent(Exception):
-    """A loop a short run looked for was neither compiled in this process nor on disk
-    (``specialised_loops``)."""
-
-
-class _Refusal(Listener):
-    """A listener to numba's compile events that stops every compile its thread starts, before
-    anything is compiled (numba's ``numba:compile`` event comes after its cache on disk was
-    looked up): other threads compile as ever."""
-
-    def __init__(self) -> None:
-        self.thread = threading.get_ident()
-
-    def on_start(self, event) -> None:
-        if threading.get_ident() == self.thread:
-            raise _Absent
-
-    def on_end(self, event) -> None:
-        pass
-
-
-#: The specialised loops, with their executor, that a short run of this process looked for and
-#: did not find (``specialised_loops``): each is looked for once a process, or again once this
-#: process has compiled it (a long run).
-_ABSENT: set = set()
-
-
 def specialised_loops(scenes: list[Scene], seed: int, common: bool, grid: tuple[int, int] | None = None,
                       signals: tuple[str, ...] = DEFAULT_SIGNALS, executor: str = "lanes",
                       batch: int = LANES, show: bool = True) -> bool:
-    """Whether a short run of ``scenes`` (``Plan.general``) takes the loops specialised to their
-    structures rather than the general ones: where ``VINES_STOCH_GENERAL_WORK`` is unset (set, the
-    run's work alone decides) and the loop specialised to each structure, where that is not the
-    loop a short run takes anyway (the pass loop), is compiled in this process or in the cache on
-    disk; each such loop is then loaded (with ``prepare_loops``' line).  Looking compiles nothing
-    (``_Refusal``).  The two loops give the same numbers, bitwise; the specialised one runs 2-3x
-    faster, in SIMD lanes 5-15x.  The arguments are ``prepare_loops``'."""
-    if GENERAL_SWITCH in os.environ:
-        return False
+    """Whether the loops specialised to the structures of ``scenes``, where each is not the loop a
+    short run takes anyway (the pass loop), are compiled already, in this process or on disk (each
+    then loaded, with ``prepare_loops``' line): what a short run takes then (``kernels.keeps_general``).
+    Looking compiles nothing, and a loop missing is looked for once a process
+    (``kernels.compiled_already``).  The arguments are ``prepare_loops``'."""
     wanted = {}
     for point, scene in enumerate(scenes):
         run = chunk_runner(scene, executor, False, batch)
         if run is not chunk_runner(scene, executor, True, batch):
             wanted.setdefault(run, (point, scene))
-    if not wanted or any((run, executor) in _ABSENT and not run.overloads for run in wanted):
-        return False
     for run, (point, scene) in wanted.items():
         known, start = len(run.overloads), time.monotonic()
-        try:
-            with install_listener("numba:compile", _Refusal()):
-                simulate_chunk(scene, seed, point, 0, 0, common, grid, signals, scene.event_rows, executor,
-                               batch=batch)
-        except _Absent:
-            _ABSENT.add((run, executor))
+        if not compiled_already(partial(simulate_chunk, scene, seed, point, 0, 0, common, grid, signals,
+                                        scene.event_rows, executor, batch=batch)):
             return False
         if len(run.overloads) > known:
             _announce(structure(scene), f"loaded from the cache in {time.monotonic() - start:.1f} s (a short "
                       "run takes the loop specialised to its structure where it is on disk)", show)
-    return True
+    return bool(wanted)

@@ -19,7 +19,7 @@ from .. import history as hist
 from .. import notices, psd, rare, schedulers, sensitivity, store
 from ..binding import binding
 from ..environment import memory_problem, require_cluster
-from ..kernels import DEFAULT_SIGNALS, check_executor, general_run
+from ..kernels import DEFAULT_SIGNALS, check_executor, general_run, keeps_general
 from ..metrics import residual_warnings
 from ..progress import Progress
 from ..results import Results, Solution, as_study, check_whole
@@ -261,10 +261,10 @@ def _run(study: Study, directory: Path | None, o: _Options) -> Results | None:
     todo = [c for c in mine if c not in reusable]
     total = sum(c[2] - c[1] for c in mine)
     done = total - sum(c[2] - c[1] for c in todo)
-    if o.backend == "cpu" and not o.scheduler and todo and the_plan.general and specialised_loops(
+    if o.backend == "cpu" and not o.scheduler and todo:  # (loops compiled already: loaded, not run)
+        the_plan = replace(the_plan, general=keeps_general(the_plan.general, lambda: specialised_loops(
             the_plan.scenes, seed, base.ensemble.common_random_numbers, recorded[0][1],
-            recorded[0][0] or DEFAULT_SIGNALS, o.executor, the_plan.batch, o.progress):
-        the_plan = replace(the_plan, general=False)  # (the loops on disk: the same numbers)
+            recorded[0][0] or DEFAULT_SIGNALS, o.executor, the_plan.batch, o.progress)))
     chunk_runner = (run_chunk_cuda if o.backend == "cuda"
                     else partial(run_chunk, executor=o.executor, general=the_plan.general))
 
@@ -396,10 +396,9 @@ def sample(study: Study, workers: int | None = None, executor: str = "lanes") ->
     check_executor(executor)
     the_plan = plan(study, executor=executor)
     base = study.base
-    if the_plan.general and specialised_loops(the_plan.scenes, base.ensemble.seed,
-                                              base.ensemble.common_random_numbers, executor=executor,
-                                              batch=the_plan.batch, show=False):
-        the_plan = replace(the_plan, general=False)
+    the_plan = replace(the_plan, general=keeps_general(the_plan.general, lambda: specialised_loops(
+        the_plan.scenes, base.ensemble.seed, base.ensemble.common_random_numbers, executor=executor,
+        batch=the_plan.batch, show=False)))
     uncertain = study if base.uncertain else None
     runner = partial(run_chunk, executor=executor, general=the_plan.general)
 
@@ -434,8 +433,8 @@ def solve(scenario: Study | Mapping[str, Any] | str | os.PathLike, *, point: int
     grid = hist.grid(scene.n_steps, points or scene.n_steps + 1)
     base = study.base
     seed, common = base.ensemble.seed, base.ensemble.common_random_numbers
-    general = general_run(scene.n_steps) and not specialised_loops([scene], seed, common, grid, signals,
-                                                                   executor, 1, False)
+    general = keeps_general(general_run(scene.n_steps), lambda: specialised_loops(
+        [scene], seed, common, grid, signals, executor, 1, False))
     frame, paths = run_chunk(scene, seed, point, realization, realization + 1, grid,
                              study if base.uncertain else None, common, signals, executor, general)
     label_points(frame, study, point)

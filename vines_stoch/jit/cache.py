@@ -11,8 +11,10 @@ back to earlier sources finds their cache again.  numba's own classes are not ch
 code of the process caches as numba does.  ``make clean-cache`` removes the folders of earlier
 sources.  ``compile_once`` lets one process of a machine at a time compile a loop, so that
 processes starting the same loop together compile it once, with the faster front end
-(``frontend.compiling``).  ``cache_on_disk`` caches the cuda backend's launchers in the same
-folders (numba-cuda's own ``cache=True`` would miss in every new process: see there).
+(``frontend.compiling``); ``compiling_nothing`` lets a caller load a loop from the disk cache or
+learn that it is not there, compiling nothing.  ``cache_on_disk`` caches the cuda backend's
+launchers in the same folders (numba-cuda's own ``cache=True`` would miss in every new process:
+see there).
 """
 
 from __future__ import annotations
@@ -21,8 +23,11 @@ import hashlib
 import importlib
 import inspect
 import os
+import threading
 import types
 import warnings
+from collections.abc import Iterator
+from contextlib import contextmanager
 from functools import cache
 from pathlib import Path
 from typing import Any
@@ -214,6 +219,46 @@ def described(value: Any) -> str | None:
     if options is not None:
         options = sorted((k, sorted(v) if isinstance(v, (set, frozenset)) else v) for k, v in options.items())
     return None if inner is None else f"{func.__module__}.{func.__qualname__}: {inner} {options or ''}"
+
+
+class NotCompiled(Exception):
+    """A compile that ``compiling_nothing`` stopped: the function is compiled neither in this
+    process nor in the cache on disk for the types it was given."""
+
+
+#: The threads inside ``compiling_nothing`` (their ``threading.get_ident``, with the depth).
+_REFUSING: dict[int, int] = {}
+
+
+def refusing() -> bool:
+    """Whether this thread is inside ``compiling_nothing``."""
+    return _REFUSING.get(threading.get_ident(), 0) > 0
+
+
+@contextmanager
+def compiling_nothing() -> Iterator[None]:
+    """Inside the block, a compile this thread starts raises ``NotCompiled`` before anything is
+    compiled: numba's ``numba:compile`` event, which a compile raises after looking in the cache on
+    disk, so that a function found there is loaded as ever.  Other threads compile as ever.  It
+    listens through numba's event API (``numba.core.event``) and changes nothing of numba."""
+    from numba.core.event import Listener, install_listener
+
+    thread = threading.get_ident()
+
+    class Refusal(Listener):
+        def on_start(self, event: Any) -> None:
+            if threading.get_ident() == thread:
+                raise NotCompiled(f"{event.data['dispatcher']} is not compiled for {event.data['args']}")
+
+        def on_end(self, event: Any) -> None:
+            pass
+
+    _REFUSING[thread] = _REFUSING.get(thread, 0) + 1
+    try:
+        with install_listener("numba:compile", Refusal()):
+            yield
+    finally:
+        _REFUSING[thread] -= 1
 
 
 def compile_once(dispatcher: Any, args: tuple, package: str = "numba.core") -> None:

@@ -44,9 +44,11 @@ from .paths import (
     advance,
     bundles,
     compile_first,
+    compiled_already,
     filter_draws,
     general_run,
     history_columns,
+    keeps_general,
     kernel_for,
     load_history,
     needed_streams,
@@ -74,8 +76,9 @@ def stretcher(*args: Any, **kwargs: Any):
 
 
 __all__ = ["DEFAULT_SIGNALS", "EXECUTORS", "LANES", "SLOTS", "SPARE_ROWS", "Path", "advance", "bundles",
-           "check_executor", "chunk_loop", "chunk_runner", "compile_first", "filter_draws", "general_run",
-           "ground_paths", "history_columns", "in_pass_loop", "kernel_for", "lane_normals", "lane_scene",
+           "check_executor", "chunk_loop", "chunk_runner", "compile_first", "compiled_already",
+           "filter_draws", "general_run", "ground_paths", "history_columns", "in_pass_loop", "keeps_general",
+           "kernel_for", "lane_normals", "lane_scene",
            "launcher", "load_history", "needed_streams", "parameter_draws", "pass_loop", "pass_scene",
            "realization_streams", "sample_buffer", "scalar_general", "seed_keys", "simulate",
            "simulate_chunk", "spec_of", "start_path", "step_of", "stretch_to", "stretcher"]

@@ -6,14 +6,15 @@ from __future__ import annotations
 
 import copy
 import importlib
-from collections.abc import Sequence
+import os
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-from ..environment import GENERAL_WORK, general_problem, general_work
-from ..jit.cache import compile_once
+from ..environment import GENERAL_SWITCH, GENERAL_WORK, general_problem, general_work
+from ..jit.cache import NotCompiled, compile_once, compiling_nothing, refusing
 from ..outputs import EVENT_COLUMNS, SLOTS, new_events, new_metrics
 from ..schemes import SCHEMES
 from ..signals import declare
@@ -39,6 +40,9 @@ _NO_CARRY = np.zeros(0)
 #: saw them first: a loop given PCG64 and then Philox streams compiles twice, both times with
 #: the faster front end).
 _STARTED: set = set()
+#: The loops, with the kinds of their generators, that a look compiling nothing
+#: (``jit.cache.compiling_nothing``) found neither compiled nor on disk: looked for once a process.
+_MISSED: set = set()
 
 
 def step_of(name: str):
@@ -90,6 +94,27 @@ def general_run(path_steps: int) -> bool:
     if work is None:
         raise ValueError(general_problem())
     return path_steps < work
+
+
+def keeps_general(general: bool, specialised: Callable[[], bool]) -> bool:
+    """Whether a run whose work makes it short (``general``, ``general_run``) takes the general
+    loops: unless ``VINES_STOCH_GENERAL_WORK`` is unset (set, the work alone decides) and
+    ``specialised()`` finds the loops specialised to its structures compiled already, in this
+    process or on disk (looking compiles nothing: ``compiled_already``).  The two give the same
+    numbers, bitwise; the specialised loops run 2-3x faster, in SIMD lanes 5-15x."""
+    return general and (GENERAL_SWITCH in os.environ or not specialised())
+
+
+def compiled_already(run: Callable[[], Any]) -> bool:
+    """Whether ``run`` (a call that compiles or loads its loops first: ``compile_first``) runs
+    with no loop compiled: each compiled in this process already, or loaded now from the cache on
+    disk (``jit.cache.compiling_nothing``)."""
+    try:
+        with compiling_nothing():
+            run()
+    except NotCompiled:
+        return False
+    return True
 
 
 def kernel_for(scene, gpu: bool = False, general: bool = False):
@@ -358,7 +383,9 @@ def start_path(scene, streams: Streams | np.random.Generator | None = None, *,
                          f"not {events.shape}")
     args = bundles(scene, x, v, fl, normals if replay else _NO_NORMALS, out, samples, history, stride, gens,
                    refine, carry, columns, events)
-    general = general_run(scene.n_steps) if general is None else general
+    if general is None:  # (a specialised loop compiled already: loaded, not run)
+        general = keeps_general(general_run(scene.n_steps), lambda: compiled_already(
+            lambda: compile_first(kernel_for(scene), args, args[7:])))
     return Path(kernel_for(scene, general=general), args, sources=sources, scene=scene)
 
 
@@ -367,9 +394,16 @@ def compile_first(dispatcher, args: tuple, gens: Sequence) -> None:
     one) with streams of the kinds of ``gens``: compile it for ``args`` (or load it) with the
     faster front end, one process at a time (``cache.compile_once``)."""
     started = (dispatcher, *((type(gen), getattr(gen, "dtype", None)) for gen in gens))
-    if started not in _STARTED:
+    if started in _STARTED:
+        return
+    if started in _MISSED and refusing():
+        raise NotCompiled(f"{dispatcher} was not found before")
+    try:
         compile_once(dispatcher, args)
-        _STARTED.add(started)
+    except NotCompiled:
+        _MISSED.add(started)
+        raise
+    _STARTED.add(started)
 
 
 def stretch_to(path: Path, stop: int) -> bool:
@@ -461,5 +495,6 @@ def load_history(
     return scene.dt * np.arange(n + 1), force, ground
 
 
-__all__ = ["GENERAL_WORK", "SLOTS", "Path", "advance", "bundles", "filter_draws", "general_run", "kernel_for",
-           "load_history", "sample_buffer", "simulate", "start_path"]
+__all__ = ["GENERAL_WORK", "SLOTS", "Path", "advance", "bundles", "compiled_already", "filter_draws",
+           "general_run", "keeps_general", "kernel_for", "load_history", "sample_buffer", "simulate",
+           "start_path"]

@@ -213,6 +213,7 @@ def test_short_runs_take_the_general_loop_and_long_runs_a_specialised_one(monkey
     monkeypatch.delenv("VINES_STOCH_GENERAL_WORK", raising=False)  # (the suite's: every run general)
     scene = scene_from(frame(2, [CUBIC], [NOISE]))
     assert general_run(scene.n_steps) and general_run(GENERAL_WORK - 1) and not general_run(GENERAL_WORK)
+    monkeypatch.setenv("VINES_STOCH_GENERAL_WORK", str(GENERAL_WORK))  # (the work alone: the next test)
     assert start_path(scene, np.random.default_rng(0)).kernel is kernel_for(scene, general=True)
     monkeypatch.setenv("VINES_STOCH_GENERAL_WORK", "1e3")
     assert general_run(999) and not general_run(1000)
@@ -247,6 +248,22 @@ def test_a_short_run_takes_the_specialised_loop_where_it_is_compiled_with_the_sa
     pd.testing.assert_series_equal(one.metrics, one_general.metrics, check_exact=True)
     for name in one.ys:
         np.testing.assert_array_equal(one.ys[name], one_general.ys[name])
+
+
+def test_a_short_path_takes_the_specialised_loop_where_it_is_compiled_with_the_same_numbers(monkeypatch):
+    """``simulate`` and ``start_path`` likewise (``kernels.keeps_general``): a short path takes the
+    step loop specialised to its structure where it is compiled (or on disk), the general one's
+    numbers bitwise."""
+    scene = scene_from(frame(1, [], [HARMONIC], **{"simulation.scheme": "rk4"}))
+    final, general_final = np.zeros((2, 1)), np.zeros((2, 1))
+    monkeypatch.setenv("VINES_STOCH_GENERAL_WORK", "0")
+    simulate(scene)  # (the specialised loop: compiled or loaded)
+    monkeypatch.delenv("VINES_STOCH_GENERAL_WORK")
+    assert general_run(scene.n_steps) and start_path(scene).kernel is kernel_for(scene)
+    fast = simulate(scene, final=final)
+    monkeypatch.setenv("VINES_STOCH_GENERAL_WORK", str(GENERAL_WORK))
+    assert start_path(scene).kernel is kernel_for(scene, general=True)
+    assert same(fast, simulate(scene, final=general_final)) and same(final, general_final)
 
 
 def test_a_short_run_looks_for_a_specialised_loop_once_and_compiles_nothing(monkeypatch):
