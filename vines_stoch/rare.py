@@ -193,6 +193,14 @@ def rare_streams(seed: int, point: int, replica: int, draw: int, scene, philox: 
     return Streams(gen(0) if increments else None, gen(1) if bridge else None, gen(2) if filters else None)
 
 
+def _general(work: int, backend: str) -> bool | None:
+    """``start_path``'s ``general`` for the paths of a run of ``work`` path-steps on ``backend``:
+    the loops specialised to the structure for a long run; for a short one the general loop, or on
+    the CPU ``start_path``'s own choice (None: the specialised loop where it is compiled already,
+    ``kernels.keeps_general``; the GPU compiles loops of its own)."""
+    return None if general_run(work) and backend == "cpu" else general_run(work)
+
+
 def run_paths(paths: list[Path], stops: list[int], backend: str = "cpu") -> None:
     """Run each of ``paths`` to its stop: one after the other on the CPU (``kernels.advance``),
     or together on the GPU (``backend = "cuda"``: ``gpu.advance_many``, one path a thread)."""
@@ -277,7 +285,7 @@ class _Splitting:
 
     def start(self) -> list[_Particle]:
         """The initial paths, each on its own streams, run to the end."""
-        general = general_run(len(self.scenes) * self.n_steps)  # (the initial paths' work, at least)
+        general = _general(len(self.scenes) * self.n_steps, self.backend)  # (the initial paths' work)
         paths = [start_path(scene, self._fresh(), general=general) for scene in self.scenes]
         return self._run([_Particle(path, [path.branch()], [self._peak(path)]) for path in paths])
 
@@ -364,7 +372,7 @@ def subset(scene, limit: int, n: int, seed: int, point: int, replica: int,
                          "this scene has none")
     dim = noise + filtered + (len(parameters.laws) if parameters is not None else 0)
     rng = _chooser(seed, point, replica, INPUTS)
-    general = general_run(n * scene.n_steps)  # (a level's work, at least)
+    general = _general(n * scene.n_steps, backend)  # (a level's work, at least)
     row = scene.limits[limit]
     value = float(row[2])
     seeded = needed_streams(scene)[1]
