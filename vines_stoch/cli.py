@@ -219,10 +219,12 @@ def compile_(
                                       "whatever its structure."),
     specialised: bool = typer.Option(False, "--specialised",
                                      help="The loops specialised to the files' structures, which a run of "
-                                          "1e8 path-steps or more takes: with them on disk every run of "
-                                          "these structures takes them, however short (2-3x faster, in SIMD "
-                                          "lanes 5-15x, the same numbers), unless VINES_STOCH_GENERAL_WORK "
-                                          "is set."),
+                                          "1e8 path-steps or more takes: with them on disk every later "
+                                          "ensemble or solve of these structures with the same executor "
+                                          "takes them, however short (2-3x faster, in SIMD lanes up to about "
+                                          "13x, the same numbers), unless VINES_STOCH_GENERAL_WORK is set; a "
+                                          "process that looked for them before they were there does not "
+                                          "look again.")
 ) -> None:
     """Compile the step loops the scenarios' runs need, and run nothing (a cluster image, a
     notebook server): later runs load them from the cache on disk."""

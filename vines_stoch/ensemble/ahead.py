@@ -17,7 +17,7 @@ from typing import Any
 
 import numpy as np
 
-from ..kernels import DEFAULT_SIGNALS, EXECUTORS, check_executor, simulate
+from ..kernels import DEFAULT_SIGNALS, EXECUTORS, advance, check_executor, start_path
 from ..results import as_study
 from ..scenario import History, Study
 from ..scene import Scene, build_scene
@@ -34,8 +34,8 @@ def compile_loops(scenario: Study | Mapping[str, Any] | str | os.PathLike, *, ex
     floors, absorber laws, loads, what the run records), not on the parameters' values, so one
     scenario covers its whole sweep and its uncertain parameters; ``show``: a line a loop on
     standard error (``prepare_loops``).  ``specialised``: the loops specialised to its structures
-    (a long run's) whatever the run's work, which every later run of them then takes, however
-    short (``planning.specialised_loops``)."""
+    (a long run's) whatever the run's work, which every later ensemble or ``solve`` of them with
+    ``executor`` then takes, however short (``kernels.keeps_general``)."""
     check_executor(executor)
     study = as_study(scenario)
     base = study.base
@@ -161,7 +161,7 @@ def _compile_piece(piece: tuple[str, str, str], show: bool, kept: bool = False) 
         print(f"step loop: the general {scheme} loop for paths ({load}): compiling or loading ...", end="",
               file=sys.stderr, flush=True)
     start = time.monotonic()
-    simulate(scene, np.random.default_rng(0))
+    advance(start_path(scene, np.random.default_rng(0), stretches=False, general=True), scene.n_steps)
     if show:
         print(f" ready in {time.monotonic() - start:.1f} s", file=sys.stderr, flush=True)
     for executor in EXECUTORS:

@@ -184,7 +184,7 @@ def specialised_loops(scenes: list[Scene], seed: int, common: bool, grid: tuple[
     """Whether the loops specialised to the structures of ``scenes``, where each is not the loop a
     short run takes anyway (the pass loop), are compiled already, in this process or on disk (each
     then loaded, with ``prepare_loops``' line): what a short run takes then (``kernels.keeps_general``).
-    Looking compiles nothing (``kernels.compiled_already``), and a loop missing is looked for once
+    Looking compiles no loop (``kernels.compiled_already``), and a loop missing is looked for once
     a process (``kernels.compile_first``).  The arguments are ``prepare_loops``'."""
     wanted = {}
     for point, scene in enumerate(scenes):

@@ -222,43 +222,58 @@ def described(value: Any) -> str | None:
 
 
 class NotCompiled(Exception):
-    """A compile that ``compiling_nothing`` stopped: the function is compiled neither in this
-    process nor in the cache on disk for the types it was given."""
+    """A compile that ``compiling_nothing`` stopped: the loop is compiled neither in this process
+    nor in the cache on disk for the types it was given."""
 
 
-#: The threads inside ``compiling_nothing`` (their ``threading.get_ident``, with the depth).
-_REFUSING: dict[int, int] = {}
+#: This thread's ``compiling_nothing`` depth and the loop ``compile_once`` looks for inside it.
+_LOCAL = threading.local()
+#: The one listener to numba's compile events (``_listen``), registered on first use.
+_LISTENER: list = []
+_LISTENER_LOCK = threading.Lock()
 
 
 def refusing() -> bool:
     """Whether this thread is inside ``compiling_nothing``."""
-    return _REFUSING.get(threading.get_ident(), 0) > 0
+    return getattr(_LOCAL, "depth", 0) > 0
 
 
-@contextmanager
-def compiling_nothing() -> Iterator[None]:
-    """Inside the block, a compile this thread starts raises ``NotCompiled`` before anything is
-    compiled: numba's ``numba:compile`` event, which a compile raises after looking in the cache on
-    disk, so that a function found there is loaded as ever.  Other threads compile as ever.  It
-    listens through numba's event API (``numba.core.event``) and changes nothing of numba."""
-    from numba.core.event import Listener, install_listener
-
-    thread = threading.get_ident()
+def _listen() -> None:
+    """Register, once a process, the listener to numba's ``numba:compile`` event that stops the
+    compile of the loop ``compile_once`` looks for inside ``compiling_nothing`` (numba's event
+    API; registered for good, so that no thread's compile walks the listeners while another
+    thread takes its own away)."""
+    from numba.core.event import Listener, register
 
     class Refusal(Listener):
         def on_start(self, event: Any) -> None:
-            if threading.get_ident() == thread:
-                raise NotCompiled(f"{event.data['dispatcher']} is not compiled for {event.data['args']}")
+            target = getattr(_LOCAL, "target", None)
+            if target is not None and event.data["dispatcher"] is target:
+                raise NotCompiled(f"{target} is not compiled for {event.data['args']}")
 
         def on_end(self, event: Any) -> None:
             pass
 
-    _REFUSING[thread] = _REFUSING.get(thread, 0) + 1
+    with _LISTENER_LOCK:
+        if not _LISTENER:
+            _LISTENER.append(Refusal())
+            register("numba:compile", _LISTENER[0])
+
+
+@contextmanager
+def compiling_nothing() -> Iterator[None]:
+    """Inside the block, ``compile_once`` compiles nothing in this thread: a loop neither compiled
+    in this process nor in the cache on disk raises ``NotCompiled`` before anything of it is
+    compiled (at numba's ``numba:compile`` event, which a compile raises after looking in the
+    cache on disk, so that a loop found there is loaded as ever).  Other threads, and the small
+    functions a call compiles on the way (not through ``compile_once``), compile as ever.  It
+    listens through numba's event API and changes nothing of numba."""
+    _listen()
+    _LOCAL.depth = getattr(_LOCAL, "depth", 0) + 1
     try:
-        with install_listener("numba:compile", Refusal()):
-            yield
+        yield
     finally:
-        _REFUSING[thread] -= 1
+        _LOCAL.depth -= 1
 
 
 def compile_once(dispatcher: Any, args: tuple, package: str = "numba.core") -> None:
@@ -292,10 +307,12 @@ def compile_once(dispatcher: Any, args: tuple, package: str = "numba.core") -> N
         lock.acquire()
     except (AttributeError, OSError, TypeError):  # (no cache folder to write)
         lock = None
+    _LOCAL.target = dispatcher if refusing() else None  # (``compiling_nothing``: load it, or stop)
     try:
         with frontend.compiling(package):
             dispatcher.compile(signature)
     finally:
+        _LOCAL.target = None
         if lock is not None:
             lock.release()
 

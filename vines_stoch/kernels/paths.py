@@ -88,7 +88,7 @@ def general_run(path_steps: int) -> bool:
     set (``environment.general_work``).  A longer run takes a loop specialised to its structure,
     compiled for it (and cached): at 10-25 M path-steps/s on one core the general loop runs 10^8
     path-steps in about the 10-20 s that compiling a specialised loop takes, which then runs 2-3x
-    faster (and in SIMD lanes, where the scheme has them, 5-10x).  The two give the same numbers,
+    faster (and in SIMD lanes, where the scheme has them, up to about 13x).  The two give the same numbers,
     bitwise (``tests/unit/kernels/test_general_loop.py``)."""
     work = general_work()
     if work is None:
@@ -100,8 +100,8 @@ def keeps_general(general: bool, specialised: Callable[[], bool]) -> bool:
     """Whether a run whose work makes it short (``general``, ``general_run``) takes the general
     loops: unless ``VINES_STOCH_GENERAL_WORK`` is unset (set, the work alone decides) and
     ``specialised()`` finds the loops specialised to its structures compiled already, in this
-    process or on disk (looking compiles nothing: ``compiled_already``).  The two give the same
-    numbers, bitwise; the specialised loops run 2-3x faster, in SIMD lanes 5-15x."""
+    process or on disk (looking compiles no loop: ``compiled_already``).  The two give the same
+    numbers, bitwise; the specialised loops run 2-3x faster, in SIMD lanes up to about 13x."""
     return general and (GENERAL_SWITCH in os.environ or not specialised())
 
 
@@ -396,7 +396,7 @@ def compile_first(dispatcher, args: tuple, gens: Sequence) -> None:
     started = (dispatcher, *((type(gen), getattr(gen, "dtype", None)) for gen in gens))
     if started in _STARTED:
         return
-    if started in _MISSED and refusing():
+    if started in _MISSED and refusing() and not dispatcher.overloads:
         raise NotCompiled(f"{dispatcher} was not found before")
     try:
         compile_once(dispatcher, args)
