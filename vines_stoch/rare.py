@@ -198,7 +198,8 @@ def _general(work: int, backend: str) -> bool | None:
     the loops specialised to the structure for a long run; for a short one the general loop, or on
     the CPU ``start_path``'s own choice (None: the specialised loop where it is compiled already,
     ``kernels.keeps_general``; the GPU compiles loops of its own)."""
-    return None if general_run(work) and backend == "cpu" else general_run(work)
+    short = general_run(work)
+    return None if short and backend == "cpu" else short
 
 
 def run_paths(paths: list[Path], stops: list[int], backend: str = "cpu") -> None:

@@ -6,7 +6,7 @@ from __future__ import annotations
 import math
 import sys
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import partial
 
 from ..kernels import (
@@ -15,6 +15,7 @@ from ..kernels import (
     chunk_runner,
     compiled_already,
     general_run,
+    keeps_general,
     lane_scene,
     pass_loop,
     scalar_general,
@@ -200,3 +201,11 @@ def specialised_loops(scenes: list[Scene], seed: int, common: bool, grid: tuple[
             _announce(structure(scene), f"loaded from the cache in {time.monotonic() - start:.1f} s (a short "
                       "run takes the loop specialised to its structure where it is on disk)", show)
     return bool(wanted)
+
+
+def on_hand(the_plan: Plan, seed: int, common: bool, grid: tuple[int, int] | None = None,
+            signals: tuple[str, ...] = DEFAULT_SIGNALS, executor: str = "lanes", show: bool = True) -> Plan:
+    """``the_plan`` with the loops a short run takes where those specialised to its structures are
+    compiled already (``kernels.keeps_general``, ``specialised_loops``; the same numbers)."""
+    return replace(the_plan, general=keeps_general(the_plan.general, lambda: specialised_loops(
+        the_plan.scenes, seed, common, grid, signals, executor, the_plan.batch, show)))

@@ -7,7 +7,7 @@ from __future__ import annotations
 import os
 from collections.abc import Callable, Mapping
 from contextlib import ExitStack, closing
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from functools import partial
 from pathlib import Path
 from typing import Any
@@ -42,7 +42,7 @@ from ..store import (
 from .chunks import draw_parameters, recording, run_chunk, run_chunk_cuda, run_viewed, view_of
 from .control import Interrupted, client, noting_interrupts
 from .folding import Checkpoint, PointState
-from .planning import BACKENDS, plan, prepare_loops, specialised_loops
+from .planning import BACKENDS, on_hand, plan, prepare_loops, specialised_loops
 from .tables import chosen_paths, consolidate, label_points
 
 
@@ -262,9 +262,8 @@ def _run(study: Study, directory: Path | None, o: _Options) -> Results | None:
     total = sum(c[2] - c[1] for c in mine)
     done = total - sum(c[2] - c[1] for c in todo)
     if o.backend == "cpu" and not o.scheduler and todo:  # (loops compiled already: loaded, not run)
-        the_plan = replace(the_plan, general=keeps_general(the_plan.general, lambda: specialised_loops(
-            the_plan.scenes, seed, base.ensemble.common_random_numbers, recorded[0][1],
-            recorded[0][0] or DEFAULT_SIGNALS, o.executor, the_plan.batch, o.progress)))
+        the_plan = on_hand(the_plan, seed, base.ensemble.common_random_numbers, recorded[0][1],
+                           recorded[0][0] or DEFAULT_SIGNALS, o.executor, o.progress)
     chunk_runner = (run_chunk_cuda if o.backend == "cuda"
                     else partial(run_chunk, executor=o.executor, general=the_plan.general))
 
@@ -396,9 +395,8 @@ def sample(study: Study, workers: int | None = None, executor: str = "lanes") ->
     check_executor(executor)
     the_plan = plan(study, executor=executor)
     base = study.base
-    the_plan = replace(the_plan, general=keeps_general(the_plan.general, lambda: specialised_loops(
-        the_plan.scenes, base.ensemble.seed, base.ensemble.common_random_numbers, executor=executor,
-        batch=the_plan.batch, show=False)))
+    the_plan = on_hand(the_plan, base.ensemble.seed, base.ensemble.common_random_numbers, executor=executor,
+                       show=False)
     uncertain = study if base.uncertain else None
     runner = partial(run_chunk, executor=executor, general=the_plan.general)
 

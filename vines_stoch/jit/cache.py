@@ -228,9 +228,6 @@ class NotCompiled(Exception):
 
 #: This thread's ``compiling_nothing`` depth and the loop ``compile_once`` looks for inside it.
 _LOCAL = threading.local()
-#: The one listener to numba's compile events (``_listen``), registered on first use.
-_LISTENER: list = []
-_LISTENER_LOCK = threading.Lock()
 
 
 def refusing() -> bool:
@@ -238,6 +235,7 @@ def refusing() -> bool:
     return getattr(_LOCAL, "depth", 0) > 0
 
 
+@cache
 def _listen() -> None:
     """Register, once a process, the listener to numba's ``numba:compile`` event that stops the
     compile of the loop ``compile_once`` looks for inside ``compiling_nothing`` (numba's event
@@ -254,10 +252,7 @@ def _listen() -> None:
         def on_end(self, event: Any) -> None:
             pass
 
-    with _LISTENER_LOCK:
-        if not _LISTENER:
-            _LISTENER.append(Refusal())
-            register("numba:compile", _LISTENER[0])
+    register("numba:compile", Refusal())
 
 
 @contextmanager
@@ -294,6 +289,13 @@ def compile_once(dispatcher: Any, args: tuple, package: str = "numba.core") -> N
     signature = tuple(typer(a) for a in args)
     if signature in dispatcher.overloads:
         return
+    if refusing():  # (``compiling_nothing``: load it from the disk cache, or stop; no lock to wait on)
+        _LOCAL.target = dispatcher
+        try:
+            dispatcher.compile(signature)
+        finally:
+            _LOCAL.target = None
+        return
     func = dispatcher.py_func
     identity = described(dispatcher) or repr((func.__module__, func.__qualname__,
                                               tuple(cell.cell_contents for cell in func.__closure__ or ())))
@@ -307,12 +309,10 @@ def compile_once(dispatcher: Any, args: tuple, package: str = "numba.core") -> N
         lock.acquire()
     except (AttributeError, OSError, TypeError):  # (no cache folder to write)
         lock = None
-    _LOCAL.target = dispatcher if refusing() else None  # (``compiling_nothing``: load it, or stop)
     try:
         with frontend.compiling(package):
             dispatcher.compile(signature)
     finally:
-        _LOCAL.target = None
         if lock is not None:
             lock.release()
 
