@@ -94,8 +94,9 @@ def contact_mean(row: np.ndarray, s: float) -> float:
     def force(mu: float) -> float:
         return law(row, mu, s)[0]
 
-    width = max(s, abs(row[WALL_HI] - row[WALL_LO]), abs(row[REST]), 1e-12)
-    lo, hi = min(row[WALL_LO], row[REST]) - width, max(row[WALL_HI], row[REST]) + width
+    walls = [w for w in (row[WALL_LO], row[WALL_HI]) if math.isfinite(w)]  # (no left one: seed 001 eq. 1)
+    width = max(s, max(walls) - min(walls), abs(row[REST]), 1e-12)
+    lo, hi = min(*walls, row[REST]) - width, max(*walls, row[REST]) + width
     for _ in range(60):
         if force(lo) > 0.0 > force(hi):
             break

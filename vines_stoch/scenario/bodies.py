@@ -343,7 +343,8 @@ class HertzAbsorber(_Absorber):
     """Vibro-impact NES with finite-duration Hertz contact (MODEL.md section 2, Lizunov et al.).
 
     ``offset`` is D (single-sided) or V (double-sided), ``gap`` is C.  ``rest`` overrides the
-    spring's rest offset (default D, or V + C for double-sided).
+    spring's rest offset (default D, or V + C for double-sided).  A single-sided absorber without
+    ``contact_left`` never touches the primary: its one barrier is the obstacle (seed 001 eq. 1).
     """
 
     type: Literal["hertz"]
@@ -354,13 +355,16 @@ class HertzAbsorber(_Absorber):
     damping: NonNegative = 0.0
     offset: NonNegative
     gap: Positive
-    contact_left: Contact
+    contact_left: Contact | None = None
     contact_right: Contact
     obstacle: Literal["from-rest", "from-primary"] = "from-rest"
     rest: Real | None = None
 
     @model_validator(mode="after")
     def _geometry(self) -> HertzAbsorber:
+        if self.contact_left is None and self.geometry == "double-sided":
+            raise FieldError("contact_left", None, "missing: a double-sided absorber has two obstacles "
+                             "(only a single-sided one may leave out its contact with the primary)")
         if self.obstacle == "from-primary":
             if self.geometry != "single-sided":
                 raise FieldError("obstacle", self.obstacle,
@@ -373,12 +377,13 @@ class HertzAbsorber(_Absorber):
     @property
     def walls(self) -> tuple[float, float]:
         """Relative positions ``(lo, hi)`` of the left and right contact surfaces:
-        ``z_L = lo - u``, ``z_R = u - hi``."""
+        ``z_L = lo - u``, ``z_R = u - hi``; ``lo = -inf`` where there is no left contact."""
         if self.geometry == "double-sided":
             return self.offset, self.offset + 2.0 * self.gap
+        lo = 0.0 if self.contact_left is not None else -np.inf
         if self.obstacle == "from-primary":
-            return 0.0, self.gap
-        return 0.0, self.offset + self.gap
+            return lo, self.gap
+        return lo, self.offset + self.gap
 
     @property
     def start(self) -> float:
@@ -397,7 +402,8 @@ class HertzAbsorber(_Absorber):
         """The absorber's row by column name (``physics.absorbers.COLUMNS``): the spring and
         dashpot, the spring's rest offset, the contact constants and surfaces."""
         lo, hi = self.walls
-        return {**super().parameters(), "rest": self.spring_rest, "k_left": self.contact_left.constant,
+        left = self.contact_left.constant if self.contact_left is not None else 0.0
+        return {**super().parameters(), "rest": self.spring_rest, "k_left": left,
                 "k_right": self.contact_right.constant, "wall_lo": lo, "wall_hi": hi}
 
     @property

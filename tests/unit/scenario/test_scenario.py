@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 import subprocess
 import sys
 import tomllib
@@ -87,6 +88,11 @@ CASES = [
     ("history repeated quantile", GOOD + "history = { quantiles = [0.5, 0.5] }\n",
      "simulation.history.quantiles = [0.5, 0.5]: must not repeat a value"),
     ("target sem", GOOD + "[ensemble]\ntarget_sem = 0.0\n", "ensemble.target_sem = 0.0: must be > 0"),
+    ("double-sided without its left obstacle", GOOD.replace(
+        'type = "impact"\nmass = 0.05\nclearance = 0.2\nrestitution = 0.6',
+        'type = "hertz"\ngeometry = "double-sided"\nmass = 0.05\noffset = 0.0\ngap = 0.2\n'
+        'contact_right = { k = 1e6 }'),
+     "absorbers.1.contact_left: missing: a double-sided absorber has two obstacles"),
 ]
 
 
@@ -97,6 +103,16 @@ def test_bad_input_names_file_key_value_and_rule(write, label, text, message):
         load_scenario(path)
     assert str(err.value).startswith(str(path)), err.value
     assert message in str(err.value)
+
+
+def test_a_single_sided_absorber_without_its_left_contact_never_touches_the_primary(write):
+    """Seed 001 eq. (1): no ``contact_left``, no surface on the primary (its wall at -inf, its
+    constant 0), the obstacle at ``gap`` from the primary with ``obstacle = "from-primary"``."""
+    text = GOOD.replace('type = "impact"\nmass = 0.05\nclearance = 0.2\nrestitution = 0.6',
+                        'type = "hertz"\ngeometry = "single-sided"\nmass = 0.05\noffset = 0.1\ngap = 0.2\n'
+                        'obstacle = "from-primary"\ncontact_right = { k = 1e6 }')
+    row = load_scenario(write(text)).points[0].absorbers[1].parameters()
+    assert (row["wall_lo"], row["wall_hi"], row["k_left"], row["k_right"]) == (-math.inf, 0.2, 0.0, 1e6)
 
 
 def test_zero_stiffness_and_damping_are_valid():
