@@ -135,7 +135,8 @@ def test_20_kg_designs_keep_their_bilateral_impacts_near_the_resonance(alone):
     """Figs. 7-8 (20 kg), with the two single-sided designs not reproduced (the report's Table 4:
     SS-1(20) takes another of its regimes from rest, SS-4(20) is unexplained) held to what they do
     here.  Fig. 8, "the areas of bilateral impacts remain narrow": every design's bilateral
-    impacts lie within 5.6-6.5 rad/s, at most ten of the 31 frequencies (measured: SS-2(20) 6.2,
+    impacts lie within 5.5-6.6 rad/s, at most twelve of the 31 frequencies, a frequency step of
+    margin at each edge and two on the count (measured: SS-2(20) 6.2,
     SS-3(20) 6.3 and 6.5, DS-1 and DS-2 6.1-6.4, DS-3 6.0-6.5, DS-4 5.6-6.5, where Fig. 9 shows its
     chaos with impacts on both obstacles at 5.7), and the double-sided designs are shockless
     outside them; SS-1(20) meets the primary alone (5.8-6.7 rad/s, no bilateral impact), SS-4(20)
@@ -145,7 +146,7 @@ def test_20_kg_designs_keep_their_bilateral_impacts_near_the_resonance(alone):
     zones = {label: zones_of(rows) for label, rows in found.items()}
     for label, row in zones.items():
         both = [w for w, z in zip(E1MAX_FREQUENCIES, row) if z == "bilateral"]
-        assert all(5.6 <= w <= 6.5 for w in both) and len(both) <= 10, (label, both)
+        assert all(5.5 <= w <= 6.6 for w in both) and len(both) <= 12, (label, both)
         if label.startswith("DS"):
             (_,) = runs(row, "bilateral")  # (one unbroken zone)
             assert set(row) == {"bilateral", "none"}, label

@@ -88,7 +88,8 @@ def contact_mean(row: np.ndarray, s: float) -> float:
     vanishes, for the standard deviation ``s``: the absorber's mean balance (no mean load reaches
     it but through its attachment), with the contact's stiff mean force taken quasi-statically
     (a linearisation about any other mean overshoots across the contact; ``E[g]`` falls with
-    ``mu``, so the root is one)."""
+    ``mu``, so the root is one).  NotApplicable where none is found: a one-barrier absorber
+    without a spring (seed 001 eq. 1) has nothing that pulls it back from the barrier."""
     from scipy.optimize import brentq
 
     def force(mu: float) -> float:
@@ -103,7 +104,7 @@ def contact_mean(row: np.ndarray, s: float) -> float:
         lo, hi = lo - width, hi + width
         width *= 2.0
     else:
-        return 0.5 * (lo + hi)
+        raise NotApplicable("a Hertz absorber with nothing to pull it back on one side: no mean balance")
     return brentq(force, lo, hi, xtol=1e-15 * width, rtol=1e-12)
 
 

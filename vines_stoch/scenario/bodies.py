@@ -342,13 +342,14 @@ class Contact(_Model):
 class HertzAbsorber(_Absorber):
     """Vibro-impact NES with finite-duration Hertz contact (MODEL.md section 2, Lizunov et al.).
 
-    ``offset`` is D (single-sided) or V (double-sided), ``gap`` is C.  ``rest`` overrides the
-    spring's rest offset (default D, or V + C for double-sided).  A single-sided absorber without
-    ``contact_left`` never touches the primary: its one barrier is the obstacle (seed 001 eq. 1).
+    ``offset`` is D (single-sided, one-barrier) or V (double-sided), ``gap`` is C.  ``rest``
+    overrides the spring's rest offset (default D, or V + C for double-sided).  A one-barrier
+    absorber is a single-sided one that never touches the primary: its one barrier is the
+    obstacle, and it has no ``contact_left`` (seed 001 eq. 1).
     """
 
     type: Literal["hertz"]
-    geometry: Literal["single-sided", "double-sided"]
+    geometry: Literal["single-sided", "double-sided", "one-barrier"]
     floor: Floor | None = None
     mass: Mass
     stiffness: NonNegative = 0.0
@@ -362,13 +363,19 @@ class HertzAbsorber(_Absorber):
 
     @model_validator(mode="after")
     def _geometry(self) -> HertzAbsorber:
-        if self.contact_left is None and self.geometry == "double-sided":
-            raise FieldError("contact_left", None, "missing: a double-sided absorber has two obstacles "
-                             "(only a single-sided one may leave out its contact with the primary)")
+        one_barrier = self.geometry == "one-barrier"
+        if one_barrier and self.contact_left is not None:
+            raise FieldError("contact_left", self.contact_left.model_dump(exclude_unset=True),
+                             "a one-barrier absorber never touches the primary: "
+                             "leave contact_left out, or use geometry = 'single-sided'")
+        if not one_barrier and self.contact_left is None:
+            raise FieldError("contact_left", None, f"missing: a {self.geometry} absorber has a left contact "
+                             "(geometry = 'one-barrier' has none: seed 001 eq. 1)")
         if self.obstacle == "from-primary":
-            if self.geometry != "single-sided":
+            if self.geometry == "double-sided":
                 raise FieldError("obstacle", self.obstacle,
-                                 "'from-primary' (seed 002) is defined for single-sided geometry only")
+                                 "'from-primary' (seed 002) is defined for the single-sided and one-barrier "
+                                 "geometries only")
             if self.offset >= self.gap:
                 raise FieldError("offset", self.offset, f"must be < gap ({self.gap:g}) with obstacle = "
                                  "'from-primary' (the absorber would start inside the obstacle)")
@@ -377,17 +384,17 @@ class HertzAbsorber(_Absorber):
     @property
     def walls(self) -> tuple[float, float]:
         """Relative positions ``(lo, hi)`` of the left and right contact surfaces:
-        ``z_L = lo - u``, ``z_R = u - hi``; ``lo = -inf`` where there is no left contact."""
+        ``z_L = lo - u``, ``z_R = u - hi``; ``lo = -inf`` for a one-barrier absorber."""
         if self.geometry == "double-sided":
             return self.offset, self.offset + 2.0 * self.gap
-        lo = 0.0 if self.contact_left is not None else -np.inf
+        lo = -np.inf if self.geometry == "one-barrier" else 0.0
         if self.obstacle == "from-primary":
             return lo, self.gap
         return lo, self.offset + self.gap
 
     @property
     def start(self) -> float:
-        """Initial relative position: D (single-sided) or V + C (double-sided)."""
+        """Initial relative position: D (single-sided, one-barrier) or V + C (double-sided)."""
         return self.offset + (self.gap if self.geometry == "double-sided" else 0.0)
 
     @property

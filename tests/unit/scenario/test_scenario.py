@@ -92,7 +92,12 @@ CASES = [
         'type = "impact"\nmass = 0.05\nclearance = 0.2\nrestitution = 0.6',
         'type = "hertz"\ngeometry = "double-sided"\nmass = 0.05\noffset = 0.0\ngap = 0.2\n'
         'contact_right = { k = 1e6 }'),
-     "absorbers.1.contact_left: missing: a double-sided absorber has two obstacles"),
+     "absorbers.1.contact_left: missing: a double-sided absorber has a left contact"),
+    ("one barrier with a left contact", GOOD.replace(
+        'type = "impact"\nmass = 0.05\nclearance = 0.2\nrestitution = 0.6',
+        'type = "hertz"\ngeometry = "one-barrier"\nmass = 0.05\noffset = 0.0\ngap = 0.2\n'
+        'contact_left = { k = 1e6 }\ncontact_right = { k = 1e6 }'),
+     "absorbers.1.contact_left = {'k': 1000000.0}: a one-barrier absorber never touches the primary"),
 ]
 
 
@@ -105,11 +110,12 @@ def test_bad_input_names_file_key_value_and_rule(write, label, text, message):
     assert message in str(err.value)
 
 
-def test_a_single_sided_absorber_without_its_left_contact_never_touches_the_primary(write):
-    """Seed 001 eq. (1): no ``contact_left``, no surface on the primary (its wall at -inf, its
-    constant 0), the obstacle at ``gap`` from the primary with ``obstacle = "from-primary"``."""
+def test_a_one_barrier_absorber_never_touches_the_primary(write):
+    """Seed 001 eq. (1), ``geometry = "one-barrier"``: no surface on the primary (its wall at
+    -inf, its constant 0), the obstacle at ``gap`` from the primary with ``obstacle =
+    "from-primary"``."""
     text = GOOD.replace('type = "impact"\nmass = 0.05\nclearance = 0.2\nrestitution = 0.6',
-                        'type = "hertz"\ngeometry = "single-sided"\nmass = 0.05\noffset = 0.1\ngap = 0.2\n'
+                        'type = "hertz"\ngeometry = "one-barrier"\nmass = 0.05\noffset = 0.1\ngap = 0.2\n'
                         'obstacle = "from-primary"\ncontact_right = { k = 1e6 }')
     row = load_scenario(write(text)).points[0].absorbers[1].parameters()
     assert (row["wall_lo"], row["wall_hi"], row["k_left"], row["k_right"]) == (-math.inf, 0.2, 0.0, 1e6)

@@ -203,6 +203,23 @@ def test_every_shipped_scenario_estimates_or_says_why():
         assert missing.empty, path
 
 
+def test_a_one_barrier_absorber_is_linearised_with_its_spring_and_refused_without_one():
+    """A one-barrier Hertz absorber (seed 001 eq. 1) under white noise: with its spring the
+    linearisation settles (an EDM in (0, 1)); without one nothing pulls the absorber back from
+    the barrier, no mean balance exists, and the estimate says so (it once returned a mean 64 m
+    off, and an EDM of 2e8)."""
+    absorber = {"type": "hertz", "geometry": "one-barrier", "mass": 20.0, "stiffness": 225.0,
+                "damping": 35.3, "offset": 0.3, "gap": 0.35, "obstacle": "from-primary",
+                "contact_right": {"k": 3e7}}
+    data = {"name": "barrier", "primary": {"mass": 1000.0, "stiffness": 3.95e4, "damping": 452.0},
+            "absorbers": [absorber], "loads": [{"type": "white-noise", "intensity": 200.0}],
+            "simulation": {"duration": 50.0, "dt": 1e-3}}
+    row = estimate(data).iloc[0]
+    assert row["method"] == "statistical-linearization" and 0.0 < row["edm"] < 1.0
+    spring = estimate({**data, "absorbers": [{**absorber, "stiffness": 0.0}]}).iloc[0]
+    assert spring["method"] == "not-applicable" and "no mean balance" in spring["note"]
+
+
 def test_beside_gives_the_distance_in_standard_errors():
     import pandas as pd
 
