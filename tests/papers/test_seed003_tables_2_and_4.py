@@ -89,6 +89,29 @@ def test_table_4_misses_are_no_single_misprint():
         assert min(o for name, o in off.items() if name.startswith("D =")) > 0.05, (label, off)
 
 
+def test_ss_4_20_is_no_double_misprint_of_its_geometry():
+    """SS-4(20) beyond one misprint: D read as printed, ten or a hundred times smaller (its D is
+    SS-4(60)'s misprinted one, 0.759 m), C as printed or ten times smaller, and the obstacle
+    from the rest position or from the primary (seed 002's convention): none of the eleven
+    variants comes within 15 % of the printed 526 J (measured: the nearest, D / 10, +17.4 %, the
+    others +35 to +160 %); D / 10 from 12 initial states reaches one regime (2T,2,1, 618 J)."""
+    printed, paper = MISSED["SS-4(20)"]
+    base = tomllib.loads(Path("scenarios/seed003_ss20.toml").read_text())
+    del base["sweep"]
+    variants = [(d, c, obstacle) for d in (0.759, 0.0759, 0.00759) for c in (0.871, 0.0871)
+                for obstacle in ("from-rest", "from-primary") if obstacle == "from-rest" or d < c]
+    data = {**base, "sweep": {"zip": ["absorbers.0.offset", "absorbers.0.gap", "absorbers.0.obstacle"],
+                              "absorbers.0.offset": [v[0] for v in variants],
+                              "absorbers.0.gap": [v[1] for v in variants],
+                              "absorbers.0.obstacle": [v[2] for v in variants]}}
+    data["absorbers"][0].update(zip(FIELDS, printed), obstacle="from-rest")
+    off = run(data).realizations["e1_max"].to_numpy() / paper - 1.0
+    assert len(variants) == 11 and (off > 0.15).all(), dict(zip(variants, off))
+    tenth = (*printed[:2], printed[2] / 10.0, printed[3])
+    e1 = [run(_from(tenth, tuple(s))).realizations["e1_max"][0] for s in _states(tenth, 12, 5)]
+    assert np.ptp(e1) < 1e-6 * paper and e1[0] / paper - 1 > 0.15
+
+
 def _from(printed: tuple[float, ...], state: tuple[float, float, float, float]) -> dict:
     """The SS design ``printed`` (k2, c2, D, C) of ``seed003_ss20.toml`` started from ``state``:
     the primary's displacement and velocity, the absorber's relative to the primary."""
