@@ -6,7 +6,8 @@ trial (sub-)step and says which event lies between: its kind, the side (-1 left,
 wall hit, the contact surface touched or left) and the wall's place (the relative displacement
 at the event).  The event happens when the gap ``gap_sign(event, side) (u - wall)`` crosses zero
 upwards.  Each scheme keeps its own search for the instant: the kick-drift-kick loop the
-Illinois bracket on the Brownian path (``kdk.crossing``), the RK4 loop Newton iteration on the
+bracket on the Brownian path, halved at the nodes of the step's Brownian tree and then closed by
+the Illinois method (``kdk.crossing``), the RK4 loop Newton iteration on the
 length of an RK4 sub-step from a linear first guess (``rk4.next_event``).
 """
 

@@ -54,7 +54,7 @@ from ..physics.absorbers import CLEARANCE, HERTZ, RESTITUTION, WALL_HI, WALL_LO
 from ..physics.hertz import contact_energy, contact_force_law
 from ..physics.structure import host_of, wall_of
 from ..streams.rng import uniform
-from .brownian import MEMO, path_value, tree_seed
+from .brownian import MEMO, TREE_DEPTH, path_value, tree_seed
 from .carry import REPLAYED, SEED_HIGH, SEED_LOW, restore_absorbers, save_absorbers
 from .common import (
     FILTERED_BIT,
@@ -121,17 +121,16 @@ def kick(v, s, dws, load, ag, force, inv_mass, vn, ground):
 
 
 @njit(**INLINE)
-def increments(path, dw, off, s, left, w_at, sigma, normals, slot, memo, out):
-    """Each floor's Wiener increment ``sigma W`` over ``[off, off + s]`` of the step into ``out``
-    (``w_at``: the path at ``off``; ``dw``: the step's increments, the path at its end, which
-    ``s >= left`` reaches).  ``path``:
-    the step's tree (seed, step, dt, replayed fine normals a step, normals a fine step, replay);
-    ``slot``: each floor's place among the noisy floors; ``memo``: the tree's descent memo
+def increments(path, dw, end, whole, w_at, sigma, normals, slot, memo, out):
+    """Each floor's Wiener increment ``sigma W`` from a sub-step's start to the instant ``end`` of
+    the step into ``out`` (``w_at``: the path at the start; ``dw``: the step's increments, the
+    path at its end, which ``whole`` says the sub-step reaches).  ``path``: the step's tree
+    (seed, step, dt, replayed fine normals a step, normals a fine step, replay); ``slot``: each
+    floor's place among the noisy floors; ``memo``: the tree's descent memo
     (``brownian.path_value``)."""
     seed, step, dt, refine, stride, replay = path
-    end = off + s
     for k in range(out.shape[0]):
-        if s >= left:
+        if whole:
             out[k] = dw[k] - w_at[k]
         elif sigma[k] == 0.0:
             out[k] = 0.0
@@ -141,15 +140,37 @@ def increments(path, dw, off, s, left, w_at, sigma, normals, slot, memo, out):
 
 
 @njit(**INLINE)
+def tree_point(tree_lo: float, tree_hi: float, depth: int, off: float, lo: float, hi: float):
+    """The next of a root search's trials on a step's Brownian tree (``crossing``): from the
+    tree's interval ``[tree_lo, tree_hi]`` (instants in the step) at level ``depth`` that holds
+    the bracket ``(lo, hi)`` (sub-steps from ``off``), down the tree to the first interval whose
+    midpoint (a node of the tree) lies inside the bracket; returns that interval, its level and
+    its midpoint, or level ``TREE_DEPTH`` where no node does (the bracket lies in one leaf,
+    where the path is linear)."""
+    while depth < TREE_DEPTH:
+        mid = 0.5 * (tree_lo + tree_hi)
+        if lo < mid - off < hi:
+            return tree_lo, tree_hi, depth, mid
+        if mid - off <= lo:
+            tree_lo = mid
+        else:
+            tree_hi = mid
+        depth += 1
+    return tree_lo, tree_hi, depth, 0.0
+
+
+@njit(**INLINE)
 def crossing(x, v, length, left, path, dw, off, w_at, sigma, normals, slot, memo, load, ag, force, mass,
              inv_mass, stuck, walls, a, side, wall, vt, dws, group_mass, group_sum, ground, sticking, tree):
     """Sub-step length in ``(0, length]`` after which absorber ``a`` is exactly at ``wall``
     (side ``side``: the gap ``side (x_a - x_w) - wall`` crosses zero upwards) of the body ``w``
     that holds its walls (``walls``: ``physics.structure.wall_of``; the bodies that may hold
-    walls are as many as the sticking groups, ``group_mass``), by the Illinois method on the
-    bracket ``[0, length]``; the trial kicks take the Wiener increments of the step's Brownian
-    tree (``increments``), and ``vt`` and ``dws`` are left with the trial kick to the root (the
-    velocities and the half increments); ``sticking``: the scene has impact absorbers that may
+    walls are as many as the sticking groups, ``group_mass``), on the bracket ``[0, length]``:
+    with the tree, first by bisection at the tree's nodes inside the bracket (``tree_point``),
+    then, in the one leaf of the tree left, by the Illinois method, as without it; the trial
+    kicks take the Wiener increments of the step's Brownian tree (``increments``), and ``vt``
+    and ``dws`` are left with the trial kick to the root (the velocities and the half
+    increments); ``sticking``: the scene has impact absorbers that may
     stick, ``tree``: the sub-steps' increments come from the Brownian tree (white noise; without
     it they are the step's, zero: compile-time flags, so that a loop without noise prunes the
     tree's code before typing it).  (The floor count is ``load``'s length: a call of 30
@@ -163,17 +184,32 @@ def crossing(x, v, length, left, path, dw, off, w_at, sigma, normals, slot, memo
     s = hi
     last = 0
     done = False
-    # trial 0 kicks over the whole bracket for ``g_hi``, the next are the Illinois iterates, and
-    # a last trial at the root found (where the last iterate was not the root) leaves its kick in
-    # ``vt`` and its half increments in ``dws`` for the caller's kick to the event: one inlined
-    # trial kick for all (the Brownian tree's code is the bulk of each copy)
-    for trial in range(ROOT_ITERATIONS + 2):
+    # the tree's interval (in the step) that holds the bracket, and its level: with the tree, the
+    # first trials are its own nodes inside the bracket, each below the last, so that each draws
+    # one normal (``tree_point``; an Illinois iterate anywhere in the step drew up to
+    # ``TREE_DEPTH``); in the bracket they leave, inside one leaf, the path is linear and the
+    # gap a quadratic in ``s``, which the Illinois iterates take to the root in a few trials
+    _, _, dt, refine, _, replay = path
+    tree_lo, tree_hi, mid = 0.0, dt, 0.0
+    depth = 0 if tree and (refine == 1 or not replay) else TREE_DEPTH
+    on_tree = False
+    # trial 0 kicks over the whole bracket for ``g_hi``, the next are the tree's points and then
+    # the Illinois iterates, and a last trial at the root found (where the last iterate was not
+    # the root) leaves its kick in ``vt`` and its half increments in ``dws`` for the caller's kick
+    # to the event: one inlined trial kick for all (the Brownian tree's code is the bulk of each copy)
+    for trial in range(ROOT_ITERATIONS + TREE_DEPTH + 2):
         if trial > 0 and not done:
-            s = hi - g_hi * (hi - lo) / (g_hi - g_lo)
-            if not (lo < s < hi):
-                s = 0.5 * (lo + hi)
-        if tree:
-            increments(path, dw, off, s, left, w_at, sigma, normals, slot, memo, dws)
+            if depth < TREE_DEPTH:
+                tree_lo, tree_hi, depth, mid = tree_point(tree_lo, tree_hi, depth, off, lo, hi)
+                s = mid - off
+            on_tree = depth < TREE_DEPTH  # (a trial at a node: the tree's interval halved at it)
+            if not on_tree:
+                s = hi - g_hi * (hi - lo) / (g_hi - g_lo)
+                if not (lo < s < hi):
+                    s = 0.5 * (lo + hi)
+        if tree:  # (at a node, its instant itself: ``off + s`` may differ from it in the last bit)
+            increments(path, dw, mid if on_tree else off + s, s >= left, w_at, sigma, normals, slot, memo,
+                       dws)
         else:
             for k in range(nf):
                 dws[k] = dw[k]
@@ -187,21 +223,25 @@ def crossing(x, v, length, left, path, dw, off, w_at, sigma, normals, slot, memo
         if trial == 0:
             g_hi = g
             continue
+        tree_hi = mid if on_tree and g >= 0.0 else tree_hi
+        tree_lo = mid if on_tree and g < 0.0 else tree_lo
+        depth += 1 if on_tree else 0
         if g >= 0.0:  # (a trial exactly on the wall is the root: the bracket's end returned)
             hi, g_hi = s, g
             if last > 0:
                 g_lo *= 0.5
-            last = 1
+            last = 0 if on_tree else 1
         else:
             lo, g_lo = s, g
             if last < 0:
                 g_hi *= 0.5
-            last = -1
-        if hi - lo <= 1e-15 * length or g == 0.0 or trial == ROOT_ITERATIONS:
+            last = 0 if on_tree else -1
+        if hi - lo <= 1e-15 * length or g == 0.0 or trial == ROOT_ITERATIONS + TREE_DEPTH:
             if s == hi:
                 break
             done = True
             s = hi
+            on_tree = False
     return hi
 
 
@@ -502,7 +542,7 @@ def kdk_step(spec) -> Step:
             elif has_hertz and any_set(touching):
                 s = min(left, contact_step(*plain((x, v, nf, mass, host, rows, touching))))
             if tree:
-                increments(path, dw, off, s, left, w_at, sigma, normals, slot, memo, dws)
+                increments(path, dw, off + s, s >= left, w_at, sigma, normals, slot, memo, dws)
             else:
                 for k in range(nf):
                     dws[k] = dw[k]

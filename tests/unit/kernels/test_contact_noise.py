@@ -9,8 +9,9 @@ import numpy as np
 import pytest
 
 from tests.helpers import example_data, lane_metrics, raw_metrics, scene_from, study_from
-from vines_stoch.kernels.brownian import MEMO, new_memo, node_normal, path_value, tree_value
+from vines_stoch.kernels.brownian import MEMO, TREE_DEPTH, new_memo, node_normal, path_value, tree_value
 from vines_stoch.kernels.chunk import lane_scene
+from vines_stoch.kernels.kdk import tree_point
 from vines_stoch.streams.rng import TAIL_WORD
 from vines_stoch.validation.precision import same_path_errors, strong_order
 
@@ -119,6 +120,42 @@ def test_tree_values_do_not_depend_on_the_queries_before_them():
             total = 0.01 * (1 + floor + step)
             shared = tree_value(total, length, tau, 0.5, key, step, memo, floor * MEMO)
             assert shared == tree_value(total, length, tau, 0.5, key, step, new_memo(1), 0)
+
+
+@pytest.mark.parametrize("off, length", [(0.0, 1e-3), (0.37e-3, 0.55e-3), (0.61e-3, 1.3e-5), (0.2e-3, 5e-8)])
+def test_a_root_search_s_trials_on_the_tree_are_its_nodes(off, length):
+    """``kdk.crossing``'s first trials (``tree_point``), whichever side of each the root lies:
+    each is a node of the step's tree strictly inside the bracket, each a level below the last,
+    and a query there ends at that node, drawing the normals of the levels between (one where
+    no level is skipped: the memo holds the last trial's descent); in the bracket left, no node
+    lies inside (it lies in one leaf, where the path is linear)."""
+    dt, key = 1e-3, np.uint64(2024)
+    levels = MEMO - 2  # (the memo's count of the levels it keeps)
+    rng = np.random.default_rng(5)
+    for _ in range(20):
+        memo = new_memo(1)
+        values = []
+        lo, hi = 0.0, length
+        tree_lo, tree_hi, depth = 0.0, dt, 0
+        while True:
+            tree_lo, tree_hi, depth, mid = tree_point(tree_lo, tree_hi, depth, off, lo, hi)
+            if depth >= TREE_DEPTH:
+                break
+            assert lo < mid - off < hi
+            node = mid / dt * 2.0 ** (depth + 1)  # an odd multiple of dt / 2^(depth + 1), as rounded
+            assert node == pytest.approx(round(node), abs=1e-9) and round(node) % 2 == 1
+            kept = memo[levels]
+            values.append(tree_value(0.02, dt, mid, 0.5, key, 7, memo, 0))
+            assert memo[levels] == depth + 1  # the descent ended at the node
+            assert kept == 0.0 or memo[levels] > kept  # below the last trial's
+            if rng.random() < 0.5:  # the root left of the trial: the tree's interval halved
+                hi, tree_hi = mid - off, mid
+            else:
+                lo, tree_lo = mid - off, mid
+            depth += 1
+        leaf = dt / 2.0 ** TREE_DEPTH
+        assert math.floor((off + lo) / leaf * (1 + 1e-12)) >= math.ceil((off + hi) / leaf * (1 - 1e-12)) - 1
+        assert len(values) <= TREE_DEPTH
 
 
 # -- statistics of contact under noise ------------------------------------------------------
