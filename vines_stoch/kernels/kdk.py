@@ -193,6 +193,7 @@ def crossing(x, v, length, left, path, dw, off, w_at, sigma, normals, slot, memo
     tree_lo, tree_hi, mid = 0.0, dt, 0.0
     depth = 0 if tree and (refine == 1 or not replay) else TREE_DEPTH
     on_tree = False
+    cap = ROOT_ITERATIONS + TREE_DEPTH - depth  # (the trials: without the tree's, the Illinois search's)
     # trial 0 kicks over the whole bracket for ``g_hi``, the next are the tree's points and then
     # the Illinois iterates, and a last trial at the root found (where the last iterate was not
     # the root) leaves its kick in ``vt`` and its half increments in ``dws`` for the caller's kick
@@ -236,7 +237,7 @@ def crossing(x, v, length, left, path, dw, off, w_at, sigma, normals, slot, memo
             if last < 0:
                 g_hi *= 0.5
             last = 0 if on_tree else -1
-        if hi - lo <= 1e-15 * length or g == 0.0 or trial == ROOT_ITERATIONS + TREE_DEPTH:
+        if hi - lo <= 1e-15 * length or g == 0.0 or trial == cap:
             if s == hi:
                 break
             done = True
