@@ -185,9 +185,9 @@ def crossing(x, v, length, left, path, dw, off, w_at, sigma, normals, slot, memo
     last = 0
     done = False
     # the tree's interval (in the step) that holds the bracket, and its level: with the tree, the
-    # first trials are its own nodes inside the bracket, each below the last, so that each draws
-    # one normal (``tree_point``; an Illinois iterate anywhere in the step drew up to
-    # ``TREE_DEPTH``); in the bracket they leave, inside one leaf, the path is linear and the
+    # first trials are its own nodes inside the bracket, each below the last, so that together
+    # they draw each level's normal once (``tree_point``; an Illinois iterate anywhere in the
+    # step drew up to ``TREE_DEPTH``); in the bracket they leave, inside one leaf, the path is linear and the
     # gap a quadratic in ``s``, which the Illinois iterates take to the root in a few trials
     _, _, dt, refine, _, replay = path
     tree_lo, tree_hi, mid = 0.0, dt, 0.0
