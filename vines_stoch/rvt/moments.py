@@ -139,9 +139,16 @@ def propagate(model: Model, t_end: float, steps: int) -> Trajectory:
     m = np.empty((steps + 1, model.size))
     p = np.empty((steps + 1, model.size, model.size))
     m[0], p[0] = model.m0 - steady0, model.p0
-    cache: dict = {}
+    phi, forced, qs = _step_matrices(model, h)  # (one model, one step: once)
     for i in range(steps):
-        m[i + 1], p[i + 1] = _exact_step(model, m[i], p[i], t[i], h, cache)
+        m[i + 1] = phi @ m[i] + forced
+    fixed = _noise(qs, 0.0, phi) if all(key is None for key, _ in qs) else None
+    if fixed is not None and not fixed.any() and not p[0].any():
+        p[1:] = 0.0  # (no noise from a known start: the covariance stays zero)
+    else:
+        for i in range(steps):
+            q = fixed if fixed is not None else _noise(qs, t[i] + 0.5 * h, phi)
+            p[i + 1] = _covariance_step(phi, p[i], q)
     for w, x in amplitudes:
         m += np.real(np.exp(1j * w * t)[:, None] * x[None, :])
     return Trajectory(t, m, p, [model])
@@ -196,9 +203,18 @@ def _exact_step(model: Model, m: np.ndarray, p: np.ndarray, t0: float, h: float,
         matrices = _step_matrices(model, h)
         cache["kept"] = [(model.a, model.constant, h, matrices)] + cache.get("kept", [])[:1]
     phi, forced, qs = matrices
-    q = sum((_scale(k, t0 + 0.5 * h) ** 2 * cov for k, cov in qs), np.zeros_like(phi))
+    return phi @ m + forced, _covariance_step(phi, p, _noise(qs, t0 + 0.5 * h, phi))
+
+
+def _noise(qs: list[tuple], t: float, phi: np.ndarray) -> np.ndarray:
+    """The covariance a step adds, ``sum_j e_j(t)^2 Q_j``, its envelopes at ``t``."""
+    return sum((_scale(k, t) ** 2 * cov for k, cov in qs), np.zeros_like(phi))
+
+
+def _covariance_step(phi: np.ndarray, p: np.ndarray, q: np.ndarray) -> np.ndarray:
+    """``Phi P Phi^T + Q``, symmetrised."""
     nxt = phi @ p @ phi.T + q
-    return phi @ m + forced, 0.5 * (nxt + nxt.T)
+    return 0.5 * (nxt + nxt.T)
 
 
 def _split_step(relinearize, m, p, t0: float, h: float, depth: int, cache: dict):
