@@ -121,6 +121,6 @@ def test_compile_general_readies_every_scheme_and_compile_asks_for_something():
     for scheme in ("euler-maruyama", "sra", "rk4"):
         assert f"the general {scheme} loop for paths" in err
         assert f"the general {scheme} loop (every structure)" in err
-    assert "the pass loop (every smooth kick-drift-kick structure of three bodies or more)" in err
+    assert "the pass loop (every smooth kick-drift-kick structure)" in err
     code, err = cli("compile")
     assert code == 2 and "name scenario files, or --general" in err

@@ -68,7 +68,8 @@ def general_scene(scheme: str, load: str, storeys: int = 1) -> Scene:
 def compile_general(*, show: bool = True, workers: int | None = None) -> None:
     """Compile, or load from the cache on disk, the general loops of every scheme (``GENERAL_SET``)
     for paths (``simulate``, ``solve``) and for chunks of both executors, and the pass loop (the
-    lanes of every smooth kick-drift-kick structure of three bodies or more), keeping nothing: after
+    lanes of every smooth kick-drift-kick structure: of three bodies or more, of any in a short
+    run), keeping nothing: after
     it no run shorter than ``kernels.GENERAL_WORK`` path-steps compiles a step loop, whatever its
     structure (``vines-stoch compile --general``: a cluster image, a notebook server); then two
     tiny runs (``EVERY_LAW``) compile what a run compiles besides its loop.  The loops

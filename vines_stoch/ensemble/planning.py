@@ -152,7 +152,7 @@ def prepare_loops(scenes: list[Scene], seed: int, common: bool, grid: tuple[int,
         if run in seen:
             continue
         seen.add(run)
-        what = ("the pass loop (every smooth kick-drift-kick structure of three bodies or more)"
+        what = ("the pass loop (every smooth kick-drift-kick structure)"
                 if run is pass_loop else f"the general {scene.scheme} loop (every structure)"
                 if scalar_general(scene, executor, general) else structure(scene))
         # (a loop run before may lack this run's signature: the general loop of a scheme takes

@@ -189,7 +189,7 @@ def simulate_chunk(scene, seed: int, point: int, start: int, stop: int, common: 
     philox = lane_scene(scene, executor)  # (on the Philox streams)
     if lane_chunk(scene, executor, general, specialised, n if batch is None else batch):
         simulate_lanes(scene, seed, point, start, common, raw, history_rows, stride, columns, events,
-                       specialised)
+                       specialised, general)
         return Chunk(raw, samples, history_rows, events)
     # (the bundles of one path: the state and filter buffers the loop reuses; the outputs'
     # buffers stand for their types, each realisation writing into its rows of the arrays above)
@@ -240,20 +240,21 @@ PASS_LANES = 16
 
 
 def in_pass_loop(scene, executor: str = "lanes", specialised: bool = False,
-                 realisations: int = PASS_LANES) -> bool:
-    """Whether a chunk of ``realisations`` of ``scene`` runs in the pass loop under ``executor``,
-    however short or long the run (``lane_scene`` and ``passes.pass_scene``, unless
-    ``specialised``; at least ``PASS_LANES`` realisations): the pass loop is itself one loop for
-    every structure it takes, compiled once (``ensemble.compile_general``), and runs them in SIMD
-    lanes, 3-4x the general scalar loop's speed on a three-storey frame (the same numbers,
-    bitwise)."""
-    return pass_structure(scene, executor, specialised) and realisations >= PASS_LANES
+                 realisations: int = PASS_LANES, general: bool = False) -> bool:
+    """Whether a chunk of ``realisations`` of ``scene`` runs in the pass loop under ``executor``
+    (``lane_scene`` and ``passes.pass_scene``, unless ``specialised``; at least ``PASS_LANES``
+    realisations): a structure of three bodies or more however short or long the run, one of
+    one or two bodies in a short run (``general``).  The pass loop is itself one loop for every
+    structure it takes, compiled once (``ensemble.compile_general``), and runs them in SIMD
+    lanes: 3-4x the general scalar loop's speed on a three-storey frame, about 9x on one storey
+    with a cubic NES (the same numbers, bitwise)."""
+    return pass_structure(scene, executor, specialised, general) and realisations >= PASS_LANES
 
 
-def pass_structure(scene, executor: str = "lanes", specialised: bool = False) -> bool:
+def pass_structure(scene, executor: str = "lanes", specialised: bool = False, general: bool = False) -> bool:
     """Whether ``scene``'s lane realisations run in the pass loop under ``executor`` in chunks of
     ``PASS_LANES`` or more (``in_pass_loop``), and in the general scalar loop in smaller ones."""
-    return lane_scene(scene, executor) and pass_scene(scene) and not specialised
+    return lane_scene(scene, executor) and pass_scene(scene, general) and not specialised
 
 
 def lane_chunk(scene, executor: str, general: bool, specialised: bool, realisations: int) -> bool:
@@ -264,7 +265,7 @@ def lane_chunk(scene, executor: str, general: bool, specialised: bool, realisati
     realisation of a study with uncertain parameters), and a short run's (``general``) chunk of
     another lane scene, in the general scalar loop on the same Philox streams (``scalar_general``;
     the same numbers, bitwise)."""
-    if pass_structure(scene, executor, specialised):
+    if pass_structure(scene, executor, specialised, general):
         return realisations >= PASS_LANES
     return lane_scene(scene, executor) and (specialised or not general)
 
@@ -282,15 +283,15 @@ def chunk_runner(scene, executor: str = "lanes", general: bool = False, batch: i
     scalar loop's chunk (``general``: a loop compiled once for every structure, the pass loop or
     the scheme's general loop's; ``scalar_general``)."""
     if lane_chunk(scene, executor, general, False, batch):
-        return lane_runner(scene)
+        return lane_runner(scene, general=general)
     return chunk_loop(kernel_for(scene, general=scalar_general(scene, executor, general)))
 
 
-def lane_runner(scene, specialised: bool = False):
+def lane_runner(scene, specialised: bool = False, general: bool = False):
     """The compiled loop of ``scene``'s realisations in SIMD lanes: the pass loop, one for every
-    structure it takes (``passes.pass_scene``; unless ``specialised``), or the lane loop
-    specialised to ``scene``'s structure."""
-    if pass_scene(scene) and not specialised:
+    structure it takes (``passes.pass_scene``, ``general`` in a short run; unless
+    ``specialised``), or the lane loop specialised to ``scene``'s structure."""
+    if pass_scene(scene, general) and not specialised:
         return pass_loop
     return lane_loop(spec_of(scene, lanes=True))
 
@@ -311,13 +312,13 @@ def realization_streams(scene, seed: int, point: int, realization: int, common: 
 
 def lane_call(scene, seed: int, point: int, start: int, common: bool, raw: np.ndarray,
               history: np.ndarray | None = None, stride: int = 1, signals: np.ndarray = _NO_SIGNALS,
-              events: np.ndarray | None = None, specialised: bool = False) -> tuple:
+              events: np.ndarray | None = None, specialised: bool = False, general: bool = False) -> tuple:
     """The arguments of ``scene``'s lane loop (``lanes.lane_loop``) for realisations ``start ..
     start + len(raw) - 1`` on the Philox streams of ``seed``, their metric vectors into ``raw``
     (the declared metrics among them) and, with ``history`` (``(n, rows, len(signals))``, preset
     to NaN), their history rows of the ``signals`` (``signals.declare``'s rows) every ``stride``
     steps; with ``events`` (``(n, rows, len(EVENT_COLUMNS))``, preset to NaN), their event logs;
-    for the pass loop unless ``specialised`` (``lane_runner``)."""
+    for the pass loop unless ``specialised`` (``lane_runner``, ``general`` in a short run)."""
     places = stream_place(np.arange(start, start + raw.shape[0], dtype=np.uint64), np.uint64(point), common)
     args = bundles(scene, scene.x0.copy(), scene.v0.copy(), filter_tuple(scene, None), np.zeros(0), raw[:0],
                    sample_buffer(scene), _NO_HISTORY, 1, (_UNUSED,) * 3)
@@ -327,7 +328,7 @@ def lane_call(scene, seed: int, point: int, start: int, common: bool, raw: np.nd
     call = (*args[:6], scene.limits, np.uint64(keys[INCREMENTS]), np.uint64(keys[BRIDGE]),
             np.uint64(keys[FILTER]), scene.filters["p0"], places, raw, history, stride, signals,
             scene.reductions, events)
-    if pass_scene(scene) and not specialised:  # (the pass loop's sizes and kinds: run-time data)
+    if pass_scene(scene, general) and not specialised:  # (the pass loop's sizes and kinds: run-time data)
         kinds = (scene.has_white_noise, scene.has_ground, scene.has_shaped)
         return (*call, pass_layout(scene.mass.shape[0], scene.n_floors), kinds)
     return call
@@ -336,13 +337,14 @@ def lane_call(scene, seed: int, point: int, start: int, common: bool, raw: np.nd
 def simulate_lanes(scene, seed: int, point: int, start: int, common: bool, raw: np.ndarray,
                    history: np.ndarray | None = None, stride: int = 1,
                    signals: np.ndarray = _NO_SIGNALS, events: np.ndarray | None = None,
-                   specialised: bool = False) -> None:
+                   specialised: bool = False, general: bool = False) -> None:
     """Realisations ``start .. start + len(raw) - 1`` in SIMD lanes (``lanes.lane_loop``), their
     metric vectors into ``raw`` (preset to the vector's start) and, with ``history`` and
     ``events``, their history rows and event logs (``lane_call``): what the scalar loop gives on
-    their Philox streams (``specialised``: ``lane_runner``'s)."""
-    run = lane_runner(scene, specialised)
-    call = lane_call(scene, seed, point, start, common, raw, history, stride, signals, events, specialised)
+    their Philox streams (``specialised``, ``general``: ``lane_runner``'s)."""
+    run = lane_runner(scene, specialised, general)
+    call = lane_call(scene, seed, point, start, common, raw, history, stride, signals, events, specialised,
+                     general)
     compile_first(run, call, ())
     run(*call)
 

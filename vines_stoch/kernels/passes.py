@@ -1,5 +1,5 @@
 """Paths in SIMD lanes for structures of any size: one loop, compiled once, for every smooth
-kick-drift-kick scene of three bodies or more.
+kick-drift-kick scene of three bodies or more, and of any size in a short run.
 
 ``lanes.lane_loop`` is specialised to a scene's sizes and laws: each lane's state sits in
 registers, LLVM unrolls the loops over the bodies, and the lane loop around them becomes vector
@@ -23,8 +23,10 @@ passages, a lane's end) and the filters (``lanes.filter_rows``: each lane's, on 
 filter stream) run the lanes' and the scalar loop's functions lane by lane.
 
 Which scenes run here is ``pass_scene``'s: scenes without impacts or Hertz contact (whose lanes
-leave the vector pass for the scalar step, ``lanes.py``), of three bodies or more (below that
-the specialised lane loop is faster: ``make bench``).
+leave the vector pass for the scalar step, ``lanes.py``), of three bodies or more, and of one or
+two in a short run (``paths.general_run``), whose loop is compiled once for every structure: a
+longer run of one or two bodies takes the lane loop specialised to it, which is faster there
+(``make bench``).
 """
 
 from __future__ import annotations
@@ -63,10 +65,12 @@ ROW_NAMES = ("x", "v", "work", "d_primary", "d_absorber", "e_sum", "e1_max", "e1
              "acc_max", "x2", "done", "rows")
 
 
-def pass_scene(scene) -> bool:
-    """Whether ``scene``'s lane realisations run in the pass loop (``pass_loop``): three bodies or
-    more, no impact or Hertz absorber."""
-    return scene.mass.shape[0] >= 3 and not (scene.has_impact or scene.has_hertz)
+def pass_scene(scene, general: bool = False) -> bool:
+    """Whether ``scene``'s lane realisations run in the pass loop (``pass_loop``): no impact or
+    Hertz absorber, and three bodies or more, or any number in a short run (``general``: one whose
+    loop is compiled once for every structure, ``paths.general_run``, where the pass loop runs 1-2
+    bodies several times faster than the general scalar loop)."""
+    return (scene.mass.shape[0] >= 3 or general) and not (scene.has_impact or scene.has_hertz)
 
 
 def pass_layout(n_bodies: int, n_floors: int) -> np.ndarray:

@@ -155,7 +155,7 @@ def test_new_structures_run_the_general_loop_and_compile_nothing():
         for executor in ("scalar", "lanes"):
             simulate_chunk(scene, SEED, 0, 0, 2, executor=executor, general=True, history=(10, 4),
                            signals=("x1", "e1"), event_rows=4)
-        if in_pass_loop(scene):  # (a chunk the pass loop takes)
+        if in_pass_loop(scene, general=True):  # (a chunk the pass loop takes in a short run)
             simulate_chunk(scene, SEED, 0, 0, PASS_LANES, general=True, history=(10, 4), signals=("x1", "e1"),
                            event_rows=4)
     assert len(loops) == 3
@@ -183,7 +183,7 @@ def test_a_pass_loop_structure_runs_chunks_of_16_in_the_pass_loop_and_smaller_on
     assert chunk_runner(scene, "scalar", general=True) is general
     assert chunk_runner(scene, "scalar", general=False) is chunk_loop(kernel_for(scene))
     assert not in_pass_loop(scene, "scalar") and not in_pass_loop(scene, specialised=True)
-    assert not in_pass_loop(scene_from(frame(1, [CUBIC], [NOISE])))  # (two bodies: the general loop)
+    assert not in_pass_loop(scene_from(frame(1, [CUBIC], [NOISE])))  # (two bodies: a long run's own loop)
     lanes = []  # (the chunks that ran in SIMD lanes)
     monkeypatch.setattr(chunk_module, "simulate_lanes", lambda *args, **kwargs: lanes.append(
         simulate_lanes(*args, **kwargs)))
@@ -196,6 +196,31 @@ def test_a_pass_loop_structure_runs_chunks_of_16_in_the_pass_loop_and_smaller_on
     for r in range(2):  # (a path: the general loop, on the realisation's Philox streams)
         assert same(rows[r], simulate(scene, philox_streams(r))) and same(few[r], rows[r])
         assert same(long_few[r], rows[r])
+
+
+@pytest.mark.parametrize("bodies", [1, 2])
+def test_a_short_run_of_one_or_two_bodies_runs_its_lanes_in_the_pass_loop(monkeypatch, bodies):
+    """In a short run a smooth structure of one or two bodies runs its chunks of ``PASS_LANES``
+    or more in the pass loop (compiled once for every structure), not the general scalar loop; a
+    long run in the lane loop specialised to it; its rows are the general scalar loop's on the
+    same Philox streams and the specialised lanes', bitwise."""
+    data = frame(1, [CUBIC] if bodies == 2 else [], [NOISE, HARMONIC])
+    scene = scene_from(data)
+    assert scene.mass.shape[0] == bodies
+    assert in_pass_loop(scene, general=True) and not in_pass_loop(scene)
+    assert not in_pass_loop(scene, general=True, realisations=PASS_LANES - 1)
+    assert chunk_runner(scene, "lanes", general=True) is pass_loop
+    assert chunk_runner(scene, "lanes", general=False) is lane_loop(spec_of(scene, lanes=True))
+    assert chunk_runner(scene, "lanes", general=True, batch=PASS_LANES - 1) is chunk_loop(
+        kernel_for(scene, general=True))
+    runners = []
+    monkeypatch.setattr(chunk_module, "lane_runner", lambda *args, **kwargs: runners.append(
+        lane_runner(*args, **kwargs)) or runners[-1])
+    rows = simulate_chunk(scene, SEED, 0, 0, PASS_LANES, general=True).raw
+    assert runners == [pass_loop]
+    for r in (0, PASS_LANES - 1):  # (a path in the general loop, on the realisation's Philox streams)
+        assert same(rows[r], simulate(scene, philox_streams(r)))
+    assert same(rows, simulate_chunk(scene, SEED, 0, 0, PASS_LANES, specialised=True).raw)
 
 
 def _made() -> tuple[int, int, int]:
@@ -226,8 +251,9 @@ def test_short_runs_take_the_general_loop_and_long_runs_a_specialised_one(monkey
 def test_a_short_run_takes_the_specialised_loop_where_it_is_compiled_with_the_same_numbers(monkeypatch):
     """A run shorter than ``GENERAL_WORK`` with ``VINES_STOCH_GENERAL_WORK`` unset takes the loop
     specialised to its structure where that is compiled already (here in this process; on disk,
-    loaded: ``planning.specialised_loops``), ``solve`` too; the rows and the path are the general
-    loop's, bitwise, which a run takes with the variable set (its work alone decides)."""
+    loaded: ``planning.specialised_loops``), ``solve`` too; the rows and the path are those of the
+    loops compiled once for every structure, bitwise, which a run takes with the variable set (its
+    work alone decides): the pass loop for the run's chunk, the general scalar loop for the path."""
     scene, study = scene_from(SMOOTH), study_from(SMOOTH, {"ensemble.realizations": 20})
     simulate_chunk(scene, SEED, 0, 0, 2)  # (the lane loop specialised to the structure, compiled or loaded)
     assert not in_pass_loop(scene) and lane_runner(scene) is lane_loop(spec_of(scene, lanes=True))
@@ -241,9 +267,14 @@ def test_a_short_run_takes_the_specialised_loop_where_it_is_compiled_with_the_sa
     assert sum(ran) == 20 + 1, ran  # (the run's realisations and the path of ``solve``, in lanes)
     monkeypatch.setenv("VINES_STOCH_GENERAL_WORK", str(GENERAL_WORK))
     ran.clear()
+    runners = []
+    monkeypatch.setattr(chunk_module, "lane_runner", lambda *args, **kwargs: runners.append(
+        lane_runner(*args, **kwargs)) or runners[-1])
     general, _ = vines_stoch.run(study, workers=1)
     one_general = vines_stoch.solve(study, realization=3)
-    assert sum(ran) == 0  # (the general scalar loop, on the same Philox streams)
+    # (the run's chunk in the pass loop, the path of ``solve`` in the general scalar loop, on the
+    # same Philox streams)
+    assert sum(ran) == 20 and set(runners) == {pass_loop}, (ran, runners)
     pd.testing.assert_frame_equal(fast, general, check_exact=True)
     pd.testing.assert_series_equal(one.metrics, one_general.metrics, check_exact=True)
     for name in one.ys:
@@ -268,12 +299,14 @@ def test_a_short_path_takes_the_specialised_loop_where_it_is_compiled_with_the_s
 
 def test_a_short_run_looks_for_a_specialised_loop_once_and_compiles_nothing(monkeypatch):
     """Where the specialised loop is neither compiled nor on disk (a fresh one without a cache,
-    here), a short run takes the general loop: looking for it compiled nothing (numba's
-    statistics: one miss, no signature), and the process does not look for it again."""
+    here), a short run takes the loops compiled once (the pass loop, the general loop): looking
+    for it compiled nothing (numba's statistics: one miss, no signature), and the process does
+    not look for it again."""
     scene, study = scene_from(SMOOTH), study_from(SMOOTH, {"ensemble.realizations": 20})
     fresh = lane_loop.__wrapped__(spec_of(scene, lanes=True))  # (not the memoised one)
     fresh._cache = NullCache()
-    monkeypatch.setattr(chunk_module, "lane_runner", lambda *args, **kwargs: fresh)
+    monkeypatch.setattr(chunk_module, "lane_runner", lambda scene, specialised=False, general=False: (
+        lane_runner(scene, specialised, general) if general else fresh))  # (a short run's: the pass loop)
     monkeypatch.delenv("VINES_STOCH_GENERAL_WORK")
     assert not planning.specialised_loops([scene], SEED, True, executor="lanes", batch=20, show=False)
     assert len(fresh.overloads) == 0 and sum(fresh.stats.cache_misses.values()) == 1

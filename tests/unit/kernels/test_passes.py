@@ -1,5 +1,6 @@
 """The pass loop (kernels/passes.py): one compiled loop for the lane realisations of every smooth
-structure of three bodies or more (filtered loads included), in chunks of ``PASS_LANES``
+structure of three bodies or more (filtered loads included), and of one or two bodies in a
+short run (``test_general_loop.py``), in chunks of ``PASS_LANES``
 realisations or more (a smaller one runs in the general scalar loop).  Each realisation's metric vector,
 history rows and declared metrics are, bitwise, the scalar loop's on its Philox streams,
 whatever the structure; and structures that differ in storeys, absorbers, loads and outputs run
@@ -131,8 +132,11 @@ def test_one_pass_loop_serves_every_structure(monkeypatch):
     assert len(pass_loop.overloads) == 1
 
 
-def test_the_pass_loop_takes_no_scene_with_events_or_of_two_bodies():
+def test_the_pass_loop_takes_no_scene_with_events_nor_one_of_two_bodies_but_in_a_short_run():
     assert not pass_scene(scene_from(frame(1, [CUBIC], [NOISE])))
-    assert not pass_scene(scene_from(frame(3, [{"type": "impact", "mass": 0.05, "clearance": 0.05,
-                                                "restitution": 0.6}], [NOISE])))
+    assert pass_scene(scene_from(frame(1, [CUBIC], [NOISE])), general=True)
+    assert pass_scene(scene_from(frame(1, [], [NOISE])), general=True)
+    impact = scene_from(frame(3, [{"type": "impact", "mass": 0.05, "clearance": 0.05, "restitution": 0.6}],
+                              [NOISE]))
+    assert not pass_scene(impact) and not pass_scene(impact, general=True)
     assert pass_scene(scene_from(frame(2, [CUBIC], [CLOUGH_PENZIEN])))
