@@ -203,7 +203,7 @@ def test_a_short_run_of_one_or_two_bodies_runs_its_lanes_in_the_pass_loop(monkey
     """In a short run a smooth structure of one or two bodies runs its chunks of ``PASS_LANES``
     or more in the pass loop (compiled once for every structure), not the general scalar loop; a
     long run in the lane loop specialised to it; its rows are the general scalar loop's on the
-    same Philox streams and the specialised lanes', bitwise."""
+    same Philox streams, bitwise (and so the specialised lanes': ``test_lanes.py``)."""
     data = frame(1, [CUBIC] if bodies == 2 else [], [NOISE, HARMONIC])
     scene = scene_from(data)
     assert scene.mass.shape[0] == bodies
@@ -220,7 +220,6 @@ def test_a_short_run_of_one_or_two_bodies_runs_its_lanes_in_the_pass_loop(monkey
     assert runners == [pass_loop]
     for r in (0, PASS_LANES - 1):  # (a path in the general loop, on the realisation's Philox streams)
         assert same(rows[r], simulate(scene, philox_streams(r)))
-    assert same(rows, simulate_chunk(scene, SEED, 0, 0, PASS_LANES, specialised=True).raw)
 
 
 def _made() -> tuple[int, int, int]:
