@@ -219,7 +219,8 @@ def compile_(
                                       "whatever its structure."),
     specialised: bool = typer.Option(False, "--specialised",
                                      help="The loops specialised to the files' structures, which a run of "
-                                          "1e8 path-steps or more takes: with them on disk every later "
+                                          "1e8 path-steps or more takes (8e8 for a smooth structure of one "
+                                          "or two bodies under the lanes): with them on disk every later "
                                           "ensemble or solve of these structures with the same executor "
                                           "takes them, however short (2-3x faster, in SIMD lanes up to about "
                                           "13x, the same numbers), unless VINES_STOCH_GENERAL_WORK is set; a "

@@ -15,6 +15,7 @@ from ..kernels import (
     chunk_runner,
     compiled_already,
     general_run,
+    in_pass_loop,
     keeps_general,
     lane_scene,
     pass_loop,
@@ -47,6 +48,15 @@ HISTORY_CHUNK_BYTES = 8_000_000
 #: run at about the scalar loop's speed (``make bench``: 1.03x on the contact-under-noise scene,
 #: whose 256 paths made one chunk that a second worker could not share).
 LANE_WORK = 16
+#: How many times cheaper a path-step counts toward ``kernels.GENERAL_WORK`` (``plan``) in a
+#: chunk that a short run gives to the pass loop and a long one to the lane loop specialised to
+#: its structure (a smooth structure of one or two bodies: ``kernels.in_pass_loop`` with
+#: ``general`` alone).  The threshold counts path-steps at the general scalar loop's cost, and
+#: the pass loop runs such a chunk 8-9x faster (one storey with a cubic NES, 256 realisations of
+#: 20 s: 125-129 against 14-16 M path-steps/s), so such a run compiles a loop of its own only
+#: past 8e8 path-steps (6-7 s in the pass loop on one core; the specialised lanes, 266 M
+#: path-steps/s there, first compile for 10-20 s).
+PASS_WORK = 8
 #: Realisations of an automatic chunk of the cuda backend (a launch fills a large GPU from
 #: about 1e5 threads on; ``gpu.simulate_many`` splits a chunk into launches that fit its memory).
 GPU_CHUNK = 1 << 20
@@ -100,9 +110,18 @@ def plan(study: Study, chunk: int | None = None, realizations: int | None = None
             row_bytes = recorded_bytes(scene, spec, spectra)
             size = min(size, max(1, HISTORY_CHUNK_BYTES // row_bytes))
         chunks += [(p, s, min(s + size, n)) for s in range(0, n, size)]
-    work = sum(n * scene.n_steps for scene, n in zip(scenes, counts))
+    work = sum((stop - start) * scenes[p].n_steps / _cheaper(scenes[p], executor, stop - start, random)
+               for p, start, stop in chunks)
     batch = 1 if random else max((stop - start for _, start, stop in chunks), default=1)
     return Plan(scenes, chunks, general=backend == "cpu" and general_run(work), batch=batch)
+
+
+def _cheaper(scene: Scene, executor: str, realisations: int, random: bool) -> float:
+    """How many times cheaper a chunk's path-steps count toward ``kernels.GENERAL_WORK``:
+    ``PASS_WORK`` where a short run gives the chunk to the pass loop and a long one would not (not
+    with uncertain parameters, ``random``: each realisation then runs alone)."""
+    short = not random and in_pass_loop(scene, executor, realisations=realisations, general=True)
+    return PASS_WORK if short and not in_pass_loop(scene, executor, realisations=realisations) else 1
 
 
 def _auto_chunk(scene: Scene, n: int, lanes: bool) -> int:

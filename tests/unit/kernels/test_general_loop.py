@@ -7,6 +7,7 @@ compiling anything."""
 
 from __future__ import annotations
 
+import math
 import os
 
 import numpy as np
@@ -245,6 +246,34 @@ def test_short_runs_take_the_general_loop_and_long_runs_a_specialised_one(monkey
     assert not general_run(0) and not general_run(1)
     monkeypatch.setenv("VINES_STOCH_GENERAL_WORK", "inf")
     assert general_run(10**18)
+
+
+def test_a_run_the_pass_loop_takes_when_short_counts_its_work_pass_work_times_cheaper(monkeypatch):
+    """Toward ``GENERAL_WORK`` the path-steps of a smooth structure of one or two bodies, whose
+    chunks a short run gives to the pass loop, count ``PASS_WORK`` times cheaper (the pass
+    loop's speed over the general scalar loop's); an impact absorber's (the general scalar loop
+    when short), the SRA3 scheme's (no lanes), a frame's of three bodies (the pass loop however
+    long) and those of a study with uncertain parameters (each realisation alone) at their full
+    count."""
+    from vines_stoch.ensemble.planning import PASS_WORK
+
+    monkeypatch.delenv("VINES_STOCH_GENERAL_WORK", raising=False)
+    smooth = frame(1, [CUBIC], [NOISE])
+    steps = scene_from(smooth).n_steps
+
+    def general(data, work, **changes):
+        return plan(study_from(data, {"ensemble.realizations": math.ceil(work / steps), **changes})).general
+
+    for work in (2 * GENERAL_WORK, 0.9 * PASS_WORK * GENERAL_WORK):
+        assert general(smooth, work)
+    assert not general(smooth, 1.1 * PASS_WORK * GENERAL_WORK)
+    assert not general(smooth, 2 * GENERAL_WORK, **{"simulation.scheme": "sra"})
+    assert not general(frame(1, [CUBIC, {**IMPACT, "floor": 1}], [NOISE]), 2 * GENERAL_WORK)
+    assert not general(frame(2, [CUBIC], [NOISE]), 2 * GENERAL_WORK)
+    lognormal = {"distribution": "lognormal", "median": 100.0, "cov": 0.1}
+    uncertain = {**smooth, "uncertain": {"absorbers.0.stiffness": lognormal}}
+    assert not general(uncertain, 2 * GENERAL_WORK)
+    assert general(smooth, 0.9 * GENERAL_WORK, **{"simulation.scheme": "sra"})
 
 
 def test_a_short_run_takes_the_specialised_loop_where_it_is_compiled_with_the_same_numbers(monkeypatch):
