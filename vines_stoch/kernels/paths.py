@@ -89,7 +89,9 @@ def general_run(path_steps: int) -> bool:
     compiled for it (and cached): at 10-25 M path-steps/s on one core the general loop runs 10^8
     path-steps in about the 10-20 s that compiling a specialised loop takes, which then runs 2-3x
     faster (and in SIMD lanes, where the scheme has them, up to about 13x).  The two give the same numbers,
-    bitwise (``tests/unit/kernels/test_general_loop.py``)."""
+    bitwise (``tests/unit/kernels/test_general_loop.py``).  An ensemble counts the path-steps of
+    the chunks that a short run gives to the pass loop and a long one would not 8 times cheaper
+    (``ensemble.planning.PASS_WORK``)."""
     work = general_work()
     if work is None:
         raise ValueError(general_problem())
