@@ -246,7 +246,7 @@ def in_pass_loop(scene, executor: str = "lanes", specialised: bool = False,
     realisations): a structure of three bodies or more however short or long the run, one of
     one or two bodies in a short run (``general``).  The pass loop is itself one loop for every
     structure it takes, compiled once (``ensemble.compile_general``), and runs them in SIMD
-    lanes: 3-4x the general scalar loop's speed on a three-storey frame, about 9x on one storey
+    lanes: 3-4x the general scalar loop's speed on a three-storey frame, 8-9x on one storey
     with a cubic NES (the same numbers, bitwise)."""
     return pass_structure(scene, executor, specialised, general) and realisations >= PASS_LANES
 
